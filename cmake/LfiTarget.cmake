@@ -1,0 +1,24 @@
+# Compiler flags shared by every lfi target.
+add_library(lfi_options INTERFACE)
+target_compile_options(lfi_options INTERFACE -Wall -Wextra -Wpedantic -Wshadow -Wnon-virtual-dtor
+                       -Wconversion-null -Wno-unused-parameter
+                       # GCC 12 false positives inside libstdc++ at -O3 (GCC bug 105651)
+                       -Wno-restrict)
+if(LFI_WERROR)
+  target_compile_options(lfi_options INTERFACE -Werror)
+endif()
+if(LFI_SANITIZE)
+  target_compile_options(lfi_options INTERFACE -fsanitize=address,undefined -fno-omit-frame-pointer
+                         -fno-sanitize-recover=undefined)
+  target_link_options(lfi_options INTERFACE -fsanitize=address,undefined)
+endif()
+
+# lfi_library(<name> SOURCES ... DEPS ...): one folder, one library, public
+# headers in <folder>/include/lfi/<name>/.
+function(lfi_library name)
+  cmake_parse_arguments(ARG "" "" "SOURCES;PUBLIC_DEPS;PRIVATE_DEPS" ${ARGN})
+  add_library(lfi_${name} ${ARG_SOURCES})
+  add_library(lfi::${name} ALIAS lfi_${name})
+  target_include_directories(lfi_${name} PUBLIC ${CMAKE_CURRENT_SOURCE_DIR}/include)
+  target_link_libraries(lfi_${name} PUBLIC ${ARG_PUBLIC_DEPS} PRIVATE lfi_options ${ARG_PRIVATE_DEPS})
+endfunction()

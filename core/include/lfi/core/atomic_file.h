@@ -1,0 +1,26 @@
+#pragma once
+// Atomic, non-clobbering writes for files users care about (captured light
+// fields, calibrations, study results). The content is written to a temporary
+// file in the target's directory, flushed to disk, and renamed over the target
+// in one step; a failure at any point leaves the old file untouched and removes
+// the temporary. Without Overwrite::Allow an existing target is never replaced
+// (checked atomically by the rename itself, not by a racy stat).
+
+#include <filesystem>
+#include <functional>
+#include <string_view>
+
+namespace lfi {
+
+enum class Overwrite { Refuse, Allow };
+
+// Calls writeTo(temporaryPath) to produce the content, then publishes it at
+// `target`. Throws Errc::Exists (Refuse and target exists) or Errc::Io; any
+// exception thrown by writeTo propagates after the temporary is removed.
+void writeFileAtomically(const std::filesystem::path& target, Overwrite overwrite,
+                         const std::function<void(const std::filesystem::path& temporary)>& writeTo);
+
+// Convenience for text and small binary files.
+void writeFileAtomically(const std::filesystem::path& target, Overwrite overwrite, std::string_view content);
+
+}  // namespace lfi

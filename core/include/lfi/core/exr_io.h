@@ -1,0 +1,42 @@
+#pragma once
+// OpenEXR files for light fields and HDR (linear radiance) images, written with
+// the OpenEXR library so that the parametrisation travels in the header as
+// typed attributes. One FLOAT channel "Y", ZIP compression (lossless, so a
+// round trip is bit-exact). docs/file-formats.md lists every attribute.
+//
+// Loading validates everything and throws lfi::Error naming the file and the
+// attribute: Errc::InvalidFile for a missing/mistyped/out-of-range attribute,
+// a size that does not match, NaN/Inf pixels or a truncated file;
+// Errc::Checksum when the pixels do not match the recorded CRC-32.
+
+#include "lfi/core/atomic_file.h"
+#include "lfi/core/light_field.h"
+
+#include <opencv2/core.hpp>
+
+#include <filesystem>
+#include <string>
+
+namespace lfi {
+
+inline constexpr int kExrFormatVersion = 1;
+
+void writeLightFieldExr(const std::filesystem::path& path, const LightField& lightField,
+                        Overwrite overwrite = Overwrite::Refuse);
+LightField readLightFieldExr(const std::filesystem::path& path);
+
+// Metadata of a radiance image. objectPixel_mm is the pixel size projected into
+// object space (0 = unknown); description is free text shown by tools.
+struct RadianceImageInfo {
+  double objectPixel_mm = 0;
+  std::string description;
+};
+
+void writeRadianceExr(const std::filesystem::path& path, const cv::Mat& image, const RadianceImageInfo& info,
+                      Overwrite overwrite = Overwrite::Refuse);
+cv::Mat readRadianceExr(const std::filesystem::path& path, RadianceImageInfo* info = nullptr);
+
+// CRC-32 (zlib polynomial) of an image's pixel bytes, row by row.
+unsigned long pixelChecksum(const cv::Mat& image);
+
+}  // namespace lfi

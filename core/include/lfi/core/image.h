@@ -1,0 +1,29 @@
+#pragma once
+// The stack's image type is cv::Mat. Pixel formats used at library boundaries:
+//
+//   kind                   cv type    units / meaning
+//   radiance image         CV_32FC1   linear radiance, relative (emitter radiance 1 = 1.0)
+//   camera frame Mono8     CV_8UC1    digital numbers 0..255
+//   camera frame Mono12/16 CV_16UC1   digital numbers; Mono12 uses the low 12 bits
+//   light field (lenslet)  CV_32FC1   linear radiance, see light_field.h
+//   panel image            CV_8UC1/3  display drive levels
+//
+// Row 0 is the top of the image; for camera images the top is world +y and
+// columns run along world +x (the camera model makes the image upright).
+
+#include <opencv2/core.hpp>
+
+#include <filesystem>
+#include <string>
+
+namespace lfi {
+
+// Throws Errc::InvalidArgument naming `what` unless `image` has type `cvType`
+// and is not empty.
+void requireImageType(const cv::Mat& image, int cvType, const std::string& what);
+
+// Tone-maps a linear radiance image to 8 bits for people: divides by `white`
+// (<= 0: the 99.9th percentile), clamps, applies the sRGB transfer curve.
+cv::Mat toneMapForDisplay(const cv::Mat& radiance, double white = 0);
+
+}  // namespace lfi

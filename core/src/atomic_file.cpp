@@ -1,0 +1,83 @@
+#include "lfi/core/atomic_file.h"
+
+#include "lfi/core/error.h"
+
+#include <fcntl.h>
+#include <stdio.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
+#include <fstream>
+#include <string>
+
+namespace lfi {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+void syncPath(const fs::path& path, int flags) {
+  const int fd = ::open(path.c_str(), flags | O_CLOEXEC);
+  if (fd < 0) return;  // best effort: a directory may not be openable
+  ::fsync(fd);
+  ::close(fd);
+}
+
+}  // namespace
+
+void writeFileAtomically(const fs::path& target, Overwrite overwrite,
+                         const std::function<void(const fs::path&)>& writeTo) {
+  if (target.filename().empty()) fail(Errc::InvalidArgument, "cannot write '{}': not a file name", target.string());
+  const fs::path dir = target.has_parent_path() ? target.parent_path() : fs::path(".");
+  if (overwrite == Overwrite::Refuse && fs::exists(target))
+    fail(Errc::Exists, "'{}' exists; refusing to overwrite it (use --force to replace it)", target.string());
+
+  // mkstemp gives a unique name that nothing else writes to; the writer may
+  // then reopen it by path (OpenEXR does).
+  std::string pattern = (dir / ("." + target.filename().string() + ".tmp-XXXXXX")).string();
+  const int fd = ::mkstemp(pattern.data());
+  if (fd < 0) fail(Errc::Io, "cannot create a temporary file next to '{}': {}", target.string(), std::strerror(errno));
+  ::close(fd);
+  const fs::path temporary = pattern;
+  try {
+    writeTo(temporary);
+    syncPath(temporary, O_RDONLY);
+    if (overwrite == Overwrite::Allow) {
+      if (::rename(temporary.c_str(), target.c_str()) != 0)
+        fail(Errc::Io, "cannot rename '{}' to '{}': {}", temporary.string(), target.string(), std::strerror(errno));
+    } else {
+      // renameat2(RENAME_NOREPLACE) publishes and checks existence in one step.
+      if (::renameat2(AT_FDCWD, temporary.c_str(), AT_FDCWD, target.c_str(), RENAME_NOREPLACE) != 0) {
+        const int err = errno;
+        if (err == EEXIST)
+          fail(Errc::Exists, "'{}' exists; refusing to overwrite it (use --force to replace it)", target.string());
+        if (err != EINVAL && err != ENOSYS)
+          fail(Errc::Io, "cannot rename '{}' to '{}': {}", temporary.string(), target.string(), std::strerror(err));
+        // Filesystem without RENAME_NOREPLACE: link() fails atomically if the target exists.
+        if (::link(temporary.c_str(), target.c_str()) != 0) {
+          const int lerr = errno;
+          fail(lerr == EEXIST ? Errc::Exists : Errc::Io, "cannot publish '{}': {}", target.string(),
+               std::strerror(lerr));
+        }
+        ::unlink(temporary.c_str());
+      }
+    }
+    syncPath(dir, O_RDONLY | O_DIRECTORY);
+  } catch (...) {
+    std::error_code ignored;
+    fs::remove(temporary, ignored);
+    throw;
+  }
+}
+
+void writeFileAtomically(const fs::path& target, Overwrite overwrite, std::string_view content) {
+  writeFileAtomically(target, overwrite, [&](const fs::path& temporary) {
+    std::ofstream out(temporary, std::ios::binary | std::ios::trunc);
+    out.write(content.data(), static_cast<std::streamsize>(content.size()));
+    out.flush();
+    if (!out) fail(Errc::Io, "cannot write '{}': {}", temporary.string(), std::strerror(errno));
+  });
+}
+
+}  // namespace lfi

@@ -1,0 +1,203 @@
+#include "lfi/core/exr_io.h"
+
+#include "lfi/core/error.h"
+#include "lfi/core/image.h"
+
+#include <Iex.h>
+#include <OpenEXR/ImfChannelList.h>
+#include <OpenEXR/ImfDoubleAttribute.h>
+#include <OpenEXR/ImfFrameBuffer.h>
+#include <OpenEXR/ImfHeader.h>
+#include <OpenEXR/ImfInputFile.h>
+#include <OpenEXR/ImfIntAttribute.h>
+#include <OpenEXR/ImfOutputFile.h>
+#include <OpenEXR/ImfStringAttribute.h>
+#include <zlib.h>
+
+#include <cmath>
+
+namespace lfi {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+constexpr const char* kKind = "lfi.kind";
+constexpr const char* kVersion = "lfi.formatVersion";
+constexpr const char* kChecksum = "lfi.checksum";
+constexpr const char* kUnits = "lfi.units";
+constexpr const char* kFrame = "lfi.frame";
+constexpr const char* kParametrisation = "lfi.parametrisation";
+constexpr const char* kSpatialX = "lfi.spatialX";
+constexpr const char* kSpatialY = "lfi.spatialY";
+constexpr const char* kAngular = "lfi.angular";
+constexpr const char* kPixelPitch = "lfi.pixelPitch_mm";
+constexpr const char* kDistance = "lfi.distance_mm";
+constexpr const char* kObjectPixel = "lfi.objectPixel_mm";
+constexpr const char* kDescription = "lfi.description";
+
+constexpr const char* kLightFieldKind = "light-field";
+constexpr const char* kRadianceKind = "radiance-image";
+
+std::string checksumText(unsigned long crc) { return fmt::format("crc32:{:08x}", crc); }
+
+void writeExr(const fs::path& path, const cv::Mat& image, Imf::Header header, Overwrite overwrite) {
+  requireImageType(image, CV_32FC1, "EXR image '" + path.string() + "'");
+  cv::Mat pixels = image.isContinuous() ? image : image.clone();
+  header.compression() = Imf::ZIP_COMPRESSION;
+  header.channels().insert("Y", Imf::Channel(Imf::FLOAT));
+  header.insert(kVersion, Imf::IntAttribute(kExrFormatVersion));
+  header.insert(kUnits, Imf::StringAttribute("lengths mm, angles rad, pixels linear relative radiance"));
+  header.insert(kChecksum, Imf::StringAttribute(checksumText(pixelChecksum(pixels))));
+  writeFileAtomically(path, overwrite, [&](const fs::path& temporary) {
+    try {
+      Imf::OutputFile file(temporary.c_str(), header);
+      Imf::FrameBuffer frame;
+      frame.insert("Y", Imf::Slice(Imf::FLOAT, const_cast<char*>(pixels.ptr<char>()), sizeof(float), pixels.step));
+      file.setFrameBuffer(frame);
+      file.writePixels(pixels.rows);
+    } catch (const std::exception& e) {
+      fail(Errc::Io, "cannot write '{}': {}", path.string(), e.what());
+    }
+  });
+}
+
+// An opened, fully read and validated EXR: the pixels and the header.
+struct LoadedExr {
+  Imf::Header header;
+  cv::Mat pixels;
+};
+
+template <typename Attribute>
+const Attribute& requireAttribute(const fs::path& path, const Imf::Header& header, const char* name) {
+  const auto it = header.find(name);
+  if (it == header.end()) fail(Errc::InvalidFile, "'{}': attribute '{}' is missing", path.string(), name);
+  const Imf::Attribute* any = &it.attribute();
+  const auto* typed = dynamic_cast<const Attribute*>(any);
+  if (!typed)
+    fail(Errc::InvalidFile, "'{}': attribute '{}' has type '{}', expected '{}'", path.string(), name,
+         any->typeName(), Attribute::staticTypeName());
+  return *typed;
+}
+
+LoadedExr loadExr(const fs::path& path, const char* expectedKind) {
+  if (!fs::exists(path)) fail(Errc::NotFound, "'{}': no such file", path.string());
+  LoadedExr out;
+  try {
+    Imf::InputFile file(path.c_str());
+    out.header = file.header();
+    const auto& kind = requireAttribute<Imf::StringAttribute>(path, out.header, kKind).value();
+    if (kind != expectedKind)
+      fail(Errc::InvalidFile, "'{}': attribute '{}' is '{}', expected '{}'", path.string(), kKind, kind, expectedKind);
+    const int version = requireAttribute<Imf::IntAttribute>(path, out.header, kVersion).value();
+    if (version != kExrFormatVersion)
+      fail(Errc::InvalidFile, "'{}': attribute '{}' is {}, this build reads version {}", path.string(), kVersion,
+           version, kExrFormatVersion);
+    const Imf::Channel* channel = out.header.channels().findChannel("Y");
+    if (!channel || channel->type != Imf::FLOAT)
+      fail(Errc::InvalidFile, "'{}': expected one FLOAT channel 'Y'", path.string());
+    const Imath::Box2i dw = out.header.dataWindow();
+    const long width = static_cast<long>(dw.max.x) - dw.min.x + 1, height = static_cast<long>(dw.max.y) - dw.min.y + 1;
+    if (width < 1 || height < 1 || width > (1 << 17) || height > (1 << 17))
+      fail(Errc::InvalidFile, "'{}': data window {}x{} is out of range", path.string(), width, height);
+    out.pixels.create(static_cast<int>(height), static_cast<int>(width), CV_32FC1);
+    Imf::FrameBuffer frame;
+    char* base = out.pixels.ptr<char>() - (static_cast<long>(dw.min.x) * sizeof(float)) -
+                 static_cast<long>(dw.min.y) * static_cast<long>(out.pixels.step);
+    frame.insert("Y", Imf::Slice(Imf::FLOAT, base, sizeof(float), out.pixels.step));
+    file.setFrameBuffer(frame);
+    file.readPixels(dw.min.y, dw.max.y);
+  } catch (const Error&) {
+    throw;
+  } catch (const std::exception& e) {
+    fail(Errc::InvalidFile, "'{}': not a readable OpenEXR file (truncated or corrupt): {}", path.string(), e.what());
+  }
+  const std::string expected = requireAttribute<Imf::StringAttribute>(path, out.header, kChecksum).value();
+  const std::string actual = checksumText(pixelChecksum(out.pixels));
+  if (expected != actual)
+    fail(Errc::Checksum, "'{}': pixel data do not match attribute '{}' (recorded {}, computed {})", path.string(),
+         kChecksum, expected, actual);
+  for (int r = 0; r < out.pixels.rows; ++r) {
+    const float* row = out.pixels.ptr<float>(r);
+    for (int c = 0; c < out.pixels.cols; ++c)
+      if (!std::isfinite(row[c]))
+        fail(Errc::InvalidFile, "'{}': pixel ({}, {}) is {}; radiance must be finite", path.string(), c, r, row[c]);
+  }
+  return out;
+}
+
+}  // namespace
+
+unsigned long pixelChecksum(const cv::Mat& image) {
+  uLong crc = crc32(0L, Z_NULL, 0);
+  const size_t rowBytes = image.cols * image.elemSize();
+  for (int r = 0; r < image.rows; ++r) crc = crc32(crc, image.ptr<Bytef>(r), static_cast<uInt>(rowBytes));
+  return crc;
+}
+
+void writeLightFieldExr(const fs::path& path, const LightField& lightField, Overwrite overwrite) {
+  const LightFieldGeometry& g = lightField.geometry();
+  g.validate();
+  Imf::Header header(g.width(), g.height());
+  header.insert(kKind, Imf::StringAttribute(kLightFieldKind));
+  header.insert(kSpatialX, Imf::IntAttribute(g.spatialX));
+  header.insert(kSpatialY, Imf::IntAttribute(g.spatialY));
+  header.insert(kAngular, Imf::IntAttribute(g.angular));
+  header.insert(kPixelPitch, Imf::DoubleAttribute(g.pixelPitch_mm));
+  header.insert(kDistance, Imf::DoubleAttribute(g.distance_mm));
+  header.insert(kFrame, Imf::StringAttribute(
+                            "plane frame: origin at the grid centre, +z the viewing/emitting side; "
+                            "pixel (col,row) = (ex*n+u, ey*n+v), row increases with +y"));
+  header.insert(kParametrisation,
+                Imf::StringAttribute("lenslet image of SxxSy spatial elements of nxn angular elements; "
+                                     "in-element position (px,py) in [-1,1]^2 sees direction "
+                                     "normalise(-px,-py,sqrt(1-px^2-py^2)); px^2+py^2>=1 is 0"));
+  writeExr(path, lightField.lensletImage(), std::move(header), overwrite);
+}
+
+LightField readLightFieldExr(const fs::path& path) {
+  LoadedExr exr = loadExr(path, kLightFieldKind);
+  LightFieldGeometry g;
+  g.spatialX = requireAttribute<Imf::IntAttribute>(path, exr.header, kSpatialX).value();
+  g.spatialY = requireAttribute<Imf::IntAttribute>(path, exr.header, kSpatialY).value();
+  g.angular = requireAttribute<Imf::IntAttribute>(path, exr.header, kAngular).value();
+  g.pixelPitch_mm = requireAttribute<Imf::DoubleAttribute>(path, exr.header, kPixelPitch).value();
+  g.distance_mm = requireAttribute<Imf::DoubleAttribute>(path, exr.header, kDistance).value();
+  try {
+    g.validate();
+  } catch (const Error& e) {
+    fail(Errc::InvalidFile, "'{}': {}", path.string(), e.what());
+  }
+  if (exr.pixels.cols != g.width() || exr.pixels.rows != g.height())
+    fail(Errc::InvalidFile, "'{}': image is {}x{} but attributes {}={}, {}={}, {}={} need {}x{}", path.string(),
+         exr.pixels.cols, exr.pixels.rows, kSpatialX, g.spatialX, kSpatialY, g.spatialY, kAngular, g.angular,
+         g.width(), g.height());
+  return LightField(g, std::move(exr.pixels));
+}
+
+void writeRadianceExr(const fs::path& path, const cv::Mat& image, const RadianceImageInfo& info,
+                      Overwrite overwrite) {
+  requireImageType(image, CV_32FC1, "radiance image for '" + path.string() + "'");
+  Imf::Header header(image.cols, image.rows);
+  header.insert(kKind, Imf::StringAttribute(kRadianceKind));
+  header.insert(kObjectPixel, Imf::DoubleAttribute(info.objectPixel_mm));
+  header.insert(kFrame, Imf::StringAttribute("camera image: row 0 at world +y, columns along world +x"));
+  header.insert(kDescription, Imf::StringAttribute(info.description));
+  writeExr(path, image, std::move(header), overwrite);
+}
+
+cv::Mat readRadianceExr(const fs::path& path, RadianceImageInfo* info) {
+  LoadedExr exr = loadExr(path, kRadianceKind);
+  const double objectPixel = requireAttribute<Imf::DoubleAttribute>(path, exr.header, kObjectPixel).value();
+  if (!(objectPixel >= 0) || !std::isfinite(objectPixel))
+    fail(Errc::InvalidFile, "'{}': attribute '{}' = {} must be finite and >= 0", path.string(), kObjectPixel,
+         objectPixel);
+  if (info) {
+    info->objectPixel_mm = objectPixel;
+    const auto* d = exr.header.findTypedAttribute<Imf::StringAttribute>(kDescription);
+    info->description = d ? d->value() : std::string();
+  }
+  return exr.pixels;
+}
+
+}  // namespace lfi

@@ -1,0 +1,117 @@
+#include "lfi/core/light_field.h"
+
+#include "lfi/core/error.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace lfi {
+
+void LightFieldGeometry::validate() const {
+  constexpr int kMaxElements = 1 << 15;
+  constexpr int kMaxAngular = 1024;
+  if (spatialX < 1 || spatialX > kMaxElements)
+    fail(Errc::InvalidArgument, "light field spatialX = {} is outside [1, {}]", spatialX, kMaxElements);
+  if (spatialY < 1 || spatialY > kMaxElements)
+    fail(Errc::InvalidArgument, "light field spatialY = {} is outside [1, {}]", spatialY, kMaxElements);
+  if (angular < 1 || angular > kMaxAngular)
+    fail(Errc::InvalidArgument, "light field angular = {} is outside [1, {}]", angular, kMaxAngular);
+  if (static_cast<long long>(spatialX) * angular > kMaxElements * 4LL ||
+      static_cast<long long>(spatialY) * angular > kMaxElements * 4LL)
+    fail(Errc::InvalidArgument, "light field lenslet image {}x{} is too large", width(), height());
+  if (!(pixelPitch_mm > 0) || !std::isfinite(pixelPitch_mm) || pixelPitch_mm > 1000)
+    fail(Errc::InvalidArgument, "light field pixelPitch_mm = {} is outside (0, 1000]", pixelPitch_mm);
+  if (!(distance_mm >= 0) || !std::isfinite(distance_mm))
+    fail(Errc::InvalidArgument, "light field distance_mm = {} must be finite and >= 0", distance_mm);
+}
+
+LightField::LightField(const LightFieldGeometry& geometry) : geometry_(geometry) {
+  geometry_.validate();
+  lenslet_ = cv::Mat::zeros(geometry_.height(), geometry_.width(), CV_32FC1);
+}
+
+LightField::LightField(const LightFieldGeometry& geometry, cv::Mat lensletImage)
+    : geometry_(geometry), lenslet_(std::move(lensletImage)) {
+  geometry_.validate();
+  if (lenslet_.type() != CV_32FC1)
+    fail(Errc::InvalidArgument, "light field lenslet image must be CV_32FC1 (got type {})", lenslet_.type());
+  if (lenslet_.cols != geometry_.width() || lenslet_.rows != geometry_.height())
+    fail(Errc::InvalidArgument, "light field lenslet image is {}x{} but {}x{} elements of {}x{} need {}x{}",
+         lenslet_.cols, lenslet_.rows, geometry_.spatialX, geometry_.spatialY, geometry_.angular,
+         geometry_.angular, geometry_.width(), geometry_.height());
+}
+
+Vec2 LightField::elementCentre(int ex, int ey) const {
+  const double e = geometry_.elementPitch_mm();
+  return {(ex + 0.5 - 0.5 * geometry_.spatialX) * e, (ey + 0.5 - 0.5 * geometry_.spatialY) * e};
+}
+
+Vec2 LightField::angularCentre(int u, int v) const {
+  const double n = geometry_.angular;
+  return {(2 * u + 1) / n - 1, (2 * v + 1) / n - 1};
+}
+
+Vec3 LightField::directionFromDisc(const Vec2& p) {
+  const double r2 = p.x * p.x + p.y * p.y;
+  return {-p.x, -p.y, std::sqrt(std::max(0.0, 1 - r2))};
+}
+
+bool LightField::discFromDirection(const Vec3& d, Vec2& p) {
+  const double len = d.length();
+  if (!(len > 0) || d.z <= 0) return false;
+  p = {-d.x / len, -d.y / len};
+  return true;
+}
+
+namespace {
+
+// Continuous index whose integers are cell centres, split into a base cell and
+// a weight for the next one; clamped so that values beyond the outer centres
+// hold the outer value.
+struct Lerp {
+  int i0;
+  int i1;
+  double t;
+};
+
+Lerp lerpIndex(double coordinate, int count) {
+  if (count == 1 || coordinate <= 0) return {0, 0, 0};
+  if (coordinate >= count - 1) return {count - 1, count - 1, 0};
+  const int i0 = static_cast<int>(coordinate);
+  return {i0, i0 + 1, coordinate - i0};
+}
+
+}  // namespace
+
+double LightField::angularSample(int ex, int ey, const Vec2& disc, LightFieldLookup mode) const {
+  const int n = geometry_.angular;
+  const double ax = 0.5 * (disc.x + 1) * n;  // in pixel units, 0..n across the element
+  const double ay = 0.5 * (disc.y + 1) * n;
+  if (mode == LightFieldLookup::Nearest) {
+    const int u = std::clamp(static_cast<int>(std::floor(ax)), 0, n - 1);
+    const int v = std::clamp(static_cast<int>(std::floor(ay)), 0, n - 1);
+    return at(ex, ey, u, v);
+  }
+  const Lerp lu = lerpIndex(ax - 0.5, n), lv = lerpIndex(ay - 0.5, n);
+  return (1 - lv.t) * ((1 - lu.t) * at(ex, ey, lu.i0, lv.i0) + lu.t * at(ex, ey, lu.i1, lv.i0)) +
+         lv.t * ((1 - lu.t) * at(ex, ey, lu.i0, lv.i1) + lu.t * at(ex, ey, lu.i1, lv.i1));
+}
+
+double LightField::radiance(const Vec2& q, const Vec3& d, LightFieldLookup mode) const {
+  if (lenslet_.empty()) return 0;
+  Vec2 disc;
+  if (!discFromDirection(d, disc) || disc.x * disc.x + disc.y * disc.y >= 1) return 0;
+  const double e = geometry_.elementPitch_mm();
+  const double sx = q.x / e + 0.5 * geometry_.spatialX;  // 0..Sx across the plane
+  const double sy = q.y / e + 0.5 * geometry_.spatialY;
+  if (!(sx >= 0 && sx < geometry_.spatialX && sy >= 0 && sy < geometry_.spatialY)) return 0;
+  if (mode == LightFieldLookup::Nearest)
+    return angularSample(static_cast<int>(sx), static_cast<int>(sy), disc, mode);
+  const Lerp lx = lerpIndex(sx - 0.5, geometry_.spatialX), ly = lerpIndex(sy - 0.5, geometry_.spatialY);
+  return (1 - ly.t) * ((1 - lx.t) * angularSample(lx.i0, ly.i0, disc, mode) +
+                       lx.t * angularSample(lx.i1, ly.i0, disc, mode)) +
+         ly.t * ((1 - lx.t) * angularSample(lx.i0, ly.i1, disc, mode) +
+                 lx.t * angularSample(lx.i1, ly.i1, disc, mode));
+}
+
+}  // namespace lfi

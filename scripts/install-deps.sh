@@ -1,0 +1,57 @@
+#!/usr/bin/env bash
+# Installs lfi's build, run and test dependencies from Debian 12 packages.
+# Idempotent: packages already installed are left alone and apt is not
+# touched at all when nothing is missing. Needs root or sudo for apt-get.
+set -euo pipefail
+
+PACKAGES=(
+  # toolchain
+  g++ cmake make pkg-config ninja-build git
+  # ray queries, parallelism
+  libembree-dev libtbb-dev
+  # camera: GenICam through Aravis (tools for the loopback tests)
+  libaravis-dev aravis-tools
+  # display: USB
+  libusb-1.0-0-dev
+  # images, light fields, analysis
+  libopencv-dev libopencv-contrib-dev libopenexr-dev libimath-dev zlib1g-dev
+  # meshes
+  libtinyobjloader-dev
+  # small libraries instead of hand-written code
+  libcli11-dev libtomlplusplus-dev nlohmann-json3-dev libspdlog-dev libfmt-dev
+  # tests and benchmarks
+  libgtest-dev libgmock-dev libbenchmark-dev umockdev libumockdev-dev udev
+)
+
+if [[ ! -r /etc/os-release ]] || ! grep -qE '^ID=debian' /etc/os-release \
+    || ! grep -qE '^VERSION_ID="?12' /etc/os-release; then
+  echo "install-deps: this script supports Debian 12 (bookworm) only;" >&2
+  echo "  found: $( (grep -E '^PRETTY_NAME=' /etc/os-release 2>/dev/null || echo unknown) | cut -d= -f2-)" >&2
+  echo "  install the equivalents of these packages by hand: ${PACKAGES[*]}" >&2
+  exit 1
+fi
+
+missing=()
+for p in "${PACKAGES[@]}"; do
+  if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q 'install ok installed'; then
+    missing+=("$p")
+  fi
+done
+
+if [[ ${#missing[@]} -eq 0 ]]; then
+  echo "install-deps: all ${#PACKAGES[@]} packages present"
+  exit 0
+fi
+
+SUDO=()
+if [[ $(id -u) -ne 0 ]]; then
+  if command -v sudo >/dev/null; then SUDO=(sudo); else
+    echo "install-deps: need root or sudo to install: ${missing[*]}" >&2
+    exit 1
+  fi
+fi
+
+echo "install-deps: installing ${missing[*]}"
+export DEBIAN_FRONTEND=noninteractive
+"${SUDO[@]}" apt-get update -q
+"${SUDO[@]}" apt-get install -y -q --no-install-recommends "${missing[@]}"
