@@ -1,0 +1,38 @@
+# Thin wrapper around CMake (the presets in CMakePresets.json hold the details).
+#   make study       install dependencies if missing, build (Release), run the reference study
+#   make check       same set-up, then build and run every test
+#   make check-asan  the tests under AddressSanitizer + UndefinedBehaviorSanitizer
+#   make bench       build and run the benchmarks
+JOBS ?= 2
+STUDY_OUT ?= out/study
+STUDY_QUALITY ?= default
+CMAKE_WERROR := $(if $(CI),-DLFI_WERROR=ON,)
+LFI := build/release/apps/lfi
+
+.PHONY: deps configure build study check check-asan bench clean
+
+deps:
+	@scripts/install-deps.sh
+
+configure: deps
+	@cmake --preset release $(CMAKE_WERROR) >/dev/null
+
+build: configure
+	@cmake --build --preset release -j $(JOBS)
+
+study: build
+	$(LFI) study --out $(STUDY_OUT) --quality $(STUDY_QUALITY) --force
+
+check: build
+	ctest --preset release -j $(JOBS)
+
+check-asan: deps
+	@cmake --preset asan $(CMAKE_WERROR) >/dev/null
+	@cmake --build --preset asan -j $(JOBS)
+	ctest --preset asan -j $(JOBS)
+
+bench: build
+	build/release/bench/lfi-bench
+
+clean:
+	rm -rf build

@@ -1,0 +1,85 @@
+#pragma once
+// Sensors of the ray tracer: each maps a pixel sample (and, for the camera, an
+// aperture sample) to a ray of sight in the world frame (SPEC §2, exactly).
+//
+// TelecentricCamera (object-side telecentric thin lens with depth of field)
+//   parameter         symbol  units  meaning
+//   focalLength_mm    f       mm     focal length of the thin lens
+//   imageDistance_mm  b       mm     sensor to lens; focused object distance wz = (1/f - 1/b)^-1
+//   stopDiameter_mm   D       mm     telecentric stop in the image-side focal plane;
+//                                    object-side acceptance half-angle ≈ D / (2 f)
+//   pixelPitch_mm     -       mm     sensor pixel pitch (after binning)
+//   width, height     -       px     pixel counts
+//   worldFromCamera   -       -      camera frame: lens centre at the origin, +z towards the
+//                                    object (the viewing direction), x right, y down in the
+//                                    image; the sensor lies at z = -b, the stop at z = -f.
+// Pixel (i, j) with in-pixel offset (ju, jv) in [0,1)^2 sits at sensor position
+// s = -((i + ju - W/2) p, (j + jv - H/2) p): the sign undoes the lens's
+// inversion, so images come out upright (row 0 = camera -y).
+// A stop sample a (uniform on the disc of diameter D) gives
+//   w = (-(wz/b) sx, -(wz/b) sy, wz), o = line(s, a) ∩ {z = 0}, ray o + α (w - o).
+//
+// LightFieldSensor (lensless; SPEC §2): see lfi/core/light_field.h for the
+// parametrisation; worldFromSensor places the plane frame. A pixel sample p
+// starts at the centre of its spatial element and looks along
+// d = normalise(-px, -py, sqrt(1 - px^2 - py^2)); samples with px^2+py^2 >= 1
+// carry no ray (radiance 0).
+
+#include "lfi/core/geometry.h"
+#include "lfi/core/light_field.h"
+#include "lfi/sim/solid.h"
+
+#include <optional>
+#include <variant>
+
+namespace lfi::sim {
+
+struct TelecentricCamera {
+  double focalLength_mm = 100;
+  double imageDistance_mm = 200;
+  double stopDiameter_mm = 2;
+  double pixelPitch_mm = 0.1;
+  int width = 256;
+  int height = 256;
+  Rigid3 worldFromCamera;
+
+  double focusDistance_mm() const { return 1.0 / (1.0 / focalLength_mm - 1.0 / imageDistance_mm); }
+  double magnification() const { return imageDistance_mm / focusDistance_mm(); }
+  double objectPixel_mm() const { return pixelPitch_mm / magnification(); }
+  double acceptanceHalfAngle_rad() const { return std::atan(0.5 * stopDiameter_mm / focalLength_mm); }
+  void validate() const;  // throws Errc::InvalidArgument naming the field
+
+  // pixel + offset in [0,1)^2, stop sample in the unit disc.
+  Ray ray(int i, int j, const Vec2& pixelOffset, const Vec2& unitDiscSample) const;
+  // Where the world point projects on the image (continuous pixel coordinates;
+  // exact on the focal plane, the chief ray elsewhere).
+  Vec2 project(const Vec3& worldPoint) const;
+  // A camera looking down -z from z = lensZ, focused at world z = lensZ - wz.
+  static Rigid3 lookingDownFrom(double lensZ);
+};
+
+struct LightFieldSensor {
+  LightFieldGeometry geometry;
+  Rigid3 worldFromSensor;
+
+  // The ray of sight of a sample at (col + offset.x, row + offset.y) of the
+  // lenslet image; nullopt outside the hemisphere mapping.
+  std::optional<Ray> ray(int col, int row, const Vec2& pixelOffset) const;
+};
+
+using Sensor = std::variant<TelecentricCamera, LightFieldSensor>;
+
+inline int sensorWidth(const Sensor& s) {
+  return std::visit([](const auto& x) {
+    if constexpr (std::is_same_v<std::decay_t<decltype(x)>, TelecentricCamera>) return x.width;
+    else return x.geometry.width();
+  }, s);
+}
+inline int sensorHeight(const Sensor& s) {
+  return std::visit([](const auto& x) {
+    if constexpr (std::is_same_v<std::decay_t<decltype(x)>, TelecentricCamera>) return x.height;
+    else return x.geometry.height();
+  }, s);
+}
+
+}  // namespace lfi::sim

@@ -1,0 +1,99 @@
+#pragma once
+// Analytic solids and constructive solid geometry, intersected exactly in
+// double precision. A solid is a closed set; along a line it is a sorted list
+// of disjoint intervals [t_enter, t_exit], each end carrying the solid's
+// outward surface normal. Booleans combine those lists, so union, intersection
+// and difference are exact for any nesting (no tessellation).
+//
+// Primitives, in the node's local frame (mm):
+//   kind       parameters        set
+//   Sphere     radius r          |p| <= r
+//   Cylinder   radius r          x^2 + y^2 <= r^2 (infinite along z)
+//   HalfSpace  -                 z <= 0 (outward normal +z)
+// Every node carries parentFromLocal, so any subtree can be placed.
+
+#include "lfi/core/geometry.h"
+
+#include <array>
+#include <limits>
+#include <memory>
+#include <vector>
+
+namespace lfi::sim {
+
+struct Ray {
+  Vec3 origin;
+  Vec3 direction;  // unit length
+  Vec3 at(double t) const { return origin + direction * t; }
+};
+
+struct SurfacePoint {
+  double t = std::numeric_limits<double>::infinity();
+  Vec3 normal{0, 0, 0};  // outward normal of the solid, unit
+};
+
+struct Interval {
+  SurfacePoint enter;
+  SurfacePoint exit;
+};
+
+// Fixed-capacity interval list: no allocation on the hot path. Shapes in this
+// project produce at most a handful of intervals per line.
+class IntervalList {
+public:
+  static constexpr int kCapacity = 16;
+  int size() const { return size_; }
+  const Interval& operator[](int i) const { return items_[i]; }
+  void push(const Interval& interval);  // throws if the capacity is exceeded
+  void clear() { size_ = 0; }
+
+private:
+  std::array<Interval, kCapacity> items_;
+  int size_ = 0;
+};
+
+struct Bounds {
+  Vec3 lo{std::numeric_limits<double>::infinity()};
+  Vec3 hi{-std::numeric_limits<double>::infinity()};
+  bool finite() const;
+  static Bounds everything();
+  Bounds transformed(const Rigid3& parentFromLocal) const;
+  Bounds intersect(const Bounds& other) const;
+  Bounds unite(const Bounds& other) const;
+};
+
+class Solid {
+public:
+  enum class Kind { Sphere, Cylinder, HalfSpace, Union, Intersection, Difference };
+
+  static std::shared_ptr<Solid> sphere(double radius, const Rigid3& parentFromLocal = {});
+  static std::shared_ptr<Solid> cylinder(double radius, const Rigid3& parentFromLocal = {});
+  static std::shared_ptr<Solid> halfSpace(const Rigid3& parentFromLocal = {});
+  static std::shared_ptr<Solid> combine(Kind op, std::shared_ptr<const Solid> a, std::shared_ptr<const Solid> b,
+                                        const Rigid3& parentFromLocal = {});
+
+  // A spherical lens in optics sign convention: front vertex at z = -tc/2,
+  // back vertex at z = +tc/2, radius > 0 when the centre of curvature lies on
+  // the +z side of the vertex, 0 for a flat face; diameter is the edge cylinder.
+  static std::shared_ptr<Solid> sphericalLens(double frontRadius, double backRadius, double centreThickness,
+                                              double diameter);
+
+  // All intervals of the line origin + t direction (any t), in the parent frame.
+  void intervals(const Ray& ray, IntervalList& out) const;
+  Bounds bounds() const;  // in the parent frame
+  bool contains(const Vec3& point) const;  // in the parent frame
+  Kind kind() const { return kind_; }
+
+private:
+  Solid(Kind kind, double radius, const Rigid3& parentFromLocal);
+  void localIntervals(const Ray& local, IntervalList& out) const;
+
+  Kind kind_;
+  double radius_ = 0;
+  Rigid3 parentFromLocal_;
+  Rigid3 localFromParent_;
+  bool identity_ = true;
+  std::shared_ptr<const Solid> a_, b_;
+};
+
+}  // namespace lfi::sim

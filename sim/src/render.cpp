@@ -1,0 +1,238 @@
+#include "lfi/sim/render.h"
+
+#include "lfi/core/error.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
+#include <cmath>
+#include <numbers>
+
+namespace lfi::sim {
+
+namespace {
+
+std::uint64_t splitMix64(std::uint64_t x) {
+  x += 0x9e3779b97f4a7c15ull;
+  x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ull;
+  x = (x ^ (x >> 27)) * 0x94d049bb133111ebull;
+  return x ^ (x >> 31);
+}
+
+// Shirley's concentric map: keeps stratification and has no singular centre.
+Vec2 concentricDisc(double u1, double u2) {
+  const double a = 2 * u1 - 1, b = 2 * u2 - 1;
+  if (a == 0 && b == 0) return {0, 0};
+  double r, phi;
+  if (std::abs(a) > std::abs(b)) {
+    r = a;
+    phi = (std::numbers::pi / 4) * (b / a);
+  } else {
+    r = b;
+    phi = std::numbers::pi / 2 - (std::numbers::pi / 4) * (a / b);
+  }
+  return {r * std::cos(phi), r * std::sin(phi)};
+}
+
+Vec3 cosineHemisphere(const Vec3& n, double u1, double u2) {
+  const Vec2 d = concentricDisc(u1, u2);
+  const double z = std::sqrt(std::max(0.0, 1 - d.x * d.x - d.y * d.y));
+  const Vec3 t = std::abs(n.x) > 0.5 ? Vec3(0, 1, 0).cross(n).normalized() : Vec3(1, 0, 0).cross(n).normalized();
+  const Vec3 bt = n.cross(t);
+  return (t * d.x + bt * d.y + n * z).normalized();
+}
+
+double emittedRadiance(const Scene& scene, const Hit& hit, const Emission& emission, const Vec3& towardsSensor) {
+  const double cosTheta = towardsSensor.dot(hit.normal);
+  return std::visit(
+      [&](const auto& e) -> double {
+        using T = std::decay_t<decltype(e)>;
+        if constexpr (std::is_same_v<T, ParallelEmission>) {
+          return cosTheta >= std::cos(e.halfAngle_rad) ? e.radiance : 0.0;
+        } else if constexpr (std::is_same_v<T, LambertianEmission>) {
+          return cosTheta > 0 ? e.radiance : 0.0;
+        } else {
+          if (!e.lightField) return 0.0;
+          const Vec3 d = scene.objectFromWorld(hit.object).vector(towardsSensor);
+          return e.lightField->radiance({hit.localPoint.x, hit.localPoint.y}, d, e.lookup);
+        }
+      },
+      emission);
+}
+
+// The dielectric objects a path is inside, innermost last.
+class MediumStack {
+public:
+  static constexpr int kDepth = 8;
+  int size() const { return size_; }
+  int top() const { return items_[size_ - 1]; }
+  void push(int object) {
+    if (size_ < kDepth) items_[size_++] = object;
+  }
+  void remove(int object) {
+    for (int i = size_ - 1; i >= 0; --i)
+      if (items_[i] == object) {
+        for (int k = i; k + 1 < size_; ++k) items_[k] = items_[k + 1];
+        --size_;
+        return;
+      }
+  }
+  // Index of refraction of the innermost medium, ignoring `skip`.
+  double ior(const Scene& scene, int skip = -1) const {
+    for (int i = size_ - 1; i >= 0; --i)
+      if (items_[i] != skip) return std::get<Dielectric>(scene.object(items_[i]).material).ior;
+    return scene.ambientIor();
+  }
+  double absorption(const Scene& scene) const {
+    return size_ ? std::get<Dielectric>(scene.object(top()).material).absorption_per_mm : 0.0;
+  }
+
+private:
+  std::array<int, kDepth> items_{};
+  int size_ = 0;
+};
+
+}  // namespace
+
+Sampler::Sampler(std::uint64_t seed, std::uint64_t stream) : state(0), increment((splitMix64(stream) << 1) | 1) {
+  nextU32();
+  state += splitMix64(seed);
+  nextU32();
+}
+
+std::uint32_t Sampler::nextU32() {
+  const std::uint64_t old = state;
+  state = old * 6364136223846793005ull + increment;
+  const auto xorshifted = static_cast<std::uint32_t>(((old >> 18u) ^ old) >> 27u);
+  const auto rot = static_cast<std::uint32_t>(old >> 59u);
+  return (xorshifted >> rot) | (xorshifted << ((-rot) & 31));
+}
+
+double Sampler::next() {
+  // 53 random bits from two outputs.
+  const std::uint64_t hi = nextU32(), lo = nextU32();
+  return static_cast<double>(((hi << 32) | lo) >> 11) * 0x1.0p-53;
+}
+
+double fresnelReflectance(double cosI, double n1, double n2) {
+  cosI = std::clamp(cosI, 0.0, 1.0);
+  const double eta = n1 / n2;
+  const double sin2T = eta * eta * (1 - cosI * cosI);
+  if (sin2T >= 1) return 1;
+  const double cosT = std::sqrt(1 - sin2T);
+  const double rs = (n1 * cosI - n2 * cosT) / (n1 * cosI + n2 * cosT);
+  const double rp = (n2 * cosI - n1 * cosT) / (n2 * cosI + n1 * cosT);
+  return 0.5 * (rs * rs + rp * rp);
+}
+
+bool refract(const Vec3& d, const Vec3& n, double eta, Vec3& out) {
+  const double cosI = -d.dot(n);
+  const double sin2T = eta * eta * (1 - cosI * cosI);
+  if (sin2T >= 1) return false;
+  out = (d * eta + n * (eta * cosI - std::sqrt(1 - sin2T))).normalized();
+  return true;
+}
+
+Vec3 reflect(const Vec3& d, const Vec3& n) { return (d - n * (2 * d.dot(n))).normalized(); }
+
+double traceRadiance(const Scene& scene, Ray ray, Sampler& sampler, int maxDepth) {
+  double throughput = 1;
+  MediumStack media;
+  for (int depth = 0; depth < maxDepth; ++depth) {
+    const Hit hit = scene.intersect(ray);
+    if (!hit.valid()) return 0;
+    if (media.size()) throughput *= std::exp(-media.absorption(scene) * hit.t);
+    const Object& obj = scene.object(hit.object);
+    if (obj.emission) return throughput * emittedRadiance(scene, hit, *obj.emission, -ray.direction);
+
+    const Vec3& d = ray.direction;
+    const bool fromOutside = d.dot(hit.normal) < 0;
+    const Vec3 facing = fromOutside ? hit.normal : -hit.normal;  // towards the incoming side
+    // Meshes are intersected in float: step off the surface to avoid re-hits.
+    const bool exact = std::holds_alternative<std::shared_ptr<const Solid>>(obj.shape);
+    auto leave = [&](const Vec3& dir) {
+      const double offset = exact ? 0.0 : 1e-4 * (dir.dot(facing) > 0 ? 1 : -1);
+      ray = {hit.point + facing * offset, dir};
+    };
+
+    if (std::holds_alternative<Absorber>(obj.material)) return 0;
+    if (const auto* diffuse = std::get_if<Diffuse>(&obj.material)) {
+      throughput *= diffuse->albedo;
+      leave(cosineHemisphere(facing, sampler.next(), sampler.next()));
+      continue;
+    }
+    const auto& glass = std::get<Dielectric>(obj.material);
+    // Entering: from the current medium into the glass. Leaving: from the
+    // glass into whatever medium contains it (a bubble in glass exits to glass).
+    const bool entering = fromOutside;
+    const double n1 = entering ? media.ior(scene) : glass.ior;
+    const double n2 = entering ? glass.ior : media.ior(scene, hit.object);
+    const double cosI = -d.dot(facing);
+    const double reflectance = fresnelReflectance(cosI, n1, n2);
+    Vec3 refracted;
+    if (sampler.next() < reflectance || !refract(d, facing, n1 / n2, refracted)) {
+      leave(reflect(d, facing));
+      continue;
+    }
+    if (entering)
+      media.push(hit.object);
+    else
+      media.remove(hit.object);
+    leave(refracted);
+  }
+  return 0;
+}
+
+cv::Mat render(const Scene& scene, const Sensor& sensor, const RenderOptions& options) {
+  if (options.samplesPerPixel < 1) fail(Errc::InvalidArgument, "render: samplesPerPixel must be >= 1");
+  if (options.tileSize < 1) fail(Errc::InvalidArgument, "render: tileSize must be >= 1");
+  if (const auto* cam = std::get_if<TelecentricCamera>(&sensor)) cam->validate();
+  if (const auto* lfs = std::get_if<LightFieldSensor>(&sensor)) lfs->geometry.validate();
+  const int width = sensorWidth(sensor), height = sensorHeight(sensor);
+  cv::Mat image(height, width, CV_32FC1, cv::Scalar(0));
+  const int ts = options.tileSize;
+  const int tilesX = (width + ts - 1) / ts, tilesY = (height + ts - 1) / ts, tiles = tilesX * tilesY;
+  std::atomic<int> done{0};
+  std::atomic<bool> stopped{false};
+
+  auto renderTile = [&](int tile) {
+    if (options.cancel && options.cancel->load(std::memory_order_relaxed)) {
+      stopped = true;
+      return;
+    }
+    const int x0 = (tile % tilesX) * ts, y0 = (tile / tilesX) * ts;
+    for (int j = y0; j < std::min(y0 + ts, height); ++j) {
+      float* row = image.ptr<float>(j);
+      for (int i = x0; i < std::min(x0 + ts, width); ++i) {
+        Sampler sampler(options.seed, static_cast<std::uint64_t>(j) * static_cast<std::uint64_t>(width) + i);
+        double sum = 0;
+        for (int s = 0; s < options.samplesPerPixel; ++s) {
+          const Vec2 offset(sampler.next(), sampler.next());
+          std::optional<Ray> ray;
+          if (const auto* cam = std::get_if<TelecentricCamera>(&sensor)) {
+            const Vec2 disc = concentricDisc(sampler.next(), sampler.next());
+            ray = cam->ray(i, j, offset, disc);
+          } else {
+            ray = std::get<LightFieldSensor>(sensor).ray(i, j, offset);
+          }
+          if (ray) sum += traceRadiance(scene, *ray, sampler, options.maxDepth);
+        }
+        row[i] = static_cast<float>(sum / options.samplesPerPixel);
+      }
+    }
+    const int finished = ++done;
+    if (options.progress) options.progress(static_cast<double>(finished) / tiles);
+  };
+
+  tbb::task_arena arena(options.threads > 0 ? options.threads : tbb::task_arena::automatic);
+  arena.execute([&] {
+    tbb::parallel_for(tbb::blocked_range<int>(0, tiles, 1), [&](const tbb::blocked_range<int>& range) {
+      for (int tile = range.begin(); tile != range.end(); ++tile) renderTile(tile);
+    });
+  });
+  if (stopped) fail(Errc::Cancelled, "render cancelled");
+  return image;
+}
+
+}  // namespace lfi::sim

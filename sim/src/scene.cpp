@@ -1,0 +1,220 @@
+#include "lfi/sim/scene.h"
+
+#include "lfi/core/error.h"
+#include "lfi/core/log.h"
+
+#include <embree3/rtcore.h>
+
+#include <cmath>
+
+namespace lfi::sim {
+
+namespace {
+
+// Our data for one analytic object, handed to Embree's callbacks.
+struct SolidGeometry {
+  const Solid* solid;
+  Rigid3 worldFromObject;
+  Rigid3 objectFromWorld;
+  int object;
+};
+
+// Embree's context, extended with the double-precision ray and best hit so
+// that analytic shapes are intersected and reported without float rounding.
+struct HitContext {
+  RTCIntersectContext embree;
+  Ray ray;  // world frame
+  double tMin;
+  double bestT;
+  Vec3 bestNormal;  // world frame
+  int bestObject;
+};
+
+void solidBounds(const RTCBoundsFunctionArguments* args) {
+  const auto* g = static_cast<const SolidGeometry*>(args->geometryUserPtr);
+  Bounds b = g->solid->bounds().transformed(g->worldFromObject);
+  // Embree traverses in float; pad so that rounding never culls a real hit.
+  const double pad = 1e-3 + 1e-6 * std::max({std::abs(b.lo.x), std::abs(b.lo.y), std::abs(b.lo.z),
+                                             std::abs(b.hi.x), std::abs(b.hi.y), std::abs(b.hi.z)});
+  RTCBounds* o = args->bounds_o;
+  o->lower_x = static_cast<float>(b.lo.x - pad);
+  o->lower_y = static_cast<float>(b.lo.y - pad);
+  o->lower_z = static_cast<float>(b.lo.z - pad);
+  o->upper_x = static_cast<float>(b.hi.x + pad);
+  o->upper_y = static_cast<float>(b.hi.y + pad);
+  o->upper_z = static_cast<float>(b.hi.z + pad);
+}
+
+void solidIntersect(const RTCIntersectFunctionNArguments* args) {
+  if (args->N != 1 || !args->valid[0]) return;  // the scene is only traced with rtcIntersect1
+  const auto* g = static_cast<const SolidGeometry*>(args->geometryUserPtr);
+  auto* ctx = reinterpret_cast<HitContext*>(args->context);
+  const Ray local{g->objectFromWorld.point(ctx->ray.origin), g->objectFromWorld.vector(ctx->ray.direction)};
+  IntervalList list;
+  g->solid->intervals(local, list);
+  for (int i = 0; i < list.size(); ++i) {
+    for (const SurfacePoint* s : {&list[i].enter, &list[i].exit}) {
+      if (s->t <= ctx->tMin || s->t >= ctx->bestT || !std::isfinite(s->t)) continue;
+      ctx->bestT = s->t;
+      ctx->bestNormal = g->worldFromObject.vector(s->normal);
+      ctx->bestObject = g->object;
+      RTCRayN* rays = RTCRayHitN_RayN(args->rayhit, 1);
+      RTCHitN* hits = RTCRayHitN_HitN(args->rayhit, 1);
+      RTCRayN_tfar(rays, 1, 0) = static_cast<float>(s->t);
+      RTCHitN_Ng_x(hits, 1, 0) = static_cast<float>(ctx->bestNormal.x);
+      RTCHitN_Ng_y(hits, 1, 0) = static_cast<float>(ctx->bestNormal.y);
+      RTCHitN_Ng_z(hits, 1, 0) = static_cast<float>(ctx->bestNormal.z);
+      RTCHitN_u(hits, 1, 0) = 0;
+      RTCHitN_v(hits, 1, 0) = 0;
+      RTCHitN_primID(hits, 1, 0) = args->primID;
+      RTCHitN_geomID(hits, 1, 0) = args->geomID;
+      RTCHitN_instID(hits, 1, 0, 0) = args->context->instID[0];
+    }
+  }
+}
+
+void embreeError(void*, RTCError code, const char* message) {
+  spdlog::error("embree: error {}: {}", static_cast<int>(code), message ? message : "");
+}
+
+}  // namespace
+
+struct Scene::Impl {
+  RTCDevice device = nullptr;
+  RTCScene scene = nullptr;
+  std::vector<std::unique_ptr<SolidGeometry>> solids;
+  std::vector<Rigid3> objectFromWorld;
+  ~Impl() {
+    if (scene) rtcReleaseScene(scene);
+    if (device) rtcReleaseDevice(device);
+  }
+};
+
+Scene::Scene(std::vector<Object> objects, double ambientIor)
+    : impl_(std::make_unique<Impl>()), objects_(std::move(objects)), ambientIor_(ambientIor) {
+  impl_->device = rtcNewDevice(nullptr);
+  if (!impl_->device) fail(Errc::Device, "embree: cannot create a device (error {})", static_cast<int>(rtcGetDeviceError(nullptr)));
+  rtcSetDeviceErrorFunction(impl_->device, embreeError, nullptr);
+  impl_->scene = rtcNewScene(impl_->device);
+  rtcSetSceneFlags(impl_->scene, RTC_SCENE_FLAG_ROBUST);
+  rtcSetSceneBuildQuality(impl_->scene, RTC_BUILD_QUALITY_HIGH);
+
+  for (size_t i = 0; i < objects_.size(); ++i) {
+    const Object& obj = objects_[i];
+    impl_->objectFromWorld.push_back(obj.worldFromObject.inverse());
+    RTCGeometry geom = nullptr;
+    if (const auto* solid = std::get_if<std::shared_ptr<const Solid>>(&obj.shape)) {
+      if (!*solid) fail(Errc::InvalidArgument, "scene object '{}' has no solid", obj.name);
+      if (!(*solid)->bounds().transformed(obj.worldFromObject).finite())
+        fail(Errc::InvalidArgument, "scene object '{}' is unbounded (intersect it with a finite solid)", obj.name);
+      auto data = std::make_unique<SolidGeometry>(
+          SolidGeometry{solid->get(), obj.worldFromObject, obj.worldFromObject.inverse(), static_cast<int>(i)});
+      geom = rtcNewGeometry(impl_->device, RTC_GEOMETRY_TYPE_USER);
+      rtcSetGeometryUserPrimitiveCount(geom, 1);
+      rtcSetGeometryUserData(geom, data.get());
+      rtcSetGeometryBoundsFunction(geom, solidBounds, nullptr);
+      rtcSetGeometryIntersectFunction(geom, solidIntersect);
+      impl_->solids.push_back(std::move(data));
+    } else if (const auto* rect = std::get_if<Rectangle>(&obj.shape)) {
+      if (!(rect->sizeX > 0) || !(rect->sizeY > 0))
+        fail(Errc::InvalidArgument, "scene object '{}': rectangle size must be > 0", obj.name);
+      geom = rtcNewGeometry(impl_->device, RTC_GEOMETRY_TYPE_QUAD);
+      auto* v = static_cast<float*>(
+          rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), 4));
+      const double hx = rect->sizeX / 2, hy = rect->sizeY / 2;
+      const Vec3 corners[4] = {{-hx, -hy, 0}, {hx, -hy, 0}, {hx, hy, 0}, {-hx, hy, 0}};
+      for (int c = 0; c < 4; ++c) {
+        const Vec3 p = obj.worldFromObject.point(corners[c]);
+        v[3 * c] = static_cast<float>(p.x);
+        v[3 * c + 1] = static_cast<float>(p.y);
+        v[3 * c + 2] = static_cast<float>(p.z);
+      }
+      auto* q = static_cast<unsigned*>(
+          rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT4, 4 * sizeof(unsigned), 1));
+      q[0] = 0, q[1] = 1, q[2] = 2, q[3] = 3;
+    } else {
+      const auto& mesh = std::get<TriangleMesh>(obj.shape);
+      if (mesh.triangles.empty()) fail(Errc::InvalidArgument, "scene object '{}': mesh has no triangles", obj.name);
+      if (!mesh.normals.empty() && mesh.normals.size() != mesh.vertices.size())
+        fail(Errc::InvalidArgument, "scene object '{}': {} normals for {} vertices", obj.name, mesh.normals.size(),
+             mesh.vertices.size());
+      geom = rtcNewGeometry(impl_->device, RTC_GEOMETRY_TYPE_TRIANGLE);
+      auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
+                                                            3 * sizeof(float), mesh.vertices.size()));
+      for (size_t k = 0; k < mesh.vertices.size(); ++k) {
+        const Vec3 p = obj.worldFromObject.point(mesh.vertices[k]);
+        v[3 * k] = static_cast<float>(p.x);
+        v[3 * k + 1] = static_cast<float>(p.y);
+        v[3 * k + 2] = static_cast<float>(p.z);
+      }
+      auto* t = static_cast<unsigned*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
+                                                               3 * sizeof(unsigned), mesh.triangles.size()));
+      for (size_t k = 0; k < mesh.triangles.size(); ++k)
+        for (int c = 0; c < 3; ++c) {
+          if (mesh.triangles[k][c] >= mesh.vertices.size())
+            fail(Errc::InvalidArgument, "scene object '{}': triangle {} uses vertex {} of {}", obj.name, k,
+                 mesh.triangles[k][c], mesh.vertices.size());
+          t[3 * k + c] = mesh.triangles[k][c];
+        }
+    }
+    rtcCommitGeometry(geom);
+    rtcAttachGeometryByID(impl_->scene, geom, static_cast<unsigned>(i));
+    rtcReleaseGeometry(geom);
+  }
+  rtcCommitScene(impl_->scene);
+}
+
+Scene::~Scene() = default;
+
+Hit Scene::intersect(const Ray& ray, double tMin, double tMax) const {
+  HitContext ctx;
+  rtcInitIntersectContext(&ctx.embree);
+  ctx.ray = ray;
+  ctx.tMin = tMin;
+  ctx.bestT = tMax;
+  ctx.bestObject = -1;
+  RTCRayHit rh;
+  rh.ray.org_x = static_cast<float>(ray.origin.x);
+  rh.ray.org_y = static_cast<float>(ray.origin.y);
+  rh.ray.org_z = static_cast<float>(ray.origin.z);
+  rh.ray.dir_x = static_cast<float>(ray.direction.x);
+  rh.ray.dir_y = static_cast<float>(ray.direction.y);
+  rh.ray.dir_z = static_cast<float>(ray.direction.z);
+  rh.ray.tnear = static_cast<float>(tMin);
+  rh.ray.tfar = std::isfinite(tMax) ? static_cast<float>(tMax) : std::numeric_limits<float>::infinity();
+  rh.ray.time = 0;
+  rh.ray.mask = 0xffffffffu;
+  rh.ray.id = 0;
+  rh.ray.flags = 0;
+  rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+  rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+  rtcIntersect1(impl_->scene, &ctx.embree, &rh);
+
+  Hit hit;
+  if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return hit;
+  hit.object = static_cast<int>(rh.hit.geomID);
+  const Object& obj = objects_[rh.hit.geomID];
+  if (ctx.bestObject == hit.object) {
+    hit.t = ctx.bestT;
+    hit.normal = ctx.bestNormal.normalized();
+  } else {
+    hit.t = rh.ray.tfar;
+    hit.normal = Vec3(rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z).normalized();
+    if (std::holds_alternative<Rectangle>(obj.shape)) hit.normal = obj.worldFromObject.vector({0, 0, 1});
+    if (const auto* mesh = std::get_if<TriangleMesh>(&obj.shape); mesh && !mesh->normals.empty()) {
+      const auto& tri = mesh->triangles[rh.hit.primID];
+      const double u = rh.hit.u, v = rh.hit.v;
+      const Vec3 n = mesh->normals[tri[0]] * (1 - u - v) + mesh->normals[tri[1]] * u + mesh->normals[tri[2]] * v;
+      const Vec3 shading = obj.worldFromObject.vector(n).normalized();
+      // Keep the interpolated normal on the geometric normal's side.
+      hit.normal = shading.dot(hit.normal) > 0 ? shading : hit.normal;
+    }
+  }
+  hit.point = ray.at(hit.t);
+  hit.localPoint = impl_->objectFromWorld[rh.hit.geomID].point(hit.point);
+  return hit;
+}
+
+const Rigid3& Scene::objectFromWorld(int index) const { return impl_->objectFromWorld[static_cast<size_t>(index)]; }
+
+}  // namespace lfi::sim

@@ -1,0 +1,198 @@
+#include "lfi/core/atomic_file.h"
+
+#include <fmt/format.h>
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <atomic>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "lfi/core/error.h"
+
+namespace {
+
+namespace fs = std::filesystem;
+using lfi::Errc;
+using lfi::Overwrite;
+
+testing::AssertionResult throwsError(const std::function<void()>& f, Errc code,
+                                     const std::vector<std::string>& fragments) {
+  try {
+    f();
+  } catch (const lfi::Error& e) {
+    if (e.code() != code)
+      return testing::AssertionFailure() << "code '" << lfi::toString(e.code()) << "', expected '"
+                                         << lfi::toString(code) << "' (message: " << e.what() << ")";
+    for (const std::string& fragment : fragments)
+      if (std::string(e.what()).find(fragment) == std::string::npos)
+        return testing::AssertionFailure() << "message '" << e.what() << "' does not contain '" << fragment << "'";
+    return testing::AssertionSuccess();
+  } catch (const std::exception& e) {
+    return testing::AssertionFailure() << "threw a non-lfi exception: " << e.what();
+  }
+  return testing::AssertionFailure() << "did not throw";
+}
+
+std::string readAll(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+void writePlain(const fs::path& path, const std::string& content) { std::ofstream(path, std::ios::binary) << content; }
+
+class AtomicFile : public testing::Test {
+protected:
+  void SetUp() override {
+    static std::atomic<int> counter{0};
+    const auto* info = testing::UnitTest::GetInstance()->current_test_info();
+    dir_ = fs::path(testing::TempDir()) /
+           fmt::format("lfi-atomic-{}-{}-{}", info->name(), ::getpid(), counter.fetch_add(1));
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+  }
+  void TearDown() override {
+    std::error_code ignored;
+    fs::remove_all(dir_, ignored);
+  }
+  // Names of everything in the test directory, sorted (hidden temporaries included).
+  std::vector<std::string> entries() const {
+    std::vector<std::string> names;
+    for (const auto& entry : fs::directory_iterator(dir_)) names.push_back(entry.path().filename().string());
+    std::sort(names.begin(), names.end());
+    return names;
+  }
+
+  fs::path dir_;
+};
+
+using Names = std::vector<std::string>;
+
+TEST_F(AtomicFile, InterruptedWriteKeepsOldFileAndRemovesTemporary) {
+  const fs::path target = dir_ / "calibration.json";
+  writePlain(target, "old content");
+  fs::path seenTemporary;
+  bool temporaryExisted = false;
+  try {
+    lfi::writeFileAtomically(target, Overwrite::Allow, [&](const fs::path& temporary) {
+      seenTemporary = temporary;
+      std::ofstream(temporary, std::ios::binary) << "new cont";  // part of the new content...
+      temporaryExisted = fs::exists(temporary);
+      throw std::runtime_error("writer interrupted");  // ...then the writer fails
+    });
+    ADD_FAILURE() << "the writer's exception did not propagate";
+  } catch (const std::runtime_error& e) {
+    EXPECT_STREQ(e.what(), "writer interrupted");  // the writer's own exception, unchanged
+  }
+  // The temporary was a real file next to the target, not the target itself.
+  EXPECT_TRUE(temporaryExisted);
+  EXPECT_EQ(seenTemporary.parent_path(), target.parent_path());
+  EXPECT_NE(seenTemporary, target);
+  EXPECT_FALSE(fs::exists(seenTemporary));
+  EXPECT_EQ(readAll(target), "old content");
+  EXPECT_EQ(entries(), (Names{"calibration.json"}));
+}
+
+TEST_F(AtomicFile, InterruptedWriteOfNewFileLeavesNothing) {
+  const fs::path target = dir_ / "new.bin";
+  EXPECT_TRUE(throwsError(
+      [&] {
+        lfi::writeFileAtomically(target, Overwrite::Refuse, [](const fs::path& temporary) {
+          std::ofstream(temporary) << "partial";
+          lfi::fail(Errc::Cancelled, "stopped by the user");
+        });
+      },
+      Errc::Cancelled, {"stopped by the user"}));
+  EXPECT_EQ(entries(), Names{});
+}
+
+TEST_F(AtomicFile, RefuseKeepsExistingTarget) {
+  const fs::path target = dir_ / "result.csv";
+  writePlain(target, "original");
+  EXPECT_TRUE(throwsError(
+      [&] {
+        lfi::writeFileAtomically(target, Overwrite::Refuse,
+                                 [](const fs::path& temporary) { std::ofstream(temporary) << "replacement"; });
+      },
+      Errc::Exists, {target.string()}));
+  EXPECT_EQ(readAll(target), "original");
+  EXPECT_EQ(entries(), (Names{"result.csv"}));
+}
+
+TEST_F(AtomicFile, RefuseDetectsTargetCreatedDuringWrite) {
+  // Another process creates the target while we write: the publish step itself must refuse.
+  const fs::path target = dir_ / "race.txt";
+  EXPECT_TRUE(throwsError(
+      [&] {
+        lfi::writeFileAtomically(target, Overwrite::Refuse, [&](const fs::path& temporary) {
+          std::ofstream(temporary) << "ours";
+          writePlain(target, "theirs");
+        });
+      },
+      Errc::Exists, {target.string()}));
+  EXPECT_EQ(readAll(target), "theirs");
+  EXPECT_EQ(entries(), (Names{"race.txt"}));
+}
+
+TEST_F(AtomicFile, RefuseCreatesMissingTarget) {
+  const fs::path target = dir_ / "fresh.txt";
+  lfi::writeFileAtomically(target, Overwrite::Refuse, [](const fs::path& temporary) {
+    std::ofstream(temporary, std::ios::binary) << "fresh content";
+  });
+  EXPECT_EQ(readAll(target), "fresh content");
+  EXPECT_EQ(entries(), (Names{"fresh.txt"}));
+}
+
+TEST_F(AtomicFile, AllowReplacesExistingTarget) {
+  const fs::path target = dir_ / "result.csv";
+  writePlain(target, "a much longer original content that must not leave a tail behind");
+  lfi::writeFileAtomically(target, Overwrite::Allow,
+                           [](const fs::path& temporary) { std::ofstream(temporary, std::ios::binary) << "short"; });
+  EXPECT_EQ(readAll(target), "short");
+  EXPECT_EQ(entries(), (Names{"result.csv"}));
+}
+
+TEST_F(AtomicFile, MissingDirectoryIsIoErrorNamingPath) {
+  const fs::path target = dir_ / "no" / "such" / "dir" / "out.txt";
+  bool writerCalled = false;
+  EXPECT_TRUE(throwsError(
+      [&] { lfi::writeFileAtomically(target, Overwrite::Allow, [&](const fs::path&) { writerCalled = true; }); },
+      Errc::Io, {target.string()}));
+  EXPECT_FALSE(writerCalled);
+  EXPECT_TRUE(
+      throwsError([&] { lfi::writeFileAtomically(target, Overwrite::Refuse, "text"); }, Errc::Io, {target.string()}));
+  EXPECT_FALSE(fs::exists(dir_ / "no"));
+}
+
+TEST_F(AtomicFile, StringOverloadWritesExactBytes) {
+  const fs::path target = dir_ / "blob.bin";
+  const std::string content("line 1\nline 2\r\n\0binary\xff\x00tail", 28);
+  lfi::writeFileAtomically(target, Overwrite::Refuse, content);
+  EXPECT_EQ(readAll(target), content);
+  EXPECT_EQ(fs::file_size(target), content.size());
+  EXPECT_TRUE(throwsError([&] { lfi::writeFileAtomically(target, Overwrite::Refuse, "other"); }, Errc::Exists,
+                          {target.string()}));
+  EXPECT_EQ(readAll(target), content);
+  lfi::writeFileAtomically(target, Overwrite::Allow, "other");
+  EXPECT_EQ(readAll(target), "other");
+  lfi::writeFileAtomically(target, Overwrite::Allow, std::string_view());
+  EXPECT_EQ(readAll(target), "");
+  EXPECT_TRUE(fs::exists(target));
+  EXPECT_EQ(entries(), (Names{"blob.bin"}));
+}
+
+TEST_F(AtomicFile, TargetWithoutFileNameIsRejected) {
+  EXPECT_TRUE(throwsError([&] { lfi::writeFileAtomically(dir_ / "", Overwrite::Allow, "x"); }, Errc::InvalidArgument,
+                          {"not a file name"}));
+  EXPECT_EQ(entries(), Names{});
+}
+
+}  // namespace

@@ -1,0 +1,386 @@
+#include "lfi/core/exr_io.h"
+
+#include <OpenEXR/ImfChannelList.h>
+#include <OpenEXR/ImfDoubleAttribute.h>
+#include <OpenEXR/ImfFrameBuffer.h>
+#include <OpenEXR/ImfHeader.h>
+#include <OpenEXR/ImfInputFile.h>
+#include <OpenEXR/ImfIntAttribute.h>
+#include <OpenEXR/ImfOutputFile.h>
+#include <OpenEXR/ImfStringAttribute.h>
+#include <fmt/format.h>
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <bit>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <limits>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "lfi/core/error.h"
+
+namespace {
+
+namespace fs = std::filesystem;
+using lfi::Errc;
+using lfi::LightField;
+using lfi::LightFieldGeometry;
+
+testing::AssertionResult throwsError(const std::function<void()>& f, Errc code,
+                                     const std::vector<std::string>& fragments) {
+  try {
+    f();
+  } catch (const lfi::Error& e) {
+    if (e.code() != code)
+      return testing::AssertionFailure() << "code '" << lfi::toString(e.code()) << "', expected '"
+                                         << lfi::toString(code) << "' (message: " << e.what() << ")";
+    for (const std::string& fragment : fragments)
+      if (std::string(e.what()).find(fragment) == std::string::npos)
+        return testing::AssertionFailure() << "message '" << e.what() << "' does not contain '" << fragment << "'";
+    return testing::AssertionSuccess();
+  } catch (const std::exception& e) {
+    return testing::AssertionFailure() << "threw a non-lfi exception: " << e.what();
+  }
+  return testing::AssertionFailure() << "did not throw";
+}
+
+// A fresh directory per test, removed with everything in it at the end.
+class ExrIo : public testing::Test {
+protected:
+  void SetUp() override {
+    static std::atomic<int> counter{0};
+    const auto* info = testing::UnitTest::GetInstance()->current_test_info();
+    dir_ =
+        fs::path(testing::TempDir()) / fmt::format("lfi-exr-{}-{}-{}", info->name(), ::getpid(), counter.fetch_add(1));
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+  }
+  void TearDown() override {
+    std::error_code ignored;
+    fs::remove_all(dir_, ignored);
+  }
+  fs::path file(const std::string& name) const { return dir_ / name; }
+
+  fs::path dir_;
+};
+
+LightFieldGeometry geometry() {
+  LightFieldGeometry g;
+  g.spatialX = 5;
+  g.spatialY = 3;
+  g.angular = 4;
+  g.pixelPitch_mm = 0.0375;
+  g.distance_mm = 17.25;
+  return g;
+}
+
+// Random finite floats over the whole bit range (all exponents, both signs, denormals).
+cv::Mat randomFloats(int rows, int cols, unsigned seed) {
+  cv::Mat m(rows, cols, CV_32FC1);
+  std::mt19937 rng(seed);
+  for (int r = 0; r < rows; ++r)
+    for (int c = 0; c < cols; ++c) {
+      float x;
+      do x = std::bit_cast<float>(static_cast<std::uint32_t>(rng()));
+      while (!std::isfinite(x));
+      m.at<float>(r, c) = x;
+    }
+  return m;
+}
+
+cv::Mat specialFloats(int rows, int cols, unsigned seed) {
+  cv::Mat m = randomFloats(rows, cols, seed);
+  using L = std::numeric_limits<float>;
+  const float specials[] = {0.0f,      -0.0f,        L::denorm_min(), -L::denorm_min(), L::min() / 3,
+                            -L::min(), L::min(),     L::max(),        L::lowest(),      1.0f,
+                            -1.0f,     L::epsilon(), -123.456f,       1e-30f,           -1e30f};
+  int i = 0;
+  for (float s : specials) m.at<float>(i / cols, i % cols) = s, ++i;
+  return m;
+}
+
+bool bitIdentical(const cv::Mat& a, const cv::Mat& b) {
+  if (a.size() != b.size() || a.type() != b.type()) return false;
+  for (int r = 0; r < a.rows; ++r)
+    if (std::memcmp(a.ptr(r), b.ptr(r), a.cols * a.elemSize()) != 0) return false;
+  return true;
+}
+
+std::string checksumText(const cv::Mat& pixels) { return fmt::format("crc32:{:08x}", lfi::pixelChecksum(pixels)); }
+
+// Writes an EXR with the OpenEXR API directly: one FLOAT channel "Y" with the given
+// pixels and the header as prepared by `edit` (which may add or leave out attributes).
+void writeRawExr(const fs::path& path, const cv::Mat& pixels, const std::function<void(Imf::Header&)>& edit) {
+  Imf::Header header(pixels.cols, pixels.rows);
+  header.compression() = Imf::ZIP_COMPRESSION;
+  header.channels().insert("Y", Imf::Channel(Imf::FLOAT));
+  edit(header);
+  Imf::OutputFile out(path.c_str(), header);
+  Imf::FrameBuffer frame;
+  frame.insert("Y", Imf::Slice(Imf::FLOAT, const_cast<char*>(pixels.ptr<char>()), sizeof(float), pixels.step));
+  out.setFrameBuffer(frame);
+  out.writePixels(pixels.rows);
+}
+
+// The attributes of a light field file as lfi writes them, each optional.
+struct RawLightFieldAttributes {
+  LightFieldGeometry geometry = ::geometry();
+  bool withAngular = true;
+  std::string checksum;  // empty: the correct one
+};
+
+void writeRawLightField(const fs::path& path, const cv::Mat& pixels, const RawLightFieldAttributes& a) {
+  writeRawExr(path, pixels, [&](Imf::Header& h) {
+    h.insert("lfi.kind", Imf::StringAttribute("light-field"));
+    h.insert("lfi.formatVersion", Imf::IntAttribute(lfi::kExrFormatVersion));
+    h.insert("lfi.checksum", Imf::StringAttribute(a.checksum.empty() ? checksumText(pixels) : a.checksum));
+    h.insert("lfi.spatialX", Imf::IntAttribute(a.geometry.spatialX));
+    h.insert("lfi.spatialY", Imf::IntAttribute(a.geometry.spatialY));
+    if (a.withAngular) h.insert("lfi.angular", Imf::IntAttribute(a.geometry.angular));
+    h.insert("lfi.pixelPitch_mm", Imf::DoubleAttribute(a.geometry.pixelPitch_mm));
+    h.insert("lfi.distance_mm", Imf::DoubleAttribute(a.geometry.distance_mm));
+  });
+}
+
+TEST_F(ExrIo, LightFieldRoundTripIsBitExact) {
+  const LightFieldGeometry g = geometry();
+  const LightField original(g, specialFloats(g.height(), g.width(), 1));
+  const fs::path path = file("lf.exr");
+  lfi::writeLightFieldExr(path, original);
+  const LightField loaded = lfi::readLightFieldExr(path);
+  EXPECT_EQ(loaded.geometry().spatialX, g.spatialX);
+  EXPECT_EQ(loaded.geometry().spatialY, g.spatialY);
+  EXPECT_EQ(loaded.geometry().angular, g.angular);
+  EXPECT_EQ(loaded.geometry().pixelPitch_mm, g.pixelPitch_mm);  // exact: stored as double
+  EXPECT_EQ(loaded.geometry().distance_mm, g.distance_mm);
+  EXPECT_TRUE(loaded.geometry() == g);
+  EXPECT_TRUE(bitIdentical(loaded.lensletImage(), original.lensletImage()));
+  // Negative zero and denormals survive (a value comparison would not notice a lost sign of zero).
+  EXPECT_TRUE(std::signbit(loaded.lensletImage().at<float>(0, 1)));
+  EXPECT_EQ(loaded.lensletImage().at<float>(0, 2), std::numeric_limits<float>::denorm_min());
+}
+
+TEST_F(ExrIo, LightFieldRoundTripWithNonContinuousImageAndOneByOneElements) {
+  LightFieldGeometry g = geometry();
+  g.spatialX = 7;
+  g.spatialY = 1;
+  g.angular = 1;
+  g.distance_mm = 0;
+  // A region of a larger image: rows are not contiguous in memory.
+  const cv::Mat big = randomFloats(9, 20, 2);
+  const LightField original(g, big(cv::Rect(3, 4, 7, 1)));
+  ASSERT_FALSE(big(cv::Rect(3, 4, 7, 2)).isContinuous());
+  lfi::writeLightFieldExr(file("roi.exr"), original);
+  const LightField loaded = lfi::readLightFieldExr(file("roi.exr"));
+  EXPECT_TRUE(loaded.geometry() == g);
+  EXPECT_TRUE(bitIdentical(loaded.lensletImage(), original.lensletImage()));
+}
+
+TEST_F(ExrIo, RadianceRoundTripKeepsPixelsAndInfo) {
+  const cv::Mat big = specialFloats(40, 60, 3);
+  const cv::Mat image = big(cv::Rect(5, 2, 33, 31));  // odd size, not continuous
+  lfi::RadianceImageInfo info;
+  info.objectPixel_mm = 0.00345;
+  info.description = "lens N-BK7, parallel illumination, 64 spp";
+  lfi::writeRadianceExr(file("r.exr"), image, info);
+  lfi::RadianceImageInfo loadedInfo;
+  const cv::Mat loaded = lfi::readRadianceExr(file("r.exr"), &loadedInfo);
+  EXPECT_TRUE(bitIdentical(loaded, image));
+  EXPECT_EQ(loadedInfo.objectPixel_mm, info.objectPixel_mm);
+  EXPECT_EQ(loadedInfo.description, info.description);
+  // The info is optional.
+  EXPECT_TRUE(bitIdentical(lfi::readRadianceExr(file("r.exr")), image));
+}
+
+TEST_F(ExrIo, KindsAreNotInterchangeable) {
+  const LightFieldGeometry g = geometry();
+  lfi::writeLightFieldExr(file("lf.exr"), LightField(g, randomFloats(g.height(), g.width(), 4)));
+  lfi::writeRadianceExr(file("r.exr"), randomFloats(8, 8, 5), {});
+  EXPECT_TRUE(throwsError([&] { lfi::readRadianceExr(file("lf.exr")); }, Errc::InvalidFile,
+                          {file("lf.exr").string(), "lfi.kind", "light-field"}));
+  EXPECT_TRUE(throwsError([&] { lfi::readLightFieldExr(file("r.exr")); }, Errc::InvalidFile,
+                          {file("r.exr").string(), "lfi.kind", "radiance-image"}));
+}
+
+TEST_F(ExrIo, RawWriterProducesReadableFiles) {
+  // Control for the failure tests below: the hand-written file is accepted when nothing is wrong.
+  const LightFieldGeometry g = geometry();
+  const cv::Mat pixels = randomFloats(g.height(), g.width(), 6);
+  writeRawLightField(file("raw.exr"), pixels, {});
+  const LightField loaded = lfi::readLightFieldExr(file("raw.exr"));
+  EXPECT_TRUE(loaded.geometry() == g);
+  EXPECT_TRUE(bitIdentical(loaded.lensletImage(), pixels));
+}
+
+TEST_F(ExrIo, TruncatedFileIsInvalid) {
+  const LightFieldGeometry g = geometry();
+  const fs::path valid = file("valid.exr");
+  lfi::writeLightFieldExr(valid, LightField(g, randomFloats(g.height(), g.width(), 7)));
+  const auto size = fs::file_size(valid);
+  ASSERT_GT(size, 200u);
+  for (const auto keep : {size - 1, size - 16, size / 2, std::uintmax_t{300}, std::uintmax_t{100}, std::uintmax_t{8},
+                          std::uintmax_t{0}}) {
+    const fs::path cut = file(fmt::format("cut-{}.exr", keep));
+    fs::copy_file(valid, cut);
+    fs::resize_file(cut, keep);
+    EXPECT_TRUE(throwsError([&] { lfi::readLightFieldExr(cut); }, Errc::InvalidFile, {cut.string()}))
+        << "truncated to " << keep << " of " << size << " bytes";
+  }
+}
+
+TEST_F(ExrIo, MissingAttributeIsNamed) {
+  const LightFieldGeometry g = geometry();
+  RawLightFieldAttributes a;
+  a.withAngular = false;
+  writeRawLightField(file("no-angular.exr"), randomFloats(g.height(), g.width(), 8), a);
+  EXPECT_TRUE(throwsError([&] { lfi::readLightFieldExr(file("no-angular.exr")); }, Errc::InvalidFile,
+                          {file("no-angular.exr").string(), "lfi.angular", "missing"}));
+}
+
+TEST_F(ExrIo, MistypedAttributeIsNamed) {
+  const LightFieldGeometry g = geometry();
+  const cv::Mat pixels = randomFloats(g.height(), g.width(), 9);
+  // pixelPitch_mm as a string instead of a double.
+  writeRawExr(file("typed.exr"), pixels, [&](Imf::Header& h) {
+    h.insert("lfi.kind", Imf::StringAttribute("light-field"));
+    h.insert("lfi.formatVersion", Imf::IntAttribute(lfi::kExrFormatVersion));
+    h.insert("lfi.checksum", Imf::StringAttribute(checksumText(pixels)));
+    h.insert("lfi.spatialX", Imf::IntAttribute(g.spatialX));
+    h.insert("lfi.spatialY", Imf::IntAttribute(g.spatialY));
+    h.insert("lfi.angular", Imf::IntAttribute(g.angular));
+    h.insert("lfi.pixelPitch_mm", Imf::StringAttribute("0.0375"));
+    h.insert("lfi.distance_mm", Imf::DoubleAttribute(g.distance_mm));
+  });
+  EXPECT_TRUE(throwsError([&] { lfi::readLightFieldExr(file("typed.exr")); }, Errc::InvalidFile,
+                          {"lfi.pixelPitch_mm", "string", "double"}));
+}
+
+TEST_F(ExrIo, OutOfRangeAttributeIsInvalidFile) {
+  RawLightFieldAttributes a;
+  a.geometry.angular = 0;
+  a.geometry.spatialX = 20;  // keeps width() = 0 != 20 out of the way: validation comes first
+  writeRawLightField(file("zero.exr"), randomFloats(12, 20, 10), a);
+  EXPECT_TRUE(throwsError([&] { lfi::readLightFieldExr(file("zero.exr")); }, Errc::InvalidFile,
+                          {file("zero.exr").string(), "angular"}));
+}
+
+TEST_F(ExrIo, SizeThatDoesNotMatchAttributesIsNamed) {
+  const LightFieldGeometry g = geometry();                             // needs 20x12
+  const cv::Mat pixels = randomFloats(g.height(), g.width() + 4, 11);  // 24x12
+  writeRawLightField(file("size.exr"), pixels, {});
+  EXPECT_TRUE(throwsError([&] { lfi::readLightFieldExr(file("size.exr")); }, Errc::InvalidFile,
+                          {file("size.exr").string(), "24x12", "20x12"}));
+}
+
+TEST_F(ExrIo, NonFinitePixelIsNamed) {
+  const LightFieldGeometry g = geometry();
+  for (const float bad : {std::numeric_limits<float>::quiet_NaN(), std::numeric_limits<float>::infinity(),
+                          -std::numeric_limits<float>::infinity()}) {
+    cv::Mat pixels = randomFloats(g.height(), g.width(), 12);
+    pixels.at<float>(7, 13) = bad;  // row 7, column 13
+    const fs::path path = file(fmt::format("bad-{}.exr", static_cast<int>(std::fpclassify(bad)) + (bad < 0)));
+    writeRawLightField(path, pixels, {});  // with the correct checksum of these pixels
+    EXPECT_TRUE(throwsError([&] { lfi::readLightFieldExr(path); }, Errc::InvalidFile,
+                            {path.string(), "pixel (13, 7)", "finite"}))
+        << bad;
+  }
+}
+
+TEST_F(ExrIo, ModifiedPixelFailsChecksum) {
+  const LightFieldGeometry g = geometry();
+  const cv::Mat pixels = randomFloats(g.height(), g.width(), 13);
+  const fs::path valid = file("valid.exr");
+  lfi::writeLightFieldExr(valid, LightField(g, pixels));
+  ASSERT_NO_THROW(lfi::readLightFieldExr(valid));
+  // Keep lfi's header (with its checksum) as it is; change one pixel by one ulp.
+  Imf::Header header = Imf::InputFile(valid.c_str()).header();
+  cv::Mat tampered = pixels.clone();
+  tampered.at<float>(5, 9) = std::nextafter(tampered.at<float>(5, 9), std::numeric_limits<float>::max());
+  const fs::path path = file("tampered.exr");
+  {
+    Imf::OutputFile out(path.c_str(), header);
+    Imf::FrameBuffer frame;
+    frame.insert("Y", Imf::Slice(Imf::FLOAT, tampered.ptr<char>(), sizeof(float), tampered.step));
+    out.setFrameBuffer(frame);
+    out.writePixels(tampered.rows);
+  }
+  const std::string recorded = header.typedAttribute<Imf::StringAttribute>("lfi.checksum").value();
+  EXPECT_EQ(recorded, checksumText(pixels));
+  EXPECT_TRUE(throwsError([&] { lfi::readLightFieldExr(path); }, Errc::Checksum,
+                          {path.string(), "lfi.checksum", recorded, checksumText(tampered)}));
+}
+
+TEST_F(ExrIo, FileThatIsNotExrIsInvalid) {
+  const fs::path path = file("notes.exr");
+  std::ofstream(path) << "this is a text file, not an OpenEXR image\n";
+  EXPECT_TRUE(throwsError([&] { lfi::readLightFieldExr(path); }, Errc::InvalidFile, {path.string()}));
+  EXPECT_TRUE(throwsError([&] { lfi::readRadianceExr(path); }, Errc::InvalidFile, {path.string()}));
+  // A directory is not an EXR file either.
+  fs::create_directory(file("dir.exr"));
+  EXPECT_TRUE(throwsError([&] { lfi::readLightFieldExr(file("dir.exr")); }, Errc::InvalidFile, {"dir.exr"}));
+}
+
+TEST_F(ExrIo, MissingFileIsNotFound) {
+  const fs::path path = file("nothing-here.exr");
+  EXPECT_TRUE(throwsError([&] { lfi::readLightFieldExr(path); }, Errc::NotFound, {path.string()}));
+  EXPECT_TRUE(throwsError([&] { lfi::readRadianceExr(path); }, Errc::NotFound, {path.string()}));
+}
+
+TEST_F(ExrIo, ExistingFileIsKeptUnlessOverwriteAllowed) {
+  const LightFieldGeometry g = geometry();
+  const LightField first(g, randomFloats(g.height(), g.width(), 14));
+  const LightField second(g, randomFloats(g.height(), g.width(), 15));
+  const fs::path path = file("lf.exr");
+  lfi::writeLightFieldExr(path, first);
+  EXPECT_TRUE(throwsError([&] { lfi::writeLightFieldExr(path, second); }, Errc::Exists, {path.string()}));
+  EXPECT_TRUE(throwsError([&] { lfi::writeLightFieldExr(path, second, lfi::Overwrite::Refuse); }, Errc::Exists,
+                          {path.string()}));
+  EXPECT_TRUE(bitIdentical(lfi::readLightFieldExr(path).lensletImage(), first.lensletImage()));
+  lfi::writeLightFieldExr(path, second, lfi::Overwrite::Allow);
+  EXPECT_TRUE(bitIdentical(lfi::readLightFieldExr(path).lensletImage(), second.lensletImage()));
+  // Same for radiance images.
+  const fs::path r = file("r.exr");
+  lfi::writeRadianceExr(r, first.lensletImage(), {});
+  EXPECT_TRUE(throwsError([&] { lfi::writeRadianceExr(r, second.lensletImage(), {}); }, Errc::Exists, {r.string()}));
+  EXPECT_TRUE(bitIdentical(lfi::readRadianceExr(r), first.lensletImage()));
+  lfi::writeRadianceExr(r, second.lensletImage(), {}, lfi::Overwrite::Allow);
+  EXPECT_TRUE(bitIdentical(lfi::readRadianceExr(r), second.lensletImage()));
+  // No temporaries are left behind.
+  std::vector<std::string> names;
+  for (const auto& entry : fs::directory_iterator(dir_)) names.push_back(entry.path().filename().string());
+  std::sort(names.begin(), names.end());
+  EXPECT_EQ(names, (std::vector<std::string>{"lf.exr", "r.exr"}));
+}
+
+TEST_F(ExrIo, WritingRejectsWrongImages) {
+  EXPECT_TRUE(throwsError([&] { lfi::writeRadianceExr(file("a.exr"), cv::Mat(4, 4, CV_8UC1), {}); },
+                          Errc::InvalidArgument, {"a.exr"}));
+  EXPECT_TRUE(
+      throwsError([&] { lfi::writeRadianceExr(file("b.exr"), cv::Mat(), {}); }, Errc::InvalidArgument, {"b.exr"}));
+  EXPECT_FALSE(fs::exists(file("a.exr")));
+  EXPECT_FALSE(fs::exists(file("b.exr")));
+}
+
+TEST(PixelChecksum, IsCrc32OfPixelBytesRowByRow) {
+  // CRC-32 (zlib polynomial) of the ASCII bytes "123456789" is 0xcbf43926.
+  cv::Mat bytes(1, 9, CV_8UC1);
+  std::memcpy(bytes.data, "123456789", 9);
+  EXPECT_EQ(lfi::pixelChecksum(bytes), 0xcbf43926ul);
+  // Row padding of a region is not part of the checksum.
+  const cv::Mat big = randomFloats(6, 10, 16);
+  const cv::Mat roi = big(cv::Rect(1, 1, 5, 4));
+  EXPECT_EQ(lfi::pixelChecksum(roi), lfi::pixelChecksum(roi.clone()));
+  cv::Mat changed = roi.clone();
+  changed.at<float>(3, 4) = -changed.at<float>(3, 4);
+  EXPECT_NE(lfi::pixelChecksum(changed), lfi::pixelChecksum(roi));
+}
+
+}  // namespace
