@@ -3,7 +3,9 @@ add_library(lfi_options INTERFACE)
 target_compile_options(lfi_options INTERFACE -Wall -Wextra -Wpedantic -Wshadow -Wnon-virtual-dtor
                        -Wconversion-null -Wno-unused-parameter
                        # GCC 12 false positives inside libstdc++ at -O3 (GCC bug 105651)
-                       -Wno-restrict)
+                       -Wno-restrict
+                       # designated initializers leave defaulted members out on purpose
+                       -Wno-missing-field-initializers)
 if(LFI_WERROR)
   target_compile_options(lfi_options INTERFACE -Werror)
 endif()

@@ -7,6 +7,7 @@
 #include <tbb/task_arena.h>
 
 #include <cmath>
+#include <functional>
 #include <numbers>
 
 namespace lfi::sim {
@@ -136,56 +137,124 @@ bool refract(const Vec3& d, const Vec3& n, double eta, Vec3& out) {
 
 Vec3 reflect(const Vec3& d, const Vec3& n) { return (d - n * (2 * d.dot(n))).normalized(); }
 
-double traceRadiance(const Scene& scene, Ray ray, Sampler& sampler, int maxDepth) {
-  double throughput = 1;
-  MediumStack media;
-  for (int depth = 0; depth < maxDepth; ++depth) {
-    const Hit hit = scene.intersect(ray);
-    if (!hit.valid()) return 0;
-    if (media.size()) throughput *= std::exp(-media.absorption(scene) * hit.t);
-    const Object& obj = scene.object(hit.object);
-    if (obj.emission) return throughput * emittedRadiance(scene, hit, *obj.emission, -ray.direction);
+namespace {
 
-    const Vec3& d = ray.direction;
-    const bool fromOutside = d.dot(hit.normal) < 0;
-    const Vec3 facing = fromOutside ? hit.normal : -hit.normal;  // towards the incoming side
+struct PathState {
+  Ray ray;
+  MediumStack media;
+  double throughput = 1;
+  int depth = 0;
+};
+
+// One walk through the scene. The policy decides each Fresnel event (split
+// into both branches, or choose one), bounces off diffuse surfaces and sees
+// every hit. Returns the radiance carried back.
+template <typename Policy>
+double walk(const Scene& scene, PathState p, Policy& policy) {
+  for (; p.depth < policy.maxDepth; ++p.depth) {
+    const Hit hit = scene.intersect(p.ray);
+    policy.visit(hit, p.ray);
+    if (!hit.valid()) return 0;
+    if (p.media.size()) p.throughput *= std::exp(-p.media.absorption(scene) * hit.t);
+    const Object& obj = scene.object(hit.object);
+    if (obj.emission) return p.throughput * emittedRadiance(scene, hit, *obj.emission, -p.ray.direction);
+
+    const Vec3 d = p.ray.direction;
+    const bool entering = d.dot(hit.normal) < 0;
+    const Vec3 facing = entering ? hit.normal : -hit.normal;  // towards the incoming side
     // Meshes are intersected in float: step off the surface to avoid re-hits.
     const bool exact = std::holds_alternative<std::shared_ptr<const Solid>>(obj.shape);
     auto leave = [&](const Vec3& dir) {
       const double offset = exact ? 0.0 : 1e-4 * (dir.dot(facing) > 0 ? 1 : -1);
-      ray = {hit.point + facing * offset, dir};
+      return Ray{hit.point + facing * offset, dir};
     };
 
     if (std::holds_alternative<Absorber>(obj.material)) return 0;
     if (const auto* diffuse = std::get_if<Diffuse>(&obj.material)) {
-      throughput *= diffuse->albedo;
-      leave(cosineHemisphere(facing, sampler.next(), sampler.next()));
+      if (!policy.diffuse) return 0;
+      p.throughput *= diffuse->albedo;
+      p.ray = leave(policy.bounce(facing));
       continue;
     }
     const auto& glass = std::get<Dielectric>(obj.material);
     // Entering: from the current medium into the glass. Leaving: from the
     // glass into whatever medium contains it (a bubble in glass exits to glass).
-    const bool entering = fromOutside;
-    const double n1 = entering ? media.ior(scene) : glass.ior;
-    const double n2 = entering ? glass.ior : media.ior(scene, hit.object);
-    const double cosI = -d.dot(facing);
-    const double reflectance = fresnelReflectance(cosI, n1, n2);
+    const double n1 = entering ? p.media.ior(scene) : glass.ior;
+    const double n2 = entering ? glass.ior : p.media.ior(scene, hit.object);
+    const double reflectance = fresnelReflectance(-d.dot(facing), n1, n2);
     Vec3 refracted;
-    if (sampler.next() < reflectance || !refract(d, facing, n1 / n2, refracted)) {
-      leave(reflect(d, facing));
+    if (!refract(d, facing, n1 / n2, refracted)) {  // total internal reflection
+      p.ray = leave(reflect(d, facing));
       continue;
     }
+    PathState t = p;
+    t.ray = leave(refracted);
     if (entering)
-      media.push(hit.object);
+      t.media.push(hit.object);
     else
-      media.remove(hit.object);
-    leave(refracted);
+      t.media.remove(hit.object);
+    ++t.depth;
+    if (p.depth < policy.splitDepth) {
+      // Splitting: both branches, weighted, instead of a random choice.
+      PathState r = p;
+      r.ray = leave(reflect(d, facing));
+      r.throughput *= reflectance;
+      ++r.depth;
+      t.throughput *= 1 - reflectance;
+      return walk(scene, r, policy) + walk(scene, t, policy);
+    }
+    if (policy.chooseReflection(reflectance)) {
+      p.ray = leave(reflect(d, facing));
+      continue;
+    }
+    p = t;
+    --p.depth;  // the loop increments it
   }
   return 0;
 }
 
+struct SampledPolicy {
+  Sampler& sampler;
+  int maxDepth;
+  int splitDepth;
+  bool diffuse = true;
+  void visit(const Hit&, const Ray&) {}
+  bool chooseReflection(double reflectance) { return sampler.next() < reflectance; }
+  Vec3 bounce(const Vec3& n) {
+    const double u1 = sampler.next(), u2 = sampler.next();
+    return cosineHemisphere(n, u1, u2);
+  }
+};
+
+struct RefractionPathPolicy {
+  std::vector<Vec3>& vertices;
+  int maxDepth;
+  double escape;
+  int splitDepth = 0;
+  bool diffuse = false;
+  void visit(const Hit& hit, const Ray& ray) { vertices.push_back(hit.valid() ? hit.point : ray.at(escape)); }
+  bool chooseReflection(double) { return false; }
+  Vec3 bounce(const Vec3& n) { return n; }
+};
+
+}  // namespace
+
+double traceRadiance(const Scene& scene, const Ray& ray, Sampler& sampler, int maxDepth, int splitDepth) {
+  SampledPolicy policy{sampler, maxDepth, splitDepth};
+  return walk(scene, PathState{.ray = ray}, policy);
+}
+
+std::vector<Vec3> refractionPath(const Scene& scene, const Ray& ray, int maxDepth, double escape) {
+  std::vector<Vec3> vertices{ray.origin};
+  RefractionPathPolicy policy{vertices, maxDepth, escape};
+  walk(scene, PathState{.ray = ray}, policy);
+  return vertices;
+}
+
 cv::Mat render(const Scene& scene, const Sensor& sensor, const RenderOptions& options) {
   if (options.samplesPerPixel < 1) fail(Errc::InvalidArgument, "render: samplesPerPixel must be >= 1");
+  if (options.splitDepth < 0 || options.splitDepth > 12)
+    fail(Errc::InvalidArgument, "render: splitDepth = {} is outside [0, 12]", options.splitDepth);
   if (options.tileSize < 1) fail(Errc::InvalidArgument, "render: tileSize must be >= 1");
   if (const auto* cam = std::get_if<TelecentricCamera>(&sensor)) cam->validate();
   if (const auto* lfs = std::get_if<LightFieldSensor>(&sensor)) lfs->geometry.validate();
@@ -216,7 +285,7 @@ cv::Mat render(const Scene& scene, const Sensor& sensor, const RenderOptions& op
           } else {
             ray = std::get<LightFieldSensor>(sensor).ray(i, j, offset);
           }
-          if (ray) sum += traceRadiance(scene, *ray, sampler, options.maxDepth);
+          if (ray) sum += traceRadiance(scene, *ray, sampler, options.maxDepth, options.splitDepth);
         }
         row[i] = static_cast<float>(sum / options.samplesPerPixel);
       }

@@ -1,5 +1,7 @@
 #include "lfi/core/atomic_file.h"
 
+#include "lfi/core/error.h"
+
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 #include <unistd.h>
@@ -13,8 +15,6 @@
 #include <stdexcept>
 #include <string>
 #include <vector>
-
-#include "lfi/core/error.h"
 
 namespace {
 

@@ -1,5 +1,7 @@
 #include "lfi/core/exr_io.h"
 
+#include "lfi/core/error.h"
+
 #include <OpenEXR/ImfChannelList.h>
 #include <OpenEXR/ImfDoubleAttribute.h>
 #include <OpenEXR/ImfFrameBuffer.h>
@@ -12,6 +14,7 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
 #include <bit>
 #include <cmath>
@@ -23,9 +26,8 @@
 #include <limits>
 #include <random>
 #include <string>
+#include <utility>
 #include <vector>
-
-#include "lfi/core/error.h"
 
 namespace {
 
@@ -89,8 +91,9 @@ cv::Mat randomFloats(int rows, int cols, unsigned seed) {
   for (int r = 0; r < rows; ++r)
     for (int c = 0; c < cols; ++c) {
       float x;
-      do x = std::bit_cast<float>(static_cast<std::uint32_t>(rng()));
-      while (!std::isfinite(x));
+      do {
+        x = std::bit_cast<float>(static_cast<std::uint32_t>(rng()));
+      } while (!std::isfinite(x));
       m.at<float>(r, c) = x;
     }
   return m;
@@ -102,8 +105,7 @@ cv::Mat specialFloats(int rows, int cols, unsigned seed) {
   const float specials[] = {0.0f,      -0.0f,        L::denorm_min(), -L::denorm_min(), L::min() / 3,
                             -L::min(), L::min(),     L::max(),        L::lowest(),      1.0f,
                             -1.0f,     L::epsilon(), -123.456f,       1e-30f,           -1e30f};
-  int i = 0;
-  for (float s : specials) m.at<float>(i / cols, i % cols) = s, ++i;
+  for (int i = 0; i < static_cast<int>(std::size(specials)); ++i) m.at<float>(i / cols, i % cols) = specials[i];
   return m;
 }
 
@@ -231,7 +233,8 @@ TEST_F(ExrIo, TruncatedFileIsInvalid) {
     const fs::path cut = file(fmt::format("cut-{}.exr", keep));
     fs::copy_file(valid, cut);
     fs::resize_file(cut, keep);
-    EXPECT_TRUE(throwsError([&] { lfi::readLightFieldExr(cut); }, Errc::InvalidFile, {cut.string()}))
+    EXPECT_TRUE(
+        throwsError([&] { lfi::readLightFieldExr(cut); }, Errc::InvalidFile, {"'" + cut.string() + "'", "truncated"}))
         << "truncated to " << keep << " of " << size << " bytes";
   }
 }
@@ -282,15 +285,17 @@ TEST_F(ExrIo, SizeThatDoesNotMatchAttributesIsNamed) {
 
 TEST_F(ExrIo, NonFinitePixelIsNamed) {
   const LightFieldGeometry g = geometry();
-  for (const float bad : {std::numeric_limits<float>::quiet_NaN(), std::numeric_limits<float>::infinity(),
-                          -std::numeric_limits<float>::infinity()}) {
+  const float inf = std::numeric_limits<float>::infinity();
+  const std::vector<std::pair<std::string, float>> cases = {
+      {"nan", std::numeric_limits<float>::quiet_NaN()}, {"inf", inf}, {"minus-inf", -inf}};
+  for (const auto& [name, bad] : cases) {
     cv::Mat pixels = randomFloats(g.height(), g.width(), 12);
     pixels.at<float>(7, 13) = bad;  // row 7, column 13
-    const fs::path path = file(fmt::format("bad-{}.exr", static_cast<int>(std::fpclassify(bad)) + (bad < 0)));
+    const fs::path path = file(name + ".exr");
     writeRawLightField(path, pixels, {});  // with the correct checksum of these pixels
     EXPECT_TRUE(throwsError([&] { lfi::readLightFieldExr(path); }, Errc::InvalidFile,
                             {path.string(), "pixel (13, 7)", "finite"}))
-        << bad;
+        << name;
   }
 }
 
@@ -321,8 +326,10 @@ TEST_F(ExrIo, ModifiedPixelFailsChecksum) {
 TEST_F(ExrIo, FileThatIsNotExrIsInvalid) {
   const fs::path path = file("notes.exr");
   std::ofstream(path) << "this is a text file, not an OpenEXR image\n";
-  EXPECT_TRUE(throwsError([&] { lfi::readLightFieldExr(path); }, Errc::InvalidFile, {path.string()}));
-  EXPECT_TRUE(throwsError([&] { lfi::readRadianceExr(path); }, Errc::InvalidFile, {path.string()}));
+  // lfi names the file itself (quoted), not only through OpenEXR's message.
+  const std::string quoted = "'" + path.string() + "'";
+  EXPECT_TRUE(throwsError([&] { lfi::readLightFieldExr(path); }, Errc::InvalidFile, {quoted, "OpenEXR"}));
+  EXPECT_TRUE(throwsError([&] { lfi::readRadianceExr(path); }, Errc::InvalidFile, {quoted, "OpenEXR"}));
   // A directory is not an EXR file either.
   fs::create_directory(file("dir.exr"));
   EXPECT_TRUE(throwsError([&] { lfi::readLightFieldExr(file("dir.exr")); }, Errc::InvalidFile, {"dir.exr"}));

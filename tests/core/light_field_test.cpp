@@ -1,5 +1,7 @@
 #include "lfi/core/light_field.h"
 
+#include "lfi/core/error.h"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -9,8 +11,6 @@
 #include <random>
 #include <string>
 #include <vector>
-
-#include "lfi/core/error.h"
 
 namespace {
 
@@ -319,7 +319,7 @@ TEST(LightField, PositionsOutsidePlaneGiveZero) {
       EXPECT_EQ(lf.radiance(q, up, mode), 1.0) << q.x << ", " << q.y;
     // Just outside each edge and far away: nothing.
     for (const Vec2& q : {Vec2(hx + eps, 0), Vec2(-hx - eps, 0), Vec2(0, hy + eps), Vec2(0, -hy - eps),
-                         Vec2(100 * hx, 100 * hy), Vec2(std::numeric_limits<double>::quiet_NaN(), 0)})
+                          Vec2(100 * hx, 100 * hy), Vec2(std::numeric_limits<double>::quiet_NaN(), 0)})
       EXPECT_EQ(lf.radiance(q, up, mode), 0.0) << q.x << ", " << q.y;
   }
   // An empty (default-constructed) light field emits nothing.

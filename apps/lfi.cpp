@@ -1,0 +1,123 @@
+// lfi: the command line front end. Every subcommand reports progress on long
+// work to stderr, prints results to stdout, and exits non-zero with one clear
+// message on error.
+
+#include "lfi/core/error.h"
+#include "lfi/core/exr_io.h"
+#include "lfi/core/log.h"
+#include "lfi/study/study.h"
+
+#include <CLI/CLI.hpp>
+#include <fmt/format.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <mutex>
+
+namespace fs = std::filesystem;
+
+namespace {
+
+// A one-line progress bar on stderr when it is a terminal, otherwise a log
+// line every 10 %.
+class ProgressBar {
+public:
+  void operator()(const std::string& label, double fraction) {
+    std::lock_guard lock(mutex_);
+    const int percent = static_cast<int>(fraction * 100);
+    if (isatty(STDERR_FILENO)) {
+      const int filled = static_cast<int>(fraction * 30);
+      fmt::print(stderr, "\r[{:<30}] {:3d}% {:<40}", std::string(static_cast<size_t>(filled), '#'), percent,
+                 label.substr(0, 40));
+      if (fraction >= 1) fmt::print(stderr, "\n");
+    } else if (percent / 10 != lastDecile_) {
+      lastDecile_ = percent / 10;
+      spdlog::info("{:3d}% {}", percent, label);
+    }
+  }
+  void finish() {
+    if (isatty(STDERR_FILENO)) fmt::print(stderr, "\n");
+  }
+
+private:
+  std::mutex mutex_;
+  int lastDecile_ = -1;
+};
+
+fs::path defaultBench() {
+  const fs::path installed = fs::path(LFI_DATA_DIR) / "benches" / "reference.toml";
+  return installed;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"lfi: inverse schlieren inspection bench (drivers and ray-traced simulation)"};
+  app.set_version_flag("--version", LFI_VERSION);
+  app.require_subcommand(1);
+  int verbosity = 0;
+  app.add_flag("-v,--verbose", verbosity, "More log output (repeat for more)");
+  bool quiet = false;
+  app.add_flag("-q,--quiet", quiet, "Only errors on stderr");
+
+  // lfi study
+  auto* study = app.add_subcommand("study", "Run the reference study on the simulated bench");
+  fs::path studyOut;
+  fs::path benchFile = defaultBench();
+  std::string quality = "default";
+  bool force = false;
+  int threads = 0;
+  std::uint64_t seed = 1;
+  study->add_option("--out", studyOut, "Output folder (study.json, images/, report.html)")->required();
+  study->add_option("--bench", benchFile, "Bench file (TOML)")->check(CLI::ExistingFile)->capture_default_str();
+  study->add_option("--quality", quality, "quick | default | high")
+      ->check(CLI::IsMember({"quick", "default", "high"}))
+      ->capture_default_str();
+  study->add_option("--threads", threads, "Worker threads (0 = all cores)")->check(CLI::NonNegativeNumber);
+  study->add_option("--seed", seed, "Random seed (renders and sensor noise)")->capture_default_str();
+  study->add_flag("--force", force, "Replace the results of an earlier study in --out");
+
+  // lfi lf-info
+  auto* lfInfo = app.add_subcommand("lf-info", "Validate a light field EXR and print its parametrisation");
+  fs::path lfFile;
+  lfInfo->add_option("file", lfFile, "Light field EXR")->required();
+
+  CLI11_PARSE(app, argc, argv);
+  lfi::initLogging(quiet ? -1 : verbosity);
+
+  try {
+    if (*study) {
+      const lfi::study::Bench bench = lfi::study::Bench::load(benchFile);
+      lfi::study::StudyOptions options;
+      options.quality = lfi::study::parseQuality(quality);
+      options.threads = threads;
+      options.seed = seed;
+      options.overwrite = force;
+      ProgressBar bar;
+      if (!quiet) options.progress = [&bar](const std::string& label, double f) { bar(label, f); };
+      const auto start = std::chrono::steady_clock::now();
+      const auto result = lfi::study::runStudy(bench, studyOut, options);
+      bar.finish();
+      fmt::print("{}", lfi::study::verdictTable(result));
+      spdlog::info("study written to {} in {:.1f} s (open {})", studyOut.string(),
+                   std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(),
+                   (studyOut / "report.html").string());
+    } else if (*lfInfo) {
+      const lfi::LightField lf = lfi::readLightFieldExr(lfFile);
+      const auto& g = lf.geometry();
+      fmt::print("{}: valid light field\n  spatial {} x {} elements of {} x {} angular elements\n"
+                 "  pixel pitch {} mm, element pitch {} mm, extent {} x {} mm, distance {} mm\n",
+                 lfFile.string(), g.spatialX, g.spatialY, g.angular, g.angular, g.pixelPitch_mm, g.elementPitch_mm(),
+                 g.extentX_mm(), g.extentY_mm(), g.distance_mm);
+    }
+  } catch (const lfi::Error& e) {
+    spdlog::error("{}", e.what());
+    return 1;
+  } catch (const std::exception& e) {
+    spdlog::error("unexpected failure: {}", e.what());
+    return 2;
+  }
+  return 0;
+}

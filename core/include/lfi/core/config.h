@@ -1,0 +1,49 @@
+#pragma once
+// Reading human-edited TOML files (benches, scenes) with errors that name the
+// file, line and key. Every key read is recorded; finish() turns any key that
+// was never read (a typo, a key from another version) into an error, as
+// pbrt's ReportUnused does.
+
+#include <toml++/toml.h>
+
+#include <filesystem>
+#include <memory>
+#include <optional>
+#include <set>
+#include <string>
+#include <vector>
+
+namespace lfi {
+
+class ConfigTable {
+public:
+  // Parses a file; throws Errc::NotFound or Errc::Config (with line and column).
+  static ConfigTable parseFile(const std::filesystem::path& path);
+
+  double number(const std::string& key, std::optional<double> fallback = std::nullopt,
+                double min = -1e300, double max = 1e300);
+  int integer(const std::string& key, std::optional<int> fallback = std::nullopt, int min = -(1 << 30),
+              int max = 1 << 30);
+  std::string string(const std::string& key, std::optional<std::string> fallback = std::nullopt,
+                     const std::vector<std::string>& allowed = {});
+  bool has(const std::string& key) const;
+  ConfigTable table(const std::string& key);
+  // Throws Errc::Config for the first key of this table that was not read
+  // (call it on every subtable too).
+  void finish() const;
+
+  const std::string& file() const { return file_; }
+  std::string where(const std::string& key) const;  // "file:line: key 'a.b'"
+
+private:
+  ConfigTable(std::shared_ptr<const toml::table> root, const toml::table* table, std::string file, std::string path);
+  const toml::node* node(const std::string& key);
+
+  std::shared_ptr<const toml::table> root_;
+  const toml::table* table_;
+  std::string file_;
+  std::string path_;
+  std::set<std::string> used_;
+};
+
+}  // namespace lfi

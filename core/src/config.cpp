@@ -1,0 +1,96 @@
+#include "lfi/core/config.h"
+
+#include "lfi/core/error.h"
+
+#include <fmt/ranges.h>
+
+#include <algorithm>
+#include <cmath>
+
+namespace lfi {
+
+ConfigTable::ConfigTable(std::shared_ptr<const toml::table> root, const toml::table* table, std::string file,
+                         std::string path)
+    : root_(std::move(root)), table_(table), file_(std::move(file)), path_(std::move(path)) {}
+
+ConfigTable ConfigTable::parseFile(const std::filesystem::path& path) {
+  if (!std::filesystem::exists(path)) fail(Errc::NotFound, "'{}': no such file", path.string());
+  try {
+    auto root = std::make_shared<const toml::table>(toml::parse_file(path.string()));
+    return ConfigTable(root, root.get(), path.string(), "");
+  } catch (const toml::parse_error& e) {
+    fail(Errc::Config, "{}:{}:{}: {}", path.string(), e.source().begin.line, e.source().begin.column,
+         std::string(e.description()));
+  }
+}
+
+std::string ConfigTable::where(const std::string& key) const {
+  const std::string full = path_.empty() ? key : path_ + "." + key;
+  const toml::node* n = table_->get(key);
+  const auto line = n ? n->source().begin.line : table_->source().begin.line;
+  return fmt::format("{}:{}: key '{}'", file_, line, full);
+}
+
+bool ConfigTable::has(const std::string& key) const { return table_->contains(key); }
+
+const toml::node* ConfigTable::node(const std::string& key) {
+  used_.insert(key);
+  return table_->get(key);
+}
+
+double ConfigTable::number(const std::string& key, std::optional<double> fallback, double min, double max) {
+  const toml::node* n = node(key);
+  if (!n) {
+    if (!fallback) fail(Errc::Config, "{} is missing", where(key));
+    return *fallback;
+  }
+  std::optional<double> v = n->is_integer() ? std::optional<double>(static_cast<double>(*n->value<int64_t>()))
+                                            : n->value<double>();
+  if (!v || !n->is_number()) fail(Errc::Config, "{} must be a number", where(key));
+  if (!std::isfinite(*v) || *v < min || *v > max)
+    fail(Errc::Config, "{} = {} is outside [{}, {}]", where(key), *v, min, max);
+  return *v;
+}
+
+int ConfigTable::integer(const std::string& key, std::optional<int> fallback, int min, int max) {
+  const toml::node* n = node(key);
+  if (!n) {
+    if (!fallback) fail(Errc::Config, "{} is missing", where(key));
+    return *fallback;
+  }
+  if (!n->is_integer()) fail(Errc::Config, "{} must be an integer", where(key));
+  const int64_t v = *n->value<int64_t>();
+  if (v < min || v > max) fail(Errc::Config, "{} = {} is outside [{}, {}]", where(key), v, min, max);
+  return static_cast<int>(v);
+}
+
+std::string ConfigTable::string(const std::string& key, std::optional<std::string> fallback,
+                                const std::vector<std::string>& allowed) {
+  const toml::node* n = node(key);
+  if (!n) {
+    if (!fallback) fail(Errc::Config, "{} is missing", where(key));
+    return *fallback;
+  }
+  if (!n->is_string()) fail(Errc::Config, "{} must be a string", where(key));
+  std::string v = *n->value<std::string>();
+  if (!allowed.empty() && std::find(allowed.begin(), allowed.end(), v) == allowed.end())
+    fail(Errc::Config, "{} = '{}' is not one of: {}", where(key), v, fmt::join(allowed, ", "));
+  return v;
+}
+
+ConfigTable ConfigTable::table(const std::string& key) {
+  const toml::node* n = node(key);
+  if (!n) fail(Errc::Config, "{}: table [{}] is missing", file_, path_.empty() ? key : path_ + "." + key);
+  if (!n->is_table()) fail(Errc::Config, "{} must be a table", where(key));
+  return ConfigTable(root_, n->as_table(), file_, path_.empty() ? key : path_ + "." + key);
+}
+
+void ConfigTable::finish() const {
+  for (const auto& [k, v] : *table_) {
+    const std::string key(k.str());
+    if (!used_.count(key))
+      fail(Errc::Config, "{}:{}: unknown key '{}'", file_, v.source().begin.line, path_.empty() ? key : path_ + "." + key);
+  }
+}
+
+}  // namespace lfi

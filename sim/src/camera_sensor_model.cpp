@@ -1,0 +1,53 @@
+#include "lfi/sim/camera_sensor_model.h"
+
+#include "lfi/core/error.h"
+#include "lfi/core/image.h"
+
+#include <cmath>
+#include <random>
+
+namespace lfi::sim {
+
+void CameraSensorModel::validate() const {
+  if (!(fullWell_e > 0)) fail(Errc::InvalidArgument, "camera sensor: fullWell_e = {} must be > 0", fullWell_e);
+  if (!(readNoise_e >= 0)) fail(Errc::InvalidArgument, "camera sensor: readNoise_e = {} must be >= 0", readNoise_e);
+  if (bitDepth < 8 || bitDepth > 16) fail(Errc::InvalidArgument, "camera sensor: bitDepth = {} is outside [8, 16]", bitDepth);
+  if (!(electronsPerUnit > 0)) fail(Errc::InvalidArgument, "camera sensor: electronsPerUnit must be > 0");
+  if (!(gain > 0)) fail(Errc::InvalidArgument, "camera sensor: gain = {} must be > 0", gain);
+}
+
+void CameraSensorModel::exposeFor(double brightest, double fraction) {
+  if (!(brightest > 0)) fail(Errc::InvalidArgument, "camera sensor: cannot expose for a black image");
+  electronsPerUnit = fraction * fullWell_e / (gain * brightest);
+}
+
+cv::Mat CameraSensorModel::capture(const cv::Mat& radiance, std::uint64_t seed) const {
+  validate();
+  requireImageType(radiance, CV_32FC1, "radiance image for the camera sensor");
+  cv::Mat out(radiance.size(), CV_16UC1);
+  const double scale = gain / fullWell_e * maxDigitalNumber();
+  const double maxDn = maxDigitalNumber();
+  for (int r = 0; r < radiance.rows; ++r) {
+    // One engine per row keyed by (seed, row): reproducible and independent of image width.
+    std::mt19937_64 engine(seed * 0x9e3779b97f4a7c15ull + static_cast<std::uint64_t>(r));
+    std::normal_distribution<double> read(0.0, readNoise_e);
+    const float* in = radiance.ptr<float>(r);
+    auto* o = out.ptr<std::uint16_t>(r);
+    for (int c = 0; c < radiance.cols; ++c) {
+      const double mean = std::max(0.0, static_cast<double>(in[c])) * electronsPerUnit;
+      std::poisson_distribution<long long> shot(mean > 0 ? mean : 1e-300);
+      const double electrons = std::min(static_cast<double>(shot(engine)), fullWell_e) + read(engine);
+      o[c] = static_cast<std::uint16_t>(std::clamp(std::round(electrons * scale), 0.0, maxDn));
+    }
+  }
+  return out;
+}
+
+double CameraSensorModel::noiseDn(double dn) const {
+  const double scale = gain / fullWell_e * maxDigitalNumber();
+  const double electrons = std::max(0.0, dn / scale);
+  // Shot and read noise, plus the uniform quantisation error (1/12 DN^2).
+  return std::sqrt((electrons + readNoise_e * readNoise_e) * scale * scale + 1.0 / 12);
+}
+
+}  // namespace lfi::sim

@@ -1,0 +1,71 @@
+#pragma once
+// The reference study (SPEC §3): the bi-convex lens with six kinds of defect,
+// seen by the telecentric camera under three illuminations (parallel, area,
+// inverse schlieren), each image compared with the intact lens under the same
+// illumination by one declared criterion (docs/study.md).
+
+#include "lfi/core/light_field.h"
+#include "lfi/sim/camera_sensor_model.h"
+#include "lfi/sim/scene.h"
+#include "lfi/sim/sensors.h"
+
+#include <nlohmann/json.hpp>
+
+#include <filesystem>
+#include <functional>
+#include <string>
+#include <vector>
+
+namespace lfi::study {
+
+// The bench file (data/benches/reference.toml documents every field).
+struct Bench {
+  struct Lens {
+    double ior, diameter_mm, frontRadius_mm, backRadius_mm, centreThickness_mm, absorption_per_mm;
+  } lens;
+  struct Camera {
+    double pixelPitch_mm, magnification, workingDistance_mm, objectNa;
+    int width, height;
+    double fullWell_e, readNoise_e, exposureFill;
+    int bitDepth;
+  } camera;
+  struct Backlight {
+    double distance_mm, size_mm, halfAngle_rad;
+  } parallel, area;
+  struct InverseSchlieren {
+    double distance_mm, pixelPitch_mm;
+    int angular, spatial;
+    LightFieldLookup lookup;
+    double captureHalfAngle_rad, captureDistance_mm;
+  } inverseSchlieren;
+  struct Defects {
+    double inclusionRadius_mm, rimRadial_mm, cutLargeRadius_mm, cutLargeRadial_mm, cutSubpixelRadius_mm,
+        cutSubpixelRadial_mm, indexFactor, misalignment_mm;
+  } defects;
+
+  static Bench load(const std::filesystem::path& path);
+  sim::TelecentricCamera telecentricCamera() const;
+  sim::CameraSensorModel sensorModel() const;
+  LightFieldGeometry lightFieldGeometry() const;
+};
+
+enum class Quality { Quick, Default, High };
+Quality parseQuality(const std::string& name);
+
+struct StudyOptions {
+  Quality quality = Quality::Default;
+  std::uint64_t seed = 1;
+  int threads = 0;
+  bool overwrite = false;
+  // Progress: a label for the current step and the overall fraction done.
+  std::function<void(const std::string&, double)> progress;
+};
+
+// Runs the study, writes DIR/study.json, DIR/images/*, DIR/report.html and
+// returns the JSON document.
+nlohmann::ordered_json runStudy(const Bench& bench, const std::filesystem::path& outDir, const StudyOptions& options);
+
+// The verdict table as text, for the terminal.
+std::string verdictTable(const nlohmann::ordered_json& study);
+
+}  // namespace lfi::study
