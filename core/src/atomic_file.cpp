@@ -3,6 +3,7 @@
 #include "lfi/core/error.h"
 
 #include <fcntl.h>
+#include <sys/stat.h>
 #include <stdio.h>
 #include <unistd.h>
 
@@ -16,6 +17,21 @@ namespace lfi {
 namespace fs = std::filesystem;
 
 namespace {
+
+// The process umask without changing it (umask(2) would race other threads).
+mode_t currentUmask() {
+  std::ifstream status("/proc/self/status");
+  std::string key;
+  while (status >> key) {
+    if (key == "Umask:") {
+      std::string octal;
+      status >> octal;
+      return static_cast<mode_t>(std::stoul(octal, nullptr, 8));
+    }
+    status.ignore(1 << 16, '\n');
+  }
+  return 022;
+}
 
 void syncPath(const fs::path& path, int flags) {
   const int fd = ::open(path.c_str(), flags | O_CLOEXEC);
@@ -38,6 +54,11 @@ void writeFileAtomically(const fs::path& target, Overwrite overwrite,
   std::string pattern = (dir / ("." + target.filename().string() + ".tmp-XXXXXX")).string();
   const int fd = ::mkstemp(pattern.data());
   if (fd < 0) fail(Errc::Io, "cannot create a temporary file next to '{}': {}", target.string(), std::strerror(errno));
+  // mkstemp creates 0600; published files get the mode a plain create would
+  // give them, or keep the mode of the file they replace.
+  struct stat old {};
+  const mode_t mode = ::stat(target.c_str(), &old) == 0 ? (old.st_mode & 07777) : (0666 & ~currentUmask());
+  ::fchmod(fd, mode);
   ::close(fd);
   const fs::path temporary = pattern;
   try {

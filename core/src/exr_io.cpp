@@ -15,6 +15,7 @@
 #include <zlib.h>
 
 #include <cmath>
+#include <cstddef>
 
 namespace lfi {
 
@@ -102,8 +103,9 @@ LoadedExr loadExr(const fs::path& path, const char* expectedKind) {
       fail(Errc::InvalidFile, "'{}': data window {}x{} is out of range", path.string(), width, height);
     out.pixels.create(static_cast<int>(height), static_cast<int>(width), CV_32FC1);
     Imf::FrameBuffer frame;
-    char* base = out.pixels.ptr<char>() - (static_cast<long>(dw.min.x) * sizeof(float)) -
-                 static_cast<long>(dw.min.y) * static_cast<long>(out.pixels.step);
+    const std::ptrdiff_t origin = static_cast<std::ptrdiff_t>(dw.min.x) * static_cast<std::ptrdiff_t>(sizeof(float)) +
+                                  static_cast<std::ptrdiff_t>(dw.min.y) * static_cast<std::ptrdiff_t>(out.pixels.step);
+    char* base = out.pixels.ptr<char>() - origin;
     frame.insert("Y", Imf::Slice(Imf::FLOAT, base, sizeof(float), out.pixels.step));
     file.setFrameBuffer(frame);
     file.readPixels(dw.min.y, dw.max.y);

@@ -4,6 +4,7 @@
 
 #include <fmt/format.h>
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -193,6 +194,21 @@ TEST_F(AtomicFile, TargetWithoutFileNameIsRejected) {
   EXPECT_TRUE(throwsError([&] { lfi::writeFileAtomically(dir_ / "", Overwrite::Allow, "x"); }, Errc::InvalidArgument,
                           {"not a file name"}));
   EXPECT_EQ(entries(), Names{});
+}
+
+TEST_F(AtomicFile, PublishedFileHasUmaskModeAndReplacementKeepsMode) {
+  // A plain create gives 0666 & ~umask; mkstemp's private 0600 must not leak.
+  const mode_t mask = ::umask(027);
+  const fs::path target = dir_ / "mode.txt";
+  lfi::writeFileAtomically(target, Overwrite::Refuse, "a");
+  struct stat st {};
+  ASSERT_EQ(::stat(target.c_str(), &st), 0);
+  EXPECT_EQ(st.st_mode & 0777, 0640u);
+  ASSERT_EQ(::chmod(target.c_str(), 0604), 0);
+  lfi::writeFileAtomically(target, Overwrite::Allow, "b");
+  ASSERT_EQ(::stat(target.c_str(), &st), 0);
+  EXPECT_EQ(st.st_mode & 0777, 0604u);
+  ::umask(mask);
 }
 
 }  // namespace

@@ -1,0 +1,146 @@
+// The reference study in quick mode, end to end: what it writes, and the
+// expectations that physics (not today's numbers) guarantees.
+
+#include "lfi/core/error.h"
+#include "lfi/study/study.h"
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+#include <regex>
+#include <sstream>
+
+namespace {
+
+namespace fs = std::filesystem;
+using lfi::Errc;
+
+const fs::path kBench = fs::path(LFI_SOURCE_DIR) / "data" / "benches" / "reference.toml";
+
+fs::path freshDir(const std::string& name) {
+  const fs::path dir = fs::path(testing::TempDir()) / ("lfi_study_" + name + "_" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  return dir;
+}
+
+std::string readText(const fs::path& p) {
+  std::ifstream in(p);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+// One study run serves every check below: ctest runs each TEST in its own
+// process, and the study is the slow part.
+void checkOutputs(const nlohmann::ordered_json& r, const fs::path& dir) {
+  const std::vector<std::string> setups = {"parallel", "area", "inverse_schlieren"};
+  ASSERT_EQ(r["setups"].get<std::vector<std::string>>(), setups);
+  const std::map<std::string, std::vector<std::string>> defects = {
+      {"intact", {}},          {"absorbing", {"center", "rim"}}, {"scattering", {"center", "rim"}},
+      {"cut_large", {"cut"}},  {"cut_subpixel", {"cut"}},        {"index", {"lens"}},
+      {"misaligned", {"lens"}}};
+  ASSERT_EQ(r["scenes"].size(), defects.size());
+  for (const auto& [scene, names] : defects) {
+    ASSERT_TRUE(r["scenes"].contains(scene)) << scene;
+    const auto& s = r["scenes"][scene];
+    EXPECT_EQ(s["defects"].size(), names.size()) << scene;
+    for (const auto& d : names)
+      for (const auto& setup : setups) {
+        const auto& cell = s["defects"][d][setup];
+        const std::string verdict = cell["verdict"].get<std::string>();
+        EXPECT_TRUE(verdict == "detected" || verdict == "weak" || verdict == "missed") << verdict;
+        EXPECT_GE(cell["cnr"].get<double>(), 0.0);
+        // The ground-truth mask is never empty: sub-pixel defects get their pixel.
+        EXPECT_GT(cell["pixels"].get<int>(), 0) << scene << "/" << d;
+      }
+    for (const auto& setup : setups) {
+      EXPECT_GE(s["false_positives"][setup].get<int>(), 0);
+      for (const char* ext : {".exr", ".png", "_diff.png"})
+        EXPECT_TRUE(fs::exists(dir / "images" / (scene + "_" + setup + ext))) << scene << setup << ext;
+    }
+  }
+  EXPECT_TRUE(fs::exists(dir / "lightfield.exr"));
+  const std::string html = readText(dir / "report.html");
+  EXPECT_NE(html.find("images/absorbing_inverse_schlieren.png"), std::string::npos);
+  EXPECT_EQ(nlohmann::ordered_json::parse(readText(dir / "study.json")), r);
+}
+
+TEST(QuickStudy, EndToEnd) {
+  const fs::path dir = freshDir("quick");
+  lfi::study::StudyOptions options;
+  options.quality = lfi::study::Quality::Quick;
+  const auto bench = lfi::study::Bench::load(kBench);
+  const auto r = lfi::study::runStudy(bench, dir, options);
+  {
+    SCOPED_TRACE("outputs");
+    checkOutputs(r, dir);
+  }
+  // On the axis the lens does not deflect, so both the collimated and the
+  // diffuse back light reach the camera there; an opaque sphere blocks that
+  // light completely over several pixels: a contrast of the whole signal
+  // against shot noise, far above any threshold.
+  for (const char* setup : {"parallel", "area"})
+    EXPECT_EQ(r["scenes"]["absorbing"]["defects"]["center"][setup]["verdict"], "detected") << setup;
+  // Under collimated light the lens bends rays 10 mm from the axis by about
+  // h/f = 0.2 rad, far beyond the camera's 0.015 rad acceptance: that region
+  // is dark with or without the particle, so nothing can differ.
+  EXPECT_EQ(r["scenes"]["absorbing"]["defects"]["rim"]["parallel"]["verdict"], "missed");
+  // A second run into the same folder must not replace the first.
+  try {
+    lfi::study::runStudy(bench, dir, options);
+    ADD_FAILURE() << "expected an error";
+  } catch (const lfi::Error& e) {
+    EXPECT_EQ(e.code(), Errc::Exists);
+    EXPECT_NE(std::string(e.what()).find("--force"), std::string::npos);
+  }
+  fs::remove_all(dir);
+}
+
+TEST(Bench, UnknownKeyIsAnErrorNamingFileLineAndKey) {
+  const fs::path dir = freshDir("bench");
+  std::string text = readText(kBench);
+  text = std::regex_replace(text, std::regex("\ncentre_thickness_mm"), "\ncenter_thickness_mm");
+  const fs::path bad = dir / "typo.toml";
+  std::ofstream(bad) << text;
+  try {
+    lfi::study::Bench::load(bad);
+    FAIL() << "expected an error";
+  } catch (const lfi::Error& e) {
+    EXPECT_EQ(e.code(), Errc::Config);
+    const std::string what = e.what();
+    // The missing key is reported first; after adding it back, the typo is.
+    EXPECT_NE(what.find(bad.string()), std::string::npos) << what;
+    EXPECT_NE(what.find("centre_thickness_mm"), std::string::npos) << what;
+  }
+  text = std::regex_replace(text, std::regex("\ncenter_thickness_mm"), "\ncentre_thickness_mm = 5.0\ncenter_thickness_mm");
+  std::ofstream(bad) << text;
+  try {
+    lfi::study::Bench::load(bad);
+    FAIL() << "expected an error";
+  } catch (const lfi::Error& e) {
+    const std::string what = e.what();
+    EXPECT_TRUE(std::regex_search(what, std::regex(":[0-9]+: unknown key 'lens.center_thickness_mm'"))) << what;
+  }
+  fs::remove_all(dir);
+}
+
+TEST(Bench, OutOfRangeAndMalformedValuesAreErrors) {
+  const fs::path dir = freshDir("range");
+  const fs::path bad = dir / "bad.toml";
+  std::ofstream(bad) << std::regex_replace(readText(kBench), std::regex("\nior = 1.5168"), "\nior = -3");
+  EXPECT_THROW(lfi::study::Bench::load(bad), lfi::Error);
+  std::ofstream(bad) << "format = \"lfi-bench\"\nversion = [";
+  try {
+    lfi::study::Bench::load(bad);
+    FAIL();
+  } catch (const lfi::Error& e) {
+    EXPECT_EQ(e.code(), Errc::Config);
+    EXPECT_NE(std::string(e.what()).find(bad.string() + ":2:"), std::string::npos) << e.what();
+  }
+  fs::remove_all(dir);
+}
+
+}  // namespace
