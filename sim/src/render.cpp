@@ -265,22 +265,37 @@ cv::Mat render(const Scene& scene, const Sensor& sensor, const RenderOptions& op
   std::atomic<int> done{0};
   std::atomic<bool> stopped{false};
 
+  const int side = static_cast<int>(std::sqrt(static_cast<double>(options.samplesPerPixel)));
+  const int strata = side * side;
   auto renderTile = [&](int tile) {
     if (options.cancel && options.cancel->load(std::memory_order_relaxed)) {
       stopped = true;
       return;
     }
     const int x0 = (tile % tilesX) * ts, y0 = (tile / tilesX) * ts;
+    std::vector<int> permutation(static_cast<size_t>(strata));
     for (int j = y0; j < std::min(y0 + ts, height); ++j) {
       float* row = image.ptr<float>(j);
       for (int i = x0; i < std::min(x0 + ts, width); ++i) {
         Sampler sampler(options.seed, static_cast<std::uint64_t>(j) * static_cast<std::uint64_t>(width) + i);
+        // Jittered strata for the pixel area and, independently permuted, for
+        // the stop: the first m^2 samples cover both evenly; the rest are random.
+        for (int k = 0; k < strata; ++k) permutation[static_cast<size_t>(k)] = k;
+        for (int k = strata - 1; k > 0; --k)
+          std::swap(permutation[static_cast<size_t>(k)],
+                    permutation[static_cast<size_t>(sampler.nextU32() % static_cast<std::uint32_t>(k + 1))]);
+        auto stratified = [&](int stratum) {
+          const double u = sampler.next(), v = sampler.next();
+          if (stratum >= strata) return Vec2(u, v);
+          return Vec2((stratum % side + u) / side, (stratum / side + v) / side);
+        };
         double sum = 0;
         for (int s = 0; s < options.samplesPerPixel; ++s) {
-          const Vec2 offset(sampler.next(), sampler.next());
+          const Vec2 offset = stratified(s);
           std::optional<Ray> ray;
           if (const auto* cam = std::get_if<TelecentricCamera>(&sensor)) {
-            const Vec2 disc = concentricDisc(sampler.next(), sampler.next());
+            const Vec2 u = stratified(s < strata ? permutation[static_cast<size_t>(s)] : s);
+            const Vec2 disc = concentricDisc(u.x, u.y);
             ray = cam->ray(i, j, offset, disc);
           } else {
             ray = std::get<LightFieldSensor>(sensor).ray(i, j, offset);

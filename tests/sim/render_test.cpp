@@ -1,0 +1,290 @@
+// The path tracer against analytic radiometry: a flat slab's transmission with
+// incoherent multiple reflections and Beer-Lambert absorption, the bright disc
+// of a lens under parallel illumination, determinism, cancellation, progress.
+#include "lfi/core/error.h"
+#include "lfi/sim/render.h"
+#include "lfi/sim/scene.h"
+#include "lfi/sim/sensors.h"
+
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <cmath>
+#include <cstring>
+#include <mutex>
+#include <numbers>
+#include <vector>
+
+namespace {
+
+using namespace lfi;
+using namespace lfi::sim;
+
+// Thick-lens focal length (lensmaker): 1/f = (n-1) [1/R1 - 1/R2 + (n-1) d / (n R1 R2)].
+double lensmakerFocalLength(double r1, double r2, double d, double n) {
+  return 1 / ((n - 1) * (1 / r1 - 1 / r2 + (n - 1) * d / (n * r1 * r2)));
+}
+
+// A camera looking down -z, focused on the plane z = focusZ, with an object
+// pixel of fieldMm / size and acceptance half-angle acceptance (f = 100, b = 200, m = 1).
+TelecentricCamera cameraAbove(double focusZ, int size, double fieldMm, double acceptance) {
+  TelecentricCamera cam;
+  cam.focalLength_mm = 100;
+  cam.imageDistance_mm = 200;
+  cam.stopDiameter_mm = 2 * cam.focalLength_mm * std::tan(acceptance);
+  cam.pixelPitch_mm = fieldMm / size;  // magnification b / wz = 1
+  cam.width = size;
+  cam.height = size;
+  cam.worldFromCamera = TelecentricCamera::lookingDownFrom(focusZ + cam.focusDistance_mm());
+  return cam;
+}
+
+Object emitterBelow(double z, Emission emission, bool facingUp = true) {
+  Rigid3 x = facingUp ? Rigid3() : Rigid3::rotation({1, 0, 0}, std::numbers::pi);
+  x.t = {0, 0, z};
+  return {.name = "backlight", .shape = Rectangle{400, 400}, .worldFromObject = x, .emission = emission};
+}
+
+// ---- Slab transmission --------------------------------------------------
+//
+// Camera above (looking down -z), a flat non-absorbing slab, a one-sided
+// Lambertian emitter (radiance 1, normal +z) below. A camera ray at (near)
+// normal incidence: reflected at the top face it goes up and escapes (no
+// source there: 0). Transmitted (1-R), it reaches the bottom face: (1-R) again
+// to the emitter, which it hits on its lit side (radiance 1); R back up to the
+// top face, where (1-R) escapes upwards (0) and R goes down again, and so on.
+// Each extra round trip multiplies by R^2, and with absorption by tau^2, where
+// tau = exp(-a d) is the single-pass Beer-Lambert factor:
+//   L = (1-R)^2 tau sum_k (R^2 tau^2)^k = (1-R)^2 tau / (1 - R^2 tau^2),
+// which for tau = 1 is (1-R)^2 / (1-R^2) = (1-R) / (1+R). R = ((n-1)/(n+1))^2.
+// With splitDepth = 8 the first eight interfaces are split deterministically;
+// what is left is sampled with weight < (1-R)^2 R^8 ~ 1e-11, and the acceptance
+// cone (0.01 rad) changes R by < 1e-5: tolerance 1e-4.
+double slabRadiance(const std::shared_ptr<const Solid>& slab, double n, double absorption, bool emitterFacingUp,
+                    double* minOut = nullptr) {
+  std::vector<Object> objects;
+  objects.push_back(emitterBelow(0, LambertianEmission{1.0}, emitterFacingUp));
+  objects.push_back({.name = "slab", .shape = slab, .worldFromObject = Rigid3::translation({0, 0, 20}),
+                     .material = Dielectric{n, absorption}});
+  const Scene scene(std::move(objects));
+  const TelecentricCamera cam = cameraAbove(20, 16, 2.0, 0.01);
+  RenderOptions opt;
+  opt.samplesPerPixel = 4;
+  opt.splitDepth = 8;
+  opt.threads = 2;
+  const cv::Mat image = render(scene, cam, opt);
+  double lo, hi;
+  cv::minMaxLoc(image, &lo, &hi);
+  if (minOut) *minOut = lo;
+  EXPECT_LT(hi - lo, 1e-4);  // a uniform slab gives a uniform image
+  return cv::mean(image)[0];
+}
+
+TEST(SlabTransmission, NonAbsorbingSlabTransmitsOneMinusROverOnePlusR) {
+  for (double n : {1.5, 1.8}) {
+    const double r = std::pow((n - 1) / (n + 1), 2);
+    const double expected = (1 - r) / (1 + r);
+    const double measured = slabRadiance(Solid::sphericalLens(0, 0, 5, 200), n, 0, true);
+    RecordProperty("slab_n" + std::to_string(n), std::to_string(measured) + " vs " + std::to_string(expected));
+    EXPECT_NEAR(measured, expected, 1e-4) << "n=" << n;
+    // Distinguishable from the single-pass (1-R)^2 the multiple reflections add to.
+    EXPECT_GT(measured - (1 - r) * (1 - r), 5e-4);
+  }
+}
+
+TEST(SlabTransmission, AbsorbingSlabAddsTheBeerLambertFactor) {
+  const double n = 1.5, a = 0.02, d = 5;
+  const double r = std::pow((n - 1) / (n + 1), 2), tau = std::exp(-a * d);
+  const double expected = (1 - r) * (1 - r) * tau / (1 - r * r * tau * tau);
+  // The same slab built by hand from a cylinder and two half spaces.
+  auto top = Solid::halfSpace(Rigid3::translation({0, 0, d / 2}));
+  auto bottom = Solid::halfSpace(Rigid3::translation({0, 0, -d / 2}) * Rigid3::rotation({1, 0, 0}, std::numbers::pi));
+  auto slab = Solid::combine(Solid::Kind::Intersection, Solid::cylinder(100),
+                             Solid::combine(Solid::Kind::Intersection, top, bottom));
+  const double measured = slabRadiance(slab, n, a, true);
+  EXPECT_NEAR(measured, expected, 1e-4);
+}
+
+TEST(SlabTransmission, OneSidedEmitterSeenFromBehindIsDark) {
+  // Turned over, the emitter's lit side faces away from the camera: nothing is seen.
+  double lo = -1;
+  EXPECT_EQ(slabRadiance(Solid::sphericalLens(0, 0, 5, 200), 1.5, 0, false, &lo), 0.0);
+  EXPECT_EQ(lo, 0.0);
+}
+
+// ---- Parallel illumination of an intact lens ------------------------------
+//
+// Camera above looking down -z, focused on a converging lens (focal length f
+// from the lensmaker equation), a ParallelEmission backlight (half-angle
+// theta_e) below. A camera ray through the lens at height h with direction
+// delta (|delta| <= theta_c, uniform over the acceptance disc: the stop is
+// sampled uniformly) leaves the lens towards the backlight with direction
+// delta - h/f (thin-lens deflection towards the axis). The backlight returns
+// radiance iff |delta - h/f| < theta_e. So the lit fraction of a pixel at
+// height h is the area of the disc |delta| <= theta_c, shifted by h/f, inside
+// the circle of radius theta_e, over pi theta_c^2: 1 for h < f (theta_e -
+// theta_c), 0 for h > f (theta_e + theta_c), and close to 1/2 (a little less:
+// the circle is convex) at h = f theta_e. Away from the lens the camera sees
+// the backlight directly, at angles <= theta_c < theta_e: radiance 1.
+double litFraction(double shift, double thetaC, double thetaE) {
+  const double d = shift, r = thetaC, big = thetaE;
+  if (d <= big - r) return 1;
+  if (d >= big + r) return 0;
+  const double area = r * r * std::acos((d * d + r * r - big * big) / (2 * d * r)) +
+                      big * big * std::acos((d * d + big * big - r * r) / (2 * d * big)) -
+                      0.5 * std::sqrt((-d + r + big) * (d + r - big) * (d - r + big) * (d + r + big));
+  return area / (std::numbers::pi * r * r);
+}
+
+TEST(ParallelIllumination, LensShowsABrightDiscOfRadiusFocalLengthTimesEmitterAngle) {
+  const double r1 = 100, r2 = -100, tc = 7, n = 1.5, diameter = 12;
+  const double thetaE = 0.02, thetaC = 0.01, field = 20;
+  const int size = 96;
+  const double f = lensmakerFocalLength(r1, r2, tc, n);
+  std::vector<Object> objects;
+  objects.push_back(emitterBelow(-60, ParallelEmission{1.0, thetaE}));
+  objects.push_back({.name = "lens", .shape = std::shared_ptr<const Solid>(Solid::sphericalLens(r1, r2, tc, diameter)),
+                     .material = Dielectric{n, 0}});
+  const Scene scene(std::move(objects));
+  const TelecentricCamera cam = cameraAbove(0, size, field, thetaC);
+  RenderOptions opt;
+  opt.samplesPerPixel = 16;
+  opt.splitDepth = 2;
+  opt.threads = 2;
+  const cv::Mat image = render(scene, cam, opt);
+
+  const double pixel = field / size;
+  auto radiusOf = [&](int i, int j) { return std::hypot((i + 0.5 - size / 2.0) * pixel, (j + 0.5 - size / 2.0) * pixel); };
+  // The plateau: transmitted through two surfaces, about (1 - 0.04)^2.
+  double plateau = 0;
+  int plateauCount = 0;
+  for (int j = 0; j < size; ++j)
+    for (int i = 0; i < size; ++i)
+      if (radiusOf(i, j) < 0.6) plateau += image.at<float>(j, i), ++plateauCount;
+  plateau /= plateauCount;
+  EXPECT_NEAR(plateau, 0.96 * 0.96, 0.01);
+
+  // Area of the disc above half the plateau, within the lens (r < 5.5 mm, clear of the rim).
+  int bright = 0;
+  for (int j = 0; j < size; ++j)
+    for (int i = 0; i < size; ++i) {
+      const double rr = radiusOf(i, j), v = image.at<float>(j, i);
+      if (rr < 5.5 && v > 0.5 * plateau) ++bright;
+      if (rr > 3.6 && rr < 5.5) EXPECT_LT(v, 0.01) << "dark ring at r=" << rr;
+      if (rr > 7) EXPECT_EQ(v, 1.0f) << "direct backlight at r=" << rr;
+    }
+  const double measured = std::sqrt(bright / std::numbers::pi) * pixel;
+  // Predicted: the height where the lit fraction is 1/2 (bisection), close to f theta_e.
+  double lo = f * (thetaE - thetaC), hi = f * (thetaE + thetaC);
+  for (int k = 0; k < 60; ++k) {
+    const double mid = 0.5 * (lo + hi);
+    (litFraction(mid / f, thetaC, thetaE) > 0.5 ? lo : hi) = mid;
+  }
+  const double predicted = 0.5 * (lo + hi);
+  RecordProperty("disc_radius_mm", std::to_string(measured) + " vs " + std::to_string(predicted) + " (f theta_e " +
+                                       std::to_string(f * thetaE) + ")");
+  EXPECT_GT(measured, f * (thetaE - thetaC));
+  EXPECT_LT(measured, f * (thetaE + thetaC));
+  EXPECT_NEAR(measured, f * thetaE, 0.1 * f * thetaE);
+  EXPECT_NEAR(measured, predicted, 0.25 * pixel);
+}
+
+// ---- Determinism, cancellation, progress ----------------------------------
+
+struct SmallLensScene {
+  Scene scene;
+  TelecentricCamera cam;
+  SmallLensScene()
+      : scene([] {
+          std::vector<Object> objects;
+          objects.push_back(emitterBelow(-60, ParallelEmission{1.0, 0.02}));
+          objects.push_back({.name = "lens", .shape = std::shared_ptr<const Solid>(Solid::sphericalLens(100, -100, 7, 12)),
+                             .material = Dielectric{1.5, 0.01}});
+          return objects;
+        }()),
+        cam(cameraAbove(0, 32, 10, 0.01)) {}
+};
+
+TEST(Render, BitIdenticalForAnyThreadCountAndTileSize) {
+  SmallLensScene s;
+  RenderOptions a;
+  a.samplesPerPixel = 4;
+  a.splitDepth = 0;  // pure sampling: every random choice shows in the image
+  a.seed = 7;
+  a.threads = 1;
+  a.tileSize = 16;
+  RenderOptions b = a;
+  b.threads = 2;
+  b.tileSize = 5;
+  const cv::Mat ia = render(s.scene, s.cam, a), ib = render(s.scene, s.cam, b);
+  ASSERT_EQ(ia.size(), ib.size());
+  ASSERT_EQ(ia.type(), ib.type());
+  ASSERT_TRUE(ia.isContinuous() && ib.isContinuous());
+  EXPECT_EQ(std::memcmp(ia.data, ib.data, ia.total() * ia.elemSize()), 0);
+  EXPECT_GT(cv::norm(ia, cv::NORM_L1), 10);  // not trivially black
+
+  RenderOptions c = b;
+  c.seed = 8;
+  const cv::Mat ic = render(s.scene, s.cam, c);
+  EXPECT_NE(std::memcmp(ia.data, ic.data, ia.total() * ia.elemSize()), 0);
+  EXPECT_GT(cv::norm(ia, ic, cv::NORM_L1), 1);
+}
+
+TEST(Render, CancelFlagSetBeforehandThrowsCancelled) {
+  SmallLensScene s;
+  std::atomic<bool> cancel{true};
+  RenderOptions opt;
+  opt.samplesPerPixel = 1;
+  opt.threads = 2;
+  opt.cancel = &cancel;
+  try {
+    render(s.scene, s.cam, opt);
+    FAIL() << "render did not throw";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), Errc::Cancelled);
+  }
+  // Not set: renders normally.
+  cancel = false;
+  EXPECT_NO_THROW(render(s.scene, s.cam, opt));
+}
+
+TEST(Render, ProgressEndsAtOne) {
+  SmallLensScene s;
+  const int tileSize = 8, tiles = (32 / tileSize) * (32 / tileSize);
+  for (int threads : {1, 2}) {
+    std::mutex m;
+    std::vector<double> calls;
+    RenderOptions opt;
+    opt.samplesPerPixel = 1;
+    opt.threads = threads;
+    opt.tileSize = tileSize;
+    opt.progress = [&](double x) {
+      std::lock_guard lock(m);
+      calls.push_back(x);
+    };
+    render(s.scene, s.cam, opt);
+    ASSERT_EQ(static_cast<int>(calls.size()), tiles) << "threads=" << threads;
+    for (double x : calls) {
+      EXPECT_GT(x, 0);
+      EXPECT_LE(x, 1);
+    }
+    // Every fraction k / tiles is reported once; 1.0 is among them. With one
+    // thread the calls come in order, so 1.0 is the last one.
+    std::vector<double> sorted = calls;
+    std::sort(sorted.begin(), sorted.end());
+    for (int k = 0; k < tiles; ++k) EXPECT_DOUBLE_EQ(sorted[k], (k + 1.0) / tiles);
+    if (threads == 1) EXPECT_EQ(calls.back(), 1.0);
+  }
+}
+
+TEST(Render, RejectsInvalidOptions) {
+  SmallLensScene s;
+  RenderOptions opt;
+  opt.samplesPerPixel = 0;
+  EXPECT_THROW(render(s.scene, s.cam, opt), Error);
+  opt.samplesPerPixel = 1;
+  opt.splitDepth = 13;
+  EXPECT_THROW(render(s.scene, s.cam, opt), Error);
+}
+
+}  // namespace

@@ -1,0 +1,127 @@
+// The camera sensor model against its own statistics: exposure, shot + read +
+// quantisation noise, saturation, linearity, reproducibility.
+#include "lfi/sim/camera_sensor_model.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+
+namespace {
+
+using namespace lfi;
+using namespace lfi::sim;
+
+cv::Mat flat(int size, float radiance) { return cv::Mat(size, size, CV_32FC1, cv::Scalar(radiance)); }
+
+void meanStd(const cv::Mat& dn, double& mean, double& stddev) {
+  cv::Scalar m, s;
+  cv::meanStdDev(dn, m, s);
+  mean = m[0];
+  stddev = s[0];
+}
+
+TEST(CameraSensorModel, ExposeForPutsTheBrightestAtSeventyPercent) {
+  for (double gain : {1.0, 2.0}) {
+    CameraSensorModel model;
+    model.gain = gain;
+    model.exposeFor(2.5);
+    double mean, sd;
+    meanStd(model.capture(flat(128, 2.5f), 3), mean, sd);
+    // 16384 pixels, sd ~ 30 DN: the mean is known to ~0.25 DN.
+    EXPECT_NEAR(mean, 0.7 * model.maxDigitalNumber(), 2) << "gain " << gain;
+    // A radiance of half the brightest gives half the signal.
+    meanStd(model.capture(flat(128, 1.25f), 4), mean, sd);
+    EXPECT_NEAR(mean, 0.35 * model.maxDigitalNumber(), 2) << "gain " << gain;
+  }
+  CameraSensorModel model;
+  model.exposeFor(4, 0.5);
+  double mean, sd;
+  meanStd(model.capture(flat(64, 4.0f), 5), mean, sd);
+  EXPECT_NEAR(mean, 0.5 * model.maxDigitalNumber(), 3);
+}
+
+TEST(CameraSensorModel, CaptureIsReproducibleWithTheSameSeed) {
+  CameraSensorModel model;
+  model.exposeFor(1.0);
+  cv::Mat radiance(40, 50, CV_32FC1);
+  cv::randu(radiance, 0.0, 1.0);
+  const cv::Mat a = model.capture(radiance, 11), b = model.capture(radiance, 11), c = model.capture(radiance, 12);
+  ASSERT_EQ(a.type(), CV_16UC1);
+  ASSERT_EQ(a.size(), radiance.size());
+  EXPECT_EQ(std::memcmp(a.data, b.data, a.total() * a.elemSize()), 0);
+  EXPECT_NE(std::memcmp(a.data, c.data, a.total() * a.elemSize()), 0);
+  // Different seeds differ in most pixels, not in one.
+  cv::Mat diff;
+  cv::compare(a, c, diff, cv::CMP_NE);
+  EXPECT_GT(cv::countNonZero(diff), static_cast<int>(a.total() / 2));
+}
+
+TEST(CameraSensorModel, FlatFieldNoiseMatchesNoiseDn) {
+  CameraSensorModel model;
+  model.electronsPerUnit = 1;
+  // Electrons per pixel: read-noise dominated, balanced, shot-noise dominated.
+  for (double electrons : {30.0, 1000.0, 8000.0}) {
+    double mean, sd;
+    meanStd(model.capture(flat(256, static_cast<float>(electrons)), 21), mean, sd);
+    const double expectedMean = electrons * model.gain / model.fullWell_e * model.maxDigitalNumber();
+    EXPECT_NEAR(mean, expectedMean, 0.01 * expectedMean + 0.1) << electrons << " e-";
+    // 65536 pixels: the sample sd is known to ~0.3 %.
+    EXPECT_NEAR(sd / model.noiseDn(mean), 1.0, 0.03) << electrons << " e-: sd " << sd << " DN";
+  }
+  // Without read noise the variance is the Poisson one: sqrt(N) e- (+ quantisation).
+  model.readNoise_e = 0;
+  double mean, sd;
+  meanStd(model.capture(flat(256, 4000.0f), 22), mean, sd);
+  const double scale = model.maxDigitalNumber() / model.fullWell_e;
+  EXPECT_NEAR(sd, std::sqrt(4000 * scale * scale + 1.0 / 12), 0.03 * sd);
+}
+
+TEST(CameraSensorModel, SaturationClampsAtTheMaximumDigitalNumber) {
+  CameraSensorModel model;
+  model.electronsPerUnit = model.fullWell_e;  // radiance 1 fills the well
+  for (int bits : {8, 12, 16}) {
+    model.bitDepth = bits;
+    const cv::Mat dn = model.capture(flat(64, 5.0f), 1);
+    double lo, hi;
+    cv::minMaxLoc(dn, &lo, &hi);
+    EXPECT_EQ(hi, model.maxDigitalNumber()) << bits;
+    // The well is full: only read noise is left below full scale.
+    EXPECT_GT(lo, model.maxDigitalNumber() * (1 - 10 * model.readNoise_e / model.fullWell_e)) << bits;
+  }
+  // With gain 2 half a well reaches full scale, so a full well is clipped everywhere.
+  model.bitDepth = 12;
+  model.gain = 2;
+  const cv::Mat dn = model.capture(flat(64, 1.0f), 2);
+  EXPECT_EQ(cv::countNonZero(dn != model.maxDigitalNumber()), 0);
+}
+
+TEST(CameraSensorModel, DoublingElectronsPerUnitDoublesTheMean) {
+  CameraSensorModel model;
+  model.electronsPerUnit = 2000;
+  const cv::Mat radiance = flat(128, 1.0f);
+  double m1, m2, sd;
+  meanStd(model.capture(radiance, 31), m1, sd);
+  model.electronsPerUnit = 4000;
+  meanStd(model.capture(radiance, 32), m2, sd);
+  // Means of 16384 pixels: ~0.1 DN of noise on ~780 and ~1560 DN.
+  EXPECT_NEAR(m2 / m1, 2.0, 0.002);
+  // Past saturation it stops doubling.
+  model.electronsPerUnit = 8000;
+  meanStd(model.capture(flat(128, 2.0f), 33), m1, sd);
+  model.electronsPerUnit = 16000;
+  meanStd(model.capture(flat(128, 2.0f), 34), m2, sd);
+  EXPECT_LT(m2 / m1, 1.4);
+}
+
+TEST(CameraSensorModel, ZeroRadianceGivesOnlyReadNoise) {
+  CameraSensorModel model;
+  double mean, sd;
+  meanStd(model.capture(flat(256, 0.0f), 41), mean, sd);
+  // Read noise of 2.4 e- is 0.94 DN, clipped at 0: the mean is small and positive.
+  EXPECT_LT(mean, 1.0);
+  EXPECT_GE(mean, 0.0);
+  EXPECT_THROW(model.exposeFor(0), std::exception);
+}
+
+}  // namespace

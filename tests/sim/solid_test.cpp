@@ -1,0 +1,238 @@
+// Analytic solids and CSG against closed-form geometry: ray-sphere roots,
+// spherical sag, normals of booleans, contains() versus intervals, bounds.
+#include "lfi/sim/solid.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <memory>
+#include <numbers>
+#include <random>
+
+namespace {
+
+using namespace lfi;
+using namespace lfi::sim;
+
+void expectNear(const Vec3& actual, const Vec3& expected, double tol) {
+  EXPECT_NEAR(actual.x, expected.x, tol);
+  EXPECT_NEAR(actual.y, expected.y, tol);
+  EXPECT_NEAR(actual.z, expected.z, tol);
+}
+
+// z of a spherical face with its vertex at z0 and signed radius r (centre at
+// z0 + r) at height h: the sag formula z0 + r - sign(r) sqrt(r^2 - h^2).
+double faceZ(double z0, double r, double h) {
+  if (r == 0) return z0;
+  return z0 + r - std::copysign(std::sqrt(r * r - h * h), r);
+}
+
+TEST(Solid, SphereIntervalIsTheTwoRootsWithRadialNormals) {
+  // Sphere of radius 5 centred at c; ray from p0 along unit d. Roots of
+  // |p0 + t d - c|^2 = r^2: t = -b +- sqrt(b^2 - (|p0-c|^2 - r^2)), b = (p0-c).d.
+  const Vec3 c(1, -2, 3);
+  const double r = 5;
+  auto s = Solid::sphere(r, Rigid3::translation(c) * Rigid3::rotation({0.3, 1, 0.2}, 0.8));
+  const Vec3 p0(-10, 1, 2);
+  const Vec3 d = Vec3(1, -0.1, 0.05).normalized();
+  const Vec3 oc = p0 - c;
+  const double b = oc.dot(d), cc = oc.dot(oc) - r * r;
+  const double t0 = -b - std::sqrt(b * b - cc), t1 = -b + std::sqrt(b * b - cc);
+
+  IntervalList list;
+  s->intervals({p0, d}, list);
+  ASSERT_EQ(list.size(), 1);
+  EXPECT_NEAR(list[0].enter.t, t0, 1e-12);
+  EXPECT_NEAR(list[0].exit.t, t1, 1e-12);
+  expectNear(list[0].enter.normal, (p0 + d * t0 - c) / r, 1e-12);
+  expectNear(list[0].exit.normal, (p0 + d * t1 - c) / r, 1e-12);
+  // Outward: against the ray where it enters, along it where it leaves.
+  EXPECT_LT(list[0].enter.normal.dot(d), 0);
+  EXPECT_GT(list[0].exit.normal.dot(d), 0);
+
+  // A line that misses (closest approach 6 > 5) has no interval.
+  s->intervals({c + Vec3(0, 6, -20), Vec3(0, 0, 1)}, list);
+  EXPECT_EQ(list.size(), 0);
+}
+
+TEST(Solid, LensAxialRayEntersAndExitsAtTheVertices) {
+  const double tc = 7;
+  auto lens = Solid::sphericalLens(100, -100, tc, 50);
+  IntervalList list;
+  lens->intervals({{0, 0, -50}, {0, 0, 1}}, list);
+  ASSERT_EQ(list.size(), 1);
+  EXPECT_NEAR(list[0].enter.t - 50, -tc / 2, 1e-12);
+  EXPECT_NEAR(list[0].exit.t - 50, tc / 2, 1e-12);
+  expectNear(list[0].enter.normal, {0, 0, -1}, 1e-12);
+  expectNear(list[0].exit.normal, {0, 0, 1}, 1e-12);
+}
+
+// For several lens shapes, a ray parallel to the axis at height h enters and
+// leaves where the sag formula puts the two faces, with the outward normals of
+// the face spheres: (P - C1) / R1 at the front, -(P - C2) / R2 at the back.
+TEST(Solid, LensOffAxisRayFollowsTheSagFormula) {
+  struct Case {
+    double r1, r2, tc, d;
+  };
+  for (const Case& k : {Case{100, -100, 7, 50}, Case{60, 0, 5, 40}, Case{-100, 0, 3, 50}, Case{-80, 120, 4, 40},
+                        Case{50, 120, 6, 40} /* meniscus: concave back */, Case{0, 0, 5, 30}}) {
+    SCOPED_TRACE(testing::Message() << "R1=" << k.r1 << " R2=" << k.r2 << " tc=" << k.tc << " D=" << k.d);
+    auto lens = Solid::sphericalLens(k.r1, k.r2, k.tc, k.d);
+    for (double h : {0.0, 3.0, 0.3 * k.d, 0.45 * k.d}) {
+      SCOPED_TRACE(testing::Message() << "h=" << h);
+      const Vec3 dir = Vec3(std::cos(0.7), std::sin(0.7), 0);  // the height direction in xy
+      const Vec3 o = dir * h + Vec3(0, 0, -100);
+      IntervalList list;
+      lens->intervals({o, {0, 0, 1}}, list);
+      ASSERT_EQ(list.size(), 1);
+      const double zf = faceZ(-k.tc / 2, k.r1, h), zb = faceZ(k.tc / 2, k.r2, h);
+      EXPECT_NEAR(o.z + list[0].enter.t, zf, 1e-9);
+      EXPECT_NEAR(o.z + list[0].exit.t, zb, 1e-9);
+      const Vec3 pf = o + Vec3(0, 0, list[0].enter.t), pb = o + Vec3(0, 0, list[0].exit.t);
+      const Vec3 nf = k.r1 == 0 ? Vec3(0, 0, -1) : (pf - Vec3(0, 0, -k.tc / 2 + k.r1)) / k.r1;
+      const Vec3 nb = k.r2 == 0 ? Vec3(0, 0, 1) : -(pb - Vec3(0, 0, k.tc / 2 + k.r2)) / k.r2;
+      expectNear(list[0].enter.normal, nf, 1e-12);
+      expectNear(list[0].exit.normal, nb, 1e-12);
+    }
+    // Beyond the rim there is no glass.
+    IntervalList list;
+    lens->intervals({{0.5 * k.d + 0.01, 0, -100}, {0, 0, 1}}, list);
+    EXPECT_EQ(list.size(), 0);
+  }
+}
+
+TEST(Solid, ConcaveFrontFaceIsThickerAtTheRim) {
+  // Plano-concave, R1 = -100: thickness tc on the axis, tc + sag(h) at height h.
+  const double r = -100, tc = 3, d = 50;
+  auto lens = Solid::sphericalLens(r, 0, tc, d);
+  double previous = 0;
+  for (double h : {0.0, 5.0, 10.0, 20.0, 24.9}) {
+    IntervalList list;
+    lens->intervals({{0, h, -50}, {0, 0, 1}}, list);
+    ASSERT_EQ(list.size(), 1);
+    const double thickness = list[0].exit.t - list[0].enter.t;
+    const double sag = std::abs(r) - std::sqrt(r * r - h * h);
+    EXPECT_NEAR(thickness, tc + sag, 1e-9) << "h=" << h;
+    EXPECT_GT(thickness, previous - 1e-12);
+    previous = thickness;
+  }
+  EXPECT_GT(previous, tc + 3);  // sag at h = 24.9 is 3.13 mm
+  // The vertex is a hollow: a point just in front of the front vertex, on the
+  // axis, is air, while the same z near the rim is glass.
+  EXPECT_FALSE(lens->contains({0, 0, -tc / 2 - 0.5}));
+  EXPECT_TRUE(lens->contains({0, 24, -tc / 2 - 0.5}));
+}
+
+TEST(Solid, DifferenceFlipsTheSubtractedNormals) {
+  // A spherical shell: ball 10 minus ball 5. Along x from -20 the shell gives
+  // [-10, -5] and [5, 10] (in x); at the cavity the outward normal of the
+  // result points into the cavity, i.e. against B's outward normal.
+  auto shell = Solid::combine(Solid::Kind::Difference, Solid::sphere(10), Solid::sphere(5));
+  IntervalList list;
+  shell->intervals({{-20, 0, 0}, {1, 0, 0}}, list);
+  ASSERT_EQ(list.size(), 2);
+  EXPECT_NEAR(list[0].enter.t, 10, 1e-12);
+  EXPECT_NEAR(list[0].exit.t, 15, 1e-12);
+  EXPECT_NEAR(list[1].enter.t, 25, 1e-12);
+  EXPECT_NEAR(list[1].exit.t, 30, 1e-12);
+  expectNear(list[0].enter.normal, {-1, 0, 0}, 1e-12);
+  expectNear(list[0].exit.normal, {1, 0, 0}, 1e-12);   // at x = -5: B's outward is -x, flipped
+  expectNear(list[1].enter.normal, {-1, 0, 0}, 1e-12);  // at x = +5: B's outward is +x, flipped
+  expectNear(list[1].exit.normal, {1, 0, 0}, 1e-12);
+  // Every boundary normal is outward: against the ray at entries, along it at exits.
+  for (int i = 0; i < list.size(); ++i) {
+    EXPECT_LT(list[i].enter.normal.x, 0);
+    EXPECT_GT(list[i].exit.normal.x, 0);
+  }
+  // Union and intersection of the same balls: one interval each.
+  auto both = Solid::combine(Solid::Kind::Intersection, Solid::sphere(10), Solid::sphere(5, Rigid3::translation({8, 0, 0})));
+  both->intervals({{-20, 0, 0}, {1, 0, 0}}, list);
+  ASSERT_EQ(list.size(), 1);
+  EXPECT_NEAR(list[0].enter.t, 23, 1e-12);  // x = 3: B's surface, B's normal -x
+  EXPECT_NEAR(list[0].exit.t, 30, 1e-12);   // x = 10: A's surface
+  expectNear(list[0].enter.normal, {-1, 0, 0}, 1e-12);
+}
+
+// Random lines through a few solids: sample points along each line; a point
+// strictly inside an interval is contained, a point outside all intervals is
+// not (away from the boundaries by more than the rounding).
+TEST(Solid, ContainsAgreesWithIntervals) {
+  std::vector<std::shared_ptr<const Solid>> solids = {
+      Solid::sphericalLens(100, -100, 7, 50),
+      Solid::sphericalLens(-80, 120, 4, 40),
+      Solid::sphericalLens(50, 120, 6, 40),
+      Solid::combine(Solid::Kind::Difference, Solid::sphere(10), Solid::sphere(5, Rigid3::translation({1, 2, 0}))),
+      Solid::combine(Solid::Kind::Union, Solid::sphere(6),
+                     Solid::cylinder(3, Rigid3::translation({2, 0, 0}) * Rigid3::rotation({1, 0, 0}, 1.0))),
+  };
+  std::mt19937_64 rng(42);
+  std::uniform_real_distribution<double> u(-1, 1);
+  int inside = 0, outside = 0;
+  for (const auto& solid : solids) {
+    for (int line = 0; line < 200; ++line) {
+      const Vec3 origin(30 * u(rng), 30 * u(rng), 30 * u(rng));
+      const Vec3 target(15 * u(rng), 15 * u(rng), 5 * u(rng));
+      const Vec3 dir = (target - origin).normalized();
+      IntervalList list;
+      solid->intervals({origin, dir}, list);
+      for (int i = 0; i + 1 < list.size(); ++i) EXPECT_LT(list[i].exit.t, list[i + 1].enter.t);
+      for (int k = 0; k <= 400; ++k) {
+        const double t = -10 + k * 0.2;
+        bool inInterval = false, nearBoundary = false;
+        for (int i = 0; i < list.size(); ++i) {
+          if (t > list[i].enter.t && t < list[i].exit.t) inInterval = true;
+          if (std::abs(t - list[i].enter.t) < 1e-7 || std::abs(t - list[i].exit.t) < 1e-7) nearBoundary = true;
+        }
+        if (nearBoundary) continue;
+        ASSERT_EQ(solid->contains(origin + dir * t), inInterval) << "line " << line << " t " << t;
+        (inInterval ? inside : outside)++;
+      }
+    }
+  }
+  EXPECT_GT(inside, 10000);  // the lines really cross the solids
+  EXPECT_GT(outside, 10000);
+}
+
+TEST(Solid, LensBoundsAreFiniteAndEncloseTheLens) {
+  for (auto lens : {Solid::sphericalLens(100, -100, 7, 50), Solid::sphericalLens(-100, 0, 3, 50),
+                    Solid::sphericalLens(0, 0, 5, 30)}) {
+    const Bounds b = lens->bounds();
+    ASSERT_TRUE(b.finite());
+    // The rim and the vertices are inside the box.
+    for (const Vec3& p : {Vec3(0, 0, 0), Vec3(14.9, 0, 0), Vec3(0, -14.9, 0)}) {
+      EXPECT_LE(b.lo.x, p.x);
+      EXPECT_GE(b.hi.x, p.x);
+      EXPECT_LE(b.lo.y, p.y);
+      EXPECT_GE(b.hi.y, p.y);
+    }
+    IntervalList list;
+    lens->intervals({{0, 0, -100}, {0, 0, 1}}, list);
+    ASSERT_EQ(list.size(), 1);
+    EXPECT_LE(b.lo.z, list[0].enter.t - 100);
+    EXPECT_GE(b.hi.z, list[0].exit.t - 100);
+  }
+}
+
+// A flat window built by hand: a cylinder between two half spaces, one of them
+// turned over by a rotation of pi (whose matrix carries ~1e-16 residues).
+TEST(Solid, SlabFromHalfSpacesIsBounded) {
+  auto below = Solid::halfSpace(Rigid3::translation({0, 0, 2}));                                 // z <= 2
+  auto above = Solid::halfSpace(Rigid3::translation({0, 0, -2}) * Rigid3::rotation({1, 0, 0}, std::numbers::pi));  // z >= -2
+  auto slab = Solid::combine(Solid::Kind::Intersection, Solid::cylinder(10),
+                             Solid::combine(Solid::Kind::Intersection, below, above));
+  const Bounds b = slab->bounds();
+  ASSERT_TRUE(b.finite());
+  EXPECT_NEAR(b.lo.z, -2, 1e-9);
+  EXPECT_NEAR(b.hi.z, 2, 1e-9);
+  EXPECT_NEAR(b.lo.x, -10, 1e-9);
+  EXPECT_NEAR(b.hi.y, 10, 1e-9);
+  IntervalList list;
+  slab->intervals({{1, 1, 10}, {0, 0, -1}}, list);
+  ASSERT_EQ(list.size(), 1);
+  EXPECT_NEAR(list[0].enter.t, 8, 1e-12);
+  EXPECT_NEAR(list[0].exit.t, 12, 1e-12);
+  expectNear(list[0].enter.normal, {0, 0, 1}, 1e-12);
+  expectNear(list[0].exit.normal, {0, 0, -1}, 1e-12);
+}
+
+}  // namespace
