@@ -2,14 +2,13 @@
 #   make study       install dependencies if missing, build (Release), run the reference study
 #   make check       same set-up, then build and run every test
 #   make check-asan  the tests under AddressSanitizer + UndefinedBehaviorSanitizer
-#   make bench       build and run the benchmarks
 JOBS ?= 2
 STUDY_OUT ?= out/study
 STUDY_QUALITY ?= default
 CMAKE_WERROR := $(if $(CI),-DLFI_WERROR=ON,)
 LFI := build/release/apps/lfi
 
-.PHONY: deps configure build study check check-asan bench clean
+.PHONY: deps configure build study check check-asan clean
 
 deps:
 	@scripts/install-deps.sh
@@ -30,9 +29,6 @@ check-asan: deps
 	@cmake --preset asan $(CMAKE_WERROR) >/dev/null
 	@cmake --build --preset asan -j $(JOBS)
 	ctest --preset asan -j $(JOBS)
-
-bench: build
-	build/release/bench/lfi-bench
 
 clean:
 	rm -rf build
