@@ -52,15 +52,21 @@ void solidIntersect(const RTCIntersectFunctionNArguments* args) {
   const Ray local{g->objectFromWorld.point(ctx->ray.origin), g->objectFromWorld.vector(ctx->ray.direction)};
   IntervalList list;
   g->solid->intervals(local, list);
+  RTCRayN* rays = RTCRayHitN_RayN(args->rayhit, 1);
+  RTCHitN* hits = RTCRayHitN_HitN(args->rayhit, 1);
   for (int i = 0; i < list.size(); ++i) {
     for (const SurfacePoint* s : {&list[i].enter, &list[i].exit}) {
-      if (s->t <= ctx->tMin || s->t >= ctx->bestT || !std::isfinite(s->t)) continue;
+      // Embree's own geometry (rectangles, meshes) may already have shortened
+      // the ray without touching bestT: tfar bounds the search as well.
+      if (s->t <= ctx->tMin || s->t >= ctx->bestT || s->t > RTCRayN_tfar(rays, 1, 0) || !std::isfinite(s->t))
+        continue;
       ctx->bestT = s->t;
       ctx->bestNormal = g->worldFromObject.vector(s->normal);
       ctx->bestObject = g->object;
-      RTCRayN* rays = RTCRayHitN_RayN(args->rayhit, 1);
-      RTCHitN* hits = RTCRayHitN_HitN(args->rayhit, 1);
-      RTCRayN_tfar(rays, 1, 0) = static_cast<float>(s->t);
+      // Round tfar up, so that it never cuts below bestT (a nearer solid still passes).
+      float tfar = static_cast<float>(s->t);
+      if (tfar < s->t) tfar = std::nextafter(tfar, std::numeric_limits<float>::infinity());
+      RTCRayN_tfar(rays, 1, 0) = tfar;
       RTCHitN_Ng_x(hits, 1, 0) = static_cast<float>(ctx->bestNormal.x);
       RTCHitN_Ng_y(hits, 1, 0) = static_cast<float>(ctx->bestNormal.y);
       RTCHitN_Ng_z(hits, 1, 0) = static_cast<float>(ctx->bestNormal.z);

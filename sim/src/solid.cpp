@@ -41,17 +41,22 @@ Bounds Bounds::everything() { return {Vec3(-kInf), Vec3(kInf)}; }
 
 Bounds Bounds::transformed(const Rigid3& x) const {
   if (lo.x > hi.x || lo.y > hi.y || lo.z > hi.z) return *this;  // empty
-  if (!finite()) {
-    if (x.r == Rigid3().r) return {lo + x.t, hi + x.t};
-    return everything();
-  }
+  // Interval arithmetic per output axis (for a finite box, the same box as its
+  // eight transformed corners). Along an unbounded input axis, rotation entries
+  // below 1e-12 are the rounding residues of quarter and half turns
+  // (sin(pi) = 1.2e-16) and count as exact zeros: a half space turned over
+  // keeps its finite side, so cylinder ∩ two half spaces is bounded.
   Bounds out;
-  for (int c = 0; c < 8; ++c) {
-    const Vec3 p = x.point({(c & 1) ? hi.x : lo.x, (c & 2) ? hi.y : lo.y, (c & 4) ? hi.z : lo.z});
-    for (int i = 0; i < 3; ++i) {
-      out.lo[i] = std::min(out.lo[i], p[i]);
-      out.hi[i] = std::max(out.hi[i], p[i]);
+  for (int i = 0; i < 3; ++i) {
+    double a = x.t[i], b = x.t[i];
+    for (int j = 0; j < 3; ++j) {
+      const double r = x.r[3 * i + j];
+      if (r == 0 || (std::abs(r) < 1e-12 && !(std::isfinite(lo[j]) && std::isfinite(hi[j])))) continue;
+      a += std::min(r * lo[j], r * hi[j]);
+      b += std::max(r * lo[j], r * hi[j]);
     }
+    out.lo[i] = a;
+    out.hi[i] = b;
   }
   return out;
 }

@@ -46,27 +46,33 @@ TEST(Scene, IntersectReturnsTheNearestHitAmongSolidsAndRectangles) {
   std::mt19937_64 rng(5);
   std::uniform_real_distribution<double> u(-1, 1);
   std::vector<Object> objects;
-  // Interleave solids and rectangles along z so that rays cross several of each.
+  // Interleave solids and rectangles along z, closer than the solids are thick, so
+  // that rays cross several of each and rectangles lie inside solids' bounding boxes.
   for (int k = 0; k < 12; ++k) {
-    const Vec3 at(4 * u(rng), 4 * u(rng), -40 + 7 * k);
+    const Vec3 at(4 * u(rng), 4 * u(rng), -20 + 3.5 * k);
     if (k % 3 == 1) {
-      objects.push_back({.name = "rect" + std::to_string(k), .shape = Rectangle{6 + 2 * u(rng), 6 + 2 * u(rng)},
-                         .worldFromObject = Rigid3::translation(at) * Rigid3::rotation({u(rng), u(rng), 1}, 0.3 * u(rng)),
-                         .emission = LambertianEmission{1}});
+      objects.push_back(
+          {.name = "rect" + std::to_string(k),
+           .shape = Rectangle{6 + 2 * u(rng), 6 + 2 * u(rng)},
+           .worldFromObject = Rigid3::translation(at) * Rigid3::rotation({u(rng), u(rng), 1}, 0.3 * u(rng)),
+           .emission = LambertianEmission{1}});
     } else if (k % 3 == 0) {
-      objects.push_back({.name = "ball" + std::to_string(k), .shape = std::shared_ptr<const Solid>(Solid::sphere(3 + u(rng))),
-                         .worldFromObject = Rigid3::translation(at), .material = Dielectric{}});
-    } else {
-      objects.push_back({.name = "lens" + std::to_string(k),
-                         .shape = std::shared_ptr<const Solid>(Solid::sphericalLens(20, -30, 3, 10)),
-                         .worldFromObject = Rigid3::translation(at) * Rigid3::rotation({u(rng), u(rng), 1}, 0.5 * u(rng)),
+      objects.push_back({.name = "ball" + std::to_string(k),
+                         .shape = std::shared_ptr<const Solid>(Solid::sphere(3 + u(rng))),
+                         .worldFromObject = Rigid3::translation(at),
                          .material = Dielectric{}});
+    } else {
+      objects.push_back(
+          {.name = "lens" + std::to_string(k),
+           .shape = std::shared_ptr<const Solid>(Solid::sphericalLens(20, -30, 3, 10)),
+           .worldFromObject = Rigid3::translation(at) * Rigid3::rotation({u(rng), u(rng), 1}, 0.5 * u(rng)),
+           .material = Dielectric{}});
     }
   }
   const Scene scene(objects);
   int hits = 0, mismatches = 0;
   for (int i = 0; i < 20000; ++i) {
-    const Vec3 origin(6 * u(rng), 6 * u(rng), 50 * u(rng));
+    const Vec3 origin(6 * u(rng), 6 * u(rng), 40 * u(rng));
     const Vec3 dir = Vec3(0.3 * u(rng), 0.3 * u(rng), u(rng) > 0 ? 1 : -1).normalized();
     const Ray ray{origin, dir};
     double best = kInf;
@@ -93,14 +99,45 @@ TEST(Scene, IntersectReturnsTheNearestHitAmongSolidsAndRectangles) {
     if (second - best < 1e-3) continue;
     if (!hit.valid() || hit.object != bestObject || std::abs(hit.t - best) > 1e-3) {
       if (++mismatches <= 5)
-        ADD_FAILURE() << "ray " << i << ": expected object " << bestObject << " at t=" << best << ", got "
-                      << hit.object << " at t=" << hit.t;
+        ADD_FAILURE() << "ray " << i << ": expected object " << bestObject << " at t=" << best << ", got " << hit.object
+                      << " at t=" << hit.t;
       continue;
     }
     EXPECT_LT((hit.normal - bestNormal).length(), 1e-5);
   }
   EXPECT_EQ(mismatches, 0);
   EXPECT_GT(hits, 5000);
+}
+
+}  // namespace
+
+namespace {
+
+// A rectangle in front of a solid's surface but inside its bounding box: the
+// rectangle is the nearest hit whichever order Embree visits the geometries in.
+TEST(Scene, RectangleInsideASolidsBoundsInFrontOfItsSurface) {
+  for (bool solidFirst : {true, false}) {
+    std::vector<Object> objects;
+    Object ball{.name = "ball", .shape = std::shared_ptr<const Solid>(Solid::sphere(5)), .material = Dielectric{}};
+    Object rect{.name = "rect",
+                .shape = Rectangle{8, 8},
+                .worldFromObject = Rigid3::translation({0, 0, 4.9}),
+                .emission = LambertianEmission{1}};
+    objects.push_back(solidFirst ? ball : rect);
+    objects.push_back(solidFirst ? rect : ball);
+    const Scene scene(std::move(objects));
+    const int rectIndex = solidFirst ? 1 : 0;
+    // At x = 3.9 the sphere's surface is at z = 3.13, the rectangle at z = 4.9.
+    const Hit hit = scene.intersect({{3.9, 0, 20}, {0, 0, -1}});
+    ASSERT_TRUE(hit.valid());
+    EXPECT_EQ(hit.object, rectIndex) << "solid first: " << solidFirst;
+    EXPECT_NEAR(hit.t, 15.1, 1e-5);
+    // And from below, the sphere comes first.
+    const Hit below = scene.intersect({{3.9, 0, -20}, {0, 0, 1}});
+    ASSERT_TRUE(below.valid());
+    EXPECT_EQ(below.object, 1 - rectIndex);
+    EXPECT_NEAR(below.t, 20 - std::sqrt(25 - 3.9 * 3.9), 1e-9);
+  }
 }
 
 }  // namespace

@@ -12,7 +12,9 @@ namespace {
 using namespace lfi;
 using namespace lfi::sim;
 
-cv::Mat flat(int size, float radiance) { return cv::Mat(size, size, CV_32FC1, cv::Scalar(radiance)); }
+cv::Mat flat(int size, float radiance) {
+  return cv::Mat(size, size, CV_32FC1, cv::Scalar(radiance));
+}
 
 void meanStd(const cv::Mat& dn, double& mean, double& stddev) {
   cv::Scalar m, s;
@@ -68,6 +70,8 @@ TEST(CameraSensorModel, FlatFieldNoiseMatchesNoiseDn) {
     EXPECT_NEAR(mean, expectedMean, 0.01 * expectedMean + 0.1) << electrons << " e-";
     // 65536 pixels: the sample sd is known to ~0.3 %.
     EXPECT_NEAR(sd / model.noiseDn(mean), 1.0, 0.03) << electrons << " e-: sd " << sd << " DN";
+    RecordProperty("noise_ratio_" + std::to_string(static_cast<int>(electrons)) + "e",
+                   std::to_string(sd / model.noiseDn(mean)));
   }
   // Without read noise the variance is the Poisson one: sqrt(N) e- (+ quantisation).
   model.readNoise_e = 0;

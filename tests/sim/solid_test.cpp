@@ -136,7 +136,7 @@ TEST(Solid, DifferenceFlipsTheSubtractedNormals) {
   EXPECT_NEAR(list[1].enter.t, 25, 1e-12);
   EXPECT_NEAR(list[1].exit.t, 30, 1e-12);
   expectNear(list[0].enter.normal, {-1, 0, 0}, 1e-12);
-  expectNear(list[0].exit.normal, {1, 0, 0}, 1e-12);   // at x = -5: B's outward is -x, flipped
+  expectNear(list[0].exit.normal, {1, 0, 0}, 1e-12);    // at x = -5: B's outward is -x, flipped
   expectNear(list[1].enter.normal, {-1, 0, 0}, 1e-12);  // at x = +5: B's outward is +x, flipped
   expectNear(list[1].exit.normal, {1, 0, 0}, 1e-12);
   // Every boundary normal is outward: against the ray at entries, along it at exits.
@@ -145,7 +145,8 @@ TEST(Solid, DifferenceFlipsTheSubtractedNormals) {
     EXPECT_GT(list[i].exit.normal.x, 0);
   }
   // Union and intersection of the same balls: one interval each.
-  auto both = Solid::combine(Solid::Kind::Intersection, Solid::sphere(10), Solid::sphere(5, Rigid3::translation({8, 0, 0})));
+  auto both =
+      Solid::combine(Solid::Kind::Intersection, Solid::sphere(10), Solid::sphere(5, Rigid3::translation({8, 0, 0})));
   both->intervals({{-20, 0, 0}, {1, 0, 0}}, list);
   ASSERT_EQ(list.size(), 1);
   EXPECT_NEAR(list[0].enter.t, 23, 1e-12);  // x = 3: B's surface, B's normal -x
@@ -216,8 +217,9 @@ TEST(Solid, LensBoundsAreFiniteAndEncloseTheLens) {
 // A flat window built by hand: a cylinder between two half spaces, one of them
 // turned over by a rotation of pi (whose matrix carries ~1e-16 residues).
 TEST(Solid, SlabFromHalfSpacesIsBounded) {
-  auto below = Solid::halfSpace(Rigid3::translation({0, 0, 2}));                                 // z <= 2
-  auto above = Solid::halfSpace(Rigid3::translation({0, 0, -2}) * Rigid3::rotation({1, 0, 0}, std::numbers::pi));  // z >= -2
+  auto below = Solid::halfSpace(Rigid3::translation({0, 0, 2}));  // z <= 2
+  auto above =
+      Solid::halfSpace(Rigid3::translation({0, 0, -2}) * Rigid3::rotation({1, 0, 0}, std::numbers::pi));  // z >= -2
   auto slab = Solid::combine(Solid::Kind::Intersection, Solid::cylinder(10),
                              Solid::combine(Solid::Kind::Intersection, below, above));
   const Bounds b = slab->bounds();
