@@ -3,6 +3,8 @@
 #include "lfi/core/error.h"
 
 #include <fmt/format.h>
+#include "lfi_test_support.h"
+
 #include <gtest/gtest.h>
 #include <sys/stat.h>
 #include <unistd.h>
@@ -23,23 +25,7 @@ namespace fs = std::filesystem;
 using lfi::Errc;
 using lfi::Overwrite;
 
-testing::AssertionResult throwsError(const std::function<void()>& f, Errc code,
-                                     const std::vector<std::string>& fragments) {
-  try {
-    f();
-  } catch (const lfi::Error& e) {
-    if (e.code() != code)
-      return testing::AssertionFailure() << "code '" << lfi::toString(e.code()) << "', expected '"
-                                         << lfi::toString(code) << "' (message: " << e.what() << ")";
-    for (const std::string& fragment : fragments)
-      if (std::string(e.what()).find(fragment) == std::string::npos)
-        return testing::AssertionFailure() << "message '" << e.what() << "' does not contain '" << fragment << "'";
-    return testing::AssertionSuccess();
-  } catch (const std::exception& e) {
-    return testing::AssertionFailure() << "threw a non-lfi exception: " << e.what();
-  }
-  return testing::AssertionFailure() << "did not throw";
-}
+using lfi::testing_support::throwsError;
 
 std::string readAll(const fs::path& path) {
   std::ifstream in(path, std::ios::binary);

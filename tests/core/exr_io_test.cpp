@@ -11,6 +11,8 @@
 #include <OpenEXR/ImfOutputFile.h>
 #include <OpenEXR/ImfStringAttribute.h>
 #include <fmt/format.h>
+#include "lfi_test_support.h"
+
 #include <gtest/gtest.h>
 #include <unistd.h>
 
@@ -36,23 +38,7 @@ using lfi::Errc;
 using lfi::LightField;
 using lfi::LightFieldGeometry;
 
-testing::AssertionResult throwsError(const std::function<void()>& f, Errc code,
-                                     const std::vector<std::string>& fragments) {
-  try {
-    f();
-  } catch (const lfi::Error& e) {
-    if (e.code() != code)
-      return testing::AssertionFailure() << "code '" << lfi::toString(e.code()) << "', expected '"
-                                         << lfi::toString(code) << "' (message: " << e.what() << ")";
-    for (const std::string& fragment : fragments)
-      if (std::string(e.what()).find(fragment) == std::string::npos)
-        return testing::AssertionFailure() << "message '" << e.what() << "' does not contain '" << fragment << "'";
-    return testing::AssertionSuccess();
-  } catch (const std::exception& e) {
-    return testing::AssertionFailure() << "threw a non-lfi exception: " << e.what();
-  }
-  return testing::AssertionFailure() << "did not throw";
-}
+using lfi::testing_support::throwsError;
 
 // A fresh directory per test, removed with everything in it at the end.
 class ExrIo : public testing::Test {

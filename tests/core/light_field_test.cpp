@@ -2,6 +2,8 @@
 
 #include "lfi/core/error.h"
 
+#include "lfi_test_support.h"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -21,24 +23,7 @@ using lfi::LightFieldLookup;
 using lfi::Vec2;
 using lfi::Vec3;
 
-// Passes when `f` throws lfi::Error with `code` and a message that contains every fragment.
-testing::AssertionResult throwsError(const std::function<void()>& f, Errc code,
-                                     const std::vector<std::string>& fragments) {
-  try {
-    f();
-  } catch (const lfi::Error& e) {
-    if (e.code() != code)
-      return testing::AssertionFailure() << "code '" << lfi::toString(e.code()) << "', expected '"
-                                         << lfi::toString(code) << "' (message: " << e.what() << ")";
-    for (const std::string& fragment : fragments)
-      if (std::string(e.what()).find(fragment) == std::string::npos)
-        return testing::AssertionFailure() << "message '" << e.what() << "' does not contain '" << fragment << "'";
-    return testing::AssertionSuccess();
-  } catch (const std::exception& e) {
-    return testing::AssertionFailure() << "threw a non-lfi exception: " << e.what();
-  }
-  return testing::AssertionFailure() << "did not throw";
-}
+using lfi::testing_support::throwsError;
 
 // An odd n puts the element centre (straight up) in the middle of an angular pixel.
 LightFieldGeometry smallGeometry(int angular = 7) {

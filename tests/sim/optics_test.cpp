@@ -6,6 +6,8 @@
 #include "lfi/sim/sensors.h"
 
 #include <fmt/format.h>
+#include "lfi_test_support.h"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -16,11 +18,7 @@ namespace {
 using namespace lfi;
 using namespace lfi::sim;
 
-void expectNear(const Vec3& actual, const Vec3& expected, double tol) {
-  EXPECT_NEAR(actual.x, expected.x, tol);
-  EXPECT_NEAR(actual.y, expected.y, tol);
-  EXPECT_NEAR(actual.z, expected.z, tol);
-}
+using lfi::testing_support::expectNear;
 
 // A direction at angle theta from -n (travelling into the surface) in the x-z plane.
 Vec3 incoming(double theta) {

@@ -2,6 +2,8 @@
 // spherical sag, normals of booleans, contains() versus intervals, bounds.
 #include "lfi/sim/solid.h"
 
+#include "lfi_test_support.h"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -14,11 +16,7 @@ namespace {
 using namespace lfi;
 using namespace lfi::sim;
 
-void expectNear(const Vec3& actual, const Vec3& expected, double tol) {
-  EXPECT_NEAR(actual.x, expected.x, tol);
-  EXPECT_NEAR(actual.y, expected.y, tol);
-  EXPECT_NEAR(actual.z, expected.z, tol);
-}
+using lfi::testing_support::expectNear;
 
 // z of a spherical face with its vertex at z0 and signed radius r (centre at
 // z0 + r) at height h: the sag formula z0 + r - sign(r) sqrt(r^2 - h^2).

@@ -8,8 +8,8 @@
 #include <unistd.h>
 
 #include <filesystem>
+#include <cctype>
 #include <fstream>
-#include <regex>
 #include <sstream>
 
 namespace {
@@ -24,6 +24,14 @@ fs::path freshDir(const std::string& name) {
   fs::remove_all(dir);
   fs::create_directories(dir);
   return dir;
+}
+
+// std::regex is avoided: GCC 12 warns inside it under the sanitizers.
+std::string replaceLine(std::string text, const std::string& from, const std::string& to) {
+  const size_t at = text.find("\n" + from);
+  EXPECT_NE(at, std::string::npos) << from;
+  if (at != std::string::npos) text.replace(at + 1, from.size(), to);
+  return text;
 }
 
 std::string readText(const fs::path& p) {
@@ -102,7 +110,7 @@ TEST(QuickStudy, EndToEnd) {
 TEST(Bench, UnknownKeyIsAnErrorNamingFileLineAndKey) {
   const fs::path dir = freshDir("bench");
   std::string text = readText(kBench);
-  text = std::regex_replace(text, std::regex("\ncentre_thickness_mm"), "\ncenter_thickness_mm");
+  text = replaceLine(text, "centre_thickness_mm", "center_thickness_mm");
   const fs::path bad = dir / "typo.toml";
   std::ofstream(bad) << text;
   try {
@@ -115,14 +123,16 @@ TEST(Bench, UnknownKeyIsAnErrorNamingFileLineAndKey) {
     EXPECT_NE(what.find(bad.string()), std::string::npos) << what;
     EXPECT_NE(what.find("centre_thickness_mm"), std::string::npos) << what;
   }
-  text = std::regex_replace(text, std::regex("\ncenter_thickness_mm"), "\ncentre_thickness_mm = 5.0\ncenter_thickness_mm");
+  text = replaceLine(text, "center_thickness_mm", "centre_thickness_mm = 5.0\ncenter_thickness_mm");
   std::ofstream(bad) << text;
   try {
     lfi::study::Bench::load(bad);
     FAIL() << "expected an error";
   } catch (const lfi::Error& e) {
     const std::string what = e.what();
-    EXPECT_TRUE(std::regex_search(what, std::regex(":[0-9]+: unknown key 'lens.center_thickness_mm'"))) << what;
+    const size_t at = what.find(": unknown key 'lens.center_thickness_mm'");
+    ASSERT_NE(at, std::string::npos) << what;
+    EXPECT_TRUE(at > 0 && std::isdigit(static_cast<unsigned char>(what[at - 1]))) << "no line number: " << what;
   }
   fs::remove_all(dir);
 }
@@ -130,7 +140,7 @@ TEST(Bench, UnknownKeyIsAnErrorNamingFileLineAndKey) {
 TEST(Bench, OutOfRangeAndMalformedValuesAreErrors) {
   const fs::path dir = freshDir("range");
   const fs::path bad = dir / "bad.toml";
-  std::ofstream(bad) << std::regex_replace(readText(kBench), std::regex("\nior = 1.5168"), "\nior = -3");
+  std::ofstream(bad) << replaceLine(readText(kBench), "ior = 1.5168", "ior = -3");
   EXPECT_THROW(lfi::study::Bench::load(bad), lfi::Error);
   std::ofstream(bad) << "format = \"lfi-bench\"\nversion = [";
   try {
