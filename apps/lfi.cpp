@@ -5,13 +5,19 @@
 #include "lfi/core/error.h"
 #include "lfi/core/exr_io.h"
 #include "lfi/core/log.h"
+#include "lfi/core/image.h"
+#include "lfi/sim/scene_file.h"
 #include "lfi/study/study.h"
 
 #include <CLI/CLI.hpp>
 #include <fmt/format.h>
 #include <unistd.h>
 
+#include <opencv2/imgcodecs.hpp>
+
+#include <atomic>
 #include <chrono>
+#include <csignal>
 #include <cstdio>
 #include <filesystem>
 #include <mutex>
@@ -46,6 +52,16 @@ private:
   int lastDecile_ = -1;
 };
 
+// Ctrl-C asks long work to stop cleanly (renders check it between tiles).
+std::atomic<bool> gCancel{false};
+extern "C" void onInterrupt(int) { gCancel = true; }
+
+void writePng(const fs::path& path, const cv::Mat& image8, lfi::Overwrite overwrite) {
+  std::vector<uchar> bytes;
+  if (!cv::imencode(".png", image8, bytes)) lfi::fail(lfi::Errc::Io, "cannot encode '{}'", path.string());
+  lfi::writeFileAtomically(path, overwrite, std::string_view(reinterpret_cast<const char*>(bytes.data()), bytes.size()));
+}
+
 fs::path defaultBench() {
   const fs::path installed = fs::path(LFI_DATA_DIR) / "benches" / "reference.toml";
   return installed;
@@ -79,6 +95,18 @@ int main(int argc, char** argv) {
   study->add_option("--seed", seed, "Random seed (renders and sensor noise)")->capture_default_str();
   study->add_flag("--force", force, "Replace the results of an earlier study in --out");
 
+  // lfi render
+  auto* render = app.add_subcommand("render", "Render a scene file (camera image or light field)");
+  fs::path sceneFile, renderOut;
+  int spp = 0;
+  bool renderForce = false;
+  int renderThreads = 0;
+  render->add_option("scene", sceneFile, "Scene file (TOML, docs/scene-files.md)")->required()->check(CLI::ExistingFile);
+  render->add_option("--out", renderOut, "Output folder")->required();
+  render->add_option("--spp", spp, "Samples per pixel (overrides the scene file)")->check(CLI::PositiveNumber);
+  render->add_option("--threads", renderThreads, "Worker threads (0 = all cores)")->check(CLI::NonNegativeNumber);
+  render->add_flag("--force", renderForce, "Replace existing output files");
+
   // lfi lf-info
   auto* lfInfo = app.add_subcommand("lf-info", "Validate a light field EXR and print its parametrisation");
   fs::path lfFile;
@@ -104,6 +132,34 @@ int main(int argc, char** argv) {
       spdlog::info("study written to {} in {:.1f} s (open {})", studyOut.string(),
                    std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(),
                    (studyOut / "report.html").string());
+    } else if (*render) {
+      lfi::sim::SceneDescription d = lfi::sim::loadSceneFile(sceneFile);
+      if (spp > 0) d.render.samplesPerPixel = spp;
+      d.render.threads = renderThreads;
+      d.render.cancel = &gCancel;
+      ProgressBar bar;
+      if (!quiet) d.render.progress = [&bar](double f) { bar("rendering", f); };
+      std::signal(SIGINT, onInterrupt);
+      const lfi::sim::Scene scene(std::move(d.objects), d.ambientIor);
+      const auto start = std::chrono::steady_clock::now();
+      const cv::Mat image = lfi::sim::render(scene, d.sensor, d.render);
+      const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+      bar.finish();
+      fs::create_directories(renderOut);
+      const auto overwrite = renderForce ? lfi::Overwrite::Allow : lfi::Overwrite::Refuse;
+      if (const auto* lfs = std::get_if<lfi::sim::LightFieldSensor>(&d.sensor)) {
+        const fs::path out = renderOut / (d.name + "_lightfield.exr");
+        lfi::writeLightFieldExr(out, lfi::LightField(lfs->geometry, image), overwrite);
+        fmt::print("{}\n", out.string());
+      } else {
+        const auto& cam = std::get<lfi::sim::TelecentricCamera>(d.sensor);
+        const fs::path exr = renderOut / (d.name + ".exr"), png = renderOut / (d.name + ".png");
+        lfi::writeRadianceExr(exr, image, {cam.objectPixel_mm(), "rendered radiance of scene " + d.name}, overwrite);
+        writePng(png, lfi::toneMapForDisplay(image), overwrite);
+        fmt::print("{}\n{}\n", exr.string(), png.string());
+      }
+      const double samples = static_cast<double>(image.total()) * d.render.samplesPerPixel;
+      spdlog::info("{:.0f} samples in {:.2f} s: {:.2f} M samples/s", samples, seconds, samples / seconds / 1e6);
     } else if (*lfInfo) {
       const lfi::LightField lf = lfi::readLightFieldExr(lfFile);
       const auto& g = lf.geometry();
@@ -114,7 +170,7 @@ int main(int argc, char** argv) {
     }
   } catch (const lfi::Error& e) {
     spdlog::error("{}", e.what());
-    return 1;
+    return e.code() == lfi::Errc::Cancelled ? 130 : 1;
   } catch (const std::exception& e) {
     spdlog::error("unexpected failure: {}", e.what());
     return 2;

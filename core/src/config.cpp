@@ -78,6 +78,37 @@ std::string ConfigTable::string(const std::string& key, std::optional<std::strin
   return v;
 }
 
+std::vector<double> ConfigTable::numbers(const std::string& key, size_t count,
+                                         std::optional<std::vector<double>> fallback) {
+  const toml::node* n = node(key);
+  if (!n) {
+    if (!fallback) fail(Errc::Config, "{} is missing", where(key));
+    return *fallback;
+  }
+  const toml::array* a = n->as_array();
+  if (!a || a->size() != count) fail(Errc::Config, "{} must be an array of {} numbers", where(key), count);
+  std::vector<double> out;
+  for (const toml::node& e : *a) {
+    std::optional<double> v = e.is_integer() ? std::optional<double>(static_cast<double>(*e.value<int64_t>()))
+                                             : e.value<double>();
+    if (!e.is_number() || !v || !std::isfinite(*v)) fail(Errc::Config, "{} must be an array of {} numbers", where(key), count);
+    out.push_back(*v);
+  }
+  return out;
+}
+
+std::vector<ConfigTable> ConfigTable::tables(const std::string& key) {
+  const toml::node* n = node(key);
+  std::vector<ConfigTable> out;
+  if (!n) return out;
+  const std::string path = path_.empty() ? key : path_ + "." + key;
+  const toml::array* a = n->as_array();
+  if (!a || !a->is_array_of_tables()) fail(Errc::Config, "{} must be an array of tables ([[{}]])", where(key), path);
+  for (size_t i = 0; i < a->size(); ++i)
+    out.push_back(ConfigTable(root_, a->get(i)->as_table(), file_, fmt::format("{}[{}]", path, i)));
+  return out;
+}
+
 ConfigTable ConfigTable::table(const std::string& key) {
   const toml::node* n = node(key);
   if (!n) fail(Errc::Config, "{}: table [{}] is missing", file_, path_.empty() ? key : path_ + "." + key);

@@ -26,8 +26,14 @@ public:
               int max = 1 << 30);
   std::string string(const std::string& key, std::optional<std::string> fallback = std::nullopt,
                      const std::vector<std::string>& allowed = {});
+  // An array of numbers of fixed length (e.g. a position [x, y, z]).
+  std::vector<double> numbers(const std::string& key, size_t count, std::optional<std::vector<double>> fallback = std::nullopt);
   bool has(const std::string& key) const;
   ConfigTable table(const std::string& key);
+  // An array of tables ([[key]] in TOML); empty when the key is absent.
+  std::vector<ConfigTable> tables(const std::string& key);
+  // The folder of the file, for resolving relative paths in it.
+  std::filesystem::path directory() const { return std::filesystem::path(file_).parent_path(); }
   // Throws Errc::Config for the first key of this table that was not read
   // (call it on every subtable too).
   void finish() const;

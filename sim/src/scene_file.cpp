@@ -1,0 +1,192 @@
+#include "lfi/sim/scene_file.h"
+
+#include "lfi/core/config.h"
+#include "lfi/core/error.h"
+#include "lfi/core/exr_io.h"
+
+#include <tiny_obj_loader.h>
+
+#include <cmath>
+#include <numbers>
+
+namespace lfi::sim {
+
+namespace fs = std::filesystem;
+
+Rigid3 placement(const std::vector<double>& p, const std::vector<double>& r) {
+  const double deg = std::numbers::pi / 180;
+  Rigid3 x = Rigid3::rotation({0, 0, 1}, r[2] * deg) * Rigid3::rotation({0, 1, 0}, r[1] * deg) *
+             Rigid3::rotation({1, 0, 0}, r[0] * deg);
+  x.t = {p[0], p[1], p[2]};
+  return x;
+}
+
+TriangleMesh loadObjMesh(const fs::path& path) {
+  if (!fs::exists(path)) fail(Errc::NotFound, "'{}': no such mesh file", path.string());
+  tinyobj::ObjReader reader;
+  tinyobj::ObjReaderConfig config;
+  config.triangulate = true;
+  if (!reader.ParseFromFile(path.string(), config))
+    fail(Errc::InvalidFile, "'{}': not a readable OBJ mesh: {}", path.string(), reader.Error());
+  const auto& attrib = reader.GetAttrib();
+  TriangleMesh mesh;
+  for (size_t i = 0; i + 2 < attrib.vertices.size(); i += 3) {
+    const Vec3 v(attrib.vertices[i], attrib.vertices[i + 1], attrib.vertices[i + 2]);
+    if (!std::isfinite(v.x) || !std::isfinite(v.y) || !std::isfinite(v.z))
+      fail(Errc::InvalidFile, "'{}': vertex {} is not finite", path.string(), i / 3 + 1);
+    mesh.vertices.push_back(v);
+  }
+  for (const auto& shape : reader.GetShapes())
+    for (size_t k = 0; k + 2 < shape.mesh.indices.size(); k += 3) {
+      std::array<unsigned, 3> t{};
+      for (int c = 0; c < 3; ++c) {
+        const int idx = shape.mesh.indices[k + static_cast<size_t>(c)].vertex_index;
+        if (idx < 0 || static_cast<size_t>(idx) >= mesh.vertices.size())
+          fail(Errc::InvalidFile, "'{}': face uses vertex {} of {}", path.string(), idx + 1, mesh.vertices.size());
+        t[static_cast<size_t>(c)] = static_cast<unsigned>(idx);
+      }
+      mesh.triangles.push_back(t);
+    }
+  if (mesh.triangles.empty()) fail(Errc::InvalidFile, "'{}': the mesh has no faces", path.string());
+  // Smooth normals: the cross product's length weights each face by its area.
+  mesh.normals.assign(mesh.vertices.size(), Vec3(0, 0, 0));
+  for (const auto& t : mesh.triangles) {
+    const Vec3 n = (mesh.vertices[t[1]] - mesh.vertices[t[0]]).cross(mesh.vertices[t[2]] - mesh.vertices[t[0]]);
+    for (unsigned i : t) mesh.normals[i] += n;
+  }
+  for (Vec3& n : mesh.normals) n = n.length() > 0 ? n.normalized() : Vec3(0, 0, 1);
+  return mesh;
+}
+
+namespace {
+
+Rigid3 readPlacement(ConfigTable& t) {
+  return placement(t.numbers("position_mm", 3, std::vector<double>{0, 0, 0}),
+                   t.numbers("rotation_deg", 3, std::vector<double>{0, 0, 0}));
+}
+
+std::shared_ptr<const Solid> readSolid(ConfigTable& t, const std::string& kind) {
+  if (kind == "sphere") return Solid::sphere(t.number("radius_mm", std::nullopt, 1e-6, 1e6));
+  if (kind == "lens")
+    return Solid::sphericalLens(t.number("front_radius_mm", std::nullopt, -1e6, 1e6),
+                                t.number("back_radius_mm", std::nullopt, -1e6, 1e6),
+                                t.number("centre_thickness_mm", std::nullopt, 1e-6, 1e6),
+                                t.number("diameter_mm", std::nullopt, 1e-6, 1e6));
+  if (kind == "cylinder") {
+    // A finite cylinder along z, centred: the infinite one cut by two planes.
+    const double r = t.number("radius_mm", std::nullopt, 1e-6, 1e6), h = t.number("length_mm", std::nullopt, 1e-6, 1e6);
+    Rigid3 top = Rigid3::translation({0, 0, h / 2});
+    Rigid3 bottom = Rigid3::rotation({1, 0, 0}, std::numbers::pi);
+    bottom.t = {0, 0, -h / 2};
+    return Solid::combine(Solid::Kind::Intersection, Solid::cylinder(r),
+                          Solid::combine(Solid::Kind::Intersection, Solid::halfSpace(top), Solid::halfSpace(bottom)));
+  }
+  fail(Errc::Config, "{}: unknown shape '{}'", t.where("shape"), kind);
+}
+
+Object readObject(ConfigTable& t) {
+  Object obj;
+  obj.name = t.string("name");
+  const std::string kind = t.string("shape", std::nullopt, {"sphere", "lens", "cylinder", "rectangle", "mesh"});
+  obj.worldFromObject = readPlacement(t);
+  if (kind == "rectangle") {
+    const auto size = t.numbers("size_mm", 2);
+    if (!(size[0] > 0 && size[1] > 0)) fail(Errc::Config, "{} must be positive", t.where("size_mm"));
+    obj.shape = Rectangle{size[0], size[1]};
+  } else if (kind == "mesh") {
+    fs::path file = t.string("file");
+    if (file.is_relative()) file = t.directory() / file;
+    obj.shape = loadObjMesh(file);
+  } else {
+    std::shared_ptr<const Solid> solid = readSolid(t, kind);
+    // Cut-outs: spheres subtracted from the solid (object frame).
+    for (ConfigTable& cut : t.tables("cut")) {
+      const auto c = cut.numbers("position_mm", 3);
+      solid = Solid::combine(Solid::Kind::Difference, solid,
+                             Solid::sphere(cut.number("radius_mm", std::nullopt, 1e-9, 1e6),
+                                           Rigid3::translation({c[0], c[1], c[2]})));
+      cut.finish();
+    }
+    obj.shape = solid;
+  }
+  const std::string material = t.string("material", "absorber", {"dielectric", "absorber", "diffuse"});
+  if (material == "dielectric")
+    obj.material = Dielectric{t.number("ior", std::nullopt, 1.0, 5.0), t.number("absorption_per_mm", 0.0, 0, 1e3)};
+  else if (material == "diffuse")
+    obj.material = Diffuse{t.number("albedo", 0.8, 0, 1)};
+  else
+    obj.material = Absorber{};
+  if (t.has("emitter")) {
+    const std::string e = t.string("emitter", std::nullopt, {"parallel", "lambertian", "light_field"});
+    if (e == "parallel") {
+      obj.emission = ParallelEmission{t.number("radiance", 1.0, 0, 1e12), t.number("half_angle_rad", std::nullopt, 1e-9, 1.5708)};
+    } else if (e == "lambertian") {
+      obj.emission = LambertianEmission{t.number("radiance", 1.0, 0, 1e12)};
+    } else {
+      fs::path file = t.string("light_field");
+      if (file.is_relative()) file = t.directory() / file;
+      const bool nearest = t.string("lookup", "nearest", {"nearest", "interpolated"}) == "nearest";
+      obj.emission = LightFieldEmission{std::make_shared<LightField>(readLightFieldExr(file)),
+                                        nearest ? LightFieldLookup::Nearest : LightFieldLookup::Interpolated};
+    }
+  }
+  t.finish();
+  return obj;
+}
+
+}  // namespace
+
+SceneDescription loadSceneFile(const fs::path& path) {
+  ConfigTable root = ConfigTable::parseFile(path);
+  root.string("format", std::nullopt, {"lfi-scene"});
+  root.integer("version", std::nullopt, 1, 1);
+  SceneDescription d;
+  d.name = path.stem().string();
+  d.ambientIor = root.number("ambient_ior", 1.0, 1.0, 5.0);
+  if (root.has("render")) {
+    ConfigTable r = root.table("render");
+    d.render.samplesPerPixel = r.integer("samples_per_pixel", 16, 1, 1 << 20);
+    d.render.seed = static_cast<std::uint64_t>(r.integer("seed", 1, 0, 1 << 30));
+    d.render.splitDepth = r.integer("split_depth", 4, 0, 12);
+    d.render.maxDepth = r.integer("max_depth", 64, 1, 1024);
+    r.finish();
+  }
+  const bool hasCamera = root.has("camera"), hasLightField = root.has("light_field_sensor");
+  if (hasCamera == hasLightField)
+    fail(Errc::Config, "{}: give exactly one sensor: [camera] or [light_field_sensor]", path.string());
+  if (hasCamera) {
+    ConfigTable c = root.table("camera");
+    TelecentricCamera cam;
+    cam.focalLength_mm = c.number("focal_length_mm", std::nullopt, 1e-3, 1e5);
+    cam.imageDistance_mm = c.number("image_distance_mm", std::nullopt, 1e-3, 1e5);
+    cam.stopDiameter_mm = c.number("stop_diameter_mm", std::nullopt, 1e-6, 1e4);
+    cam.pixelPitch_mm = c.number("pixel_pitch_mm", std::nullopt, 1e-6, 100);
+    cam.width = c.integer("width", std::nullopt, 1, 65536);
+    cam.height = c.integer("height", std::nullopt, 1, 65536);
+    cam.worldFromCamera = readPlacement(c);
+    c.finish();
+    try {
+      cam.validate();
+    } catch (const Error& e) {
+      fail(Errc::Config, "{}: [camera]: {}", path.string(), e.what());
+    }
+    d.sensor = cam;
+  } else {
+    ConfigTable c = root.table("light_field_sensor");
+    LightFieldSensor lfs;
+    lfs.geometry.spatialX = c.integer("spatial_x", std::nullopt, 1, 1 << 15);
+    lfs.geometry.spatialY = c.integer("spatial_y", std::nullopt, 1, 1 << 15);
+    lfs.geometry.angular = c.integer("angular", std::nullopt, 1, 1024);
+    lfs.geometry.pixelPitch_mm = c.number("pixel_pitch_mm", std::nullopt, 1e-6, 100);
+    lfs.geometry.distance_mm = c.number("distance_mm", 0.0, 0, 1e6);
+    lfs.worldFromSensor = readPlacement(c);
+    c.finish();
+    d.sensor = lfs;
+  }
+  for (ConfigTable& o : root.tables("object")) d.objects.push_back(readObject(o));
+  if (d.objects.empty()) fail(Errc::Config, "{}: the scene has no [[object]]", path.string());
+  root.finish();
+  return d;
+}
+
+}  // namespace lfi::sim
