@@ -149,14 +149,10 @@ void Solid::intervals(const Ray& ray, IntervalList& out) const {
     localIntervals(ray, out);
     return;
   }
-  const Ray local{localFromParent_.point(ray.origin), localFromParent_.vector(ray.direction)};
-  IntervalList tmp;
-  localIntervals(local, tmp);
-  for (int i = 0; i < tmp.size(); ++i) {
-    Interval iv = tmp[i];
-    iv.enter.normal = parentFromLocal_.vector(iv.enter.normal);
-    iv.exit.normal = parentFromLocal_.vector(iv.exit.normal);
-    out.push(iv);
+  localIntervals({localFromParent_.point(ray.origin), localFromParent_.vector(ray.direction)}, out);
+  for (int i = 0; i < out.size(); ++i) {
+    out[i].enter.normal = parentFromLocal_.vector(out[i].enter.normal);
+    out[i].exit.normal = parentFromLocal_.vector(out[i].exit.normal);
   }
 }
 
@@ -238,7 +234,7 @@ void Solid::localIntervals(const Ray& ray, IntervalList& out) const {
       std::merge(ea.begin(), ea.begin() + 2 * la.size(), eb.begin(), eb.begin() + 2 * lb.size(), events.begin(),
                  [](const Event& x, const Event& y) { return x.t < y.t; });
       bool inA = false, inB = false, inside = false;
-      Interval current;
+      Interval current{};
       for (int i = 0; i < n; ++i) {
         const Event& e = events[i];
         (e.fromA ? inA : inB) = e.entering;

@@ -27,9 +27,11 @@ struct Ray {
   Vec3 at(double t) const { return origin + direction * t; }
 };
 
+// No default member initialisers: interval lists live on the hot path and
+// must cost nothing to create.
 struct SurfacePoint {
-  double t = std::numeric_limits<double>::infinity();
-  Vec3 normal{0, 0, 0};  // outward normal of the solid, unit
+  double t;
+  Vec3 normal;  // outward normal of the solid, unit
 };
 
 struct Interval {
@@ -44,6 +46,7 @@ public:
   static constexpr int kCapacity = 16;
   int size() const { return size_; }
   const Interval& operator[](int i) const { return items_[i]; }
+  Interval& operator[](int i) { return items_[i]; }
   void push(const Interval& interval);  // throws if the capacity is exceeded
   void clear() { size_ = 0; }
 

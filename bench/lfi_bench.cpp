@@ -1,0 +1,191 @@
+// lfi-bench: the ray tracer's throughput on the reference scene, next to the
+// raw Embree bound measured in the same run.
+//
+//   tracer   samples/s of lfi::sim::render on data/scenes/reference.toml
+//            (analytic lens, Fresnel sampling), 1 thread and all threads;
+//            also the three study illuminations on the reference bench.
+//   bound    rtcIntersect1 rays/s, in a bare Embree scene holding the same
+//            lens as a fine triangle mesh and the same back light, for the
+//            same rays (the refraction paths of the same camera samples).
+//   ratio    the tracer's time per ray over the bound's: what the analytic
+//            intersection, the shading and the sampling cost on top of Embree.
+//
+// Usage: lfi-bench [--quick]   (quick: smaller images, for a smoke run)
+
+#include "lfi/core/light_field.h"
+#include "lfi/sim/render.h"
+#include "lfi/sim/scene_file.h"
+
+#include <embree3/rtcore.h>
+#include <fmt/format.h>
+#include <tbb/info.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstring>
+#include <functional>
+#include <numbers>
+
+using namespace lfi;
+using namespace lfi::sim;
+
+namespace {
+
+double bestSeconds(int repeats, const std::function<void()>& f) {
+  double best = 1e300;
+  for (int r = 0; r < repeats; ++r) {
+    const auto t0 = std::chrono::steady_clock::now();
+    f();
+    best = std::min(best, std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+  }
+  return best;
+}
+
+// The lens surface as triangles: both spherical caps on a polar grid and the
+// edge cylinder, wound outwards.
+TriangleMesh tessellateLens(double r1, double r2, double tc, double diameter, int rings, int sectors) {
+  TriangleMesh m;
+  const double a = diameter / 2;
+  auto sag = [](double radius, double r) {
+    return radius == 0 ? 0.0 : radius - (radius > 0 ? 1 : -1) * std::sqrt(radius * radius - r * r);
+  };
+  auto cap = [&](double radius, double z0, bool front) {
+    const auto base = static_cast<unsigned>(m.vertices.size());
+    m.vertices.push_back({0, 0, z0});
+    for (int i = 1; i <= rings; ++i)
+      for (int k = 0; k < sectors; ++k) {
+        const double r = a * i / rings, phi = 2 * std::numbers::pi * k / sectors;
+        m.vertices.push_back({r * std::cos(phi), r * std::sin(phi), z0 + sag(radius, r)});
+      }
+    auto idx = [&](int ring, int k) { return ring == 0 ? base : base + 1 + (ring - 1) * sectors + (k % sectors); };
+    for (int i = 0; i < rings; ++i)
+      for (int k = 0; k < sectors; ++k) {
+        std::array<unsigned, 3> t1{idx(i, k), idx(i + 1, k), idx(i + 1, k + 1)};
+        std::array<unsigned, 3> t2{idx(i, k), idx(i + 1, k + 1), idx(i, k + 1)};
+        if (front) std::swap(t1[1], t1[2]), std::swap(t2[1], t2[2]);
+        m.triangles.push_back(t1);
+        if (i > 0) m.triangles.push_back(t2);
+      }
+    return base + 1 + (rings - 1) * sectors;  // first vertex of the rim
+  };
+  const unsigned frontRim = cap(r1, -tc / 2, true), backRim = cap(r2, tc / 2, false);
+  for (int k = 0; k < sectors; ++k) {
+    const unsigned f0 = frontRim + k, f1 = frontRim + (k + 1) % sectors, b0 = backRim + k, b1 = backRim + (k + 1) % sectors;
+    m.triangles.push_back({f0, f1, b1});
+    m.triangles.push_back({f0, b1, b0});
+  }
+  return m;
+}
+
+struct RayBatch {
+  std::vector<RTCRayHit> rays;
+  double samples = 0;
+};
+
+// The rays the tracer follows for these camera samples (refraction branch).
+RayBatch recordRays(const Scene& scene, const TelecentricCamera& cam, int spp) {
+  RayBatch batch;
+  Sampler sampler(7, 0);
+  for (int j = 0; j < cam.height; ++j)
+    for (int i = 0; i < cam.width; ++i)
+      for (int s = 0; s < spp; ++s) {
+        const double u = std::sqrt(sampler.next()), phi = 2 * std::numbers::pi * sampler.next();
+        const Ray ray = cam.ray(i, j, {sampler.next(), sampler.next()}, {u * std::cos(phi), u * std::sin(phi)});
+        const auto path = refractionPath(scene, ray, 64, 1e4);
+        batch.samples += 1;
+        for (size_t k = 0; k + 1 < path.size(); ++k) {
+          const Vec3 d = (path[k + 1] - path[k]).normalized();
+          RTCRayHit rh{};
+          rh.ray.org_x = static_cast<float>(path[k].x), rh.ray.org_y = static_cast<float>(path[k].y);
+          rh.ray.org_z = static_cast<float>(path[k].z);
+          rh.ray.dir_x = static_cast<float>(d.x), rh.ray.dir_y = static_cast<float>(d.y), rh.ray.dir_z = static_cast<float>(d.z);
+          rh.ray.tnear = 1e-4f;
+          rh.ray.mask = 0xffffffffu;
+          batch.rays.push_back(rh);
+        }
+      }
+  return batch;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const bool quick = argc > 1 && std::strcmp(argv[1], "--quick") == 0;
+  const int threads = tbb::info::default_concurrency();
+  SceneDescription d = loadSceneFile(std::filesystem::path(LFI_SOURCE_DIR) / "data" / "scenes" / "reference.toml");
+  auto cam = std::get<TelecentricCamera>(d.sensor);
+  if (quick) {
+    cam.width = cam.height = 128;
+    cam.pixelPitch_mm *= 4;
+  }
+  const Scene scene(d.objects, d.ambientIor);
+  RenderOptions ro = d.render;
+  const int repeats = quick ? 1 : 3;
+
+  fmt::print("lfi-bench: reference scene {}x{}, {} spp, Fresnel split depth {}, {} hardware threads\n", cam.width,
+             cam.height, ro.samplesPerPixel, ro.splitDepth, threads);
+  const double samples = static_cast<double>(cam.width) * cam.height * ro.samplesPerPixel;
+  std::vector<double> samplesPerSecond;
+  for (int t : {1, threads}) {
+    ro.threads = t;
+    const double sec = bestSeconds(repeats, [&] { render(scene, cam, ro); });
+    samplesPerSecond.push_back(samples / sec);
+    fmt::print("  tracer   {} thread(s): {:8.3f} M samples/s\n", t, samples / sec / 1e6);
+  }
+  fmt::print("  scaling  1 -> {} threads: {:.2f}x\n", threads, samplesPerSecond[1] / samplesPerSecond[0]);
+
+  // The bound: bare Embree on the same rays.
+  TelecentricCamera small = cam;
+  small.width = small.height = 128;
+  small.pixelPitch_mm = cam.pixelPitch_mm * cam.width / 128.0;
+  RayBatch batch = recordRays(scene, small, quick ? 2 : 8);
+  const double raysPerSample = static_cast<double>(batch.rays.size()) / batch.samples;
+  RTCDevice device = rtcNewDevice(nullptr);
+  RTCScene raw = rtcNewScene(device);
+  const TriangleMesh lens = tessellateLens(100, -100, 7, 50, 256, 512);
+  {
+    RTCGeometry g = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
+    auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
+                                                          3 * sizeof(float), lens.vertices.size()));
+    for (size_t k = 0; k < lens.vertices.size(); ++k)
+      for (int c = 0; c < 3; ++c) v[3 * k + c] = static_cast<float>(lens.vertices[k][c]);
+    auto* t = static_cast<unsigned*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
+                                                             3 * sizeof(unsigned), lens.triangles.size()));
+    for (size_t k = 0; k < lens.triangles.size(); ++k)
+      for (int c = 0; c < 3; ++c) t[3 * k + c] = lens.triangles[k][c];
+    rtcCommitGeometry(g);
+    rtcAttachGeometry(raw, g);
+    rtcReleaseGeometry(g);
+    RTCGeometry q = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_QUAD);
+    auto* qv = static_cast<float*>(rtcSetNewGeometryBuffer(q, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), 4));
+    const float corners[12] = {-200, -200, -100, 200, -200, -100, 200, 200, -100, -200, 200, -100};
+    std::memcpy(qv, corners, sizeof(corners));
+    auto* qi = static_cast<unsigned*>(rtcSetNewGeometryBuffer(q, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT4, 4 * sizeof(unsigned), 1));
+    qi[0] = 0, qi[1] = 1, qi[2] = 2, qi[3] = 3;
+    rtcCommitGeometry(q);
+    rtcAttachGeometry(raw, q);
+    rtcReleaseGeometry(q);
+  }
+  rtcCommitScene(raw);
+  std::vector<RTCRayHit> work = batch.rays;
+  auto intersectAll = [&](size_t begin, size_t end) {
+    RTCIntersectContext ctx;
+    rtcInitIntersectContext(&ctx);
+    for (size_t k = begin; k < end; ++k) {
+      work[k] = batch.rays[k];
+      work[k].ray.tfar = std::numeric_limits<float>::infinity();
+      work[k].hit.geomID = RTC_INVALID_GEOMETRY_ID;
+      rtcIntersect1(raw, &ctx, &work[k]);
+    }
+  };
+  const double n = static_cast<double>(batch.rays.size());
+  const double raw1 = n / bestSeconds(repeats + 2, [&] { intersectAll(0, batch.rays.size()); });
+  fmt::print("  bound    1 thread:  {:8.3f} M rays/s  (bare Embree, lens as {} triangles)\n", raw1 / 1e6,
+             lens.triangles.size());
+  const double tracerRays1 = samplesPerSecond[0] * raysPerSample;
+  fmt::print("  tracer   1 thread:  {:8.3f} M rays/s  ({:.2f} rays per sample)\n", tracerRays1 / 1e6, raysPerSample);
+  fmt::print("  ratio    bound / tracer per ray, 1 thread: {:.2f} (target <= 2)\n", raw1 / tracerRays1);
+  rtcReleaseScene(raw);
+  rtcReleaseDevice(device);
+  return 0;
+}
