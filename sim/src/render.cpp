@@ -277,20 +277,24 @@ cv::Mat render(const Scene& scene, const Sensor& sensor, const RenderOptions& op
     for (int j = y0; j < std::min(y0 + ts, height); ++j) {
       float* row = image.ptr<float>(j);
       for (int i = x0; i < std::min(x0 + ts, width); ++i) {
-        Sampler sampler(options.seed, static_cast<std::uint64_t>(j) * static_cast<std::uint64_t>(width) + i);
+        const auto pixel = static_cast<std::uint64_t>(j) * static_cast<std::uint64_t>(width) + i;
+        Sampler pixelSampler(options.seed, pixel);
         // Jittered strata for the pixel area and, independently permuted, for
         // the stop: the first m^2 samples cover both evenly; the rest are random.
         for (int k = 0; k < strata; ++k) permutation[static_cast<size_t>(k)] = k;
         for (int k = strata - 1; k > 0; --k)
           std::swap(permutation[static_cast<size_t>(k)],
-                    permutation[static_cast<size_t>(sampler.nextU32() % static_cast<std::uint32_t>(k + 1))]);
-        auto stratified = [&](int stratum) {
-          const double u = sampler.next(), v = sampler.next();
-          if (stratum >= strata) return Vec2(u, v);
-          return Vec2((stratum % side + u) / side, (stratum / side + v) / side);
-        };
+                    permutation[static_cast<size_t>(pixelSampler.nextU32() % static_cast<std::uint32_t>(k + 1))]);
         double sum = 0;
         for (int s = 0; s < options.samplesPerPixel; ++s) {
+          // One random stream per sample: two scenes that differ only where a
+          // path can reach (a defect) give identical samples everywhere else.
+          Sampler sampler(options.seed, (pixel << 24) ^ static_cast<std::uint64_t>(s) ^ 0x5bd1e995ull);
+          auto stratified = [&](int stratum) {
+            const double u = sampler.next(), v = sampler.next();
+            if (stratum >= strata) return Vec2(u, v);
+            return Vec2((stratum % side + u) / side, (stratum / side + v) / side);
+          };
           const Vec2 offset = stratified(s);
           std::optional<Ray> ray;
           if (const auto* cam = std::get_if<TelecentricCamera>(&sensor)) {

@@ -66,6 +66,7 @@ void checkOutputs(const nlohmann::ordered_json& r, const fs::path& dir) {
       }
     for (const auto& setup : setups) {
       EXPECT_GE(s["false_positives"][setup].get<int>(), 0);
+      EXPECT_GE(s["secondary_regions"][setup].get<int>(), 0);
       for (const char* ext : {".exr", ".png", "_diff.png"})
         EXPECT_TRUE(fs::exists(dir / "images" / (scene + "_" + setup + ext))) << scene << setup << ext;
     }
@@ -86,12 +87,24 @@ TEST(QuickStudy, EndToEnd) {
     SCOPED_TRACE("outputs");
     checkOutputs(r, dir);
   }
-  // On the axis the lens does not deflect, so both the collimated and the
-  // diffuse back light reach the camera there; an opaque sphere blocks that
-  // light completely over several pixels: a contrast of the whole signal
-  // against shot noise, far above any threshold.
-  for (const char* setup : {"parallel", "area"})
+  // On the axis the lens does not deflect, so the collimated and the diffuse
+  // back light reach the camera there, and the emitted light field lights the
+  // whole intact lens (Imaging.InverseSchlierenLightsTheWholeIntactLens); an
+  // opaque sphere blocks that light over several pixels: a contrast of the
+  // whole signal against shot noise, far above any threshold.
+  for (const char* setup : {"parallel", "area", "inverse_schlieren"})
     EXPECT_EQ(r["scenes"]["absorbing"]["defects"]["center"][setup]["verdict"], "detected") << setup;
+  // Intact against intact differs by the camera's noise only (common random
+  // numbers): a 5 sigma excursion of a 3x3 mean has probability 6e-7 per pixel,
+  // about 0.01 expected regions in a 128x128 frame.
+  for (const char* setup : {"parallel", "area", "inverse_schlieren"})
+    EXPECT_EQ(r["scenes"]["intact"]["false_positives"][setup], 0) << setup;
+  // The light field was made for the intact lens at its place: a lens with a
+  // 10 % higher index, or moved by 3 mm, bends every emitted ray off the axis
+  // by a large fraction of its original deflection (0.25 rad at the rim)
+  // against the camera's 0.015 rad acceptance: most of the lens goes dark.
+  for (const char* scene : {"index", "misaligned"})
+    EXPECT_EQ(r["scenes"][scene]["defects"]["lens"]["inverse_schlieren"]["verdict"], "detected") << scene;
   // Under collimated light the lens bends rays 10 mm from the axis by about
   // h/f = 0.2 rad, far beyond the camera's 0.015 rad acceptance: that region
   // is dark with or without the particle, so nothing can differ.

@@ -1,0 +1,47 @@
+#pragma once
+// The GenICam backend on Aravis 0.8: any GigE Vision or USB3 Vision camera.
+// URI: "aravis:<device-id>[?packetSize=<bytes>]" where <device-id> is what
+// listAravisDevices() reports (Aravis's "<vendor>-<model>-<serial>" form), a GigE
+// camera's IP address, or empty for the first camera found. packetSize fixes the
+// GigE Vision stream packet size instead of negotiating the largest that passes
+// (arv_camera_gv_auto_packet_size). Aravis types stay inside the .cpp.
+//
+// Device loss: when grab times out, the backend asks the device whether it is
+// still there (for GigE Vision a GVCP register read with 3 × 100 ms timeouts, not
+// Aravis's 5 × 500 ms) and throws Errc::Device if it is not; so grab returns
+// within timeout + 0.3 s. Destroying a camera whose device vanished can take
+// Aravis's GVCP timeout (about 2.5 s) while it tries to release control.
+
+#include "lfi/drivers/camera.h"
+
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace lfi {
+
+// One device as Aravis's discovery sees it.
+struct AravisDeviceInfo {
+  std::string id;        // pass to openAravisCamera / "aravis:<id>"
+  std::string physicalId;
+  std::string address;   // IP address for GigE Vision, bus address for USB3 Vision
+  std::string vendor;
+  std::string model;
+  std::string serial;
+  std::string protocol;  // "GigEVision" or "USB3Vision"
+};
+
+// Runs discovery (GigE Vision broadcast on every interface, USB enumeration);
+// takes up to about a second on a network with GigE Vision devices.
+std::vector<AravisDeviceInfo> listAravisDevices();
+
+struct AravisOptions {
+  std::optional<int> packetSize_bytes;  // GigE Vision only; unset = negotiate
+};
+
+// Opens the device (state Open). A device id that matches nothing throws
+// Errc::NotFound listing the devices found.
+std::unique_ptr<Camera> openAravisCamera(const std::string& deviceId, const AravisOptions& options = {});
+
+}  // namespace lfi

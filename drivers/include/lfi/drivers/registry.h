@@ -1,0 +1,62 @@
+#pragma once
+// Camera backends by URI scheme (STYLE.md §2). A URI is
+//
+//   <scheme>:<path>[?<key>=<value>[&<key>=<value>...]]
+//
+// e.g. "aravis:Aravis-Fake-GV01", "aravis:192.168.1.20?packetSize=1400",
+// "sim:data/benches/reference.toml". The path is passed to the backend as is
+// (no percent-decoding); each backend declares the query keys it accepts and
+// any other key is an error. Backends are registered explicitly:
+// registerBuiltinBackends() adds the ones in lfi_drivers ("aravis"), and other
+// libraries add theirs (lfi_sim adds "sim") with registerCameraBackend().
+// The registry is process-wide and thread-safe.
+
+#include "lfi/drivers/camera.h"
+
+#include <functional>
+#include <map>
+#include <memory>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace lfi {
+
+struct CameraUri {
+  std::string text;                          // the whole URI, for messages
+  std::string scheme;                        // before the first ':'
+  std::string path;                          // between ':' and '?'
+  std::map<std::string, std::string> query;  // key → value, keys unique
+};
+
+// Splits a URI. Throws Errc::Config naming the URI for a missing scheme, an
+// empty key, a key without '=' or a repeated key.
+CameraUri parseCameraUri(std::string_view uri);
+
+// Returns an Open camera; throws what the backend throws (Errc::NotFound for a
+// device that is not there).
+using CameraFactory = std::function<std::unique_ptr<Camera>(const CameraUri& uri)>;
+
+struct CameraBackend {
+  std::string scheme;
+  std::vector<std::string> queryKeys;  // keys the factory understands; others are rejected before it runs
+  std::string description;             // one line for help texts, e.g. "aravis:<device-id> GenICam camera via Aravis"
+  CameraFactory factory;
+};
+
+// Throws Errc::InvalidArgument if the scheme is empty, has characters other than
+// [a-z0-9+.-], or is taken.
+void registerCameraBackend(CameraBackend backend);
+
+// Registers the backends built into lfi_drivers. Idempotent.
+void registerBuiltinBackends();
+
+// Schemes registered so far, sorted.
+std::vector<std::string> cameraSchemes();
+
+// Parses `uri`, checks its query keys against the backend's and runs the
+// factory. An unknown scheme throws Errc::Config listing the known schemes; an
+// unknown key throws Errc::Config listing the accepted keys.
+std::unique_ptr<Camera> openCamera(std::string_view uri);
+
+}  // namespace lfi
