@@ -94,6 +94,9 @@ int main(int argc, char** argv) {
   study->add_option("--threads", threads, "Worker threads (0 = all cores)")->check(CLI::NonNegativeNumber);
   study->add_option("--seed", seed, "Random seed (renders and sensor noise)")->capture_default_str();
   study->add_flag("--force", force, "Replace the results of an earlier study in --out");
+  bool sweepOn = false, sweepOff = false;
+  auto* sweepFlag = study->add_flag("--sweep", sweepOn, "Run the display-quality sweep (default: on, except with --quality quick)");
+  study->add_flag("--no-sweep", sweepOff, "Skip the display-quality sweep")->excludes(sweepFlag);
 
   // lfi render
   auto* render = app.add_subcommand("render", "Render a scene file (camera image or light field)");
@@ -123,6 +126,8 @@ int main(int argc, char** argv) {
       options.threads = threads;
       options.seed = seed;
       options.overwrite = force;
+      if (sweepOn) options.sweep = lfi::study::defaultSweep();
+      if (sweepOff) options.sweep = std::vector<lfi::study::SweepPoint>{};
       ProgressBar bar;
       if (!quiet) options.progress = [&bar](const std::string& label, double f) { bar(label, f); };
       const auto start = std::chrono::steady_clock::now();

@@ -114,36 +114,45 @@ std::vector<Object> partObjects(const Bench& bench, const SceneSpec& spec) {
   return objects;
 }
 
-Object backlight(const Bench& bench, const std::string& setup, const std::shared_ptr<const LightField>& lightField) {
-  if (setup == "parallel")
+// One illumination of the part: which back light, and for the light field
+// display, which light field, lookup and where the display actually sits.
+struct Illumination {
+  std::string setup;
+  std::shared_ptr<const LightField> lightField;
+  LightFieldLookup lookup = LightFieldLookup::Nearest;
+  double displayError_mm = 0;  // display plane moved away from the lens (Δ error)
+};
+
+Object backlight(const Bench& bench, const Illumination& light) {
+  if (light.setup == "parallel")
     return {"parallel backlight", sim::Rectangle{bench.parallel.size_mm, bench.parallel.size_mm},
             Rigid3::translation({0, 0, -bench.parallel.distance_mm}), sim::Absorber{},
             sim::ParallelEmission{1.0, bench.parallel.halfAngle_rad}};
-  if (setup == "area")
+  if (light.setup == "area")
     return {"area backlight", sim::Rectangle{bench.area.size_mm, bench.area.size_mm},
             Rigid3::translation({0, 0, -bench.area.distance_mm}), sim::Absorber{}, sim::LambertianEmission{1.0}};
-  const LightFieldGeometry& g = lightField->geometry();
+  const LightFieldGeometry& g = light.lightField->geometry();
   return {"light field display", sim::Rectangle{g.extentX_mm(), g.extentY_mm()},
-          Rigid3::translation({0, 0, -g.distance_mm}), sim::Absorber{},
-          sim::LightFieldEmission{lightField, bench.inverseSchlieren.lookup}};
+          Rigid3::translation({0, 0, -g.distance_mm - light.displayError_mm}), sim::Absorber{},
+          sim::LightFieldEmission{light.lightField, light.lookup}};
 }
 
 // SPEC §1 step 1: the collimated beam from the camera side through the intact
 // lens, recorded by the lensless light field sensor at Δ below the lens.
-LightField captureLightField(const Bench& bench, const QualitySettings& q, const StudyOptions& options,
-                             const std::function<void(double)>& progress) {
+LightField captureLightField(const Bench& bench, const LightFieldGeometry& geometry, int samples, std::uint64_t seed,
+                             int threads, const std::function<void(double)>& progress) {
   std::vector<Object> objects = partObjects(bench, SceneSpec{.name = "intact"});
-  const double size = 2 * std::max(bench.lightFieldGeometry().extentX_mm(), bench.lens.diameter_mm);
+  const double size = 2 * std::max(geometry.extentX_mm(), bench.lens.diameter_mm);
   Rigid3 facingDown = Rigid3::rotation({1, 0, 0}, std::numbers::pi);
   facingDown.t = {0, 0, bench.inverseSchlieren.captureDistance_mm};
   objects.push_back({"collimated capture beam", sim::Rectangle{size, size}, facingDown, sim::Absorber{},
                      sim::ParallelEmission{1.0, bench.inverseSchlieren.captureHalfAngle_rad}});
   sim::Scene scene(std::move(objects));
-  sim::LightFieldSensor sensor{bench.lightFieldGeometry(), Rigid3::translation({0, 0, -bench.inverseSchlieren.distance_mm})};
+  sim::LightFieldSensor sensor{geometry, Rigid3::translation({0, 0, -geometry.distance_mm})};
   sim::RenderOptions ro;
-  ro.samplesPerPixel = q.captureSamples;
-  ro.seed = options.seed ^ 0x4c46ull;
-  ro.threads = options.threads;
+  ro.samplesPerPixel = samples;
+  ro.seed = seed ^ 0x4c46ull;
+  ro.threads = threads;
   ro.progress = progress;
   return LightField(sensor.geometry, sim::render(scene, sensor, ro));
 }
@@ -237,6 +246,184 @@ Quality parseQuality(const std::string& name) {
   fail(Errc::InvalidArgument, "unknown quality '{}' (quick, default, high)", name);
 }
 
+namespace {
+
+// Overall progress of a study made of weighted steps.
+class Progress {
+public:
+  Progress(const StudyOptions& options, double totalUnits) : options_(options), total_(totalUnits) {}
+  std::function<void(double)> step(const std::string& label, double units) {
+    const double start = done_;
+    done_ += units;
+    return [this, label, start, units](double f) {
+      if (options_.progress) options_.progress(label, std::min(1.0, (start + f * units) / total_));
+    };
+  }
+
+private:
+  const StudyOptions& options_;
+  double total_;
+  double done_ = 0;
+};
+
+struct Evaluation {
+  nlohmann::ordered_json scenes;  // scene -> {defects: {defect: {verdict, cnr, pixels}}, false_positives, secondary_regions}
+  nlohmann::ordered_json noise;
+  double intactLitFraction = 0;   // lens pixels of the intact frame above a quarter of the brightest
+};
+
+// Renders every scene under one illumination, passes each through the camera,
+// and judges it against the intact lens by the declared criterion. Writes the
+// frames and difference images to imagesDir when it is given.
+Evaluation evaluate(const Bench& bench, const Illumination& light, const std::vector<SceneSpec>& specs,
+                    const sim::TelecentricCamera& camera, sim::CameraSensorModel sensor, sim::RenderOptions ro,
+                    std::uint64_t seed, Progress& progress, double renderUnits, const fs::path* imagesDir,
+                    Overwrite overwrite) {
+  auto renderScene = [&](const SceneSpec& spec, std::uint64_t mcSeed, const std::string& label) {
+    std::vector<Object> objects = partObjects(bench, spec);
+    objects.push_back(backlight(bench, light));
+    const sim::Scene scene(std::move(objects));
+    ro.seed = mcSeed;
+    ro.progress = progress.step(light.setup + ": " + label, renderUnits);
+    return sim::render(scene, camera, ro);
+  };
+  // Common random numbers: every scene of an illumination is rendered with the
+  // same seed, so paths that never touch a defect are identical and the Monte
+  // Carlo noise of the simulation cancels in every difference; what remains
+  // is the camera's own noise, drawn independently for every frame, as on a
+  // real bench. The intact reference sets the exposure; the same radiance
+  // with a second noise draw is the false-positive control.
+  const cv::Mat intact = renderScene(specs[0], seed, "intact");
+  cv::Mat smooth;
+  cv::blur(intact, smooth, {3, 3});
+  double brightest = 0;
+  cv::minMaxLoc(smooth, nullptr, &brightest);
+  sensor.exposeFor(brightest, bench.camera.exposureFill);
+  const cv::Mat intactFrame = toFloat(sensor.capture(intact, seed * 7919 + 1));
+  const cv::Mat controlFrame = toFloat(sensor.capture(intact, seed * 7919 + 2));
+
+  // Per-pixel noise expected from the sensor model for a difference of two
+  // frames; differences are judged in units of it (z).
+  const double dnPerUnit = sensor.electronsPerUnit * sensor.gain / sensor.fullWell_e * sensor.maxDigitalNumber();
+  auto zScore = [&](const cv::Mat& frame, const cv::Mat& radiance) {
+    cv::Mat z(frame.size(), CV_32FC1);
+    for (int r = 0; r < z.rows; ++r)
+      for (int c = 0; c < z.cols; ++c) {
+        const double a = sensor.noiseDn(intact.at<float>(r, c) * dnPerUnit);
+        const double b = sensor.noiseDn(radiance.at<float>(r, c) * dnPerUnit);
+        z.at<float>(r, c) =
+            static_cast<float>((frame.at<float>(r, c) - intactFrame.at<float>(r, c)) / std::sqrt(a * a + b * b));
+      }
+    return z;
+  };
+  Evaluation out;
+  {
+    std::vector<Object> objects = partObjects(bench, specs[0]);
+    objects.push_back(backlight(bench, light));
+    const cv::Mat lens = defectMask(sim::Scene(std::move(objects)), camera,
+                                    *std::get<std::shared_ptr<const Solid>>(partObjects(bench, specs[0])[0].shape));
+    const cv::Mat bright = smooth > 0.25 * brightest;
+    out.intactLitFraction = static_cast<double>(cv::countNonZero(bright & lens)) / std::max(1, cv::countNonZero(lens));
+  }
+  if (imagesDir) {
+    // How large the Monte Carlo noise of one rendering is against the camera's
+    // noise, both in DN, where the intact lens is lit: from a second,
+    // independent rendering of the intact lens.
+    const cv::Mat independent = renderScene(specs[0], seed + 99, "intact (independent)");
+    const cv::Mat lit = intact > 0.05 * brightest;
+    const double mcSigma = robustSigma(cv::Mat((independent - intact) * dnPerUnit), ~lit) / std::sqrt(2.0);
+    const double litMean = cv::mean(intact, lit)[0] * dnPerUnit;
+    out.noise = {{"monte_carlo_dn", mcSigma},
+                 {"sensor_dn", sensor.noiseDn(litMean)},
+                 {"mean_lit_signal_dn", litMean},
+                 {"common_random_numbers", true}};
+  }
+
+  for (const SceneSpec& spec : specs) {
+    const bool isIntact = spec.name == "intact";
+    const cv::Mat radiance = isIntact ? intact : renderScene(spec, seed, spec.name);
+    const auto index = static_cast<std::uint64_t>(&spec - specs.data());
+    const cv::Mat frame = isIntact ? controlFrame : toFloat(sensor.capture(radiance, seed * 7919 + 100 * (index + 1)));
+    const cv::Mat diff = zScore(frame, radiance);
+    // Ground-truth masks from the geometry (chief rays through this scene).
+    std::vector<Object> objects = partObjects(bench, spec);
+    objects.push_back(backlight(bench, light));
+    const sim::Scene scene(std::move(objects));
+    cv::Mat allDefects = cv::Mat::zeros(diff.size(), CV_8UC1);
+    std::vector<cv::Mat> masks;
+    for (const Defect& defect : spec.defects) {
+      cv::Mat m = defectMask(scene, camera, *defect.marker);
+      if (cv::countNonZero(m) == 0) {
+        // Smaller than a pixel: the pixel its centre projects to.
+        const sim::Bounds b = defect.marker->bounds();
+        const Vec2 p = camera.project((b.lo + b.hi) * 0.5);
+        const cv::Point px(static_cast<int>(p.x), static_cast<int>(p.y));
+        if (px.inside(cv::Rect(0, 0, m.cols, m.rows))) m.at<uchar>(px) = 255;
+      }
+      cv::dilate(m, m, cv::Mat::ones(3, 3, CV_8U));  // depth-of-field blur reaches one pixel further
+      masks.push_back(m);
+      allDefects |= m;
+    }
+    // z has unit variance where the camera's noise is all there is; a larger
+    // spread raises the bar accordingly.
+    const double sigma = std::max(1.0, robustSigma(diff, allDefects));
+    auto& sceneOut = out.scenes[spec.name];
+    sceneOut["defects"] = nlohmann::ordered_json::object();
+    for (size_t k = 0; k < spec.defects.size(); ++k) {
+      const double meanSq = cv::mean(diff.mul(diff), masks[k])[0];
+      const double cnr = std::sqrt(std::max(0.0, meanSq - sigma * sigma)) / sigma;
+      const char* verdict = cnr >= kDetectedCnr ? "detected" : cnr >= kWeakCnr ? "weak" : "missed";
+      sceneOut["defects"][spec.defects[k].name] = {
+          {"verdict", verdict}, {"cnr", cnr}, {"pixels", cv::countNonZero(masks[k])}};
+    }
+    cv::Mat changed = radiance != intact;
+    cv::dilate(changed, changed, cv::Mat::ones(3, 3, CV_8U));
+    const FlaggedRegions regions = flaggedRegions(diff, sigma, allDefects, changed);
+    sceneOut["false_positives"] = regions.falsePositives;
+    sceneOut["secondary_regions"] = regions.secondary;
+
+    if (imagesDir) {
+      const std::string stem = spec.name + "_" + light.setup;
+      writeRadianceExr(*imagesDir / (stem + ".exr"), frame,
+                       {camera.objectPixel_mm(), fmt::format("camera frame (DN) of scene {} under {}", spec.name,
+                                                             light.setup)},
+                       overwrite);
+      cv::Mat png8;
+      frame.convertTo(png8, CV_8U, 255.0 / sensor.maxDigitalNumber());
+      writePng(*imagesDir / (stem + ".png"), png8, overwrite);
+      cv::Mat diff8;
+      diff.convertTo(diff8, CV_8U, 127.0 / 8, 128);  // +-8 sigma fills the range
+      writePng(*imagesDir / (stem + "_diff.png"), diff8, overwrite);
+    }
+  }
+  return out;
+}
+
+// Paraxial focal length of the bench lens (thick-lens lensmaker equation).
+double lensFocalLength(const Bench::Lens& lens) {
+  const double c1 = lens.frontRadius_mm == 0 ? 0 : 1 / lens.frontRadius_mm;
+  const double c2 = lens.backRadius_mm == 0 ? 0 : 1 / lens.backRadius_mm;
+  const double n = lens.ior, t = lens.centreThickness_mm;
+  return 1 / ((n - 1) * (c1 - c2 + (n - 1) * t * c1 * c2 / n));
+}
+
+struct SweepVariant {
+  std::string series;  // angular | element | delta_error
+  double value;
+  LightFieldGeometry geometry;
+  double displayError_mm = 0;
+};
+
+}  // namespace
+
+std::vector<SweepPoint> defaultSweep() {
+  std::vector<SweepPoint> points;
+  for (int n : {4, 8, 16, 32}) points.push_back({"angular", static_cast<double>(n)});
+  for (double e : {0.2, 0.4, 0.8, 1.6, 3.2, 6.4}) points.push_back({"element", e});
+  for (double d : {-8.0, -4.0, -2.0, -1.0, 0.0, 1.0, 2.0, 4.0, 8.0}) points.push_back({"delta_error", d});
+  return points;
+}
+
 nlohmann::ordered_json runStudy(const Bench& bench, const fs::path& outDir, const StudyOptions& options) {
   const Overwrite overwrite = options.overwrite ? Overwrite::Allow : Overwrite::Refuse;
   if (!options.overwrite && fs::exists(outDir / "study.json"))
@@ -244,24 +431,31 @@ nlohmann::ordered_json runStudy(const Bench& bench, const fs::path& outDir, cons
   fs::create_directories(outDir / "images");
 
   const QualitySettings q = settingsFor(options.quality);
-  sim::TelecentricCamera camera = bench.telecentricCamera();
-  camera.width = std::max(8, camera.width / q.binning);
-  camera.height = std::max(8, camera.height / q.binning);
-  camera.pixelPitch_mm *= q.binning;
-  sim::CameraSensorModel sensor = bench.sensorModel();
-  const auto specs = sceneSpecs(bench);
-
-  // Work units for progress: the light field capture counts as 4 renders.
-  const double totalUnits = 4.0 + static_cast<double>(kSetups.size() * (specs.size() + 1));
-  double unitsDone = 0;
-  auto step = [&](const std::string& label) {
-    return [&, label](double f) {
-      if (options.progress) options.progress(label, (unitsDone + f * (label == "light field capture" ? 4 : 1)) / totalUnits);
-    };
+  auto binned = [&](int binning) {
+    sim::TelecentricCamera c = bench.telecentricCamera();
+    c.width = std::max(8, c.width / binning);
+    c.height = std::max(8, c.height / binning);
+    c.pixelPitch_mm *= binning;
+    return c;
   };
+  const sim::TelecentricCamera camera = binned(q.binning);
+  const auto specs = sceneSpecs(bench);
+  const std::vector<SweepPoint> sweep =
+      options.sweep ? *options.sweep : (options.quality == Quality::Quick ? std::vector<SweepPoint>{} : defaultSweep());
 
-  auto lightField = std::make_shared<LightField>(captureLightField(bench, q, options, step("light field capture")));
-  unitsDone += 4;
+  // The sweep runs the inverse schlieren setup only, at the quick camera
+  // resolution, so that its many variants fit the time budget.
+  const QualitySettings sweepQuality = settingsFor(Quality::Quick);
+  const double rendersPerSetup = static_cast<double>(specs.size());
+  // Progress units: one full-quality render each; the sweep's renders are
+  // smaller (quick camera) and count a tenth.
+  constexpr double kSweepRender = 0.1;
+  Progress progress(options, 4 + kSetups.size() * (rendersPerSetup + 1) +
+                                 static_cast<double>(sweep.size()) * (0.25 + 2 * rendersPerSetup * kSweepRender));
+
+  auto lightField = std::make_shared<LightField>(captureLightField(
+      bench, bench.lightFieldGeometry(), q.captureSamples, options.seed, options.threads,
+      progress.step("light field capture", 4)));
   writeLightFieldExr(outDir / "lightfield.exr", *lightField, overwrite);
 
   nlohmann::ordered_json study;
@@ -288,121 +482,136 @@ nlohmann::ordered_json runStudy(const Bench& bench, const fs::path& outDir, cons
   sim::RenderOptions ro;
   ro.samplesPerPixel = q.samplesPerPixel;
   ro.threads = options.threads;
+  const fs::path imagesDir = outDir / "images";
   for (size_t si = 0; si < kSetups.size(); ++si) {
-    const std::string& setup = kSetups[si];
-    auto renderScene = [&](const SceneSpec& spec, std::uint64_t mcSeed, const std::string& label) {
-      std::vector<Object> objects = partObjects(bench, spec);
-      objects.push_back(backlight(bench, setup, lightField));
-      sim::Scene scene(std::move(objects));
-      ro.seed = mcSeed;
-      ro.progress = step(label);
-      cv::Mat radiance = sim::render(scene, camera, ro);
-      unitsDone += 1;
-      return radiance;
-    };
-    // Common random numbers: every scene of a setup is rendered with the same
-    // seed, so paths that never touch a defect are identical and the Monte
-    // Carlo noise of the simulation cancels in every difference; what remains
-    // is the camera's own noise, drawn independently for every frame, as on a
-    // real bench. The intact reference sets the exposure; the same radiance
-    // with a second noise draw is the false-positive control.
-    const std::uint64_t mcSeed = options.seed * 1000 + si * 100;
-    const cv::Mat intact = renderScene(specs[0], mcSeed, setup + ": intact");
-    cv::Mat smooth;
-    cv::blur(intact, smooth, {3, 3});
-    double brightest = 0;
-    cv::minMaxLoc(smooth, nullptr, &brightest);
-    sensor.exposeFor(brightest, bench.camera.exposureFill);
-    const cv::Mat intactFrame = toFloat(sensor.capture(intact, options.seed * 7919 + si));
-    const cv::Mat controlFrame = toFloat(sensor.capture(intact, options.seed * 7919 + si + 5000));
-
-    // Per-pixel noise expected from the sensor model for a difference of two
-    // frames; differences are judged in units of it (z).
-    const double dnPerUnit = sensor.electronsPerUnit * sensor.gain / sensor.fullWell_e * sensor.maxDigitalNumber();
-    auto zScore = [&](const cv::Mat& frame, const cv::Mat& radiance) {
-      cv::Mat z(frame.size(), CV_32FC1);
-      for (int r = 0; r < z.rows; ++r)
-        for (int c = 0; c < z.cols; ++c) {
-          const double a = sensor.noiseDn(intact.at<float>(r, c) * dnPerUnit);
-          const double b = sensor.noiseDn(radiance.at<float>(r, c) * dnPerUnit);
-          z.at<float>(r, c) = static_cast<float>((frame.at<float>(r, c) - intactFrame.at<float>(r, c)) /
-                                                 std::sqrt(a * a + b * b));
-        }
-      return z;
-    };
-    // How large the Monte Carlo noise of one rendering is against the
-    // camera's noise, both in DN, where the intact lens is lit: from a second,
-    // independent rendering of the intact lens.
-    const cv::Mat independent = renderScene(specs[0], mcSeed + 99, setup + ": intact (independent)");
-    const cv::Mat lit = intact > 0.05 * brightest;
-    const double mcSigma = robustSigma(cv::Mat((independent - intact) * dnPerUnit), ~lit) / std::sqrt(2.0);
-    const double litMean = cv::mean(intact, lit)[0] * dnPerUnit;
-    study["noise"][setup] = {{"monte_carlo_dn", mcSigma},
-                             {"sensor_dn", sensor.noiseDn(litMean)},
-                             {"mean_lit_signal_dn", litMean},
-                             {"common_random_numbers", true}};
-
-    for (const SceneSpec& spec : specs) {
-      const auto index = static_cast<std::uint64_t>(&spec - specs.data());
-      const cv::Mat radiance = spec.name == "intact" ? intact : renderScene(spec, mcSeed, setup + ": " + spec.name);
-      const cv::Mat frame =
-          spec.name == "intact" ? controlFrame : toFloat(sensor.capture(radiance, options.seed * 7919 + si + 100 * index));
-      const cv::Mat diff = zScore(frame, radiance);
-      // Ground-truth masks from the geometry (chief rays through this scene).
-      std::vector<Object> objects = partObjects(bench, spec);
-      objects.push_back(backlight(bench, setup, lightField));
-      const sim::Scene scene(std::move(objects));
-      cv::Mat allDefects = cv::Mat::zeros(diff.size(), CV_8UC1);
-      std::vector<cv::Mat> masks;
-      for (const Defect& defect : spec.defects) {
-        cv::Mat m = defectMask(scene, camera, *defect.marker);
-        if (cv::countNonZero(m) == 0) {
-          // Smaller than a pixel: the pixel its centre projects to.
-          const sim::Bounds b = defect.marker->bounds();
-          const Vec2 p = camera.project((b.lo + b.hi) * 0.5);
-          const cv::Point px(static_cast<int>(p.x), static_cast<int>(p.y));
-          if (px.inside(cv::Rect(0, 0, m.cols, m.rows))) m.at<uchar>(px) = 255;
-        }
-        cv::dilate(m, m, cv::Mat::ones(3, 3, CV_8U));  // depth-of-field blur reaches one pixel further
-        masks.push_back(m);
-        allDefects |= m;
-      }
-      // z has unit variance where the camera's noise is all there is; a larger
-      // spread (residual Monte Carlo noise) raises the bar accordingly.
-      const double sigma = std::max(1.0, robustSigma(diff, allDefects));
-      for (size_t k = 0; k < spec.defects.size(); ++k) {
-        const cv::Mat sq = diff.mul(diff);
-        const double meanSq = cv::mean(sq, masks[k])[0];
-        const double cnr = sigma > 0 ? std::sqrt(std::max(0.0, meanSq - sigma * sigma)) / sigma : 0.0;
-        const char* verdict = cnr >= kDetectedCnr ? "detected" : cnr >= kWeakCnr ? "weak" : "missed";
-        study["scenes"][spec.name]["defects"][spec.defects[k].name][setup] = {
-            {"verdict", verdict}, {"cnr", cnr}, {"pixels", cv::countNonZero(masks[k])}};
-      }
-      cv::Mat changed = radiance != intact;
-      cv::dilate(changed, changed, cv::Mat::ones(3, 3, CV_8U));
-      const FlaggedRegions regions = flaggedRegions(diff, sigma, allDefects, changed);
-      study["scenes"][spec.name]["false_positives"][setup] = regions.falsePositives;
-      study["scenes"][spec.name]["secondary_regions"][setup] = regions.secondary;
-      if (spec.defects.empty()) study["scenes"][spec.name]["defects"] = nlohmann::ordered_json::object();
-
-      const std::string stem = spec.name + "_" + setup;
-      writeRadianceExr(outDir / "images" / (stem + ".exr"), frame,
-                       {camera.objectPixel_mm(), fmt::format("camera frame (DN) of scene {} under {}", spec.name, setup)},
-                       overwrite);
-      cv::Mat png8;
-      frame.convertTo(png8, CV_8U, 255.0 / sensor.maxDigitalNumber());
-      writePng(outDir / "images" / (stem + ".png"), png8, overwrite);
-      cv::Mat diff8;
-      diff.convertTo(diff8, CV_8U, 127.0 / 8, 128);  // +-8 sigma fills the range
-      writePng(outDir / "images" / (stem + "_diff.png"), diff8, overwrite);
+    const Illumination light{kSetups[si], lightField, bench.inverseSchlieren.lookup, 0};
+    const Evaluation e = evaluate(bench, light, specs, camera, bench.sensorModel(), ro, options.seed * 1000 + si * 100,
+                                  progress, 1.0, &imagesDir, overwrite);
+    study["noise"][kSetups[si]] = e.noise;
+    for (const auto& [scene, result] : e.scenes.items()) {
+      auto& out = study["scenes"][scene];
+      if (!out.contains("defects")) out["defects"] = nlohmann::ordered_json::object();
+      for (const auto& [defect, cell] : result["defects"].items()) out["defects"][defect][kSetups[si]] = cell;
+      out["false_positives"][kSetups[si]] = result["false_positives"];
+      out["secondary_regions"][kSetups[si]] = result["secondary_regions"];
     }
+  }
+
+  if (!sweep.empty()) {
+    // How good must the display be? Each variant captures its own light field
+    // (only as large as the lens's footprint on the display plane needs) and
+    // renders the inverse schlieren setup with both lookups.
+    const sim::TelecentricCamera sweepCamera = binned(sweepQuality.binning);
+    sim::RenderOptions sro;
+    sro.samplesPerPixel = sweepQuality.samplesPerPixel;
+    sro.threads = options.threads;
+    const LightFieldGeometry reference = bench.lightFieldGeometry();
+    const double delta = reference.distance_mm;
+    const double footprint = 0.5 * bench.lens.diameter_mm * std::abs(1 - delta / lensFocalLength(bench.lens)) +
+                             (delta + 2 * std::abs(bench.defects.misalignment_mm)) * std::tan(bench.camera.objectNa) +
+                             std::abs(bench.defects.misalignment_mm) + 2.0;
+    auto& out = study["sweep"];
+    out["setup"] = "inverse_schlieren";
+    out["camera"] = {{"width", sweepCamera.width}, {"height", sweepCamera.height},
+                     {"samples_per_pixel", sro.samplesPerPixel}};
+    out["reference"] = {{"angular", reference.angular}, {"element_mm", reference.elementPitch_mm()},
+                        {"distance_mm", delta}};
+    for (const SweepPoint& point : sweep) {
+      LightFieldGeometry g = reference;
+      double displayError = 0;
+      if (point.series == "angular") {
+        g.angular = static_cast<int>(point.value);
+        g.pixelPitch_mm = reference.elementPitch_mm() / g.angular;
+      } else if (point.series == "element") {
+        g.pixelPitch_mm = point.value / g.angular;
+      } else if (point.series == "delta_error") {
+        displayError = point.value;
+      } else {
+        fail(Errc::InvalidArgument, "unknown sweep series '{}' (angular, element, delta_error)", point.series);
+      }
+      g.spatialX = g.spatialY = std::max(2, static_cast<int>(std::ceil(2 * footprint / g.elementPitch_mm())));
+      const std::string label = fmt::format("sweep {}={}", point.series, point.value);
+      auto lf = std::make_shared<LightField>(
+          captureLightField(bench, g, sweepQuality.captureSamples, options.seed, options.threads,
+                            progress.step(label + ": capture", 0.25)));
+      nlohmann::ordered_json entry = {{"series", point.series}, {"value", point.value},
+                                      {"angular", g.angular}, {"element_mm", g.elementPitch_mm()},
+                                      {"spatial", g.spatialX}, {"display_error_mm", displayError}};
+      const std::vector<std::pair<std::string, LightFieldLookup>> lookups = {
+          {"nearest", LightFieldLookup::Nearest}, {"interpolated", LightFieldLookup::Interpolated}};
+      for (const auto& [name, lookup] : lookups) {
+        const Evaluation e = evaluate(bench, Illumination{"inverse_schlieren", lf, lookup, displayError}, specs,
+                                      sweepCamera, bench.sensorModel(), sro, options.seed * 1000 + 777, progress,
+                                      kSweepRender, nullptr, overwrite);
+        for (const auto& [scene, result] : e.scenes.items())
+          for (const auto& [defect, cell] : result["defects"].items())
+            entry["cnr"][name][scene + "/" + defect] = cell["cnr"];
+        entry["false_positives"][name] = e.scenes["intact"]["false_positives"];
+        entry["intact_lit_fraction"][name] = e.intactLitFraction;
+      }
+      out["points"].push_back(entry);
+    }
+    study["sweep"]["answers"] = sweepAnswers(study["sweep"]);
   }
   writeFileAtomically(outDir / "report.html", overwrite, htmlReport(study));
   writeFileAtomically(outDir / "study.json", overwrite, study.dump(2) + "\n");
   return study;
 }
 
+nlohmann::ordered_json sweepAnswers(const nlohmann::ordered_json& sweep) {
+  // For each defect and lookup: the coarsest light field that still detects
+  // it (largest element, fewest angular elements) and the largest display
+  // position error up to which it stays detected (on both sides).
+  nlohmann::ordered_json answers;
+  for (const char* lookup : {"nearest", "interpolated"}) {
+    std::map<std::string, double> coarsestElement, fewestAngular, deltaTolerance;
+    std::vector<nlohmann::ordered_json> deltaPoints;
+    for (const auto& p : sweep["points"]) {
+      for (const auto& [defect, cnr] : p["cnr"][lookup].items()) {
+        const bool detected = cnr.get<double>() >= kDetectedCnr;
+        const double value = p["value"].get<double>();
+        if (p["series"] == "element" && detected)
+          coarsestElement[defect] = std::max(coarsestElement.count(defect) ? coarsestElement[defect] : 0.0, value);
+        if (p["series"] == "angular" && detected)
+          fewestAngular[defect] = std::min(fewestAngular.count(defect) ? fewestAngular[defect] : 1e9, value);
+      }
+      if (p["series"] == "delta_error") deltaPoints.push_back(p);
+    }
+    // Per defect: for each |error|, whether every point at that |error| detects.
+    std::map<std::string, std::map<double, bool>> detectedAt;
+    for (const auto& p : deltaPoints)
+      for (const auto& [defect, cnr] : p["cnr"][lookup].items()) {
+        const double level = std::abs(p["value"].get<double>());
+        auto [it, fresh] = detectedAt[defect].try_emplace(level, true);
+        it->second = it->second && cnr.get<double>() >= kDetectedCnr;
+      }
+    for (const auto& [defect, levels] : detectedAt)
+      for (const auto& [level, detected] : levels) {  // ascending |error|
+        if (!detected) break;
+        deltaTolerance[defect] = level;
+      }
+    for (const auto& [defect, unused] : sweep["points"][0]["cnr"][lookup].items()) {
+      auto& a = answers[defect][lookup];
+      a["coarsest_element_mm"] = coarsestElement.count(defect) ? nlohmann::ordered_json(coarsestElement[defect]) : nullptr;
+      a["fewest_angular"] = fewestAngular.count(defect) ? nlohmann::ordered_json(fewestAngular[defect]) : nullptr;
+      a["delta_tolerance_mm"] = deltaTolerance.count(defect) ? nlohmann::ordered_json(deltaTolerance[defect]) : nullptr;
+    }
+  }
+  return answers;
+}
+
 std::string verdictTable(const nlohmann::ordered_json& study) {
+  std::string sweepText;
+  if (study.contains("sweep")) {
+    auto cell = [](const nlohmann::ordered_json& v) { return v.is_null() ? std::string("never") : v.dump(); };
+    sweepText = fmt::format("\ndisplay sweep (inverse schlieren)\n{:<32} {:>15} {:>10} {:>14}\n", "defect / lookup",
+                            "coarsest e (mm)", "fewest n", "Δ tol. (mm)");
+    for (const auto& [defect, byLookup] : study["sweep"]["answers"].items())
+      for (const auto& [lookup, a] : byLookup.items())
+        sweepText += fmt::format("{:<32} {:>15} {:>10} {:>14}\n", defect + " / " + lookup,
+                                 cell(a["coarsest_element_mm"]), cell(a["fewest_angular"]),
+                                 cell(a["delta_tolerance_mm"]));
+  }
   std::string out = fmt::format("{:<14} {:<8}", "scene", "defect");
   for (const auto& s : study["setups"]) out += fmt::format(" {:>22}", s.get<std::string>());
   out += "\n";
@@ -423,10 +632,84 @@ std::string verdictTable(const nlohmann::ordered_json& study) {
     }
     out += "\n";
   }
-  return out;
+  return out + sweepText;
 }
 
 namespace {
+
+// A CNR-versus-parameter line chart as inline SVG: one colour per defect,
+// solid for nearest lookup, dashed for interpolated; log CNR axis with the
+// detection threshold marked.
+std::string svgPlot(const nlohmann::ordered_json& sweep, const std::string& series, const std::string& xLabel,
+                    bool logX) {
+  std::vector<const nlohmann::ordered_json*> points;
+  for (const auto& p : sweep["points"])
+    if (p["series"] == series) points.push_back(&p);
+  if (points.empty()) return "";
+  std::sort(points.begin(), points.end(),
+            [](auto* a, auto* b) { return (*a)["value"].template get<double>() < (*b)["value"].template get<double>(); });
+  const double w = 560, h = 260, left = 50, right = 140, top = 20, bottom = 40;
+  const double x0 = points.front()->at("value").get<double>(), x1 = points.back()->at("value").get<double>();
+  auto fx = [&](double x) {
+    const double t = logX ? std::log(x / x0) / std::log(x1 / x0) : (x - x0) / (x1 - x0);
+    return left + (x1 == x0 ? 0.5 : t) * (w - left - right);
+  };
+  auto fy = [&](double cnr) {
+    const double t = (std::log10(std::clamp(cnr, 0.1, 1000.0)) + 1) / 4;  // 0.1 .. 1000
+    return h - bottom - t * (h - top - bottom);
+  };
+  static const char* colours[] = {"#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd",
+                                  "#8c564b", "#e377c2", "#7f7f7f", "#bcbd22", "#17becf"};
+  std::string svg = fmt::format("<svg width=\"{}\" height=\"{}\" style=\"border:1px solid #ccc;margin:4px\">", w, h);
+  svg += fmt::format("<line x1=\"{0}\" x2=\"{1}\" y1=\"{2}\" y2=\"{2}\" stroke=\"#999\" stroke-dasharray=\"2,2\"/>"
+                     "<text x=\"{3}\" y=\"{4}\" font-size=\"10\" fill=\"#666\">detected (CNR {5})</text>",
+                     left, w - right, fy(kDetectedCnr), w - right - 100, fy(kDetectedCnr) - 3, kDetectedCnr);
+  for (double c : {0.1, 1.0, 10.0, 100.0, 1000.0})
+    svg += fmt::format("<text x=\"4\" y=\"{}\" font-size=\"10\">{}</text>", fy(c) + 3, c);
+  for (const auto* p : points)
+    svg += fmt::format("<text x=\"{}\" y=\"{}\" font-size=\"10\" text-anchor=\"middle\">{}</text>",
+                       fx(p->at("value").get<double>()), h - bottom + 14, p->at("value").get<double>());
+  svg += fmt::format("<text x=\"{}\" y=\"{}\" font-size=\"11\" text-anchor=\"middle\">{}</text>", (left + w) / 2,
+                     h - 6, xLabel);
+  int k = 0;
+  for (const auto& [defect, unused] : points.front()->at("cnr").at("nearest").items()) {
+    const char* colour = colours[k % 10];
+    for (const char* lookup : {"nearest", "interpolated"}) {
+      std::string pts;
+      for (const auto* p : points)
+        pts += fmt::format("{:.1f},{:.1f} ", fx(p->at("value").get<double>()),
+                           fy(p->at("cnr").at(lookup).at(defect).get<double>()));
+      svg += fmt::format("<polyline fill=\"none\" stroke=\"{}\" stroke-width=\"1.5\" {} points=\"{}\"/>", colour,
+                         std::string(lookup) == "nearest" ? "" : "stroke-dasharray=\"5,3\"", pts);
+    }
+    svg += fmt::format("<text x=\"{}\" y=\"{}\" font-size=\"10\" fill=\"{}\">{}</text>", w - right + 6,
+                       top + 10 + 12 * k, colour, defect);
+    ++k;
+  }
+  return svg + "</svg>";
+}
+
+std::string sweepHtml(const nlohmann::ordered_json& sweep) {
+  std::string h = "<h2>How good must the display be?</h2><p>Inverse schlieren setup at the quick camera resolution; "
+                  "CNR per defect (log scale) against the light field's angular resolution (element size fixed at " +
+                  fmt::format("{} mm", sweep["reference"]["element_mm"].get<double>()) +
+                  "), its element size (angular resolution fixed at " +
+                  fmt::format("{}", sweep["reference"]["angular"].get<int>()) +
+                  "), and an error in the display's distance &Delta; (light field captured at &Delta;, display moved "
+                  "away from the lens by the error). Solid: nearest lookup (reference model); dashed: interpolated."
+                  "</p><div>";
+  h += svgPlot(sweep, "angular", "angular elements per side", true);
+  h += svgPlot(sweep, "element", "spatial element pitch (mm)", true);
+  h += svgPlot(sweep, "delta_error", "display distance error (mm)", false);
+  h += "</div><table><tr><th>defect</th><th>lookup</th><th>coarsest element (mm)</th><th>fewest angular elements</th>"
+       "<th>&Delta; tolerance (mm)</th></tr>";
+  auto cell = [](const nlohmann::ordered_json& v) { return v.is_null() ? std::string("never") : v.dump(); };
+  for (const auto& [defect, byLookup] : sweep["answers"].items())
+    for (const auto& [lookup, a] : byLookup.items())
+      h += "<tr><td>" + defect + "</td><td>" + lookup + "</td><td>" + cell(a["coarsest_element_mm"]) + "</td><td>" +
+           cell(a["fewest_angular"]) + "</td><td>" + cell(a["delta_tolerance_mm"]) + "</td></tr>";
+  return h + "</table>";
+}
 
 std::string htmlReport(const nlohmann::ordered_json& study) {
   std::string h = R"(<!doctype html><html><head><meta charset="utf-8"><title>lfi reference study</title>
@@ -454,7 +737,9 @@ difference with the intact lens (grey = 0, &plusmn;8&sigma; full scale).</p><tab
     }
     h += "</tr>";
   }
-  h += "</table><h2>Noise</h2><pre>" + study["noise"].dump(2) + "</pre></body></html>\n";
+  h += "</table>";
+  if (study.contains("sweep")) h += sweepHtml(study["sweep"]);
+  h += "<h2>Noise</h2><pre>" + study["noise"].dump(2) + "</pre></body></html>\n";
   return h;
 }
 

@@ -81,6 +81,8 @@ TEST(QuickStudy, EndToEnd) {
   const fs::path dir = freshDir("quick");
   lfi::study::StudyOptions options;
   options.quality = lfi::study::Quality::Quick;
+  // A two-point sweep: the bench's own light field, and the display 1 mm off.
+  options.sweep = std::vector<lfi::study::SweepPoint>{{"angular", 16}, {"delta_error", 1.0}};
   const auto bench = lfi::study::Bench::load(kBench);
   const auto r = lfi::study::runStudy(bench, dir, options);
   {
@@ -109,6 +111,18 @@ TEST(QuickStudy, EndToEnd) {
   // h/f = 0.2 rad, far beyond the camera's 0.015 rad acceptance: that region
   // is dark with or without the particle, so nothing can differ.
   EXPECT_EQ(r["scenes"]["absorbing"]["defects"]["rim"]["parallel"]["verdict"], "missed");
+  // The sweep: both points, both lookups, every defect; with the bench's own
+  // light field the on-axis opaque particle is found as in the main table.
+  ASSERT_TRUE(r.contains("sweep"));
+  ASSERT_EQ(r["sweep"]["points"].size(), 2u);
+  for (const auto& p : r["sweep"]["points"])
+    for (const char* lookup : {"nearest", "interpolated"}) {
+      EXPECT_EQ(p["cnr"][lookup].size(), 8u) << lookup;
+      EXPECT_GT(p["intact_lit_fraction"][lookup].get<double>(), 0.0);
+    }
+  EXPECT_GE(r["sweep"]["points"][0]["cnr"]["nearest"]["absorbing/center"].get<double>(), 3.0);
+  EXPECT_TRUE(r["sweep"]["answers"].contains("absorbing/center"));
+  EXPECT_NE(readText(dir / "report.html").find("How good must the display be?"), std::string::npos);
   // A second run into the same folder must not replace the first.
   try {
     lfi::study::runStudy(bench, dir, options);
@@ -118,6 +132,29 @@ TEST(QuickStudy, EndToEnd) {
     EXPECT_NE(std::string(e.what()).find("--force"), std::string::npos);
   }
   fs::remove_all(dir);
+}
+
+TEST(Sweep, AnswersFollowTheDeclaredThreshold) {
+  // Synthetic sweep: the answers are the coarsest/fewest settings that reach
+  // CNR 3, and the largest |error| up to which every point (both signs) does.
+  auto point = [](const char* series, double value, double cnr) {
+    nlohmann::ordered_json p = {{"series", series}, {"value", value}};
+    p["cnr"]["nearest"]["d"] = cnr;
+    p["cnr"]["interpolated"]["d"] = cnr + 10;
+    return p;
+  };
+  nlohmann::ordered_json sweep;
+  sweep["points"] = {point("element", 0.4, 20), point("element", 0.8, 5), point("element", 1.6, 2.9),
+                     point("angular", 4, 1), point("angular", 8, 3.0), point("angular", 16, 9),
+                     point("delta_error", -2, 4), point("delta_error", -1, 6), point("delta_error", 0, 9),
+                     point("delta_error", 1, 5), point("delta_error", 2, 2), point("delta_error", 4, 9)};
+  const auto a = lfi::study::sweepAnswers(sweep);
+  EXPECT_EQ(a["d"]["nearest"]["coarsest_element_mm"], 0.8);
+  EXPECT_EQ(a["d"]["nearest"]["fewest_angular"], 8);
+  EXPECT_EQ(a["d"]["nearest"]["delta_tolerance_mm"], 1.0);  // +2 fails, so 4 does not count
+  EXPECT_EQ(a["d"]["interpolated"]["coarsest_element_mm"], 1.6);
+  EXPECT_EQ(a["d"]["interpolated"]["fewest_angular"], 4);
+  EXPECT_EQ(a["d"]["interpolated"]["delta_tolerance_mm"], 4.0);
 }
 
 TEST(Bench, UnknownKeyIsAnErrorNamingFileLineAndKey) {

@@ -13,6 +13,7 @@
 
 #include <filesystem>
 #include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -52,8 +53,20 @@ struct Bench {
 enum class Quality { Quick, Default, High };
 Quality parseQuality(const std::string& name);
 
+// One variant of the display-quality sweep: `series` is "angular" (angular
+// elements per side at the bench's element size), "element" (element pitch in
+// mm at the bench's angular resolution) or "delta_error" (display moved by
+// `value` mm away from the lens after capturing at Δ).
+struct SweepPoint {
+  std::string series;
+  double value;
+};
+std::vector<SweepPoint> defaultSweep();
+
 struct StudyOptions {
   Quality quality = Quality::Default;
+  // Display-quality sweep; unset: defaultSweep() except in quick quality.
+  std::optional<std::vector<SweepPoint>> sweep;
   std::uint64_t seed = 1;
   int threads = 0;
   bool overwrite = false;
@@ -64,6 +77,10 @@ struct StudyOptions {
 // Runs the study, writes DIR/study.json, DIR/images/*, DIR/report.html and
 // returns the JSON document.
 nlohmann::ordered_json runStudy(const Bench& bench, const std::filesystem::path& outDir, const StudyOptions& options);
+
+// From the sweep's points: per defect and lookup, the coarsest light field
+// that still detects it and the display position tolerance.
+nlohmann::ordered_json sweepAnswers(const nlohmann::ordered_json& sweep);
 
 // The verdict table as text, for the terminal.
 std::string verdictTable(const nlohmann::ordered_json& study);

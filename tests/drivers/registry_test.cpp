@@ -1,0 +1,90 @@
+// The camera URI grammar and the backend registry (no device needed).
+
+#include "lfi/drivers/registry.h"
+#include "lfi_test_support.h"
+
+#include <gtest/gtest.h>
+
+namespace lfi {
+namespace {
+
+using testing_support::throwsError;
+
+TEST(CameraUri, SplitsSchemePathAndQuery) {
+  const CameraUri uri = parseCameraUri("aravis:192.168.1.20?packetSize=1400&x=y");
+  EXPECT_EQ(uri.scheme, "aravis");
+  EXPECT_EQ(uri.path, "192.168.1.20");
+  ASSERT_EQ(uri.query.size(), 2u);
+  EXPECT_EQ(uri.query.at("packetSize"), "1400");
+  EXPECT_EQ(uri.query.at("x"), "y");
+  EXPECT_EQ(uri.text, "aravis:192.168.1.20?packetSize=1400&x=y");
+}
+
+TEST(CameraUri, PathKeepsColonsAndMayBeEmpty) {
+  EXPECT_EQ(parseCameraUri("sim:data/benches/a:b.toml").path, "data/benches/a:b.toml");
+  const CameraUri empty = parseCameraUri("aravis:");
+  EXPECT_EQ(empty.scheme, "aravis");
+  EXPECT_TRUE(empty.path.empty());
+  EXPECT_TRUE(empty.query.empty());
+}
+
+TEST(CameraUri, MalformedUrisAreConfigErrors) {
+  EXPECT_TRUE(throwsError([] { parseCameraUri("Aravis-Fake-GV01"); }, Errc::Config, {"Aravis-Fake-GV01", "no scheme"}));
+  EXPECT_TRUE(throwsError([] { parseCameraUri(":x"); }, Errc::Config, {"no scheme"}));
+  EXPECT_TRUE(throwsError([] { parseCameraUri("aravis:x?packetSize"); }, Errc::Config, {"'packetSize'", "<key>=<value>"}));
+  EXPECT_TRUE(throwsError([] { parseCameraUri("aravis:x?=3"); }, Errc::Config, {"<key>=<value>"}));
+  EXPECT_TRUE(throwsError([] { parseCameraUri("aravis:x?a=1&a=2"); }, Errc::Config, {"'a'", "twice"}));
+  EXPECT_TRUE(throwsError([] { parseCameraUri("aravis:x?a=1&"); }, Errc::Config, {"ends with '&'"}));
+}
+
+TEST(CameraRegistry, UnknownSchemeListsKnownSchemes) {
+  registerBuiltinBackends();
+  registerBuiltinBackends();  // idempotent
+  EXPECT_TRUE(throwsError([] { openCamera("gige:cam1"); }, Errc::Config, {"gige:cam1", "unknown scheme", "aravis:"}));
+}
+
+TEST(CameraRegistry, UnknownQueryKeyListsAcceptedKeys) {
+  registerBuiltinBackends();
+  // Rejected before any device is looked for.
+  EXPECT_TRUE(throwsError([] { openCamera("aravis:x?packetsize=1400"); }, Errc::Config,
+                          {"unknown key 'packetsize'", "packetSize"}));
+  EXPECT_TRUE(throwsError([] { openCamera("aravis:x?packetSize=big"); }, Errc::Config, {"packetSize 'big'"}));
+  EXPECT_TRUE(throwsError([] { openCamera("aravis:x?packetSize=100"); }, Errc::Config, {"outside"}));
+}
+
+TEST(CameraRegistry, OtherLibrariesRegisterTheirSchemes) {
+  registerBuiltinBackends();
+  CameraUri seen;
+  registerCameraBackend({.scheme = "test-registry",
+                         .queryKeys = {"seed"},
+                         .description = "test-registry:<anything>",
+                         .factory = [&seen](const CameraUri& uri) -> std::unique_ptr<Camera> {
+                           seen = uri;
+                           return nullptr;
+                         }});
+  const std::vector<std::string> schemes = cameraSchemes();
+  EXPECT_NE(std::find(schemes.begin(), schemes.end(), "test-registry"), schemes.end());
+  EXPECT_NE(std::find(schemes.begin(), schemes.end(), "aravis"), schemes.end());
+  EXPECT_EQ(openCamera("test-registry:bench.toml?seed=7"), nullptr);
+  EXPECT_EQ(seen.path, "bench.toml");
+  EXPECT_EQ(seen.query.at("seed"), "7");
+  EXPECT_TRUE(throwsError([] { openCamera("test-registry:b?noise=0"); }, Errc::Config, {"'noise'", "seed"}));
+  EXPECT_TRUE(throwsError([] { registerCameraBackend({.scheme = "test-registry", .factory = [](const CameraUri&) {
+                                                        return std::unique_ptr<Camera>();
+                                                      }}); },
+                          Errc::InvalidArgument, {"already registered"}));
+  EXPECT_TRUE(throwsError([] { registerCameraBackend({.scheme = "Bad Scheme", .factory = [](const CameraUri&) {
+                                                        return std::unique_ptr<Camera>();
+                                                      }}); },
+                          Errc::InvalidArgument, {"'Bad Scheme'"}));
+}
+
+TEST(CameraState, WrongStateErrorNamesMethodStateAndAllowedStates) {
+  EXPECT_NO_THROW(requireCameraState(Camera::State::Open, {Camera::State::Open, Camera::State::Configured}, "info", "cam"));
+  EXPECT_TRUE(throwsError(
+      [] { requireCameraState(Camera::State::Configured, {Camera::State::Streaming}, "grab", "cam-7"); },
+      Errc::InvalidArgument, {"cam-7", "grab()", "state Configured", "Streaming"}));
+}
+
+}  // namespace
+}  // namespace lfi
