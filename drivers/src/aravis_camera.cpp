@@ -8,8 +8,8 @@
 #include "lfi/core/error.h"
 #include "lfi/drivers/pixel_unpack.h"
 
-#include <arv.h>
 #include <arpa/inet.h>
+#include <arv.h>
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 #include <netinet/in.h>
@@ -35,7 +35,9 @@ std::mutex& aravisMutex() {
   return mutex;
 }
 
-std::string orEmpty(const char* s) { return s != nullptr ? std::string(s) : std::string(); }
+std::string orEmpty(const char* s) {
+  return s != nullptr ? std::string(s) : std::string();
+}
 
 Errc errcFor(const GError* error) {
   if (error->domain == ARV_GC_ERROR) {
@@ -115,8 +117,18 @@ bool gvcpDeviceAnswers(const std::string& ip, std::uint16_t port, int tries, int
   for (int attempt = 0; attempt < tries && !answered; ++attempt) {
     const std::uint16_t requestId = static_cast<std::uint16_t>(0x7a00 + attempt);
     // GVCP READREG_CMD: key 0x42, flags (ack required), command 0x0080, length 4, request id, address 0x0A00.
-    const std::uint8_t packet[12] = {0x42, 0x01, 0x00, 0x80, 0x00, 0x04, static_cast<std::uint8_t>(requestId >> 8),
-                                     static_cast<std::uint8_t>(requestId & 0xff), 0x00, 0x00, 0x0a, 0x00};
+    const std::uint8_t packet[12] = {0x42,
+                                     0x01,
+                                     0x00,
+                                     0x80,
+                                     0x00,
+                                     0x04,
+                                     static_cast<std::uint8_t>(requestId >> 8),
+                                     static_cast<std::uint8_t>(requestId & 0xff),
+                                     0x00,
+                                     0x00,
+                                     0x0a,
+                                     0x00};
     if (::send(fd, packet, sizeof packet, 0) < 0) {
       if (errno == ECONNREFUSED) break;  // ICMP port unreachable: nobody listens there any more
       continue;
@@ -133,7 +145,7 @@ bool gvcpDeviceAnswers(const std::string& ip, std::uint16_t port, int tries, int
 }
 
 class AravisCamera final : public Camera {
-public:
+ public:
   AravisCamera(std::string deviceId, AravisOptions options) : deviceId_(std::move(deviceId)), options_(options) {
     open();
   }
@@ -252,8 +264,7 @@ public:
       if (error == nullptr) fail(Errc::Device, "camera '{}': arv_camera_create_stream returned no stream", name());
       check(error, name(), "arv_camera_create_stream");
     }
-    if (ARV_IS_GV_STREAM(stream_))
-      g_object_set(stream_, "packet-resend", ARV_GV_STREAM_PACKET_RESEND_ALWAYS, nullptr);
+    if (ARV_IS_GV_STREAM(stream_)) g_object_set(stream_, "packet-resend", ARV_GV_STREAM_PACKET_RESEND_ALWAYS, nullptr);
     const unsigned payload = arv_camera_get_payload(camera_, &error);
     if (error != nullptr) {
       g_clear_object(&stream_);
@@ -301,8 +312,7 @@ public:
       frame.frameId = 0;
       frame.timestamp_ns = 0;
       if (!deviceAnswers())
-        declareLost(fmt::format("no frame for {} ms and the device does not answer control requests",
-                                timeout.count()));
+        declareLost(fmt::format("no frame for {} ms and the device does not answer control requests", timeout.count()));
       return;
     }
     // The buffer goes back to the pool whatever happens below.
@@ -319,8 +329,8 @@ public:
     frame.status = status == ARV_BUFFER_STATUS_SUCCESS ? FrameStatus::Complete : FrameStatus::Incomplete;
     if (!copyImage(buffer, frame.image)) {
       if (frame.status == FrameStatus::Complete)
-        fail(Errc::Device, "camera '{}': frame {} is complete but its payload is not a {} image", name(),
-             frame.frameId, toString(settings_.pixelFormat));
+        fail(Errc::Device, "camera '{}': frame {} is complete but its payload is not a {} image", name(), frame.frameId,
+             toString(settings_.pixelFormat));
       frame.image.release();
     }
   }
@@ -382,7 +392,7 @@ public:
     check(error, name(), fmt::format("executing command '{}'", feature));
   }
 
-private:
+ private:
   // Everything open() does once Aravis has a camera object.
   void connectDevice() {
     ArvDevice* device = arv_camera_get_device(camera_);
@@ -463,7 +473,8 @@ private:
   }
 
   void validate(const CameraSettings& s) const {
-    if (!(s.exposure_us > 0)) fail(Errc::InvalidArgument, "camera '{}': exposure_us {} must be > 0", name(), s.exposure_us);
+    if (!(s.exposure_us > 0))
+      fail(Errc::InvalidArgument, "camera '{}': exposure_us {} must be > 0", name(), s.exposure_us);
     if (s.binning < 1) fail(Errc::InvalidArgument, "camera '{}': binning {} must be >= 1", name(), s.binning);
     if (s.roiX_px < 0 || s.roiY_px < 0 || s.roiWidth_px < 0 || s.roiHeight_px < 0)
       fail(Errc::InvalidArgument, "camera '{}': ROI ({}, {}, {} x {}) has a negative value", name(), s.roiX_px,
@@ -488,9 +499,15 @@ private:
     // Wire formats in order of preference for each of ours.
     std::vector<std::string> candidates;
     switch (format) {
-      case PixelFormat::Mono8: candidates = {"Mono8"}; break;
-      case PixelFormat::Mono12: candidates = {"Mono12", "Mono12p", "Mono12Packed"}; break;
-      case PixelFormat::Mono16: candidates = {"Mono16"}; break;
+      case PixelFormat::Mono8:
+        candidates = {"Mono8"};
+        break;
+      case PixelFormat::Mono12:
+        candidates = {"Mono12", "Mono12p", "Mono12Packed"};
+        break;
+      case PixelFormat::Mono16:
+        candidates = {"Mono16"};
+        break;
     }
     const std::vector<std::string> available = availablePixelFormats();
     for (const std::string& candidate : candidates) {
@@ -507,7 +524,8 @@ private:
   void applyBinning(int binning) {
     GError* error = nullptr;
     if (!arv_camera_is_binning_available(camera_, nullptr)) {
-      if (binning != 1) fail(Errc::InvalidArgument, "camera '{}': binning {} asked, the device has no binning", name(), binning);
+      if (binning != 1)
+        fail(Errc::InvalidArgument, "camera '{}': binning {} asked, the device has no binning", name(), binning);
       return;
     }
     int min = 1, max = 1;
@@ -565,13 +583,14 @@ private:
     arv_camera_get_exposure_time_bounds(camera_, &min, &max, &error);
     check(error, name(), "arv_camera_get_exposure_time_bounds");
     if (s.exposure_us < min || s.exposure_us > max)
-      fail(Errc::InvalidArgument, "camera '{}': exposure_us {} is outside the device's {}..{} us", name(), s.exposure_us,
-           min, max);
+      fail(Errc::InvalidArgument, "camera '{}': exposure_us {} is outside the device's {}..{} us", name(),
+           s.exposure_us, min, max);
     arv_camera_set_exposure_time(camera_, s.exposure_us, &error);
     check(error, name(), fmt::format("arv_camera_set_exposure_time({} us)", s.exposure_us));
 
     if (!arv_camera_is_gain_available(camera_, nullptr)) {
-      if (s.gain != 0) fail(Errc::InvalidArgument, "camera '{}': gain {} asked, the device has no gain", name(), s.gain);
+      if (s.gain != 0)
+        fail(Errc::InvalidArgument, "camera '{}': gain {} asked, the device has no gain", name(), s.gain);
       return;
     }
     if (arv_camera_is_gain_auto_available(camera_, nullptr)) {
@@ -627,7 +646,8 @@ private:
   bool copyImage(ArvBuffer* buffer, cv::Mat& out) const {
     if (arv_buffer_get_payload_type(buffer) != ARV_BUFFER_PAYLOAD_TYPE_IMAGE) return false;
     // A frame whose leader was lost has no image part (Aravis then asserts in the getters below).
-    if (arv_buffer_get_n_parts(buffer) < 1 || arv_buffer_get_part_data_type(buffer, 0) != ARV_BUFFER_PART_DATA_TYPE_2D_IMAGE)
+    if (arv_buffer_get_n_parts(buffer) < 1 ||
+        arv_buffer_get_part_data_type(buffer, 0) != ARV_BUFFER_PART_DATA_TYPE_2D_IMAGE)
       return false;
     size_t size = 0;
     const auto* data = static_cast<const std::uint8_t*>(arv_buffer_get_image_data(buffer, &size));
@@ -654,7 +674,8 @@ private:
         unpackMono12(data, size, width, height,
                      format == kPixelFormatMono12p ? Mono12Packing::Pfnc : Mono12Packing::GigEVisionPacked, out);
         return true;
-      default: return false;
+      default:
+        return false;
     }
   }
 

@@ -11,37 +11,50 @@ namespace lfi {
 
 const char* toString(PixelFormat format) {
   switch (format) {
-    case PixelFormat::Mono8: return "Mono8";
-    case PixelFormat::Mono12: return "Mono12";
-    case PixelFormat::Mono16: return "Mono16";
+    case PixelFormat::Mono8:
+      return "Mono8";
+    case PixelFormat::Mono12:
+      return "Mono12";
+    case PixelFormat::Mono16:
+      return "Mono16";
   }
   return "unknown";
 }
 
 const char* toString(TriggerMode mode) {
   switch (mode) {
-    case TriggerMode::FreeRun: return "FreeRun";
-    case TriggerMode::Software: return "Software";
-    case TriggerMode::Line: return "Line";
+    case TriggerMode::FreeRun:
+      return "FreeRun";
+    case TriggerMode::Software:
+      return "Software";
+    case TriggerMode::Line:
+      return "Line";
   }
   return "unknown";
 }
 
 const char* toString(FrameStatus status) {
   switch (status) {
-    case FrameStatus::Complete: return "Complete";
-    case FrameStatus::Incomplete: return "Incomplete";
-    case FrameStatus::Timeout: return "Timeout";
+    case FrameStatus::Complete:
+      return "Complete";
+    case FrameStatus::Incomplete:
+      return "Incomplete";
+    case FrameStatus::Timeout:
+      return "Timeout";
   }
   return "unknown";
 }
 
 const char* toString(Camera::State state) {
   switch (state) {
-    case Camera::State::Closed: return "Closed";
-    case Camera::State::Open: return "Open";
-    case Camera::State::Configured: return "Configured";
-    case Camera::State::Streaming: return "Streaming";
+    case Camera::State::Closed:
+      return "Closed";
+    case Camera::State::Open:
+      return "Open";
+    case Camera::State::Configured:
+      return "Configured";
+    case Camera::State::Streaming:
+      return "Streaming";
   }
   return "unknown";
 }

@@ -14,8 +14,8 @@ void unpackMono12(const std::uint8_t* data, std::size_t size, int width, int hei
   if (width <= 0 || height <= 0) fail(Errc::InvalidArgument, "unpackMono12: image size {} x {}", width, height);
   const std::size_t needed = mono12PackedSize(width, height);
   if (size < needed)
-    fail(Errc::InvalidArgument, "unpackMono12: {} x {} pixels need {} bytes, the buffer has {}", width, height,
-         needed, size);
+    fail(Errc::InvalidArgument, "unpackMono12: {} x {} pixels need {} bytes, the buffer has {}", width, height, needed,
+         size);
   out.create(height, width, CV_16UC1);
   // The packing runs across line ends, so walk the pixels as one sequence.
   const bool pfnc = packing == Mono12Packing::Pfnc;

@@ -96,12 +96,13 @@ void registerBuiltinBackends() {
   Registry& reg = registry();
   std::lock_guard lock(reg.mutex);
   if (reg.backends.contains("aravis")) return;
-  reg.backends.emplace("aravis", CameraBackend{
-                                     .scheme = "aravis",
-                                     .queryKeys = {"packetSize"},
-                                     .description = "aravis:<device-id>[?packetSize=<bytes>]  GenICam camera via Aravis",
-                                     .factory = openAravisFromUri,
-                                 });
+  reg.backends.emplace("aravis",
+                       CameraBackend{
+                           .scheme = "aravis",
+                           .queryKeys = {"packetSize"},
+                           .description = "aravis:<device-id>[?packetSize=<bytes>]  GenICam camera via Aravis",
+                           .factory = openAravisFromUri,
+                       });
 }
 
 std::vector<std::string> cameraSchemes() {
@@ -123,14 +124,15 @@ std::unique_ptr<Camera> openCamera(std::string_view text) {
       std::vector<std::string> known;
       for (const auto& [scheme, b] : reg.backends) known.push_back(scheme + ":");
       fail(Errc::Config, "camera URI '{}': unknown scheme '{}:' (known: {})", uri.text, uri.scheme,
-           known.empty() ? std::string("none; was registerBuiltinBackends() called?") : fmt::format("{}", fmt::join(known, ", ")));
+           known.empty() ? std::string("none; was registerBuiltinBackends() called?")
+                         : fmt::format("{}", fmt::join(known, ", ")));
     }
     backend = it->second;  // copy: the factory runs without the lock (opening a device takes time)
   }
   for (const auto& [key, value] : uri.query) {
     if (std::find(backend.queryKeys.begin(), backend.queryKeys.end(), key) == backend.queryKeys.end())
-      fail(Errc::Config, "camera URI '{}': unknown key '{}' for scheme '{}:' (accepted: {})", uri.text, key,
-           uri.scheme, backend.queryKeys.empty() ? std::string("none") : fmt::format("{}", fmt::join(backend.queryKeys, ", ")));
+      fail(Errc::Config, "camera URI '{}': unknown key '{}' for scheme '{}:' (accepted: {})", uri.text, key, uri.scheme,
+           backend.queryKeys.empty() ? std::string("none") : fmt::format("{}", fmt::join(backend.queryKeys, ", ")));
   }
   return backend.factory(uri);
 }

@@ -57,11 +57,13 @@ std::string findInPath(const std::string& name) {
   return {};
 }
 
-double secondsSince(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+double secondsSince(Clock::time_point t0) {
+  return std::chrono::duration<double>(Clock::now() - t0).count();
+}
 
 // One arv-fake-gv-camera-0.8 process serving on 127.0.0.1.
 class FakeGvCamera {
-public:
+ public:
   explicit FakeGvCamera(std::string serial) : serial_(std::move(serial)) {}
   FakeGvCamera(const FakeGvCamera&) = delete;
   FakeGvCamera& operator=(const FakeGvCamera&) = delete;
@@ -124,13 +126,13 @@ public:
     pid_ = -1;
   }
 
-private:
+ private:
   std::string serial_;
   pid_t pid_ = -1;
 };
 
 class AravisCameraTest : public ::testing::Test {
-protected:
+ protected:
   void SetUp() override {
     binary_ = findInPath(kFakeCameraBinary);
     if (binary_.empty())
@@ -216,7 +218,8 @@ TEST_F(AravisCameraTest, StateMachine) {
   camera->configure(smallSettings());
   EXPECT_EQ(camera->state(), S::Configured);
   camera->configure(smallSettings());  // reconfiguring is allowed
-  EXPECT_TRUE(throwsError([&] { camera->softwareTrigger(); }, Errc::InvalidArgument, {"softwareTrigger()", "Configured"}));
+  EXPECT_TRUE(
+      throwsError([&] { camera->softwareTrigger(); }, Errc::InvalidArgument, {"softwareTrigger()", "Configured"}));
   EXPECT_TRUE(throwsError([&] { camera->start(0); }, Errc::InvalidArgument, {"bufferCount = 0"}));
 
   camera->start(4);
@@ -224,7 +227,8 @@ TEST_F(AravisCameraTest, StateMachine) {
   EXPECT_TRUE(throwsError([&] { camera->configure(smallSettings()); }, Errc::InvalidArgument,
                           {"configure()", "state Streaming"}));
   EXPECT_TRUE(throwsError([&] { camera->start(4); }, Errc::InvalidArgument, {"start()", "state Streaming"}));
-  EXPECT_TRUE(throwsError([&] { camera->softwareTrigger(); }, Errc::InvalidArgument, {"TriggerMode::Software", "FreeRun"}));
+  EXPECT_TRUE(
+      throwsError([&] { camera->softwareTrigger(); }, Errc::InvalidArgument, {"TriggerMode::Software", "FreeRun"}));
   EXPECT_EQ(camera->grab(2s).status, FrameStatus::Complete);
 
   camera->stop();
@@ -335,8 +339,10 @@ TEST_F(AravisCameraTest, GenericFeatureAccess) {
   camera->setFloatFeature("ExposureTimeAbs", 3000.0);
   EXPECT_NEAR(camera->getFloatFeature("ExposureTimeAbs"), 3000.0, 1e-6);
   camera->executeCommand("TriggerSoftware");  // accepted outside acquisition, does nothing
-  EXPECT_TRUE(throwsError([&] { camera->getFeature("NoSuchFeature"); }, Errc::NotFound, {"NoSuchFeature", fake_->id()}));
-  EXPECT_TRUE(throwsError([&] { camera->setFeature("PixelFormat", "Mono99"); }, Errc::NotFound, {"PixelFormat", "Mono99"}));
+  EXPECT_TRUE(
+      throwsError([&] { camera->getFeature("NoSuchFeature"); }, Errc::NotFound, {"NoSuchFeature", fake_->id()}));
+  EXPECT_TRUE(
+      throwsError([&] { camera->setFeature("PixelFormat", "Mono99"); }, Errc::NotFound, {"PixelFormat", "Mono99"}));
   EXPECT_ANY_THROW(camera->setIntegerFeature("Width", 1 << 20));
 }
 

@@ -65,8 +65,8 @@ TEST(Mono12, ReusesOutputAndRejectsShortBuffers) {
   unpackMono12(bytes.data(), bytes.size(), 2, 2, Mono12Packing::Pfnc, out);
   EXPECT_EQ(out.data, before);
   EXPECT_EQ(out.at<std::uint16_t>(1, 1), 0xfff);
-  EXPECT_TRUE(throwsError([&] { unpackMono12(bytes.data(), 5, 2, 2, Mono12Packing::Pfnc, out); },
-                          Errc::InvalidArgument, {"need 6 bytes", "has 5"}));
+  EXPECT_TRUE(throwsError([&] { unpackMono12(bytes.data(), 5, 2, 2, Mono12Packing::Pfnc, out); }, Errc::InvalidArgument,
+                          {"need 6 bytes", "has 5"}));
 }
 
 }  // namespace

@@ -31,7 +31,8 @@ TEST(CameraUri, PathKeepsColonsAndMayBeEmpty) {
 TEST(CameraUri, MalformedUrisAreConfigErrors) {
   EXPECT_TRUE(throwsError([] { parseCameraUri("Aravis-Fake-GV01"); }, Errc::Config, {"Aravis-Fake-GV01", "no scheme"}));
   EXPECT_TRUE(throwsError([] { parseCameraUri(":x"); }, Errc::Config, {"no scheme"}));
-  EXPECT_TRUE(throwsError([] { parseCameraUri("aravis:x?packetSize"); }, Errc::Config, {"'packetSize'", "<key>=<value>"}));
+  EXPECT_TRUE(
+      throwsError([] { parseCameraUri("aravis:x?packetSize"); }, Errc::Config, {"'packetSize'", "<key>=<value>"}));
   EXPECT_TRUE(throwsError([] { parseCameraUri("aravis:x?=3"); }, Errc::Config, {"<key>=<value>"}));
   EXPECT_TRUE(throwsError([] { parseCameraUri("aravis:x?a=1&a=2"); }, Errc::Config, {"'a'", "twice"}));
   EXPECT_TRUE(throwsError([] { parseCameraUri("aravis:x?a=1&"); }, Errc::Config, {"ends with '&'"}));
@@ -69,21 +70,26 @@ TEST(CameraRegistry, OtherLibrariesRegisterTheirSchemes) {
   EXPECT_EQ(seen.path, "bench.toml");
   EXPECT_EQ(seen.query.at("seed"), "7");
   EXPECT_TRUE(throwsError([] { openCamera("test-registry:b?noise=0"); }, Errc::Config, {"'noise'", "seed"}));
-  EXPECT_TRUE(throwsError([] { registerCameraBackend({.scheme = "test-registry", .factory = [](const CameraUri&) {
-                                                        return std::unique_ptr<Camera>();
-                                                      }}); },
-                          Errc::InvalidArgument, {"already registered"}));
-  EXPECT_TRUE(throwsError([] { registerCameraBackend({.scheme = "Bad Scheme", .factory = [](const CameraUri&) {
-                                                        return std::unique_ptr<Camera>();
-                                                      }}); },
-                          Errc::InvalidArgument, {"'Bad Scheme'"}));
+  EXPECT_TRUE(throwsError(
+      [] {
+        registerCameraBackend(
+            {.scheme = "test-registry", .factory = [](const CameraUri&) { return std::unique_ptr<Camera>(); }});
+      },
+      Errc::InvalidArgument, {"already registered"}));
+  EXPECT_TRUE(throwsError(
+      [] {
+        registerCameraBackend(
+            {.scheme = "Bad Scheme", .factory = [](const CameraUri&) { return std::unique_ptr<Camera>(); }});
+      },
+      Errc::InvalidArgument, {"'Bad Scheme'"}));
 }
 
 TEST(CameraState, WrongStateErrorNamesMethodStateAndAllowedStates) {
-  EXPECT_NO_THROW(requireCameraState(Camera::State::Open, {Camera::State::Open, Camera::State::Configured}, "info", "cam"));
-  EXPECT_TRUE(throwsError(
-      [] { requireCameraState(Camera::State::Configured, {Camera::State::Streaming}, "grab", "cam-7"); },
-      Errc::InvalidArgument, {"cam-7", "grab()", "state Configured", "Streaming"}));
+  EXPECT_NO_THROW(
+      requireCameraState(Camera::State::Open, {Camera::State::Open, Camera::State::Configured}, "info", "cam"));
+  EXPECT_TRUE(
+      throwsError([] { requireCameraState(Camera::State::Configured, {Camera::State::Streaming}, "grab", "cam-7"); },
+                  Errc::InvalidArgument, {"cam-7", "grab()", "state Configured", "Streaming"}));
 }
 
 }  // namespace

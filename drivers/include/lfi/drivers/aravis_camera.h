@@ -23,9 +23,9 @@ namespace lfi {
 
 // One device as Aravis's discovery sees it.
 struct AravisDeviceInfo {
-  std::string id;        // pass to openAravisCamera / "aravis:<id>"
+  std::string id;  // pass to openAravisCamera / "aravis:<id>"
   std::string physicalId;
-  std::string address;   // IP address for GigE Vision, bus address for USB3 Vision
+  std::string address;  // IP address for GigE Vision, bus address for USB3 Vision
   std::string vendor;
   std::string model;
   std::string serial;
