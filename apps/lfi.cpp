@@ -6,6 +6,8 @@
 #include "lfi/core/exr_io.h"
 #include "lfi/core/log.h"
 #include "lfi/core/image.h"
+#include "lfi/drivers/gv_camera_server.h"
+#include "lfi/sim/sim_camera.h"
 #include "lfi/sim/scene_file.h"
 #include "lfi/study/study.h"
 
@@ -18,6 +20,8 @@
 #include <atomic>
 #include <chrono>
 #include <csignal>
+#include <functional>
+#include <pthread.h>
 #include <cstdio>
 #include <filesystem>
 #include <mutex>
@@ -67,6 +71,49 @@ fs::path defaultBench() {
   return installed;
 }
 
+// lfi serve-camera: SimImager frames through Aravis's device-side GigE Vision
+// implementation until SIGINT or SIGTERM. The radiance is rendered before the
+// device appears (a render inside a frame would stall its control channel).
+void serveCamera(const fs::path& sceneFile, lfi::GvCameraServerOptions options, int threads, bool quiet) {
+  lfi::sim::SimImager imager(sceneFile);
+  ProgressBar bar;
+  imager.setRenderOptions(threads, quiet ? std::function<void(double)>() : [&bar](double f) { bar("rendering", f); });
+  imager.radiance(1);
+  bar.finish();
+  imager.setRenderOptions(threads, {});
+  options.sensorWidth_px = imager.camera().width;
+  options.sensorHeight_px = imager.camera().height;
+  // Aravis's threads inherit this mask, so the signals reach sigwait() below.
+  sigset_t signals;
+  sigemptyset(&signals);
+  sigaddset(&signals, SIGINT);
+  sigaddset(&signals, SIGTERM);
+  pthread_sigmask(SIG_BLOCK, &signals, nullptr);
+  const std::string device = "lfi-served:" + sceneFile.string();
+  cv::Mat frame;
+  lfi::GvCameraServer server(options, [&](const lfi::ServedFrameRequest& request, cv::Mat& image) {
+    lfi::CameraSettings s;
+    s.exposure_us = request.exposure_us;
+    s.gain = request.gain;
+    s.pixelFormat = *request.pixelFormat;
+    s.binning = request.binning;
+    s.roiX_px = request.offsetX_px;
+    s.roiY_px = request.offsetY_px;
+    s.roiWidth_px = request.width_px;
+    s.roiHeight_px = request.height_px;
+    s = imager.resolve(s, device);
+    imager.capture(s, request.frameId, frame);
+    frame.copyTo(image);  // same size and type: written into the outgoing buffer
+  });
+  fmt::print("{}\n", server.deviceId());
+  std::fflush(stdout);
+  spdlog::info("serving '{}' as GigE Vision device '{}' on {} ({} x {} px); SIGINT/SIGTERM stops", sceneFile.string(),
+               server.deviceId(), options.interfaceAddress, options.sensorWidth_px, options.sensorHeight_px);
+  int signal = 0;
+  sigwait(&signals, &signal);
+  spdlog::info("serve-camera: {} received, stopping", signal == SIGINT ? "SIGINT" : "SIGTERM");
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -108,7 +155,24 @@ int main(int argc, char** argv) {
   render->add_option("--out", renderOut, "Output folder")->required();
   render->add_option("--spp", spp, "Samples per pixel (overrides the scene file)")->check(CLI::PositiveNumber);
   render->add_option("--threads", renderThreads, "Worker threads (0 = all cores)")->check(CLI::NonNegativeNumber);
+  std::optional<std::uint64_t> renderSeed;
+  render->add_option("--seed", renderSeed, "Random seed (overrides the scene file)");
   render->add_flag("--force", renderForce, "Replace existing output files");
+
+  // lfi serve-camera
+  auto* serve = app.add_subcommand("serve-camera",
+                                   "Serve the ray-traced camera of a scene file as a GigE Vision device (Ctrl-C stops)");
+  fs::path serveScene;
+  lfi::GvCameraServerOptions serveOptions;
+  int serveThreads = 0;
+  serve->add_option("scene", serveScene, "Scene file with a [camera] (TOML, docs/scene-files.md)")
+      ->required()
+      ->check(CLI::ExistingFile);
+  serve->add_option("--interface", serveOptions.interfaceAddress, "IPv4 address or network interface to serve on")
+      ->capture_default_str();
+  serve->add_option("--serial", serveOptions.serial, "Serial number (device id: lfi-SimCamera-<serial>)")
+      ->capture_default_str();
+  serve->add_option("--threads", serveThreads, "Render threads (0 = all cores)")->check(CLI::NonNegativeNumber);
 
   // lfi lf-info
   auto* lfInfo = app.add_subcommand("lf-info", "Validate a light field EXR and print its parametrisation");
@@ -140,6 +204,7 @@ int main(int argc, char** argv) {
     } else if (*render) {
       lfi::sim::SceneDescription d = lfi::sim::loadSceneFile(sceneFile);
       if (spp > 0) d.render.samplesPerPixel = spp;
+      if (renderSeed) d.render.seed = *renderSeed;
       d.render.threads = renderThreads;
       d.render.cancel = &gCancel;
       ProgressBar bar;
@@ -165,6 +230,8 @@ int main(int argc, char** argv) {
       }
       const double samples = static_cast<double>(image.total()) * d.render.samplesPerPixel;
       spdlog::info("{:.0f} samples in {:.2f} s: {:.2f} M samples/s", samples, seconds, samples / seconds / 1e6);
+    } else if (*serve) {
+      serveCamera(serveScene, serveOptions, serveThreads, quiet);
     } else if (*lfInfo) {
       const lfi::LightField lf = lfi::readLightFieldExr(lfFile);
       const auto& g = lf.geometry();

@@ -11,11 +11,16 @@
 //            intersection, the shading and the sampling cost on top of Embree.
 //
 // Usage: lfi-bench [--quick]   (quick: smaller images, for a smoke run)
+//        lfi-bench --rmse A.exr B.exr
+//            relative RMS difference of two EXR images of any origin (luminance,
+//            (R+G+B)/3), for the time-to-equal-error comparison in
+//            scripts/compare-cycles.sh.
 
 #include "lfi/core/light_field.h"
 #include "lfi/sim/render.h"
 #include "lfi/sim/scene_file.h"
 
+#include <OpenEXR/ImfRgbaFile.h>
 #include <embree3/rtcore.h>
 #include <fmt/format.h>
 #include <tbb/info.h>
@@ -109,7 +114,41 @@ RayBatch recordRays(const Scene& scene, const TelecentricCamera& cam, int spp) {
 
 }  // namespace
 
+// Mean of (R+G+B)/3 per pixel of any EXR that OpenEXR's RGBA interface reads
+// (luminance-only files come back as R = G = B = Y).
+std::vector<double> readLuminance(const char* path, int& width, int& height) {
+  Imf::RgbaInputFile file(path);
+  const Imath::Box2i dw = file.dataWindow();
+  width = dw.max.x - dw.min.x + 1;
+  height = dw.max.y - dw.min.y + 1;
+  std::vector<Imf::Rgba> pixels(static_cast<size_t>(width) * static_cast<size_t>(height));
+  file.setFrameBuffer(pixels.data() - dw.min.x - static_cast<long>(dw.min.y) * width, 1, static_cast<size_t>(width));
+  file.readPixels(dw.min.y, dw.max.y);
+  std::vector<double> y;
+  y.reserve(pixels.size());
+  for (const auto& p : pixels) y.push_back((static_cast<float>(p.r) + static_cast<float>(p.g) + static_cast<float>(p.b)) / 3.0);
+  return y;
+}
+
+int rmse(const char* a, const char* b) {
+  int wa = 0, ha = 0, wb = 0, hb = 0;
+  const auto ya = readLuminance(a, wa, ha), yb = readLuminance(b, wb, hb);
+  if (wa != wb || ha != hb) {
+    fmt::print(stderr, "lfi-bench: {} is {}x{} but {} is {}x{}\n", a, wa, ha, b, wb, hb);
+    return 1;
+  }
+  double sq = 0, mean = 0;
+  for (size_t k = 0; k < ya.size(); ++k) {
+    sq += (ya[k] - yb[k]) * (ya[k] - yb[k]);
+    mean += yb[k];
+  }
+  mean /= static_cast<double>(yb.size());
+  fmt::print("rmse_rel={:.6f}\n", std::sqrt(sq / static_cast<double>(ya.size())) / mean);
+  return 0;
+}
+
 int main(int argc, char** argv) {
+  if (argc == 4 && std::strcmp(argv[1], "--rmse") == 0) return rmse(argv[2], argv[3]);
   const bool quick = argc > 1 && std::strcmp(argv[1], "--quick") == 0;
   const int threads = tbb::info::default_concurrency();
   SceneDescription d = loadSceneFile(std::filesystem::path(LFI_SOURCE_DIR) / "data" / "scenes" / "reference.toml");

@@ -1,7 +1,7 @@
 # Blender (Cycles, CPU) version of lfi's reference scene (data/scenes/reference.toml),
 # for the speed comparison in docs/performance.md. Run through
 # scripts/compare-cycles.sh, or:
-#   blender -b -noaudio -P scripts/cycles/reference_scene.py -- <spp> <resolution> <threads> <out.exr>
+#   blender -b -noaudio -P scripts/cycles/reference_scene.py -- <spp> <resolution> <threads> <out.exr> [seed]
 # Scene units are millimetres (one Blender unit = 1 mm).
 import math
 import sys
@@ -10,8 +10,9 @@ import time
 import bmesh
 import bpy
 
-spp, res, threads, out = sys.argv[sys.argv.index("--") + 1:]
-spp, res, threads = int(spp), int(res), int(threads)
+args = sys.argv[sys.argv.index("--") + 1:]
+spp, res, threads, out = int(args[0]), int(args[1]), int(args[2]), args[3]
+seed = int(args[4]) if len(args) > 4 else 0
 
 bpy.ops.wm.read_factory_settings(use_empty=True)
 scene = bpy.context.scene
@@ -19,6 +20,7 @@ scene.render.engine = "CYCLES"
 cy = scene.cycles
 cy.device = "CPU"
 cy.samples = spp
+cy.seed = seed
 cy.use_adaptive_sampling = False
 cy.use_denoising = False
 cy.max_bounces = cy.transmission_bounces = cy.glossy_bounces = cy.transparent_max_bounces = 64

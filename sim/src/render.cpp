@@ -217,9 +217,16 @@ struct SampledPolicy {
   Sampler& sampler;
   int maxDepth;
   int splitDepth;
+  // Stratified values for the first Fresnel choices of this sample (Latin
+  // hypercube across the pixel's samples); later choices draw at random.
+  const double* decisions = nullptr;
+  int decisionCount = 0;
   bool diffuse = true;
   void visit(const Hit&, const Ray&) {}
-  bool chooseReflection(double reflectance) { return sampler.next() < reflectance; }
+  bool chooseReflection(double reflectance) {
+    const double u = decisionCount > 0 ? (--decisionCount, *decisions++) : sampler.next();
+    return u < reflectance;
+  }
   Vec3 bounce(const Vec3& n) {
     const double u1 = sampler.next(), u2 = sampler.next();
     return cosineHemisphere(n, u1, u2);
@@ -239,8 +246,9 @@ struct RefractionPathPolicy {
 
 }  // namespace
 
-double traceRadiance(const Scene& scene, const Ray& ray, Sampler& sampler, int maxDepth, int splitDepth) {
-  SampledPolicy policy{sampler, maxDepth, splitDepth};
+double traceRadiance(const Scene& scene, const Ray& ray, Sampler& sampler, int maxDepth, int splitDepth,
+                     const double* decisions, int decisionCount) {
+  SampledPolicy policy{sampler, maxDepth, splitDepth, decisions, decisionCount};
   return walk(scene, PathState{.ray = ray}, policy);
 }
 
@@ -250,6 +258,9 @@ std::vector<Vec3> refractionPath(const Scene& scene, const Ray& ray, int maxDept
   walk(scene, PathState{.ray = ray}, policy);
   return vertices;
 }
+
+// Fresnel choices per sample drawn from a Latin hypercube rather than at random.
+constexpr int kStratifiedChoices = 4;
 
 cv::Mat render(const Scene& scene, const Sensor& sensor, const RenderOptions& options) {
   if (options.samplesPerPixel < 1) fail(Errc::InvalidArgument, "render: samplesPerPixel must be >= 1");
@@ -274,6 +285,9 @@ cv::Mat render(const Scene& scene, const Sensor& sensor, const RenderOptions& op
     }
     const int x0 = (tile % tilesX) * ts, y0 = (tile / tilesX) * ts;
     std::vector<int> permutation(static_cast<size_t>(strata));
+    const int spp = options.samplesPerPixel;
+    std::vector<double> decisions(static_cast<size_t>(spp) * kStratifiedChoices);
+    std::vector<int> order(static_cast<size_t>(spp));
     for (int j = y0; j < std::min(y0 + ts, height); ++j) {
       float* row = image.ptr<float>(j);
       for (int i = x0; i < std::min(x0 + ts, width); ++i) {
@@ -285,6 +299,18 @@ cv::Mat render(const Scene& scene, const Sensor& sensor, const RenderOptions& op
         for (int k = strata - 1; k > 0; --k)
           std::swap(permutation[static_cast<size_t>(k)],
                     permutation[static_cast<size_t>(pixelSampler.nextU32() % static_cast<std::uint32_t>(k + 1))]);
+        // Latin hypercube for the first Fresnel choices: across the pixel's
+        // samples each choice's random value covers [0,1) evenly, so the few
+        // reflect/refract branches of a lens are taken in proportion.
+        for (int d = 0; d < kStratifiedChoices; ++d) {
+          for (int k = 0; k < spp; ++k) order[static_cast<size_t>(k)] = k;
+          for (int k = spp - 1; k > 0; --k)
+            std::swap(order[static_cast<size_t>(k)],
+                      order[static_cast<size_t>(pixelSampler.nextU32() % static_cast<std::uint32_t>(k + 1))]);
+          for (int k = 0; k < spp; ++k)
+            decisions[static_cast<size_t>(k) * kStratifiedChoices + d] =
+                (order[static_cast<size_t>(k)] + pixelSampler.next()) / spp;
+        }
         double sum = 0;
         for (int s = 0; s < options.samplesPerPixel; ++s) {
           // One random stream per sample: two scenes that differ only where a
@@ -304,7 +330,9 @@ cv::Mat render(const Scene& scene, const Sensor& sensor, const RenderOptions& op
           } else {
             ray = std::get<LightFieldSensor>(sensor).ray(i, j, offset);
           }
-          if (ray) sum += traceRadiance(scene, *ray, sampler, options.maxDepth, options.splitDepth);
+          if (ray)
+            sum += traceRadiance(scene, *ray, sampler, options.maxDepth, options.splitDepth,
+                                 &decisions[static_cast<size_t>(s) * kStratifiedChoices], kStratifiedChoices);
         }
         row[i] = static_cast<float>(sum / options.samplesPerPixel);
       }

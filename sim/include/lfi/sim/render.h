@@ -39,7 +39,10 @@ cv::Mat render(const Scene& scene, const Sensor& sensor, const RenderOptions& op
 
 // Radiance carried back along one ray of sight (exposed for tests and tools).
 struct Sampler;
-double traceRadiance(const Scene& scene, const Ray& ray, Sampler& sampler, int maxDepth, int splitDepth = 0);
+// `decisions`: optional values in [0,1) for the first `decisionCount` Fresnel
+// choices (render() passes a Latin hypercube across a pixel's samples).
+double traceRadiance(const Scene& scene, const Ray& ray, Sampler& sampler, int maxDepth, int splitDepth = 0,
+                     const double* decisions = nullptr, int decisionCount = 0);
 
 // The deterministic refraction-only path of a ray (reflection only under total
 // internal reflection): its vertices, starting with the origin. The path ends
