@@ -1,0 +1,50 @@
+#pragma once
+// Calibration of the display-to-part distance Δ, the parameter the inverse
+// schlieren method is most sensitive to (docs/calibration.md).
+//
+// Principle: radiance is constant along a ray in free space, so the light
+// field recorded on a plane can be re-expressed on any parallel plane
+// (propagateLightField). If the display actually sits ε further from the part
+// than the plane the light field was captured on, showing the light field
+// propagated by -ε restores the field at the part, and the intact part appears
+// brightest. The calibration shows the light field propagated for a series of
+// candidate errors, measures the intact part's brightness through the
+// telecentric camera for each, and refines the best candidate with a parabola
+// through it and its neighbours.
+//
+// Units: mm. Sign: ε > 0 means the display is further from the part than Δ.
+
+#include "lfi/core/light_field.h"
+
+#include <opencv2/core.hpp>
+
+#include <functional>
+#include <vector>
+
+namespace lfi::calib {
+
+// The light field on the plane moved by dz along the plane's +z (towards the
+// part for dz > 0): L'(q, d) = L(q - dz (dx/dz, dy/dz), d), sampled at every
+// element centre and angular pixel centre of the same geometry with `lookup`.
+// The result's distance_mm is the input's minus dz.
+LightField propagateLightField(const LightField& lightField, double dz_mm,
+                               LightFieldLookup lookup = LightFieldLookup::Interpolated);
+
+// Shows a light field on the display and returns the camera's image of the
+// intact part (any pixel type; converted to float).
+using InspectFunction = std::function<cv::Mat(const LightField&)>;
+
+struct DisplayDistanceScan {
+  std::vector<double> candidates_mm;  // the ε tried
+  std::vector<double> brightness;     // figure of merit per candidate
+  double estimate_mm = 0;             // refined ε of the maximum
+};
+
+// Scans the candidate errors and returns the estimate. `roi` selects the
+// part's pixels (CV_8UC1, non-zero = use; empty = the whole image); the figure
+// of merit is the mean image value there. Throws Errc::InvalidArgument for
+// fewer than three candidates or unsorted candidates.
+DisplayDistanceScan calibrateDisplayDistance(const LightField& captured, const InspectFunction& inspect,
+                                             const std::vector<double>& candidates_mm, const cv::Mat& roi = {});
+
+}  // namespace lfi::calib

@@ -1,0 +1,160 @@
+// Display distance calibration: light field propagation against an analytic
+// light field, and the full calibration against the ray-traced bench.
+
+#include "lfi/calib/display_distance.h"
+#include "lfi/sim/render.h"
+
+#include "lfi_test_support.h"
+
+#include <gtest/gtest.h>
+#include <opencv2/imgproc.hpp>
+
+#include <numbers>
+
+namespace {
+
+using namespace lfi;
+using namespace lfi::sim;
+using lfi::testing_support::throwsError;
+
+LightFieldGeometry smallGeometry() {
+  LightFieldGeometry g;
+  g.spatialX = g.spatialY = 24;
+  g.angular = 15;
+  g.pixelPitch_mm = 0.04;  // elements of 0.6 mm, 14.4 mm across
+  g.distance_mm = 30;
+  return g;
+}
+
+// The light field of a luminous disc of radius r centred on the axis at
+// height h above the plane: a ray of sight (q, d) sees it iff it crosses the
+// plane z = h within r of the axis.
+LightField discLightField(const LightFieldGeometry& g, double h, double r) {
+  LightField lf(g);
+  for (int ey = 0; ey < g.spatialY; ++ey)
+    for (int ex = 0; ex < g.spatialX; ++ex)
+      for (int v = 0; v < g.angular; ++v)
+        for (int u = 0; u < g.angular; ++u) {
+          const Vec2 disc = lf.angularCentre(u, v);
+          if (disc.x * disc.x + disc.y * disc.y >= 1) continue;
+          const Vec3 d = LightField::directionFromDisc(disc);
+          const Vec2 q = lf.elementCentre(ex, ey);
+          const Vec2 at(q.x + h * d.x / d.z, q.y + h * d.y / d.z);
+          lf.at(ex, ey, u, v) = at.length() < r ? 1.f : 0.f;
+        }
+  return lf;
+}
+
+TEST(PropagateLightField, ZeroIsTheIdentityAndDistanceFollows) {
+  const LightField a = discLightField(smallGeometry(), 12, 6);
+  const LightField b = calib::propagateLightField(a, 0);
+  EXPECT_EQ(cv::norm(a.lensletImage(), b.lensletImage(), cv::NORM_INF), 0.0);
+  EXPECT_DOUBLE_EQ(calib::propagateLightField(a, 2.5).geometry().distance_mm, 27.5);
+}
+
+TEST(PropagateLightField, MatchesTheAnalyticFieldOnTheMovedPlane) {
+  // Moving the plane 3 mm towards the disc leaves it 9 mm away: the propagated
+  // field must equal the analytic one at h = 9 wherever the propagated ray
+  // started inside the original plane (steep rays near the border came from
+  // outside it: no data), except where a sample sits on the disc's edge
+  // (nearest lookup takes the element centre's ray, up to 0.3 mm away).
+  const LightFieldGeometry g = smallGeometry();
+  const double dz = 3, h = 12, r = 6;
+  const LightField original = discLightField(g, h, r);
+  const LightField moved = calib::propagateLightField(original, dz, LightFieldLookup::Nearest);
+  const LightField expected = discLightField(g, h - dz, r);
+  int compared = 0, lit = 0, differ = 0, differUnmoved = 0;
+  for (int ey = 0; ey < g.spatialY; ++ey)
+    for (int ex = 0; ex < g.spatialX; ++ex)
+      for (int v = 0; v < g.angular; ++v)
+        for (int u = 0; u < g.angular; ++u) {
+          const Vec2 disc = moved.angularCentre(u, v);
+          if (disc.x * disc.x + disc.y * disc.y >= 1) continue;
+          const Vec3 d = LightField::directionFromDisc(disc);
+          const Vec2 q = moved.elementCentre(ex, ey);
+          const Vec2 source(q.x - dz * d.x / d.z, q.y - dz * d.y / d.z);
+          if (std::abs(source.x) > g.extentX_mm() / 2 || std::abs(source.y) > g.extentY_mm() / 2) continue;
+          ++compared;
+          lit += expected.at(ex, ey, u, v) > 0.5;
+          differ += std::abs(moved.at(ex, ey, u, v) - expected.at(ex, ey, u, v)) > 0.5;
+          differUnmoved += std::abs(original.at(ex, ey, u, v) - expected.at(ex, ey, u, v)) > 0.5;
+        }
+  ASSERT_GT(lit, 2000);
+  EXPECT_LT(differ, 0.1 * lit) << compared << " compared";
+  EXPECT_GT(differUnmoved, 3 * differ);
+}
+
+// The simulated bench: intact lens, light field captured at Δ = 30 mm, display
+// actually at Δ + trueError, telecentric camera (0.243x, NA 0.0152).
+struct Bench {
+  std::shared_ptr<const Solid> lens = Solid::sphericalLens(51.5, -51.5, 5, 25.4);
+  LightFieldGeometry g = smallGeometry();
+  TelecentricCamera camera;
+  Bench() {
+    camera.imageDistance_mm = 0.243 * 102.5;
+    camera.focalLength_mm = 1 / (1 / 102.5 + 1 / camera.imageDistance_mm);
+    camera.stopDiameter_mm = 2 * camera.focalLength_mm * std::tan(0.0152);
+    camera.pixelPitch_mm = 0.5 * 0.243;
+    camera.width = camera.height = 48;
+    camera.worldFromCamera = TelecentricCamera::lookingDownFrom(102.5);
+  }
+  LightField capture() const {
+    std::vector<Object> objects;
+    objects.push_back({"lens", lens, {}, Dielectric{1.5168, 0}, std::nullopt});
+    Rigid3 down = Rigid3::rotation({1, 0, 0}, std::numbers::pi);
+    down.t = {0, 0, 50};
+    objects.push_back({"beam", Rectangle{100, 100}, down, Absorber{}, ParallelEmission{1, 0.0087}});
+    RenderOptions ro;
+    ro.samplesPerPixel = 64;
+    return LightField(g, render(Scene(std::move(objects)), LightFieldSensor{g, Rigid3::translation({0, 0, -30})}, ro));
+  }
+  cv::Mat inspect(const LightField& shown, double trueError) const {
+    std::vector<Object> objects;
+    objects.push_back({"lens", lens, {}, Dielectric{1.5168, 0}, std::nullopt});
+    objects.push_back({"display", Rectangle{g.extentX_mm(), g.extentY_mm()}, Rigid3::translation({0, 0, -30 - trueError}),
+                       Absorber{}, LightFieldEmission{std::make_shared<LightField>(shown), LightFieldLookup::Interpolated}});
+    RenderOptions ro;
+    ro.samplesPerPixel = 16;
+    return render(Scene(std::move(objects)), camera, ro);
+  }
+};
+
+TEST(DisplayDistance, MeasuresHowFarTheDisplayMoved) {
+  // The brightest propagation is offset from the display's true error by a
+  // constant that the light field's sampling sets (its elements emit the
+  // radiance their centre recorded over their whole area; docs/calibration.md).
+  // So the calibration measures the display's position relative to a known
+  // one: a scan with the display where the light field was captured gives the
+  // offset, and scans at unknown positions must then return their error.
+  // Only the lens (radius 12.7 mm, 0.5 mm pixels) counts: a disc of 20 pixels.
+  const Bench bench;
+  cv::Mat roi = cv::Mat::zeros(48, 48, CV_8UC1);
+  cv::circle(roi, {24, 24}, 20, cv::Scalar(255), cv::FILLED);
+  const LightField captured = bench.capture();
+  const std::vector<double> candidates = {-6, -5, -4, -3, -2, -1, 0, 1, 2, 3, 4, 5, 6};
+  auto estimate = [&](double trueError) {
+    const auto scan = calib::calibrateDisplayDistance(
+        captured, [&](const LightField& lf) { return bench.inspect(lf, trueError); }, candidates, roi);
+    std::printf("display error %+.2f mm: brightest propagation %+.3f mm\n", trueError, scan.estimate_mm);
+    return scan.estimate_mm;
+  };
+  const double offset = estimate(0);
+  RecordProperty("sampling_offset_mm", std::to_string(offset));
+  EXPECT_LT(std::abs(offset), 3.0);  // a fraction of the 6 mm scan, not a runaway
+  for (double trueError : {1.5, -2.0}) EXPECT_NEAR(estimate(trueError) - offset, trueError, 0.6) << trueError;
+}
+
+TEST(DisplayDistance, RejectsBadCandidatesAndImages) {
+  const LightField lf(smallGeometry());
+  auto black = [](const LightField&) { return cv::Mat(8, 8, CV_32FC1, cv::Scalar(0)); };
+  EXPECT_TRUE(throwsError([&] { calib::calibrateDisplayDistance(lf, black, {0, 1}); }, Errc::InvalidArgument,
+                          {"at least 3"}));
+  EXPECT_TRUE(throwsError([&] { calib::calibrateDisplayDistance(lf, black, {0, 2, 1}); }, Errc::InvalidArgument,
+                          {"increasing"}));
+  EXPECT_TRUE(throwsError([&] { calib::calibrateDisplayDistance(lf, [](const LightField&) { return cv::Mat(); }, {0, 1, 2}); },
+                          Errc::Device, {"no image"}));
+  EXPECT_TRUE(throwsError([&] { calib::calibrateDisplayDistance(lf, black, {0, 1, 2}, cv::Mat::ones(4, 4, CV_8UC1)); },
+                          Errc::InvalidArgument, {"ROI"}));
+}
+
+}  // namespace
