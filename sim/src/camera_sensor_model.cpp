@@ -3,6 +3,8 @@
 #include "lfi/core/error.h"
 #include "lfi/core/image.h"
 
+#include <tbb/parallel_for.h>
+
 #include <cmath>
 #include <random>
 
@@ -27,7 +29,8 @@ cv::Mat CameraSensorModel::capture(const cv::Mat& radiance, std::uint64_t seed) 
   cv::Mat out(radiance.size(), CV_16UC1);
   const double scale = gain / fullWell_e * maxDigitalNumber();
   const double maxDn = maxDigitalNumber();
-  for (int r = 0; r < radiance.rows; ++r) {
+  // Rows in parallel: each has its own engine, so the result does not depend on the threads.
+  tbb::parallel_for(0, radiance.rows, [&](int r) {
     // One engine per row keyed by (seed, row): reproducible and independent of image width.
     std::mt19937_64 engine(seed * 0x9e3779b97f4a7c15ull + static_cast<std::uint64_t>(r));
     std::normal_distribution<double> read(0.0, readNoise_e);
@@ -39,7 +42,7 @@ cv::Mat CameraSensorModel::capture(const cv::Mat& radiance, std::uint64_t seed) 
       const double electrons = std::min(static_cast<double>(shot(engine)), fullWell_e) + read(engine);
       o[c] = static_cast<std::uint16_t>(std::clamp(std::round(electrons * scale), 0.0, maxDn));
     }
-  }
+  });
   return out;
 }
 

@@ -183,6 +183,16 @@ SceneDescription loadSceneFile(const fs::path& path) {
     c.finish();
     d.sensor = lfs;
   }
+  if (root.has("camera_sensor")) {
+    if (!hasCamera) fail(Errc::Config, "{}: [camera_sensor] needs a [camera]", path.string());
+    ConfigTable c = root.table("camera_sensor");
+    d.cameraSensor.fullWell_e = c.number("full_well_e", d.cameraSensor.fullWell_e, 1, 1e9);
+    d.cameraSensor.readNoise_e = c.number("read_noise_e", d.cameraSensor.readNoise_e, 0, 1e6);
+    d.cameraSensor.bitDepth = c.integer("bit_depth", d.cameraSensor.bitDepth, 8, 16);
+    d.cameraSensor.electronsPerUnitPerUs =
+        c.number("electrons_per_unit_per_us", d.cameraSensor.electronsPerUnitPerUs, 1e-12, 1e12);
+    c.finish();
+  }
   for (ConfigTable& o : root.tables("object")) d.objects.push_back(readObject(o));
   if (d.objects.empty()) fail(Errc::Config, "{}: the scene has no [[object]]", path.string());
   root.finish();

@@ -13,12 +13,23 @@
 
 namespace lfi::sim {
 
+// [camera_sensor]: the camera's sensor as the `sim:` camera backend models it
+// (lfi/sim/camera_sensor_model.h). The exposure scale turns relative radiance
+// into electrons: electronsPerUnit = electronsPerUnitPerUs * exposure_us.
+struct CameraSensorParameters {
+  double fullWell_e = 10500;           // e-
+  double readNoise_e = 2.4;            // e- rms
+  int bitDepth = 12;                   // ADC bits
+  double electronsPerUnitPerUs = 0.7;  // e- per unit radiance per µs: 10 ms fills 70 % of the well at radiance 1
+};
+
 struct SceneDescription {
   std::string name;
   std::vector<Object> objects;
   double ambientIor = 1.0;
   Sensor sensor;
   RenderOptions render;
+  CameraSensorParameters cameraSensor;  // defaults unless the file has [camera_sensor]
 };
 
 SceneDescription loadSceneFile(const std::filesystem::path& path);

@@ -1,0 +1,159 @@
+#pragma once
+// The bench's light field display as the rest of the stack sees it: a flat panel
+// behind a lenslet (lenticular) sheet or a parallax barrier. Backends (the libusb
+// `usb:` display, the ray-traced `sim:` display) implement this interface and are
+// opened by URI (display_registry.h).
+//
+// State machine (every backend follows it):
+//
+//            open()            show(...)
+//   Closed ─────────► Open ─────────────► Showing ──┐ show(...)
+//      ▲               ▲  ◄──── blank() ───┘   ▲    │ (next frame)
+//      │               │                        └────┘
+//      └──── close() from any state; a device that vanishes also ends in Closed
+//
+// Open: connected, the panel is dark (blank). Showing: the panel shows the last
+// presented frame. A display returned by openDisplay() is Open. Calling a method in
+// a state it does not list throws lfi::Error(Errc::InvalidArgument) naming the
+// method and the state.
+//
+// Units and frame: millimetres and radians. The display frame has its origin at the
+// centre of the panel's active area, x along panel columns (left to right), y along
+// panel rows upwards (row 0 is the top), z = 0 the emitting plane (the lens/barrier
+// plane) and +z from the display towards the part and the camera. This is the light
+// field plane frame of light_field.h, so a LightField is encoded in place.
+
+#include "lfi/core/light_field.h"
+
+#include <opencv2/core.hpp>
+
+#include <cstdint>
+#include <initializer_list>
+#include <string>
+
+namespace lfi {
+
+// Order of the colour subpixels inside one panel pixel, left to right.
+enum class SubpixelLayout { Mono, RgbStripe, BgrStripe };
+enum class OpticsType { Lenslet, Barrier };
+
+const char* toString(SubpixelLayout layout);
+const char* toString(OpticsType type);
+
+// The optics in front of the panel (display_optics.h has the model and the defaults'
+// sources). Lens axes are lines on the panel tilted by `slant_rad` from the panel's
+// vertical (positive: the axis leans towards +x going up, +y).
+struct DisplayOpticsParams {
+  OpticsType type = OpticsType::Lenslet;
+  double lensPitch_px = 0;    // distance between neighbouring lens axes along a panel row, in panel pixels
+  double slant_rad = 0;       // lens axis angle from the panel vertical
+  double offset_px = 0;       // x of lens 0's axis on the panel's centre row, from the panel centre, in pixels
+  double gap_mm = 0;          // panel (pixel plane) to lens/barrier plane
+  double focalLength_mm = 0;  // lenslet only: focal length of each lens
+  double slitWidth_mm = 0;    // barrier only: width of each slit
+  friend bool operator==(const DisplayOpticsParams&, const DisplayOpticsParams&) = default;
+};
+
+// What the display is. Everything except the identity strings comes from the
+// device's calibration at open (a bench file may override the optics).
+struct DisplayInfo {
+  std::string vendor;
+  std::string model;
+  std::string serial;
+  std::string deviceId;  // the backend's id, the part after "<scheme>:" that reopens this display
+  int panelWidth_px = 0;
+  int panelHeight_px = 0;
+  double pixelPitch_mm = 0;  // square panel pixels
+  SubpixelLayout subpixels = SubpixelLayout::Mono;
+  DisplayOpticsParams optics;
+  int viewCount = 0;  // distinct directions per lens, as the device states it
+  int brightnessMin = 0;
+  int brightnessMax = 0;
+
+  double lensPitch_mm() const { return optics.lensPitch_px * pixelPitch_mm; }
+  int subpixelsPerPixel() const { return subpixels == SubpixelLayout::Mono ? 1 : 3; }
+  // The panel image type show() takes: CV_8UC1 for Mono, CV_8UC3 otherwise.
+  int panelType() const;
+  // Throws Errc::InvalidArgument naming the first field out of range.
+  void validate() const;
+};
+
+// Outcome of one show() (a value, STYLE.md §4): Presented — the device validated and
+// shows the frame; Rejected — the device refused it (CRC, size, truncated transfer),
+// `message` says why and names the device; Timeout — the transfer did not finish in
+// time and was cancelled. The panel keeps showing the previous frame on Rejected and
+// Timeout, and the display's state does not change.
+enum class PresentStatus { Presented, Rejected, Timeout };
+const char* toString(PresentStatus status);
+
+struct PresentResult {
+  PresentStatus status = PresentStatus::Timeout;
+  std::uint32_t sequence = 0;  // the frame's sequence number on the wire
+  std::string message;
+};
+
+struct DisplayStatus {
+  bool showing = false;
+  std::uint32_t presentedSequence = 0;  // last frame shown
+  std::uint64_t framesPresented = 0;    // device counters since power-up
+  std::uint64_t framesRejected = 0;
+  int brightness = 0;
+  std::string lastError;        // the device's last error in words, empty if none
+  std::uint64_t stallsCleared = 0;  // host side: endpoint halts cleared and frames resent since open()
+};
+
+// A display device. Non-copyable, non-movable: one object owns one device.
+// Methods are not thread-safe; drive a display from one thread.
+class Display {
+public:
+  enum class State { Closed, Open, Showing };
+
+  Display() = default;
+  Display(const Display&) = delete;
+  Display& operator=(const Display&) = delete;
+  Display(Display&&) = delete;
+  Display& operator=(Display&&) = delete;
+  virtual ~Display() = default;
+
+  // Any state.
+  virtual State state() const = 0;
+
+  // Closed → Open: (re)connects to the device named at creation and reads its
+  // info and calibration. Throws Errc::NotFound when the device is not there.
+  virtual void open() = 0;
+
+  // Any state → Closed: releases the device. Never throws.
+  virtual void close() noexcept = 0;
+
+  // Open, Showing.
+  virtual DisplayInfo info() const = 0;
+
+  // Open, Showing → Showing on PresentStatus::Presented. `panel` must be
+  // panelWidth_px x panelHeight_px of info().panelType(); channels in the panel's
+  // subpixel order left to right. A device that vanishes throws Errc::Device (the
+  // display is then Closed).
+  virtual PresentResult show(const cv::Mat& panel) = 0;
+
+  // Open, Showing: encodes the light field through the optics model
+  // (display_optics.h, encodeLightField) and shows it. `white` is the radiance
+  // shown at full drive level.
+  PresentResult show(const LightField& lightField, double white = 1.0);
+
+  // Open, Showing → Open: the panel goes dark.
+  virtual void blank() = 0;
+
+  // Open, Showing: level in info().brightnessMin..brightnessMax.
+  virtual void setBrightness(int level) = 0;
+
+  // Open, Showing: asks the device.
+  virtual DisplayStatus status() = 0;
+};
+
+const char* toString(Display::State state);
+
+// For backends: throws Errc::InvalidArgument "<device>: <method> is not allowed in
+// state <state> (allowed: ...)" unless `current` is one of `allowed`.
+void requireDisplayState(Display::State current, std::initializer_list<Display::State> allowed, const char* method,
+                         const std::string& device);
+
+}  // namespace lfi

@@ -1,0 +1,75 @@
+#pragma once
+// The device side of GigE Vision: serves images made by this process as a
+// GigE Vision camera, with Aravis's own device implementation (ArvGvFakeCamera:
+// GVCP discovery and register access on UDP port 3956, GVSP streaming,
+// Aravis's fake-camera GenICam description). `lfi serve-camera` uses it to put
+// the ray-traced camera on the network, so that the Aravis backend and any
+// GenICam client can be tested against it. Aravis types stay in the .cpp.
+//
+// The GenICam features are Aravis's fake camera's (GigE Vision 1.x names):
+// Width/Height/OffsetX/OffsetY (binned pixels; their ranges do not shrink with
+// binning), BinningHorizontal/Vertical 1..16, PixelFormat Mono8/Mono16 (the
+// description also lists Bayer8/RGB8, which are served black), ExposureTimeAbs
+// (µs, integer, 10..10 000 000), GainRaw (0..10, integer), AcquisitionFrameRate
+// (1..1000 Hz), TriggerMode/TriggerSource (Software). The sensor size is ours.
+//
+// Frames are made on Aravis's device thread, which also answers control
+// requests: a filler slower than a few hundred ms makes clients time out.
+
+#include "lfi/drivers/camera.h"
+
+#include <opencv2/core.hpp>
+
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <optional>
+#include <string>
+
+namespace lfi {
+
+// One frame as the client configured the device, read from its registers.
+struct ServedFrameRequest {
+  std::uint64_t frameId = 0;  // the GVSP block id the client receives for this frame
+  int offsetX_px = 0;         // binned pixels
+  int offsetY_px = 0;
+  int width_px = 0;
+  int height_px = 0;
+  int binning = 1;  // BinningHorizontal (BinningVertical is expected equal)
+  std::optional<PixelFormat> pixelFormat;  // unset for a format we do not serve
+  double exposure_us = 0;
+  double gain = 0;  // GainRaw
+};
+
+// Writes one frame: `image` is height x width, CV_8UC1 (Mono8) or CV_16UC1
+// (Mono16), and wraps the outgoing buffer (zeroed). Runs on Aravis's device
+// thread; an exception is logged and the frame goes out black.
+using ServedFrameFiller = std::function<void(const ServedFrameRequest& request, cv::Mat& image)>;
+
+struct GvCameraServerOptions {
+  std::string interfaceAddress = "127.0.0.1";  // IPv4 address or interface name to serve on
+  std::string serial = "LFISIM01";            // < 16 characters
+  std::string vendor = "lfi";                  // < 32 characters
+  std::string model = "SimCamera";             // < 32 characters
+  int sensorWidth_px = 512;
+  int sensorHeight_px = 512;
+};
+
+class GvCameraServer {
+ public:
+  // Starts serving. Throws Errc::InvalidArgument for bad options and
+  // Errc::Device when Aravis cannot bind the interface (e.g. port 3956 taken).
+  GvCameraServer(const GvCameraServerOptions& options, ServedFrameFiller filler);
+  ~GvCameraServer();
+  GvCameraServer(const GvCameraServer&) = delete;
+  GvCameraServer& operator=(const GvCameraServer&) = delete;
+
+  // "<vendor>-<model>-<serial>", what Aravis's discovery reports.
+  std::string deviceId() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace lfi

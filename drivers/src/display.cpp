@@ -1,0 +1,92 @@
+#include "lfi/drivers/display.h"
+
+#include "lfi/core/error.h"
+#include "lfi/drivers/display_optics.h"
+
+#include <fmt/format.h>
+#include <fmt/ranges.h>
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+#include <vector>
+
+namespace lfi {
+
+const char* toString(SubpixelLayout layout) {
+  switch (layout) {
+    case SubpixelLayout::Mono: return "mono";
+    case SubpixelLayout::RgbStripe: return "RGB stripe";
+    case SubpixelLayout::BgrStripe: return "BGR stripe";
+  }
+  return "unknown";
+}
+
+const char* toString(OpticsType type) {
+  switch (type) {
+    case OpticsType::Lenslet: return "lenslet";
+    case OpticsType::Barrier: return "barrier";
+  }
+  return "unknown";
+}
+
+const char* toString(PresentStatus status) {
+  switch (status) {
+    case PresentStatus::Presented: return "Presented";
+    case PresentStatus::Rejected: return "Rejected";
+    case PresentStatus::Timeout: return "Timeout";
+  }
+  return "unknown";
+}
+
+const char* toString(Display::State state) {
+  switch (state) {
+    case Display::State::Closed: return "Closed";
+    case Display::State::Open: return "Open";
+    case Display::State::Showing: return "Showing";
+  }
+  return "unknown";
+}
+
+int DisplayInfo::panelType() const { return subpixels == SubpixelLayout::Mono ? CV_8UC1 : CV_8UC3; }
+
+void DisplayInfo::validate() const {
+  auto check = [](bool ok, const char* field, double value, const char* range) {
+    if (!ok) fail(Errc::InvalidArgument, "display info {} = {} is outside {}", field, value, range);
+  };
+  auto finite = [](double v) { return std::isfinite(v); };
+  check(panelWidth_px >= 1 && panelWidth_px <= 16384, "panelWidth_px", panelWidth_px, "[1, 16384]");
+  check(panelHeight_px >= 1 && panelHeight_px <= 16384, "panelHeight_px", panelHeight_px, "[1, 16384]");
+  check(finite(pixelPitch_mm) && pixelPitch_mm > 0 && pixelPitch_mm <= 10, "pixelPitch_mm", pixelPitch_mm,
+        "(0, 10]");
+  check(finite(optics.lensPitch_px) && optics.lensPitch_px >= 1 && optics.lensPitch_px <= 1000, "lensPitch_px",
+        optics.lensPitch_px, "[1, 1000]");
+  check(finite(optics.slant_rad) && std::abs(optics.slant_rad) < 0.786, "slant_rad", optics.slant_rad,
+        "(-pi/4, pi/4)");
+  check(finite(optics.offset_px), "offset_px", optics.offset_px, "finite values");
+  check(finite(optics.gap_mm) && optics.gap_mm > 0 && optics.gap_mm <= 100, "gap_mm", optics.gap_mm, "(0, 100]");
+  if (optics.type == OpticsType::Lenslet)
+    check(finite(optics.focalLength_mm) && optics.focalLength_mm > 0, "focalLength_mm", optics.focalLength_mm,
+          "(0, inf) for a lenslet display");
+  else
+    check(finite(optics.slitWidth_mm) && optics.slitWidth_mm > 0, "slitWidth_mm", optics.slitWidth_mm,
+          "(0, inf) for a barrier display");
+  check(viewCount >= 1, "viewCount", viewCount, "[1, inf)");
+  check(brightnessMax >= brightnessMin, "brightnessMax", brightnessMax, "[brightnessMin, inf)");
+}
+
+PresentResult Display::show(const LightField& lightField, double white) {
+  requireDisplayState(state(), {State::Open, State::Showing}, "show(LightField)", "display");
+  return show(encodeLightField(lightField, DisplayOptics(info()), white));
+}
+
+void requireDisplayState(Display::State current, std::initializer_list<Display::State> allowed, const char* method,
+                         const std::string& device) {
+  if (std::find(allowed.begin(), allowed.end(), current) != allowed.end()) return;
+  std::vector<std::string> names;
+  for (Display::State s : allowed) names.emplace_back(toString(s));
+  fail(Errc::InvalidArgument, "{}: {} is not allowed in state {} (allowed: {})", device, method, toString(current),
+       fmt::join(names, ", "));
+}
+
+}  // namespace lfi

@@ -1,0 +1,132 @@
+// GvCameraServer (gv_camera_server.h) on Aravis's ArvGvFakeCamera.
+
+#include "lfi/drivers/gv_camera_server.h"
+
+#include "lfi/core/error.h"
+
+#include <arv.h>
+#include <spdlog/spdlog.h>
+
+#include <cstring>
+#include <mutex>
+
+namespace lfi {
+namespace {
+
+// GigE Vision bootstrap registers (GigE Vision 2.x, table "bootstrap registers").
+constexpr guint32 kManufacturerNameOffset = 0x0048;  // 32 bytes
+constexpr guint32 kModelNameOffset = 0x0068;         // 32 bytes
+constexpr std::size_t kNameSize = 32;
+
+guint32 readRegister(ArvFakeCamera* camera, guint32 address) {
+  guint32 value = 0;
+  arv_fake_camera_read_register(camera, address, &value);
+  return value;
+}
+
+}  // namespace
+
+struct GvCameraServer::Impl {
+  GvCameraServerOptions options;
+  ServedFrameFiller filler;
+  ArvGvFakeCamera* gvCamera = nullptr;
+  ArvFakeCamera* camera = nullptr;  // owned by gvCamera
+  std::uint32_t lastWarnedFormat = 0;
+
+  // Aravis's fill-pattern callback, on its device thread. Inside it
+  // arv_buffer_get_data() reports size 0 (the buffer's parts are not set up
+  // yet); the pointer is valid and holds the payload, so the size comes from the
+  // registers.
+  static void fill(ArvBuffer* buffer, void* data, guint32 exposure_us, guint32 gain, ArvPixelFormat format) {
+    auto* self = static_cast<Impl*>(data);
+    if (buffer == nullptr) return;
+    ServedFrameRequest request;
+    request.frameId = arv_buffer_get_frame_id(buffer);
+    request.width_px = static_cast<int>(readRegister(self->camera, ARV_FAKE_CAMERA_REGISTER_WIDTH));
+    request.height_px = static_cast<int>(readRegister(self->camera, ARV_FAKE_CAMERA_REGISTER_HEIGHT));
+    request.offsetX_px = static_cast<int>(readRegister(self->camera, ARV_FAKE_CAMERA_REGISTER_X_OFFSET));
+    request.offsetY_px = static_cast<int>(readRegister(self->camera, ARV_FAKE_CAMERA_REGISTER_Y_OFFSET));
+    request.binning = static_cast<int>(readRegister(self->camera, ARV_FAKE_CAMERA_REGISTER_BINNING_HORIZONTAL));
+    request.exposure_us = exposure_us;
+    request.gain = gain;
+    int type = CV_8UC1;
+    if (format == ARV_PIXEL_FORMAT_MONO_8) {
+      request.pixelFormat = PixelFormat::Mono8;
+    } else if (format == ARV_PIXEL_FORMAT_MONO_16) {
+      request.pixelFormat = PixelFormat::Mono16;
+      type = CV_16UC1;
+    }
+    const std::size_t bytesPerPixel = (ARV_PIXEL_FORMAT_BIT_PER_PIXEL(format) + 7) / 8;
+    const std::size_t size = static_cast<std::size_t>(request.width_px) * request.height_px * bytesPerPixel;
+    void* pixels = const_cast<void*>(arv_buffer_get_data(buffer, nullptr));
+    if (pixels == nullptr || size == 0) return;
+    std::memset(pixels, 0, size);
+    if (!request.pixelFormat) {
+      if (self->lastWarnedFormat != format)
+        spdlog::warn("served camera '{}': pixel format 0x{:08x} is not served (Mono8, Mono16); frames are black",
+                     self->deviceId(), static_cast<std::uint32_t>(format));
+      self->lastWarnedFormat = format;
+      return;
+    }
+    cv::Mat image(request.height_px, request.width_px, type, pixels);
+    try {
+      self->filler(request, image);
+    } catch (const std::exception& e) {
+      spdlog::warn("served camera '{}': frame {} goes out black: {}", self->deviceId(), request.frameId, e.what());
+    }
+  }
+
+  std::string deviceId() const { return options.vendor + "-" + options.model + "-" + options.serial; }
+};
+
+GvCameraServer::GvCameraServer(const GvCameraServerOptions& options, ServedFrameFiller filler)
+    : impl_(std::make_unique<Impl>()) {
+  if (options.serial.empty() || options.serial.size() >= 16)
+    fail(Errc::InvalidArgument, "served camera: serial '{}' must have 1..15 characters", options.serial);
+  if (options.vendor.empty() || options.vendor.size() >= kNameSize || options.model.empty() ||
+      options.model.size() >= kNameSize)
+    fail(Errc::InvalidArgument, "served camera: vendor '{}' and model '{}' must have 1..31 characters",
+         options.vendor, options.model);
+  if (options.sensorWidth_px < 1 || options.sensorHeight_px < 1)
+    fail(Errc::InvalidArgument, "served camera: sensor {} x {} px", options.sensorWidth_px, options.sensorHeight_px);
+  if (!filler) fail(Errc::InvalidArgument, "served camera: no frame filler");
+  impl_->options = options;
+  impl_->filler = std::move(filler);
+
+  impl_->gvCamera = arv_gv_fake_camera_new(options.interfaceAddress.c_str(), options.serial.c_str());
+  if (impl_->gvCamera == nullptr || !arv_gv_fake_camera_is_running(impl_->gvCamera)) {
+    if (impl_->gvCamera != nullptr) g_object_unref(impl_->gvCamera);
+    fail(Errc::Device,
+         "served camera '{}': Aravis could not serve on '{}' (no such interface, or UDP port 3956 is taken by "
+         "another GigE Vision device on it)",
+         impl_->deviceId(), options.interfaceAddress);
+  }
+  ArvFakeCamera* camera = arv_gv_fake_camera_get_fake_camera(impl_->gvCamera);
+  impl_->camera = camera;
+  // Identity and sensor size before any client can see the device.
+  char name[kNameSize] = {};
+  std::strncpy(name, options.vendor.c_str(), kNameSize - 1);
+  arv_fake_camera_write_memory(camera, kManufacturerNameOffset, kNameSize, name);
+  std::memset(name, 0, kNameSize);
+  std::strncpy(name, options.model.c_str(), kNameSize - 1);
+  arv_fake_camera_write_memory(camera, kModelNameOffset, kNameSize, name);
+  const auto width = static_cast<guint32>(options.sensorWidth_px), height = static_cast<guint32>(options.sensorHeight_px);
+  arv_fake_camera_write_register(camera, ARV_FAKE_CAMERA_REGISTER_SENSOR_WIDTH, width);
+  arv_fake_camera_write_register(camera, ARV_FAKE_CAMERA_REGISTER_SENSOR_HEIGHT, height);
+  arv_fake_camera_write_register(camera, ARV_FAKE_CAMERA_REGISTER_WIDTH, width);
+  arv_fake_camera_write_register(camera, ARV_FAKE_CAMERA_REGISTER_HEIGHT, height);
+  arv_fake_camera_set_fill_pattern(camera, &Impl::fill, impl_.get());
+}
+
+GvCameraServer::~GvCameraServer() {
+  if (impl_ && impl_->gvCamera != nullptr) {
+    arv_fake_camera_set_fill_pattern(impl_->camera, nullptr, nullptr);
+    g_object_unref(impl_->gvCamera);  // stops Aravis's device thread
+  }
+}
+
+std::string GvCameraServer::deviceId() const {
+  return impl_->deviceId();
+}
+
+}  // namespace lfi

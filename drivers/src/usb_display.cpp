@@ -1,0 +1,517 @@
+#include "lfi/drivers/usb_display.h"
+
+#include "lfi/core/error.h"
+#include "lfi/drivers/usb_display_protocol.h"
+
+#include <fmt/format.h>
+#include <fmt/ranges.h>
+#include <libusb.h>
+
+#include <algorithm>
+#include <charconv>
+#include <cstring>
+#include <vector>
+
+namespace lfi {
+namespace {
+
+namespace proto = usbdisplay;
+using Clock = std::chrono::steady_clock;
+
+std::uint16_t parseHex16(std::string_view text, const char* what, const std::string& uri) {
+  unsigned value = 0;
+  const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), value, 16);
+  if (text.size() != 4 || ec != std::errc() || end != text.data() + text.size())
+    fail(Errc::Config, "display URI '{}': {} '{}' is not 4 hex digits (expected usb:<vid>:<pid>[/<serial>])", uri,
+         what, text);
+  return static_cast<std::uint16_t>(value);
+}
+
+SubpixelLayout toLayout(proto::SubpixelCode code) {
+  switch (code) {
+    case proto::SubpixelCode::RgbStripe: return SubpixelLayout::RgbStripe;
+    case proto::SubpixelCode::BgrStripe: return SubpixelLayout::BgrStripe;
+    case proto::SubpixelCode::Mono: break;
+  }
+  return SubpixelLayout::Mono;
+}
+
+// One bulk OUT transfer of a frame and the state its callback fills in.
+struct Chunk {
+  libusb_transfer* transfer = nullptr;
+  bool submitted = false;
+  bool done = false;
+  bool cancelled = false;
+  libusb_transfer_status status = LIBUSB_TRANSFER_COMPLETED;
+  int actual = 0;
+  int length = 0;
+};
+
+void LIBUSB_CALL onChunkDone(libusb_transfer* transfer) {
+  auto* chunk = static_cast<Chunk*>(transfer->user_data);
+  chunk->done = true;
+  chunk->status = transfer->status;
+  chunk->actual = transfer->actual_length;
+}
+
+enum class BulkOutcome { Ok, Stall, Timeout, NoDevice, Error };
+
+class UsbDisplay final : public Display {
+public:
+  UsbDisplay(UsbDisplaySelector selector, UsbDisplayOptions options)
+      : selector_(std::move(selector)), options_(options), name_(selector_.uri()) {
+    if (options_.transfersInFlight < 1 || options_.transfersInFlight > 32)
+      fail(Errc::InvalidArgument, "{}: transfersInFlight = {} is outside 1..32", name_, options_.transfersInFlight);
+    if (options_.transferSize_bytes < 512 || options_.transferSize_bytes > (16u << 20) ||
+        options_.transferSize_bytes % 512 != 0)
+      fail(Errc::InvalidArgument, "{}: transferSize_bytes = {} is not a multiple of 512 in 512..16 MiB", name_,
+           options_.transferSize_bytes);
+    if (options_.controlTimeout.count() < 1 || options_.transferTimeout.count() < 1 || options_.stallRetries < 0)
+      fail(Errc::InvalidArgument, "{}: timeouts must be >= 1 ms and stallRetries >= 0", name_);
+  }
+  ~UsbDisplay() override { close(); }
+
+  State state() const override { return state_; }
+
+  void open() override {
+    requireDisplayState(state_, {State::Closed}, "open", name_);
+    if (const int rc = libusb_init(&ctx_); rc != 0)
+      fail(Errc::Device, "{}: libusb_init failed: {}", name_, libusb_error_name(rc));
+    try {
+      openDevice();
+      readIdentity();
+    } catch (...) {
+      close();
+      throw;
+    }
+    state_ = State::Open;
+  }
+
+  void close() noexcept override {
+    if (handle_) {
+      if (claimed_) libusb_release_interface(handle_, interface_);
+      libusb_close(handle_);
+    }
+    handle_ = nullptr;
+    claimed_ = false;
+    if (ctx_) libusb_exit(ctx_);
+    ctx_ = nullptr;
+    state_ = State::Closed;
+  }
+
+  DisplayInfo info() const override {
+    requireDisplayState(state_, {State::Open, State::Showing}, "info", name_);
+    return info_;
+  }
+
+  PresentResult show(const cv::Mat& panel) override {
+    requireDisplayState(state_, {State::Open, State::Showing}, "show", name_);
+    if (panel.empty() || panel.type() != info_.panelType() || panel.cols != info_.panelWidth_px ||
+        panel.rows != info_.panelHeight_px)
+      fail(Errc::InvalidArgument, "{}: show needs a {}x{} {} panel image, got {}x{} of type {}", name_,
+           info_.panelWidth_px, info_.panelHeight_px, info_.panelType() == CV_8UC1 ? "CV_8UC1" : "CV_8UC3", panel.cols,
+           panel.rows, panel.type());
+    const std::uint32_t sequence = ++sequence_;
+    buildFrame(panel, sequence);
+
+    for (int attempt = 0;; ++attempt) {
+      std::size_t sent = 0;
+      const BulkOutcome outcome = sendFrame(sent);
+      if (outcome == BulkOutcome::Ok) break;
+      if (outcome == BulkOutcome::NoDevice) vanished(fmt::format("bulk OUT of frame {}", sequence));
+      if (outcome == BulkOutcome::Timeout)
+        return {PresentStatus::Timeout, sequence,
+                fmt::format("{}: bulk OUT of frame {} to endpoint 0x{:02x} timed out ({} ms per transfer; {} of {} "
+                            "bytes acknowledged)",
+                            name_, sequence, endpoint_, options_.transferTimeout.count(), sent, frame_.size())};
+      if (outcome == BulkOutcome::Stall) {
+        if (attempt >= options_.stallRetries)
+          fail(Errc::Device, "{}: endpoint 0x{:02x} stalled again on frame {} after {} clear-halt retries", name_,
+               endpoint_, sequence, options_.stallRetries);
+        const int rc = libusb_clear_halt(handle_, endpoint_);
+        if (rc == LIBUSB_ERROR_NO_DEVICE) vanished("CLEAR_HALT");
+        if (rc != 0)
+          fail(Errc::Device, "{}: CLEAR_HALT on endpoint 0x{:02x} failed: {}", name_, endpoint_,
+               libusb_error_name(rc));
+        ++stallsCleared_;
+        continue;
+      }
+      fail(Errc::Device, "{}: bulk OUT of frame {} to endpoint 0x{:02x} failed ({} of {} bytes sent)", name_,
+           sequence, endpoint_, sent, frame_.size());
+    }
+
+    const int rc = control(LIBUSB_ENDPOINT_OUT, proto::Request::Present, static_cast<std::uint16_t>(sequence),
+                           nullptr, 0);
+    if (rc == LIBUSB_ERROR_PIPE) return {PresentStatus::Rejected, sequence, rejection(sequence)};
+    requireOk(rc, proto::Request::Present);
+    state_ = State::Showing;
+    return {PresentStatus::Presented, sequence, {}};
+  }
+
+  void blank() override {
+    requireDisplayState(state_, {State::Open, State::Showing}, "blank", name_);
+    requireOk(control(LIBUSB_ENDPOINT_OUT, proto::Request::Blank, 0, nullptr, 0), proto::Request::Blank);
+    state_ = State::Open;
+  }
+
+  void setBrightness(int level) override {
+    requireDisplayState(state_, {State::Open, State::Showing}, "setBrightness", name_);
+    if (level < info_.brightnessMin || level > info_.brightnessMax)
+      fail(Errc::InvalidArgument, "{}: brightness {} is outside {}..{}", name_, level, info_.brightnessMin,
+           info_.brightnessMax);
+    requireOk(control(LIBUSB_ENDPOINT_OUT, proto::Request::SetBrightness, static_cast<std::uint16_t>(level), nullptr,
+                      0),
+              proto::Request::SetBrightness);
+  }
+
+  DisplayStatus status() override {
+    requireDisplayState(state_, {State::Open, State::Showing}, "status", name_);
+    const proto::StatusBlock s = proto::decodeStatus(controlIn(proto::Request::GetStatus, 0, proto::kStatusSize), name_);
+    DisplayStatus out;
+    out.showing = s.showing == 1;
+    out.presentedSequence = s.presentedSequence;
+    out.framesPresented = s.framesPresented;
+    out.framesRejected = s.framesRejected;
+    out.brightness = s.brightness;
+    if (s.lastError != 0) out.lastError = lastErrorText();
+    out.stallsCleared = stallsCleared_;
+    return out;
+  }
+
+private:
+  void openDevice() {
+    libusb_device** list = nullptr;
+    const ssize_t count = libusb_get_device_list(ctx_, &list);
+    if (count < 0) fail(Errc::Device, "{}: cannot list USB devices: {}", name_, libusb_error_name(int(count)));
+    std::vector<std::string> seen;
+    std::vector<std::pair<libusb_device_handle*, std::string>> matches;
+    int lastOpenError = 0;
+    for (ssize_t i = 0; i < count; ++i) {
+      libusb_device_descriptor desc{};
+      if (libusb_get_device_descriptor(list[i], &desc) != 0) continue;
+      seen.push_back(fmt::format("{:04x}:{:04x}", desc.idVendor, desc.idProduct));
+      if (desc.idVendor != selector_.vendorId || desc.idProduct != selector_.productId) continue;
+      libusb_device_handle* handle = nullptr;
+      if (const int rc = libusb_open(list[i], &handle); rc != 0) {
+        lastOpenError = rc;
+        continue;
+      }
+      std::string serial;
+      if (desc.iSerialNumber != 0) {
+        unsigned char text[256] = {};
+        const int n = libusb_get_string_descriptor_ascii(handle, desc.iSerialNumber, text, sizeof(text) - 1);
+        if (n > 0) serial.assign(reinterpret_cast<char*>(text), static_cast<std::size_t>(n));
+      }
+      if (!selector_.serial.empty() && serial != selector_.serial) {
+        seen.back() += "/" + serial;
+        libusb_close(handle);
+        continue;
+      }
+      matches.emplace_back(handle, serial);
+    }
+    libusb_free_device_list(list, 1);
+    if (matches.empty()) {
+      if (lastOpenError == LIBUSB_ERROR_ACCESS)
+        fail(Errc::NotFound, "{}: the device is present but cannot be opened: permission denied (udev rules?)", name_);
+      if (lastOpenError != 0)
+        fail(Errc::NotFound, "{}: the device is present but cannot be opened: {}", name_,
+             libusb_error_name(lastOpenError));
+      fail(Errc::NotFound, "{}: no such USB device (present: {})", name_,
+           seen.empty() ? std::string("none") : fmt::format("{}", fmt::join(seen, ", ")));
+    }
+    if (matches.size() > 1) {
+      std::vector<std::string> serials;
+      for (auto& [h, s] : matches) {
+        serials.push_back(s);
+        libusb_close(h);
+      }
+      fail(Errc::Config, "{}: {} displays match; name one by serial (usb:{:04x}:{:04x}/<serial>, serials: {})", name_,
+           matches.size(), selector_.vendorId, selector_.productId, fmt::join(serials, ", "));
+    }
+    handle_ = matches.front().first;
+    serial_ = matches.front().second;
+
+    libusb_config_descriptor* config = nullptr;
+    if (const int rc = libusb_get_active_config_descriptor(libusb_get_device(handle_), &config); rc != 0)
+      fail(Errc::Device, "{}: cannot read the configuration descriptor: {}", name_, libusb_error_name(rc));
+    bool found = false;
+    for (int i = 0; i < config->bNumInterfaces && !found; ++i) {
+      for (int a = 0; a < config->interface[i].num_altsetting && !found; ++a) {
+        const libusb_interface_descriptor& alt = config->interface[i].altsetting[a];
+        if (alt.bInterfaceClass != proto::kInterfaceClass || alt.bInterfaceSubClass != proto::kInterfaceSubclass)
+          continue;
+        for (int e = 0; e < alt.bNumEndpoints; ++e) {
+          const libusb_endpoint_descriptor& ep = alt.endpoint[e];
+          if ((ep.bmAttributes & 0x3) == LIBUSB_TRANSFER_TYPE_BULK && (ep.bEndpointAddress & 0x80) == 0) {
+            interface_ = alt.bInterfaceNumber;
+            endpoint_ = ep.bEndpointAddress;
+            found = true;
+            break;
+          }
+        }
+      }
+    }
+    libusb_free_config_descriptor(config);
+    if (!found)
+      fail(Errc::Device, "{}: no vendor interface (class 0x{:02x}, subclass 0x{:02x}) with a bulk OUT endpoint", name_,
+           proto::kInterfaceClass, proto::kInterfaceSubclass);
+    if (const int rc = libusb_claim_interface(handle_, interface_); rc != 0) {
+      if (rc == LIBUSB_ERROR_NO_DEVICE) vanished("CLAIM_INTERFACE");
+      fail(Errc::Device, "{}: cannot claim interface {}: {}{}", name_, interface_, libusb_error_name(rc),
+           rc == LIBUSB_ERROR_BUSY ? " (another program has it)" : "");
+    }
+    claimed_ = true;
+  }
+
+  void readIdentity() {
+    const std::vector<std::uint8_t> version = controlIn(proto::Request::GetProtocolVersion, 0, 4);
+    if (version.size() != 4)
+      fail(Errc::Device, "{}: GET_PROTOCOL_VERSION returned {} bytes, expected 4", name_, version.size());
+    const std::uint16_t major = proto::getU16(version.data()), minor = proto::getU16(version.data() + 2);
+    if (major != proto::kProtocolMajor)
+      fail(Errc::Device, "{}: the device speaks protocol {}.{}, this host speaks {}.x", name_, major, minor,
+           proto::kProtocolMajor);
+    const proto::DeviceInfoBlock block =
+        proto::decodeDeviceInfo(controlIn(proto::Request::GetDeviceInfo, 0, proto::kDeviceInfoSize), name_);
+    std::vector<std::uint8_t> blob;
+    for (std::uint16_t chunk = 0; blob.size() < block.calibrationSize; ++chunk) {
+      const std::size_t want = std::min<std::size_t>(proto::kCalibrationChunk, block.calibrationSize - blob.size());
+      const std::vector<std::uint8_t> part = controlIn(proto::Request::GetCalibration, chunk, want);
+      if (part.size() != want)
+        fail(Errc::Device, "{}: GET_CALIBRATION chunk {} returned {} bytes, expected {}", name_, chunk, part.size(),
+             want);
+      blob.insert(blob.end(), part.begin(), part.end());
+    }
+    const proto::CalibrationBlock cal = proto::decodeCalibration(blob, name_);
+
+    DisplayInfo info;
+    info.vendor = block.vendor;
+    info.model = block.model;
+    info.serial = block.serial;
+    info.deviceId = fmt::format("{:04x}:{:04x}/{}", selector_.vendorId, selector_.productId,
+                                serial_.empty() ? block.serial : serial_);
+    info.panelWidth_px = block.panelWidth_px;
+    info.panelHeight_px = block.panelHeight_px;
+    info.pixelPitch_mm = cal.pixelPitch_mm;
+    info.subpixels = toLayout(block.subpixels);
+    info.optics.type = cal.optics == proto::OpticsCode::Barrier ? OpticsType::Barrier : OpticsType::Lenslet;
+    info.optics.lensPitch_px = cal.lensPitch_px;
+    info.optics.slant_rad = cal.slant_rad;
+    info.optics.offset_px = cal.offset_px;
+    info.optics.gap_mm = cal.gap_mm;
+    info.optics.focalLength_mm = cal.focalLength_mm;
+    info.optics.slitWidth_mm = cal.slitWidth_mm;
+    info.viewCount = block.viewCount;
+    info.brightnessMin = 0;
+    info.brightnessMax = block.brightnessMax;
+    const bool wantsRgb = info.subpixels != SubpixelLayout::Mono;
+    if (!(block.formats & (wantsRgb ? 0x2 : 0x1)))
+      fail(Errc::Device, "{}: device info format mask 0x{:02x} lacks the {} format its {} panel needs", name_,
+           block.formats, wantsRgb ? "RGB888" : "Mono8", toString(info.subpixels));
+    try {
+      info.validate();
+    } catch (const Error& e) {
+      fail(Errc::Device, "{}: calibration read from the device is invalid: {}", name_, e.what());
+    }
+    info_ = info;
+    format_ = wantsRgb ? proto::Format::Rgb888 : proto::Format::Mono8;
+  }
+
+  // Raw synchronous control transfer on the vendor interface; returns bytes or a libusb error.
+  int control(int direction, proto::Request request, std::uint16_t value, unsigned char* data, std::uint16_t length) {
+    const std::uint8_t type = direction == LIBUSB_ENDPOINT_IN ? proto::kRequestTypeIn : proto::kRequestTypeOut;
+    return libusb_control_transfer(handle_, type, static_cast<std::uint8_t>(request), value,
+                                   static_cast<std::uint16_t>(interface_), data, length,
+                                   static_cast<unsigned>(options_.controlTimeout.count()));
+  }
+
+  void requireOk(int rc, proto::Request request) {
+    if (rc >= 0) return;
+    if (rc == LIBUSB_ERROR_NO_DEVICE) vanished(proto::toString(request));
+    if (rc == LIBUSB_ERROR_TIMEOUT)
+      fail(Errc::Timeout, "{}: control request {} timed out after {} ms (the device does not answer)", name_,
+           proto::toString(request), options_.controlTimeout.count());
+    if (rc == LIBUSB_ERROR_PIPE)
+      fail(Errc::Device, "{}: the device refused control request {} (stall)", name_, proto::toString(request));
+    fail(Errc::Device, "{}: control request {} failed: {}", name_, proto::toString(request), libusb_error_name(rc));
+  }
+
+  std::vector<std::uint8_t> controlIn(proto::Request request, std::uint16_t value, std::size_t length) {
+    std::vector<std::uint8_t> buffer(length);
+    const int rc = control(LIBUSB_ENDPOINT_IN, request, value, buffer.data(), static_cast<std::uint16_t>(length));
+    requireOk(rc, request);
+    buffer.resize(std::min<std::size_t>(static_cast<std::size_t>(rc), length));
+    return buffer;
+  }
+
+  std::string lastErrorText() {
+    const std::vector<std::uint8_t> reply =
+        controlIn(proto::Request::GetLastError, 0, 8 + proto::kMaxErrorText);
+    if (reply.size() < 8)
+      fail(Errc::Device, "{}: GET_LAST_ERROR returned {} bytes, expected at least 8", name_, reply.size());
+    const auto code = static_cast<proto::DeviceError>(proto::getU32(reply.data()));
+    std::string text;
+    for (std::size_t i = 8; i < reply.size(); ++i)
+      text.push_back(reply[i] >= 0x20 && reply[i] <= 0x7e ? static_cast<char>(reply[i]) : '?');
+    return fmt::format("{} (code {}, frame {}){}{}", proto::toString(code), static_cast<unsigned>(code),
+                       proto::getU32(reply.data() + 4), text.empty() ? "" : ": ", text);
+  }
+
+  std::string rejection(std::uint32_t sequence) {
+    return fmt::format("{}: PRESENT of frame {} refused by the device: {}", name_, sequence, lastErrorText());
+  }
+
+  [[noreturn]] void vanished(const std::string& request) {
+    const std::string name = name_;
+    close();
+    fail(Errc::Device, "{}: the device vanished during {}; the display is closed, open() it again when it is back",
+         name, request);
+  }
+
+  void buildFrame(const cv::Mat& panel, std::uint32_t sequence) {
+    const std::size_t rowBytes = static_cast<std::size_t>(panel.cols) * panel.elemSize();
+    const std::size_t payload = rowBytes * static_cast<std::size_t>(panel.rows);
+    frame_.resize(proto::kFrameHeaderSize + payload);
+    std::uint8_t* out = frame_.data() + proto::kFrameHeaderSize;
+    for (int r = 0; r < panel.rows; ++r) std::memcpy(out + r * rowBytes, panel.ptr<std::uint8_t>(r), rowBytes);
+    proto::FrameHeader header;
+    header.sequence = sequence;
+    header.format = format_;
+    header.width = static_cast<std::uint16_t>(panel.cols);
+    header.height = static_cast<std::uint16_t>(panel.rows);
+    header.payloadSize = static_cast<std::uint32_t>(payload);
+    header.payloadCrc = proto::crc32Of({out, payload});
+    const std::vector<std::uint8_t> bytes = proto::encodeFrameHeader(header);
+    std::memcpy(frame_.data(), bytes.data(), bytes.size());
+  }
+
+  // Sends frame_ as bulk transfers, several in flight; cancels the rest on the first failure.
+  BulkOutcome sendFrame(std::size_t& sent) {
+    const std::size_t size = options_.transferSize_bytes;
+    const std::size_t count = (frame_.size() + size - 1) / size;
+    std::vector<Chunk> chunks(count);
+    BulkOutcome outcome = BulkOutcome::Ok;
+    std::size_t next = 0, inFlight = 0;
+    // A guard above libusb's own per-transfer timeouts, in case a cancellation never completes.
+    const auto deadline = Clock::now() + options_.transferTimeout * static_cast<int>(count + 1) +
+                          std::chrono::seconds(2);
+    auto record = [&](BulkOutcome o) {
+      if (outcome == BulkOutcome::Ok || o == BulkOutcome::NoDevice) outcome = o;
+    };
+    while (true) {
+      while (outcome == BulkOutcome::Ok && next < count && inFlight < static_cast<std::size_t>(options_.transfersInFlight)) {
+        Chunk& c = chunks[next];
+        c.length = static_cast<int>(std::min(size, frame_.size() - next * size));
+        c.transfer = libusb_alloc_transfer(0);
+        if (!c.transfer) fail(Errc::Device, "{}: libusb_alloc_transfer failed (out of memory)", name_);
+        libusb_fill_bulk_transfer(c.transfer, handle_, endpoint_, frame_.data() + next * size, c.length, onChunkDone,
+                                  &c, static_cast<unsigned>(options_.transferTimeout.count()));
+        const int rc = libusb_submit_transfer(c.transfer);
+        ++next;
+        if (rc != 0) {
+          c.done = true;
+          record(rc == LIBUSB_ERROR_NO_DEVICE ? BulkOutcome::NoDevice
+                                              : rc == LIBUSB_ERROR_PIPE ? BulkOutcome::Stall : BulkOutcome::Error);
+          break;
+        }
+        c.submitted = true;
+        ++inFlight;
+      }
+      if (inFlight == 0 && (outcome != BulkOutcome::Ok || next == count)) break;
+      timeval tv{0, 50'000};
+      const int rc = libusb_handle_events_timeout_completed(ctx_, &tv, nullptr);
+      if (rc == LIBUSB_ERROR_NO_DEVICE) record(BulkOutcome::NoDevice);
+      for (Chunk& c : chunks) {
+        if (!c.submitted || !c.done) continue;
+        c.submitted = false;
+        --inFlight;
+        if (c.status == LIBUSB_TRANSFER_COMPLETED && c.actual == c.length) {
+          sent += static_cast<std::size_t>(c.actual);
+          continue;
+        }
+        switch (c.status) {
+          case LIBUSB_TRANSFER_STALL: record(BulkOutcome::Stall); break;
+          case LIBUSB_TRANSFER_TIMED_OUT: record(BulkOutcome::Timeout); break;
+          case LIBUSB_TRANSFER_NO_DEVICE: record(BulkOutcome::NoDevice); break;
+          case LIBUSB_TRANSFER_CANCELLED: break;  // we cancelled it after another one failed
+          default: record(BulkOutcome::Error); break;
+        }
+      }
+      if (outcome != BulkOutcome::Ok && inFlight > 0) {
+        for (Chunk& c : chunks) {
+          if (c.submitted && !c.done && !c.cancelled) {
+            libusb_cancel_transfer(c.transfer);
+            c.cancelled = true;
+          }
+        }
+      }
+      if (Clock::now() > deadline) {
+        if (inFlight > 0) {
+          // Transfers that neither complete nor cancel: libusb still owns them, so they
+          // (and the context) must not be freed; give the device up.
+          for (Chunk& c : chunks) c.transfer = nullptr;
+          handle_ = nullptr;
+          ctx_ = nullptr;
+          claimed_ = false;
+          state_ = State::Closed;
+          fail(Errc::Device, "{}: bulk OUT transfers neither completed nor cancelled within the deadline; the "
+                             "display is closed", name_);
+        }
+        break;
+      }
+    }
+    for (Chunk& c : chunks)
+      if (c.transfer) libusb_free_transfer(c.transfer);
+    return outcome;
+  }
+
+  UsbDisplaySelector selector_;
+  UsbDisplayOptions options_;
+  std::string name_;
+  std::string serial_;
+  libusb_context* ctx_ = nullptr;
+  libusb_device_handle* handle_ = nullptr;
+  bool claimed_ = false;
+  int interface_ = 0;
+  std::uint8_t endpoint_ = proto::kFrameEndpoint;
+  proto::Format format_ = proto::Format::Mono8;
+  DisplayInfo info_;
+  State state_ = State::Closed;
+  std::uint32_t sequence_ = 0;
+  std::uint64_t stallsCleared_ = 0;
+  std::vector<std::uint8_t> frame_;
+};
+
+}  // namespace
+
+std::string UsbDisplaySelector::uri() const {
+  return serial.empty() ? fmt::format("usb:{:04x}:{:04x}", vendorId, productId)
+                        : fmt::format("usb:{:04x}:{:04x}/{}", vendorId, productId, serial);
+}
+
+UsbDisplaySelector parseUsbDisplayPath(std::string_view path, const std::string& uri) {
+  UsbDisplaySelector s;
+  const std::size_t slash = path.find('/');
+  const std::string_view ids = path.substr(0, slash);
+  const std::size_t colon = ids.find(':');
+  if (colon == std::string_view::npos)
+    fail(Errc::Config, "display URI '{}': expected usb:<vid>:<pid>[/<serial>] with 4 hex digits each", uri);
+  s.vendorId = parseHex16(ids.substr(0, colon), "vendor id", uri);
+  s.productId = parseHex16(ids.substr(colon + 1), "product id", uri);
+  if (slash != std::string_view::npos) {
+    s.serial = std::string(path.substr(slash + 1));
+    if (s.serial.empty() || s.serial.size() > 126 ||
+        !std::all_of(s.serial.begin(), s.serial.end(), [](char c) { return c > 0x20 && c < 0x7f && c != '/'; }))
+      fail(Errc::Config, "display URI '{}': serial '{}' must be 1..126 printable characters without '/' or spaces",
+           uri, s.serial);
+  }
+  return s;
+}
+
+std::unique_ptr<Display> openUsbDisplay(const UsbDisplaySelector& selector, const UsbDisplayOptions& options) {
+  auto display = std::make_unique<UsbDisplay>(selector, options);
+  display->open();
+  return display;
+}
+
+}  // namespace lfi

@@ -1,0 +1,416 @@
+// The ray-traced camera backend (sim_camera.h): a state machine over SimImager
+// with a simulated frame clock and buffer pool, so that timing, underruns and
+// software triggers behave like a streaming device's.
+
+#include "lfi/sim/sim_camera.h"
+
+#include "lfi/core/error.h"
+#include "lfi/drivers/registry.h"
+#include "lfi/sim/render.h"
+#include "lfi/sim/scene.h"
+
+#include <fmt/format.h>
+#include <spdlog/spdlog.h>
+
+#include <chrono>
+#include <cmath>
+#include <algorithm>
+#include <deque>
+#include <thread>
+
+namespace lfi::sim {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+std::uint64_t splitMix64(std::uint64_t x) {
+  x += 0x9e3779b97f4a7c15ull;
+  x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ull;
+  x = (x ^ (x >> 27)) * 0x94d049bb133111ebull;
+  return x ^ (x >> 31);
+}
+
+int formatBits(PixelFormat format) {
+  switch (format) {
+    case PixelFormat::Mono8:
+      return 8;
+    case PixelFormat::Mono12:
+      return 12;
+    case PixelFormat::Mono16:
+      return 16;
+  }
+  return 16;
+}
+
+}  // namespace
+
+std::uint64_t frameNoiseSeed(std::uint64_t sceneSeed, std::uint64_t frameId) {
+  return splitMix64(splitMix64(sceneSeed) ^ frameId);
+}
+
+SimImager::SimImager(const fs::path& sceneFile) : sceneFile_(sceneFile) {
+  if (!fs::exists(sceneFile)) fail(Errc::NotFound, "camera 'sim:{}': no such scene file", sceneFile.string());
+  description_ = loadSceneFile(sceneFile);
+  const auto* camera = std::get_if<TelecentricCamera>(&description_.sensor);
+  if (camera == nullptr)
+    fail(Errc::Config, "camera 'sim:{}': the scene has a [light_field_sensor], the sim camera needs a [camera]",
+         sceneFile.string());
+  camera_ = *camera;
+  scene_ = std::make_unique<Scene>(std::move(description_.objects), description_.ambientIor);
+  description_.objects.clear();
+}
+
+SimImager::~SimImager() = default;
+
+void SimImager::setRenderOptions(int threads, std::function<void(double)> progress) {
+  renderThreads_ = threads;
+  renderProgress_ = std::move(progress);
+}
+
+CameraSettings SimImager::resolve(const CameraSettings& s, const std::string& device) const {
+  const Limits limits;
+  CameraSettings r = s;
+  if (!(s.exposure_us >= limits.minExposure_us && s.exposure_us <= limits.maxExposure_us))
+    fail(Errc::InvalidArgument, "camera '{}': exposure_us {} is outside {}..{} us", device, s.exposure_us,
+         limits.minExposure_us, limits.maxExposure_us);
+  if (!(s.gain >= limits.minGain_dB && s.gain <= limits.maxGain_dB))
+    fail(Errc::InvalidArgument, "camera '{}': gain {} is outside {}..{} dB", device, s.gain, limits.minGain_dB,
+         limits.maxGain_dB);
+  if (s.binning < 1 || s.binning > limits.maxBinning || camera_.width / s.binning < 1 ||
+      camera_.height / s.binning < 1)
+    fail(Errc::InvalidArgument, "camera '{}': binning {} is outside 1..{} (sensor {} x {})", device, s.binning,
+         limits.maxBinning, camera_.width, camera_.height);
+  const int width = camera_.width / s.binning, height = camera_.height / s.binning;
+  if (s.roiX_px < 0 || s.roiY_px < 0 || s.roiWidth_px < 0 || s.roiHeight_px < 0)
+    fail(Errc::InvalidArgument, "camera '{}': ROI ({}, {}, {} x {}) has a negative value", device, s.roiX_px,
+         s.roiY_px, s.roiWidth_px, s.roiHeight_px);
+  r.roiWidth_px = s.roiWidth_px > 0 ? s.roiWidth_px : width - s.roiX_px;
+  r.roiHeight_px = s.roiHeight_px > 0 ? s.roiHeight_px : height - s.roiY_px;
+  if (r.roiWidth_px < 1 || r.roiHeight_px < 1 || s.roiX_px + r.roiWidth_px > width ||
+      s.roiY_px + r.roiHeight_px > height)
+    fail(Errc::InvalidArgument, "camera '{}': ROI ({}, {}, {} x {}) does not fit the {} x {} (binned) sensor", device,
+         s.roiX_px, s.roiY_px, r.roiWidth_px, r.roiHeight_px, width, height);
+  if (s.trigger == TriggerMode::Line)
+    fail(Errc::InvalidArgument, "camera '{}': TriggerMode::Line asked, the sim camera has no trigger lines "
+         "(FreeRun, Software)", device);
+  if (s.trigger == TriggerMode::FreeRun) {
+    if (s.frameRate_hz == 0) r.frameRate_hz = limits.defaultFrameRate_hz;
+    if (!(r.frameRate_hz > 0 && r.frameRate_hz <= limits.maxFrameRate_hz))
+      fail(Errc::InvalidArgument, "camera '{}': frameRate_hz {} is outside (0, {}] Hz", device, s.frameRate_hz,
+           limits.maxFrameRate_hz);
+  }
+  return r;
+}
+
+CameraSensorModel SimImager::sensorModel(const CameraSettings& s) const {
+  const CameraSensorParameters& p = description_.cameraSensor;
+  const double pixels = static_cast<double>(s.binning) * s.binning;
+  CameraSensorModel model;
+  model.fullWell_e = p.fullWell_e * pixels;
+  model.readNoise_e = p.readNoise_e;
+  model.bitDepth = p.bitDepth;
+  model.electronsPerUnit = p.electronsPerUnitPerUs * s.exposure_us * pixels;
+  model.gain = std::pow(10.0, s.gain / 20);
+  return model;
+}
+
+const cv::Mat& SimImager::radiance(int binning) {
+  auto it = radianceByBinning_.find(binning);
+  if (it != radianceByBinning_.end()) return it->second;
+  TelecentricCamera binned = camera_;
+  binned.width = camera_.width / binning;
+  binned.height = camera_.height / binning;
+  binned.pixelPitch_mm = camera_.pixelPitch_mm * binning;
+  RenderOptions options = description_.render;
+  options.threads = renderThreads_;
+  options.progress = renderProgress_;
+  const auto t0 = std::chrono::steady_clock::now();
+  cv::Mat image = render(*scene_, binned, options);
+  spdlog::debug("sim camera '{}': rendered {} x {} (binning {}) in {:.2f} s", sceneFile_.string(), binned.width,
+                binned.height, binning, std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+  return radianceByBinning_.emplace(binning, std::move(image)).first->second;
+}
+
+void SimImager::capture(const CameraSettings& s, std::uint64_t frameId, cv::Mat& out) {
+  const CameraSensorModel model = sensorModel(s);
+  const cv::Mat& full = radiance(s.binning);
+  const cv::Mat roi = full(cv::Rect(s.roiX_px, s.roiY_px, s.roiWidth_px, s.roiHeight_px));
+  const cv::Mat dn = model.capture(roi, frameNoiseSeed(seed(), frameId));
+  // The ADC's bit_depth bits, aligned to the format's most significant bits.
+  const int shift = model.bitDepth - formatBits(s.pixelFormat);
+  const int type = s.pixelFormat == PixelFormat::Mono8 ? CV_8UC1 : CV_16UC1;
+  if (!out.empty() && (out.u == nullptr || out.u->refcount > 1 || !out.isContinuous() || out.isSubmatrix()))
+    out.release();  // a caller still holds the previous image: do not overwrite it
+  out.create(dn.rows, dn.cols, type);
+  for (int r = 0; r < dn.rows; ++r) {
+    const auto* in = dn.ptr<std::uint16_t>(r);
+    if (type == CV_8UC1) {
+      auto* o = out.ptr<std::uint8_t>(r);
+      for (int c = 0; c < dn.cols; ++c) o[c] = static_cast<std::uint8_t>(in[c] >> shift);  // bit depth >= 8
+    } else {
+      auto* o = out.ptr<std::uint16_t>(r);
+      for (int c = 0; c < dn.cols; ++c)
+        o[c] = static_cast<std::uint16_t>(shift >= 0 ? in[c] >> shift : in[c] << -shift);
+    }
+  }
+}
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+class SimCamera final : public Camera {
+ public:
+  explicit SimCamera(fs::path sceneFile) : sceneFile_(std::move(sceneFile)) { open(); }
+  ~SimCamera() override { close(); }
+
+  State state() const override { return state_; }
+
+  void open() override {
+    requireCameraState(state_, {State::Closed}, "open", name());
+    imager_ = std::make_unique<SimImager>(sceneFile_);
+    const TelecentricCamera& cam = imager_->camera();
+    info_ = CameraInfo{
+        .vendor = "lfi",
+        .model = "SimCamera",
+        .serial = imager_->sceneName(),
+        .deviceId = sceneFile_.string(),
+        .sensorWidth_px = cam.width,
+        .sensorHeight_px = cam.height,
+        .pixelSize_um = cam.pixelPitch_mm * 1000,
+    };
+    settings_ = imager_->resolve(CameraSettings{}, name());
+    state_ = State::Open;
+  }
+
+  void close() noexcept override {
+    queue_.clear();
+    imager_.reset();
+    state_ = State::Closed;
+  }
+
+  CameraInfo info() const override {
+    requireCameraState(state_, {State::Open, State::Configured, State::Streaming}, "info", name());
+    return info_;
+  }
+
+  void configure(const CameraSettings& s) override {
+    requireCameraState(state_, {State::Open, State::Configured}, "configure", name());
+    state_ = State::Open;  // until every field is accepted
+    settings_ = imager_->resolve(s, name());
+    state_ = State::Configured;
+  }
+
+  CameraSettings settings() const override {
+    requireCameraState(state_, {State::Configured, State::Streaming}, "settings", name());
+    return settings_;
+  }
+
+  void start(int bufferCount) override {
+    requireCameraState(state_, {State::Configured}, "start", name());
+    if (bufferCount < 1 || bufferCount > 1024)
+      fail(Errc::InvalidArgument, "camera '{}': start(bufferCount = {}) needs 1..1024 buffers", name(), bufferCount);
+    imager_->radiance(settings_.binning);  // render now, not in the first grab
+    bufferCount_ = static_cast<std::size_t>(bufferCount);
+    queue_.clear();
+    statistics_ = {};
+    nextFrameId_ = 1;
+    produced_ = 0;
+    start_ = Clock::now();
+    state_ = State::Streaming;
+  }
+
+  void stop() override {
+    requireCameraState(state_, {State::Streaming}, "stop", name());
+    queue_.clear();
+    state_ = State::Configured;
+  }
+
+  void softwareTrigger() override {
+    requireCameraState(state_, {State::Streaming}, "softwareTrigger", name());
+    if (settings_.trigger != TriggerMode::Software)
+      fail(Errc::InvalidArgument, "camera '{}': softwareTrigger() needs TriggerMode::Software, the camera is in {}",
+           name(), toString(settings_.trigger));
+    enqueue(nextFrameId_++, Clock::now());
+  }
+
+  void grabInto(Frame& frame, std::chrono::milliseconds timeout) override {
+    requireCameraState(state_, {State::Streaming}, "grab", name());
+    if (timeout.count() < 0) fail(Errc::InvalidArgument, "camera '{}': grab timeout {} ms", name(), timeout.count());
+    const Clock::time_point deadline = Clock::now() + timeout;
+    produceDueFrames(Clock::now());
+    if (queue_.empty() && settings_.trigger == TriggerMode::FreeRun) {
+      const Clock::time_point due = dueTime(produced_);
+      if (due <= deadline) {
+        std::this_thread::sleep_until(due);
+        produceDueFrames(due);
+      }
+    }
+    if (queue_.empty()) {
+      std::this_thread::sleep_until(deadline);
+      frame.status = FrameStatus::Timeout;
+      frame.frameId = 0;
+      frame.timestamp_ns = 0;
+      return;
+    }
+    const Queued next = queue_.front();
+    queue_.pop_front();
+    imager_->capture(settings_, next.frameId, frame.image);
+    frame.frameId = next.frameId;
+    frame.timestamp_ns = static_cast<std::uint64_t>(
+        std::chrono::duration_cast<std::chrono::nanoseconds>(next.time.time_since_epoch()).count());
+    frame.status = FrameStatus::Complete;
+    ++statistics_.completed;
+  }
+
+  StreamStatistics statistics() const override {
+    requireCameraState(state_, {State::Configured, State::Streaming}, "statistics", name());
+    return statistics_;
+  }
+
+  // A few SFNC features, mapped on the settings. ExposureTime and Gain can be
+  // changed at any time (they act on the next frame, as on a real camera); the
+  // rest is read-only here (configure() sets it).
+  std::string getFeature(const std::string& feature) override {
+    requireFeatureState("getFeature");
+    const CameraSettings& s = settings_;
+    if (feature == "DeviceVendorName") return info_.vendor;
+    if (feature == "DeviceModelName") return info_.model;
+    if (feature == "DeviceSerialNumber") return info_.serial;
+    if (feature == "SensorWidth") return std::to_string(info_.sensorWidth_px);
+    if (feature == "SensorHeight") return std::to_string(info_.sensorHeight_px);
+    if (feature == "Width") return std::to_string(s.roiWidth_px);
+    if (feature == "Height") return std::to_string(s.roiHeight_px);
+    if (feature == "OffsetX") return std::to_string(s.roiX_px);
+    if (feature == "OffsetY") return std::to_string(s.roiY_px);
+    if (feature == "BinningHorizontal" || feature == "BinningVertical") return std::to_string(s.binning);
+    if (feature == "PixelFormat") return toString(s.pixelFormat);
+    if (feature == "ExposureTime") return fmt::format("{}", s.exposure_us);
+    if (feature == "Gain") return fmt::format("{}", s.gain);
+    if (feature == "TriggerMode") return s.trigger == TriggerMode::FreeRun ? "Off" : "On";
+    if (feature == "TriggerSource") return "Software";
+    if (feature == "AcquisitionFrameRate") return fmt::format("{}", s.frameRate_hz);
+    fail(Errc::NotFound, "camera '{}': getFeature('{}'): the sim camera has no such feature", name(), feature);
+  }
+
+  void setFeature(const std::string& feature, const std::string& value) override {
+    requireFeatureState("setFeature");
+    setFloatFeature(feature, parseNumber(feature, value));
+  }
+
+  std::int64_t getIntegerFeature(const std::string& feature) override {
+    return static_cast<std::int64_t>(std::llround(parseNumber(feature, getFeature(feature))));
+  }
+
+  void setIntegerFeature(const std::string& feature, std::int64_t value) override {
+    setFloatFeature(feature, static_cast<double>(value));
+  }
+
+  double getFloatFeature(const std::string& feature) override { return parseNumber(feature, getFeature(feature)); }
+
+  void setFloatFeature(const std::string& feature, double value) override {
+    requireFeatureState("setFloatFeature");
+    CameraSettings s = settings_;
+    if (feature == "ExposureTime")
+      s.exposure_us = value;
+    else if (feature == "Gain")
+      s.gain = value;
+    else {
+      getFeature(feature);  // NotFound for unknown names
+      fail(Errc::InvalidArgument, "camera '{}': feature '{}' is read-only on the sim camera (use configure())", name(),
+           feature);
+    }
+    settings_ = imager_->resolve(s, name());
+  }
+
+  void executeCommand(const std::string& feature) override {
+    requireFeatureState("executeCommand");
+    if (feature == "TriggerSoftware") return softwareTrigger();
+    fail(Errc::NotFound, "camera '{}': executeCommand('{}'): the sim camera has no such command", name(), feature);
+  }
+
+ private:
+  struct Queued {
+    std::uint64_t frameId;
+    Clock::time_point time;
+  };
+
+  std::string name() const { return "sim:" + sceneFile_.string(); }
+
+  void requireFeatureState(const char* method) const {
+    requireCameraState(state_, {State::Open, State::Configured, State::Streaming}, method, name());
+  }
+
+  double parseNumber(const std::string& feature, const std::string& text) const {
+    try {
+      std::size_t used = 0;
+      const double value = std::stod(text, &used);
+      if (used == text.size()) return value;
+    } catch (const std::exception&) {
+    }
+    fail(Errc::InvalidArgument, "camera '{}': feature '{}': '{}' is not a number", name(), feature, text);
+  }
+
+  Clock::time_point dueTime(std::uint64_t index) const {
+    return start_ + std::chrono::duration_cast<Clock::duration>(
+                        std::chrono::duration<double>(static_cast<double>(index) / settings_.frameRate_hz));
+  }
+
+  // A frame the device produced: into a free buffer, or lost (underrun).
+  void enqueue(std::uint64_t frameId, Clock::time_point time) {
+    if (queue_.size() < bufferCount_)
+      queue_.push_back({frameId, time});
+    else
+      ++statistics_.underruns;
+  }
+
+  // The free-running clock: frame k is due at start + k / rate.
+  void produceDueFrames(Clock::time_point now) {
+    if (settings_.trigger != TriggerMode::FreeRun || now < start_) return;
+    const double elapsed = std::chrono::duration<double>(now - start_).count();
+    const auto due = static_cast<std::uint64_t>(std::floor(elapsed * settings_.frameRate_hz)) + 1;
+    if (due <= produced_) return;
+    const std::uint64_t count = due - produced_;
+    const std::uint64_t room = bufferCount_ - queue_.size();
+    for (std::uint64_t k = 0; k < std::min(count, room); ++k) queue_.push_back({nextFrameId_ + k, dueTime(produced_ + k)});
+    if (count > room) statistics_.underruns += count - room;
+    nextFrameId_ += count;
+    produced_ = due;
+  }
+
+  fs::path sceneFile_;
+  State state_ = State::Closed;
+  std::unique_ptr<SimImager> imager_;
+  CameraInfo info_;
+  CameraSettings settings_;
+  StreamStatistics statistics_;
+  std::deque<Queued> queue_;
+  std::size_t bufferCount_ = 1;
+  std::uint64_t nextFrameId_ = 1;
+  std::uint64_t produced_ = 0;  // free-running frames produced since start()
+  Clock::time_point start_;
+};
+
+}  // namespace
+
+std::unique_ptr<Camera> openSimCamera(const fs::path& sceneFile) {
+  return std::make_unique<SimCamera>(sceneFile);
+}
+
+void registerSimBackends() {
+  const std::vector<std::string> schemes = cameraSchemes();
+  if (std::ranges::find(schemes, std::string("sim")) != schemes.end()) return;
+  try {
+    registerCameraBackend(CameraBackend{
+        .scheme = "sim",
+        .queryKeys = {},
+        .description = "sim:<scene-file>  ray-traced camera (the scene file's [camera] and [camera_sensor])",
+        .factory = [](const CameraUri& uri) { return openSimCamera(uri.path); },
+    });
+  } catch (const Error&) {
+    // Registered by another thread in between: fine, the scheme is there.
+  }
+}
+
+}  // namespace lfi::sim

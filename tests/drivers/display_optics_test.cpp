@@ -1,0 +1,157 @@
+// The display optics model against analytic geometry (display_optics.h).
+
+#include "lfi_test_support.h"
+
+#include "lfi/drivers/display.h"
+#include "lfi/drivers/display_optics.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+
+namespace lfi {
+namespace {
+
+using testing_support::throwsError;
+
+DisplayInfo smallLenticular(SubpixelLayout layout, double slant_rad) {
+  DisplayInfo info = defaultLenticularDisplay();
+  info.panelWidth_px = 96;
+  info.panelHeight_px = 64;
+  info.subpixels = layout;
+  info.optics.slant_rad = slant_rad;
+  return info;
+}
+
+TEST(DisplayOptics, DefaultsAreALenticularOfTheLookingGlassClass) {
+  const DisplayInfo info = defaultLenticularDisplay();
+  const DisplayOptics optics(info);
+  EXPECT_NEAR(info.optics.lensPitch_px, 7.2, 0.1);                          // ~7 pixels per lens
+  EXPECT_NEAR(info.optics.slant_rad * 180 / std::numbers::pi, 10.45, 0.05);  // ~10 degrees
+  EXPECT_NEAR(optics.viewCone_rad() * 180 / std::numbers::pi, 40.0, 1e-9);   // 40 degree view cone
+  EXPECT_NEAR(optics.lensPitchPerp_mm(), 25.4 / 47.58427, 1e-12);
+}
+
+TEST(DisplayOptics, PixelRayPixelRoundTrip) {
+  for (SubpixelLayout layout : {SubpixelLayout::Mono, SubpixelLayout::RgbStripe}) {
+    for (double slant : {0.0, 0.1826, -0.3}) {
+      const DisplayOptics optics(smallLenticular(layout, slant));
+      const DisplayInfo& info = optics.info();
+      int checked = 0;
+      for (int row = 0; row < info.panelHeight_px; ++row)
+        for (int col = 0; col < info.panelWidth_px; ++col)
+          for (int k = 0; k < info.subpixelsPerPixel(); ++k) {
+            const DisplayRay ray = optics.rayFromPixel(col, row, k);
+            ASSERT_NEAR(ray.direction.length(), 1.0, 1e-12);
+            ASSERT_GT(ray.direction.z, 0);
+            ASSERT_EQ(ray.origin_mm.z, 0);
+            const auto back = optics.pixelFromRay(ray.origin_mm, ray.direction);
+            ASSERT_TRUE(back.has_value()) << col << "," << row << "," << k << " slant " << slant;
+            ASSERT_EQ(*back, (PanelSample{col, row, k})) << "slant " << slant;
+            ++checked;
+          }
+      EXPECT_EQ(checked, 96 * 64 * optics.info().subpixelsPerPixel());
+    }
+  }
+}
+
+TEST(DisplayOptics, RayGeometryIsTheChiefRayThroughTheLensAxis) {
+  const DisplayOptics optics(smallLenticular(SubpixelLayout::Mono, 0.1826));
+  const Vec2 n = optics.lensNormal();
+  const double gap = optics.info().optics.gap_mm;
+  for (int col = 10; col < 20; ++col) {
+    const DisplayRay ray = optics.rayFromPixel(col, 30, 0);
+    const Vec2 p = optics.subpixelCentre(col, 30, 0);
+    // The straight line from the pixel (at z = -gap) through the origin continues along the direction.
+    const Vec3 fromPixel = Vec3(ray.origin_mm.x - p.x, ray.origin_mm.y - p.y, gap).normalized();
+    testing_support::expectNear(fromPixel, ray.direction, 1e-12);
+    // The origin moved only across the lens, and by at most half a lens.
+    const Vec2 shift(ray.origin_mm.x - p.x, ray.origin_mm.y - p.y);
+    EXPECT_NEAR(shift.x * n.y - shift.y * n.x, 0, 1e-12);
+    EXPECT_LE(shift.length(), 0.5 * optics.lensPitchPerp_mm() + 1e-12);
+  }
+}
+
+TEST(DisplayOptics, SlantedLenticularSpreadsAPixelColumnOverTheViewCone) {
+  // One panel column under slanted lenses: going down the rows, the column crosses
+  // the lens by sin(slant) pixels per row, so its pixels take directions across the
+  // whole cone; an unslanted lens would give every row the same direction.
+  const DisplayInfo info = defaultLenticularDisplay();
+  const DisplayOptics optics(info);
+  const double halfCone = 0.5 * optics.viewCone_rad();
+  const Vec2 n = optics.lensNormal();
+  double lo = 1, hi = -1;
+  for (int row = 0; row < 200; ++row) {
+    const Vec3 d = optics.rayFromPixel(1000, row, 1).direction;
+    const double angle = std::atan2(d.x * n.x + d.y * n.y, d.z);  // in the fan plane
+    EXPECT_LE(std::abs(angle), halfCone + 1e-12);
+    lo = std::min(lo, angle);
+    hi = std::max(hi, angle);
+  }
+  // Steps are sin(slant)·pitch ≈ 0.18 px across a 7.1 px lens: the column reaches within
+  // one step of both cone edges.
+  const double step = 2 * halfCone * std::sin(info.optics.slant_rad) / (info.optics.lensPitch_px * std::cos(info.optics.slant_rad));
+  EXPECT_LT(lo, -halfCone + 1.5 * step);
+  EXPECT_GT(hi, halfCone - 1.5 * step);
+
+  DisplayInfo straight = info;
+  straight.optics.slant_rad = 0;
+  const DisplayOptics unslanted(straight);
+  const Vec3 first = unslanted.rayFromPixel(1000, 0, 1).direction;
+  for (int row = 1; row < 200; ++row) testing_support::expectNear(unslanted.rayFromPixel(1000, row, 1).direction, first, 1e-12);
+}
+
+TEST(DisplayOptics, RaysOutsideTheConeOrPanelMapToNothing) {
+  const DisplayOptics optics(smallLenticular(SubpixelLayout::Mono, 0.1826));
+  EXPECT_FALSE(optics.pixelFromRay({0, 0, 0}, {0, 0, -1}).has_value());
+  const Vec2 n = optics.lensNormal();
+  const double t = std::tan(0.5 * optics.viewCone_rad() + 0.01);
+  EXPECT_FALSE(optics.pixelFromRay({0, 0, 0}, Vec3(t * n.x, t * n.y, 1).normalized()).has_value());
+  EXPECT_FALSE(optics.pixelFromRay({1000, 0, 0}, {0, 0, 1}).has_value());
+  EXPECT_TRUE(optics.pixelFromRay({0, 0, 0}, {0, 0, 1}).has_value());
+}
+
+TEST(DisplayOptics, EncodingADirectionOnlyLightFieldGivesTheAnalyticDirectionOfEachPixel) {
+  // L(q, d) = 0.5 - 0.4 dx: linear in the disc coordinate (px = -dx), which bilinear
+  // angular interpolation reproduces exactly; every element holds the same values.
+  const DisplayInfo info = smallLenticular(SubpixelLayout::RgbStripe, 0.1826);
+  const DisplayOptics optics(info);
+  const double width = info.panelWidth_px * info.pixelPitch_mm, height = info.panelHeight_px * info.pixelPitch_mm;
+  LightFieldGeometry g{.spatialX = 8, .spatialY = 6, .angular = 16, .pixelPitch_mm = 0};
+  g.pixelPitch_mm = 1.2 * std::max(width / g.spatialX, height / g.spatialY) / g.angular;  // covers the panel
+  LightField lf(g);
+  for (int ey = 0; ey < g.spatialY; ++ey)
+    for (int ex = 0; ex < g.spatialX; ++ex)
+      for (int v = 0; v < g.angular; ++v)
+        for (int u = 0; u < g.angular; ++u) lf.at(ex, ey, u, v) = static_cast<float>(0.5 + 0.4 * lf.angularCentre(u, v).x);
+  const cv::Mat panel = encodeLightField(lf, optics);
+  ASSERT_EQ(panel.type(), CV_8UC3);
+  int maxError = 0;
+  for (int row = 0; row < info.panelHeight_px; ++row)
+    for (int col = 0; col < info.panelWidth_px; ++col)
+      for (int k = 0; k < 3; ++k) {
+        const Vec3 d = optics.rayFromPixel(col, row, k).direction;
+        const long expected = std::lround(255 * (0.5 - 0.4 * d.x));
+        maxError = std::max(maxError, static_cast<int>(std::abs(panel.at<cv::Vec3b>(row, col)[k] - expected)));
+      }
+  EXPECT_LE(maxError, 1);  // float storage of the light field: at most one rounding step
+  // The panel really varies with direction: the cone spans 0.5 ± 0.4 sin(20°).
+  double lo = 0, hi = 0;
+  cv::minMaxLoc(panel.reshape(1), &lo, &hi);
+  EXPECT_GT(hi - lo, 255 * 0.8 * std::sin(0.3));
+}
+
+TEST(DisplayOptics, InvalidParametersNameTheField) {
+  DisplayInfo info = defaultLenticularDisplay();
+  info.optics.gap_mm = 0;
+  EXPECT_TRUE(throwsError([&] { DisplayOptics optics(info); }, Errc::InvalidArgument, {"gap_mm"}));
+  info = defaultLenticularDisplay();
+  info.optics.type = OpticsType::Barrier;
+  EXPECT_TRUE(throwsError([&] { DisplayOptics optics(info); }, Errc::InvalidArgument, {"slitWidth_mm"}));
+  info.optics.slitWidth_mm = 0.05;
+  EXPECT_NO_THROW(DisplayOptics optics(info));
+}
+
+}  // namespace
+}  // namespace lfi

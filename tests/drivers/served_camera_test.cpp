@@ -1,0 +1,377 @@
+// The Aravis backend against `lfi serve-camera` on loopback: the real driver
+// code path (GVCP control, GVSP streaming over UDP) receiving ray-traced,
+// sensor-modelled frames, compared pixel for pixel with what SimImager renders
+// locally for the same frame id.
+//
+// Every GigE Vision device listens on UDP port 3956 of its address, so the
+// fixture holds /tmp/lfi-fake-gv-camera.lock (shared with aravis_camera_test)
+// while its server runs.
+
+#include "lfi/drivers/aravis_camera.h"
+#include "lfi/drivers/registry.h"
+#include "lfi/sim/sim_camera.h"
+#include "lfi_test_support.h"
+
+#include <arpa/inet.h>
+#include <fcntl.h>
+#include <gtest/gtest.h>
+#include <netinet/in.h>
+#include <poll.h>
+#include <signal.h>
+#include <spawn.h>
+#include <sys/file.h>
+#include <sys/socket.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <thread>
+#include <vector>
+
+extern char** environ;
+
+namespace lfi {
+namespace {
+
+using namespace std::chrono_literals;
+using testing_support::throwsError;
+using Clock = std::chrono::steady_clock;
+namespace fs = std::filesystem;
+
+double secondsSince(Clock::time_point t0) {
+  return std::chrono::duration<double>(Clock::now() - t0).count();
+}
+
+// A small bench: the reference lens over a Lambertian back light, 96 x 64 px.
+constexpr const char* kScene = R"(format = "lfi-scene"
+version = 1
+[render]
+samples_per_pixel = 2
+seed = 7
+[camera]
+focal_length_mm = 100
+image_distance_mm = 200
+stop_diameter_mm = 2
+pixel_pitch_mm = 0.625
+width = 96
+height = 64
+position_mm = [0, 0, 200]
+rotation_deg = [180, 0, 0]
+[camera_sensor]
+full_well_e = 10000
+read_noise_e = 3
+bit_depth = 12
+electrons_per_unit_per_us = 1.0
+[[object]]
+name = "lens"
+shape = "lens"
+front_radius_mm = 100
+back_radius_mm = -100
+centre_thickness_mm = 7
+diameter_mm = 40
+material = "dielectric"
+ior = 1.5
+[[object]]
+name = "back light"
+shape = "rectangle"
+size_mm = [400, 400]
+position_mm = [0, 0, -100]
+emitter = "lambertian"
+radiance = 1
+)";
+
+// GVCP READREG of the control channel privilege register on 127.0.0.1:3956 gets an answer.
+bool answersGvcp() {
+  const int fd = ::socket(AF_INET, SOCK_DGRAM | SOCK_CLOEXEC, 0);
+  if (fd < 0) return false;
+  sockaddr_in address{};
+  address.sin_family = AF_INET;
+  address.sin_port = htons(3956);
+  address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  const std::uint8_t packet[12] = {0x42, 0x01, 0x00, 0x80, 0x00, 0x04, 0x00, 0x01, 0x00, 0x00, 0x0a, 0x00};
+  bool answered = false;
+  if (::connect(fd, reinterpret_cast<const sockaddr*>(&address), sizeof address) == 0 &&
+      ::send(fd, packet, sizeof packet, 0) == sizeof packet) {
+    pollfd pfd{.fd = fd, .events = POLLIN, .revents = 0};
+    std::uint8_t reply[64];
+    answered = ::poll(&pfd, 1, 100) > 0 && ::recv(fd, reply, sizeof reply, 0) >= 8;
+  }
+  ::close(fd);
+  return answered;
+}
+
+// `lfi serve-camera` as a child process.
+class ServedCamera {
+ public:
+  ServedCamera(fs::path scene, std::string serial) : scene_(std::move(scene)), serial_(std::move(serial)) {}
+  ServedCamera(const ServedCamera&) = delete;
+  ServedCamera& operator=(const ServedCamera&) = delete;
+  ~ServedCamera() { kill(SIGKILL); }
+
+  std::string id() const { return "lfi-SimCamera-" + serial_; }
+
+  // Starts the server and waits (up to 20 s: it renders first) until it answers GVCP.
+  void start() {
+    std::vector<std::string> args = {LFI_EXECUTABLE, "-q",     "serve-camera", scene_.string(),
+                                     "--interface",  "127.0.0.1", "--serial",  serial_};
+    std::vector<char*> argv;
+    for (std::string& a : args) argv.push_back(a.data());
+    argv.push_back(nullptr);
+    posix_spawn_file_actions_t actions;
+    posix_spawn_file_actions_init(&actions);
+    posix_spawn_file_actions_addopen(&actions, STDOUT_FILENO, "/dev/null", O_WRONLY, 0);
+    const int rc = posix_spawn(&pid_, LFI_EXECUTABLE, &actions, nullptr, argv.data(), environ);
+    posix_spawn_file_actions_destroy(&actions);
+    ASSERT_EQ(rc, 0) << "posix_spawn " << LFI_EXECUTABLE << ": " << std::strerror(rc);
+    const auto t0 = Clock::now();
+    while (secondsSince(t0) < 20) {
+      if (answersGvcp()) return;
+      int status = 0;
+      if (::waitpid(pid_, &status, WNOHANG) == pid_) {
+        pid_ = -1;
+        FAIL() << "lfi serve-camera exited before serving (status " << status << ")";
+      }
+      std::this_thread::sleep_for(20ms);
+    }
+    FAIL() << "lfi serve-camera did not answer on 127.0.0.1:3956 within 20 s";
+  }
+
+  // Sends `signal` and reaps the process; returns its wait status (-1 if not running).
+  int kill(int signal) {
+    if (pid_ <= 0) return -1;
+    ::kill(pid_, signal);
+    int status = 0;
+    ::waitpid(pid_, &status, 0);
+    pid_ = -1;
+    return status;
+  }
+
+ private:
+  fs::path scene_;
+  std::string serial_;
+  pid_t pid_ = -1;
+};
+
+class ServedCameraTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    if (::access(LFI_EXECUTABLE, X_OK) != 0) GTEST_SKIP() << LFI_EXECUTABLE << " is not built";
+    dir_ = fs::temp_directory_path() / ("lfi-served-camera-" + std::to_string(::getpid()));
+    fs::create_directories(dir_);
+    scene_ = dir_ / "served.toml";
+    std::ofstream(scene_) << kScene;
+    lockFd_ = ::open("/tmp/lfi-fake-gv-camera.lock", O_RDWR | O_CREAT | O_CLOEXEC, 0666);
+    ASSERT_GE(lockFd_, 0);
+    ASSERT_EQ(::flock(lockFd_, LOCK_EX), 0);
+    registerBuiltinBackends();
+    server_ = std::make_unique<ServedCamera>(scene_, "LFIS" + std::to_string(::getpid() % 100000));
+    server_->start();
+  }
+
+  void TearDown() override {
+    server_.reset();
+    if (lockFd_ >= 0) ::close(lockFd_);  // releases the lock
+    std::error_code ignored;
+    fs::remove_all(dir_, ignored);
+  }
+
+  std::unique_ptr<Camera> openServed() { return openCamera("aravis:" + server_->id()); }
+
+  static CameraSettings streamSettings(PixelFormat format) {
+    CameraSettings s;
+    s.exposure_us = 4000;
+    s.gain = 3;  // GainRaw on the served device: dB for the simulated sensor
+    s.pixelFormat = format;
+    s.roiX_px = 8;
+    s.roiY_px = 4;
+    s.roiWidth_px = 72;
+    s.roiHeight_px = 48;
+    s.frameRate_hz = 100;
+    return s;
+  }
+
+  // Streams `count` frames and compares each with SimImager's frame of the same id.
+  void expectFramesEqualLocalRender(PixelFormat format, int count) {
+    auto camera = openServed();
+    const CameraSettings settings = streamSettings(format);
+    camera->configure(settings);
+    sim::SimImager local(scene_);
+    const CameraSettings resolved = local.resolve(settings, "local");
+    camera->start(8);
+    Frame frame;
+    cv::Mat expected;
+    std::uint64_t previous = 0;
+    for (int i = 0; i < count; ++i) {
+      camera->grabInto(frame, 2s);
+      ASSERT_EQ(frame.status, FrameStatus::Complete) << "frame " << i;
+      if (i > 0) {
+        EXPECT_EQ(frame.frameId, previous + 1) << "frame ids must be consecutive";
+      }
+      previous = frame.frameId;
+      local.capture(resolved, frame.frameId, expected);
+      ASSERT_EQ(frame.image.type(), expected.type());
+      ASSERT_EQ(frame.image.size(), expected.size());
+      EXPECT_EQ(cv::norm(frame.image, expected, cv::NORM_INF), 0) << "frame id " << frame.frameId;
+    }
+    const StreamStatistics stats = camera->statistics();
+    EXPECT_EQ(stats.failed, 0u);
+    EXPECT_EQ(stats.missingPackets, 0u);
+    // Frames differ (new noise each), and are not black.
+    EXPECT_GT(cv::mean(frame.image)[0], 1.0);
+  }
+
+  fs::path dir_, scene_;
+  int lockFd_ = -1;
+  std::unique_ptr<ServedCamera> server_;
+};
+
+TEST_F(ServedCameraTest, DiscoveryFindsTheServedCamera) {
+  bool found = false;
+  for (const AravisDeviceInfo& d : listAravisDevices()) {
+    if (d.id != server_->id()) continue;
+    found = true;
+    EXPECT_EQ(d.vendor, "lfi");
+    EXPECT_EQ(d.model, "SimCamera");
+    EXPECT_EQ(d.address, "127.0.0.1");
+    EXPECT_EQ(d.protocol, "GigEVision");
+  }
+  EXPECT_TRUE(found) << server_->id() << " not discovered";
+  auto camera = openServed();
+  const CameraInfo info = camera->info();
+  EXPECT_EQ(info.vendor, "lfi");
+  EXPECT_EQ(info.model, "SimCamera");
+  EXPECT_EQ(info.sensorWidth_px, 96);
+  EXPECT_EQ(info.sensorHeight_px, 64);
+}
+
+TEST_F(ServedCameraTest, Mono8FramesEqualTheLocalRender) {
+  expectFramesEqualLocalRender(PixelFormat::Mono8, 20);
+}
+
+TEST_F(ServedCameraTest, Mono16FramesEqualTheLocalRender) {
+  expectFramesEqualLocalRender(PixelFormat::Mono16, 20);
+}
+
+TEST_F(ServedCameraTest, BinnedFramesEqualTheLocalRender) {
+  auto camera = openServed();
+  CameraSettings s = streamSettings(PixelFormat::Mono16);
+  s.binning = 2;
+  s.roiX_px = 0;
+  s.roiY_px = 0;
+  s.roiWidth_px = 48;  // the served device's Width range does not shrink with binning: explicit ROI
+  s.roiHeight_px = 32;
+  camera->configure(s);
+  sim::SimImager local(scene_);
+  const CameraSettings resolved = local.resolve(s, "local");
+  camera->start(4);
+  cv::Mat expected;
+  for (int i = 0; i < 3; ++i) {
+    const Frame frame = camera->grab(5s);  // the first binned frame renders the binned radiance
+    ASSERT_EQ(frame.status, FrameStatus::Complete);
+    local.capture(resolved, frame.frameId, expected);
+    EXPECT_EQ(cv::norm(frame.image, expected, cv::NORM_INF), 0) << "frame id " << frame.frameId;
+  }
+}
+
+// GigE Vision block ids are 16 bits (Aravis's fake camera starts near 65000; 65535 is followed by 1): the
+// frames stay equal to the local render across the wrap.
+TEST_F(ServedCameraTest, FramesStayEqualAcrossTheBlockIdWrap) {
+  auto camera = openServed();
+  CameraSettings s = streamSettings(PixelFormat::Mono16);
+  s.roiWidth_px = 16;
+  s.roiHeight_px = 16;
+  s.frameRate_hz = 1000;
+  camera->configure(s);
+  sim::SimImager local(scene_);
+  const CameraSettings resolved = local.resolve(s, "local");
+  camera->start(64);
+  Frame frame;
+  cv::Mat expected;
+  std::uint64_t previous = 0;
+  int afterWrap = 0;
+  for (int i = 0; i < 3000 && afterWrap < 20; ++i) {
+    camera->grabInto(frame, 2s);
+    ASSERT_EQ(frame.status, FrameStatus::Complete);
+    if (i > 0) {
+      EXPECT_EQ(frame.frameId, previous == 65535 ? 1 : previous + 1);
+    }
+    if (afterWrap > 0 || (i > 0 && frame.frameId < previous)) ++afterWrap;
+    previous = frame.frameId;
+    local.capture(resolved, frame.frameId, expected);
+    ASSERT_EQ(cv::norm(frame.image, expected, cv::NORM_INF), 0) << "frame id " << frame.frameId;
+  }
+  EXPECT_EQ(afterWrap, 20) << "the block id did not wrap within 3000 frames";
+}
+
+TEST_F(ServedCameraTest, SoftwareTriggerDeliversOneFramePerTrigger) {
+  auto camera = openServed();
+  CameraSettings s = streamSettings(PixelFormat::Mono8);
+  s.trigger = TriggerMode::Software;
+  camera->configure(s);
+  sim::SimImager local(scene_);
+  const CameraSettings resolved = local.resolve(s, "local");
+  camera->start(4);
+  EXPECT_EQ(camera->grab(300ms).status, FrameStatus::Timeout) << "no trigger, no frame";
+  std::uint64_t previous = 0;
+  cv::Mat expected;
+  for (int i = 0; i < 5; ++i) {
+    camera->softwareTrigger();
+    const Frame frame = camera->grab(2s);
+    ASSERT_EQ(frame.status, FrameStatus::Complete) << "trigger " << i;
+    if (i > 0) {
+      EXPECT_EQ(frame.frameId, previous + 1);
+    }
+    previous = frame.frameId;
+    local.capture(resolved, frame.frameId, expected);
+    EXPECT_EQ(cv::norm(frame.image, expected, cv::NORM_INF), 0);
+    EXPECT_EQ(camera->grab(150ms).status, FrameStatus::Timeout) << "exactly one frame per trigger";
+  }
+}
+
+TEST_F(ServedCameraTest, ServerKilledMidStreamIsAClearErrorWithinTheTimeout) {
+  auto camera = openServed();
+  camera->configure(streamSettings(PixelFormat::Mono8));
+  camera->start(4);
+  for (int i = 0; i < 3; ++i) ASSERT_EQ(camera->grab(2s).status, FrameStatus::Complete);
+  server_->kill(SIGKILL);
+  const auto t0 = Clock::now();
+  bool thrown = false;
+  try {
+    for (int i = 0; i < 50; ++i) camera->grab(200ms);  // frames already in flight may still arrive
+  } catch (const Error& e) {
+    thrown = true;
+    EXPECT_EQ(e.code(), Errc::Device);
+    EXPECT_NE(std::string(e.what()).find(server_->id()), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("device lost"), std::string::npos) << e.what();
+  }
+  EXPECT_TRUE(thrown);
+  EXPECT_LT(secondsSince(t0), 0.2 + 0.3 + 0.5);  // one grab timeout + the backend's probe, with margin
+  EXPECT_EQ(camera->state(), Camera::State::Closed);
+}
+
+TEST_F(ServedCameraTest, WrongIdIsNotFoundAndListsTheServedCamera) {
+  EXPECT_TRUE(throwsError([] { openCamera("aravis:lfi-SimCamera-NOSUCH"); }, Errc::NotFound,
+                          {"lfi-SimCamera-NOSUCH", "devices found", server_->id(), "127.0.0.1"}));
+}
+
+TEST_F(ServedCameraTest, SigtermStopsTheServerCleanly) {
+  {
+    auto camera = openServed();
+    camera->configure(streamSettings(PixelFormat::Mono8));
+    camera->start(4);
+    ASSERT_EQ(camera->grab(2s).status, FrameStatus::Complete);
+    camera->stop();
+  }
+  const auto t0 = Clock::now();
+  const int status = server_->kill(SIGTERM);
+  EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << "wait status " << status;
+  EXPECT_LT(secondsSince(t0), 3.0);
+  EXPECT_FALSE(answersGvcp());
+}
+
+}  // namespace
+}  // namespace lfi

@@ -1,0 +1,320 @@
+// The `usb:` display backend through the real libusb against the emulated device
+// (emulated_usb_display.h). Runs under umockdev's preload library (CTest starts it
+// through tests/drivers/run_with_umockdev.sh).
+
+#include "emulated_usb_display.h"
+#include "lfi_test_support.h"
+
+#include "lfi/drivers/display.h"
+#include "lfi/drivers/display_optics.h"
+#include "lfi/drivers/display_registry.h"
+#include "lfi/drivers/usb_display.h"
+
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <cmath>
+
+namespace lfi {
+namespace {
+
+using testing_support::EmulatedDisplayConfig;
+using testing_support::EmulatedUsbDisplay;
+using testing_support::throwsError;
+using Clock = std::chrono::steady_clock;
+
+const bool kPrivateTmp = (testing_support::usePrivateTmpDir(), true);
+
+class UsbDisplayTest : public ::testing::Test {
+protected:
+  void SetUp() override {
+    ASSERT_TRUE(kPrivateTmp);
+    ASSERT_TRUE(testing_support::umockdevPreloadActive())
+        << "umockdev's preload library is not active: run this test through ctest, umockdev-wrapper or "
+           "LD_PRELOAD=libumockdev-preload.so.0";
+    registerBuiltinDisplayBackends();
+  }
+
+  static cv::Mat randomPanel(const DisplayInfo& info, unsigned seed) {
+    cv::Mat panel(info.panelHeight_px, info.panelWidth_px, info.panelType());
+    cv::RNG rng(seed);
+    rng.fill(panel, cv::RNG::UNIFORM, 0, 256);
+    return panel;
+  }
+
+  static bool sameBytes(const cv::Mat& a, const cv::Mat& b) {
+    return a.size() == b.size() && a.type() == b.type() && cv::norm(a, b, cv::NORM_INF) == 0;
+  }
+};
+
+TEST_F(UsbDisplayTest, OpenReadsInfoAndCalibrationFromTheDevice) {
+  EmulatedUsbDisplay device;
+  device.plug();
+  auto display = openDisplay("usb:1209:4c46");
+  ASSERT_EQ(display->state(), Display::State::Open);
+  const DisplayInfo info = display->info();
+  const EmulatedDisplayConfig& c = device.config();
+  EXPECT_EQ(info.vendor, c.vendor);
+  EXPECT_EQ(info.model, c.model);
+  EXPECT_EQ(info.serial, c.serial);
+  EXPECT_EQ(info.deviceId, "1209:4c46/" + c.serial);
+  EXPECT_EQ(info.panelWidth_px, c.panelWidth_px);
+  EXPECT_EQ(info.panelHeight_px, c.panelHeight_px);
+  EXPECT_EQ(info.subpixels, SubpixelLayout::RgbStripe);
+  EXPECT_EQ(info.viewCount, c.viewCount);
+  EXPECT_EQ(info.brightnessMax, c.brightnessMax);
+  // Doubles travel as IEEE-754 bytes: exact.
+  EXPECT_EQ(info.pixelPitch_mm, c.calibration.pixelPitch_mm);
+  EXPECT_EQ(info.optics.type, OpticsType::Lenslet);
+  EXPECT_EQ(info.optics.lensPitch_px, c.calibration.lensPitch_px);
+  EXPECT_EQ(info.optics.slant_rad, c.calibration.slant_rad);
+  EXPECT_EQ(info.optics.offset_px, c.calibration.offset_px);
+  EXPECT_EQ(info.optics.gap_mm, c.calibration.gap_mm);
+  EXPECT_EQ(info.optics.focalLength_mm, c.calibration.focalLength_mm);
+  EXPECT_TRUE(device.state().claimed);
+
+  // By serial, and a serial that is not there.
+  display->close();
+  EXPECT_NO_THROW(openDisplay("usb:1209:4c46/" + c.serial));
+  EXPECT_TRUE(throwsError([] { openDisplay("usb:1209:4c46/NOPE"); }, Errc::NotFound, {"usb:1209:4c46/NOPE"}));
+  EXPECT_TRUE(throwsError([] { openDisplay("usb:1209:0001"); }, Errc::NotFound, {"no such USB device", "1209:4c46"}));
+}
+
+TEST_F(UsbDisplayTest, UriErrorsNameTheUri) {
+  EXPECT_TRUE(throwsError([] { openDisplay("usb:12:4c46"); }, Errc::Config, {"usb:12:4c46", "4 hex digits"}));
+  EXPECT_TRUE(throwsError([] { openDisplay("usb:1209:4c46?speed=1"); }, Errc::Config, {"unknown key 'speed'"}));
+  EXPECT_TRUE(throwsError([] { openDisplay("usb:1209:4c46?timeout_ms=x"); }, Errc::Config, {"timeout_ms"}));
+  EXPECT_TRUE(throwsError([] { openDisplay("nope:1"); }, Errc::Config, {"unknown scheme 'nope:'", "usb:"}));
+}
+
+TEST_F(UsbDisplayTest, StateMachine) {
+  EmulatedUsbDisplay device;
+  device.plug();
+  auto display = openDisplay("usb:1209:4c46");
+  const DisplayInfo info = display->info();
+  EXPECT_TRUE(throwsError([&] { display->open(); }, Errc::InvalidArgument, {"open", "state Open"}));
+  display->blank();  // Open → Open
+  EXPECT_EQ(display->state(), Display::State::Open);
+  EXPECT_EQ(display->show(randomPanel(info, 1)).status, PresentStatus::Presented);
+  EXPECT_EQ(display->state(), Display::State::Showing);
+  EXPECT_EQ(display->show(randomPanel(info, 2)).status, PresentStatus::Presented);
+  EXPECT_EQ(display->state(), Display::State::Showing);
+  EXPECT_TRUE(display->status().showing);
+  display->blank();
+  EXPECT_EQ(display->state(), Display::State::Open);
+  EXPECT_FALSE(display->status().showing);
+  EXPECT_FALSE(device.state().showing);
+  display->close();
+  EXPECT_EQ(display->state(), Display::State::Closed);
+  EXPECT_FALSE(device.state().claimed);
+  EXPECT_TRUE(throwsError([&] { display->info(); }, Errc::InvalidArgument, {"info", "state Closed"}));
+  EXPECT_TRUE(throwsError([&] { display->show(randomPanel(info, 3)); }, Errc::InvalidArgument, {"show"}));
+  EXPECT_TRUE(throwsError([&] { display->blank(); }, Errc::InvalidArgument, {"blank"}));
+  display->close();  // idempotent
+  display->open();
+  EXPECT_EQ(display->state(), Display::State::Open);
+  // A wrong panel image is the caller's error.
+  EXPECT_TRUE(throwsError([&] { display->show(cv::Mat(4, 4, CV_8UC3)); }, Errc::InvalidArgument,
+                          {"640x400", "got 4x4"}));
+}
+
+TEST_F(UsbDisplayTest, Brightness) {
+  EmulatedUsbDisplay device;
+  device.plug();
+  auto display = openDisplay("usb:1209:4c46");
+  display->setBrightness(100);
+  EXPECT_EQ(device.state().brightness, 100);
+  EXPECT_EQ(display->status().brightness, 100);
+  EXPECT_TRUE(throwsError([&] { display->setBrightness(256); }, Errc::InvalidArgument, {"brightness 256", "0..255"}));
+}
+
+struct PanelCase {
+  int width;
+  int height;
+  usbdisplay::SubpixelCode subpixels;
+};
+
+class UsbDisplayFrames : public UsbDisplayTest, public ::testing::WithParamInterface<PanelCase> {};
+
+TEST_P(UsbDisplayFrames, ArriveByteExact) {
+  EmulatedDisplayConfig config;
+  config.panelWidth_px = GetParam().width;
+  config.panelHeight_px = GetParam().height;
+  config.subpixels = GetParam().subpixels;
+  EmulatedUsbDisplay device(config);
+  device.plug();
+  UsbDisplayOptions options;
+  options.transferSize_bytes = 256 * 1024;
+  auto display = openUsbDisplay({usbdisplay::kDefaultVendorId, usbdisplay::kDefaultProductId, ""}, options);
+  const DisplayInfo info = display->info();
+  for (unsigned seed = 1; seed <= 2; ++seed) {
+    const cv::Mat panel = randomPanel(info, seed);
+    const auto start = Clock::now();
+    const PresentResult result = display->show(panel);
+    const double seconds = std::chrono::duration<double>(Clock::now() - start).count();
+    ASSERT_EQ(result.status, PresentStatus::Presented) << result.message;
+    EXPECT_TRUE(sameBytes(device.presented(), panel));
+    EXPECT_EQ(device.state().presentedSequence, result.sequence);
+    RecordProperty(fmt::format("show_{}x{}x{}_ms", info.panelWidth_px, info.panelHeight_px, panel.channels()),
+                   static_cast<int>(seconds * 1000));
+  }
+  const std::size_t bytes = static_cast<std::size_t>(info.panelWidth_px) * info.panelHeight_px * info.subpixelsPerPixel();
+  if (bytes > 2 * options.transferSize_bytes) {
+    EXPECT_GE(device.state().maxUrbsInFlight, 2u);
+  }
+  EXPECT_EQ(display->status().framesPresented, 2u);
+}
+
+INSTANTIATE_TEST_SUITE_P(Sizes, UsbDisplayFrames,
+                         ::testing::Values(PanelCase{1, 1, usbdisplay::SubpixelCode::Mono},
+                                           PanelCase{333, 77, usbdisplay::SubpixelCode::Mono},
+                                           PanelCase{640, 400, usbdisplay::SubpixelCode::RgbStripe},
+                                           PanelCase{3840, 2160, usbdisplay::SubpixelCode::RgbStripe}),
+                         [](const auto& param) {
+                           return fmt::format("{}x{}x{}", param.param.width, param.param.height,
+                                              param.param.subpixels == usbdisplay::SubpixelCode::Mono ? 1 : 3);
+                         });
+
+TEST_F(UsbDisplayTest, PresentedImageIsTheEncodedLightField) {
+  EmulatedUsbDisplay device;
+  device.plug();
+  auto display = openDisplay("usb:1209:4c46");
+  const DisplayInfo info = display->info();
+  LightFieldGeometry g{.spatialX = 24, .spatialY = 16, .angular = 8, .pixelPitch_mm = 0.25};
+  LightField lf(g);
+  cv::RNG rng(7);
+  rng.fill(lf.lensletImage(), cv::RNG::UNIFORM, 0.0, 1.0);
+  const PresentResult result = display->show(lf);
+  ASSERT_EQ(result.status, PresentStatus::Presented) << result.message;
+  const cv::Mat expected = encodeLightField(lf, DisplayOptics(info));
+  EXPECT_TRUE(sameBytes(device.presented(), expected));
+  EXPECT_GT(cv::countNonZero(expected.reshape(1)), static_cast<int>(expected.total()));  // not a blank panel
+}
+
+TEST_F(UsbDisplayTest, StallIsClearedAndTheFrameResent) {
+  EmulatedUsbDisplay device;
+  device.plug();
+  auto display = openDisplay("usb:1209:4c46");
+  const cv::Mat panel = randomPanel(display->info(), 5);
+  device.stallNextFrame();
+  const PresentResult result = display->show(panel);
+  ASSERT_EQ(result.status, PresentStatus::Presented) << result.message;
+  EXPECT_TRUE(sameBytes(device.presented(), panel));
+  EXPECT_EQ(device.state().clearHalts, 1u);
+  EXPECT_EQ(display->status().stallsCleared, 1u);
+
+  device.stallAlways(true);
+  EXPECT_TRUE(throwsError([&] { display->show(panel); }, Errc::Device,
+                          {"usb:1209:4c46", "endpoint 0x01 stalled again", "frame 2"}));
+  device.stallAlways(false);
+  EXPECT_EQ(display->show(panel).status, PresentStatus::Presented);
+}
+
+TEST_F(UsbDisplayTest, CrcMismatchIsARejectedFrame) {
+  EmulatedUsbDisplay device;
+  device.plug();
+  auto display = openDisplay("usb:1209:4c46");
+  const cv::Mat first = randomPanel(display->info(), 1), second = randomPanel(display->info(), 2);
+  ASSERT_EQ(display->show(first).status, PresentStatus::Presented);
+  device.corruptNextFrame();
+  const PresentResult result = display->show(second);
+  EXPECT_EQ(result.status, PresentStatus::Rejected);
+  EXPECT_NE(result.message.find("usb:1209:4c46"), std::string::npos) << result.message;
+  EXPECT_NE(result.message.find("PRESENT of frame 2"), std::string::npos) << result.message;
+  EXPECT_NE(result.message.find("payload CRC mismatch"), std::string::npos) << result.message;
+  EXPECT_TRUE(sameBytes(device.presented(), first));  // the panel keeps the last good frame
+  const DisplayStatus status = display->status();
+  EXPECT_EQ(status.framesRejected, 1u);
+  EXPECT_NE(status.lastError.find("payload CRC mismatch"), std::string::npos) << status.lastError;
+  EXPECT_EQ(display->show(second).status, PresentStatus::Presented);  // and the next one goes through
+  EXPECT_TRUE(sameBytes(device.presented(), second));
+}
+
+TEST_F(UsbDisplayTest, TruncatedFrameIsARejectedFrame) {
+  EmulatedUsbDisplay device;
+  device.plug();
+  auto display = openDisplay("usb:1209:4c46");
+  const DisplayInfo info = display->info();
+  device.truncateNextFrame(100);
+  const PresentResult result = display->show(randomPanel(info, 3));
+  EXPECT_EQ(result.status, PresentStatus::Rejected);
+  EXPECT_NE(result.message.find("truncated frame"), std::string::npos) << result.message;
+  const std::size_t full = 32 + static_cast<std::size_t>(info.panelWidth_px) * info.panelHeight_px * 3;
+  EXPECT_NE(result.message.find(fmt::format("received {} of {} bytes", full - 100, full)), std::string::npos)
+      << result.message;
+  EXPECT_EQ(display->show(randomPanel(info, 4)).status, PresentStatus::Presented);
+}
+
+TEST_F(UsbDisplayTest, AbsurdDeviceRepliesAreClearErrors) {
+  EmulatedUsbDisplay device;
+  device.plug();
+  device.setAbsurdDeviceInfo(true);
+  EXPECT_TRUE(throwsError([] { openDisplay("usb:1209:4c46"); }, Errc::Device,
+                          {"usb:1209:4c46", "calibration size 4294967295 bytes is outside"}));
+  device.setAbsurdDeviceInfo(false);
+  device.setBadCalibrationCrc(true);
+  EXPECT_TRUE(throwsError([] { openDisplay("usb:1209:4c46"); }, Errc::Device,
+                          {"usb:1209:4c46", "calibration blob CRC-32"}));
+  device.setBadCalibrationCrc(false);
+  EXPECT_NO_THROW(openDisplay("usb:1209:4c46"));  // the failed opens released the device
+}
+
+TEST_F(UsbDisplayTest, ADeviceThatNeverAnswersTimesOut) {
+  EmulatedUsbDisplay device;
+  device.plug();
+  device.setSilent(true);
+  auto start = Clock::now();
+  EXPECT_TRUE(throwsError([] { openDisplay("usb:1209:4c46?timeout_ms=200"); }, Errc::Timeout,
+                          {"usb:1209:4c46", "timed out after 200 ms"}));
+  EXPECT_LT(Clock::now() - start, std::chrono::seconds(5));
+
+  device.setSilent(false);
+  auto display = openDisplay("usb:1209:4c46?timeout_ms=200");
+  const cv::Mat panel = randomPanel(display->info(), 9);
+  device.setSilent(true);
+  start = Clock::now();
+  const PresentResult result = display->show(panel);
+  EXPECT_EQ(result.status, PresentStatus::Timeout);
+  EXPECT_NE(result.message.find("timed out"), std::string::npos) << result.message;
+  EXPECT_LT(Clock::now() - start, std::chrono::seconds(5));
+  EXPECT_TRUE(throwsError([&] { display->status(); }, Errc::Timeout, {"GET_STATUS timed out"}));
+  device.setSilent(false);
+  EXPECT_EQ(display->show(panel).status, PresentStatus::Presented);
+  EXPECT_TRUE(sameBytes(device.presented(), panel));
+}
+
+TEST_F(UsbDisplayTest, UnplugMidTransferThenReplug) {
+  EmulatedUsbDisplay device;
+  device.plug();
+  UsbDisplayOptions options;
+  options.transferSize_bytes = 64 * 1024;  // several transfers per frame
+  const UsbDisplaySelector selector{usbdisplay::kDefaultVendorId, usbdisplay::kDefaultProductId, ""};
+  auto display = openUsbDisplay(selector, options);
+  const cv::Mat panel = randomPanel(display->info(), 11);
+  device.unplugDuringNextFrame();
+  EXPECT_TRUE(throwsError([&] { display->show(panel); }, Errc::Device,
+                          {"usb:1209:4c46", "vanished during bulk OUT of frame 1"}));
+  EXPECT_EQ(display->state(), Display::State::Closed);
+  device.unplug();
+  EXPECT_TRUE(throwsError([&] { display->open(); }, Errc::NotFound, {"usb:1209:4c46"}));
+  device.plug();
+  display->open();
+  const PresentResult result = display->show(panel);
+  ASSERT_EQ(result.status, PresentStatus::Presented) << result.message;
+  EXPECT_TRUE(sameBytes(device.presented(), panel));
+}
+
+TEST_F(UsbDisplayTest, UnplugWhileIdle) {
+  EmulatedUsbDisplay device;
+  device.plug();
+  auto display = openDisplay("usb:1209:4c46");
+  device.unplug();
+  EXPECT_TRUE(throwsError([&] { display->setBrightness(3); }, Errc::Device, {"vanished during SET_BRIGHTNESS"}));
+  EXPECT_EQ(display->state(), Display::State::Closed);
+  device.plug();
+  display->open();
+  EXPECT_EQ(display->state(), Display::State::Open);
+}
+
+}  // namespace
+}  // namespace lfi
