@@ -6,7 +6,10 @@
 #include "lfi/core/exr_io.h"
 #include "lfi/core/log.h"
 #include "lfi/core/image.h"
+#include "lfi/controller/controller.h"
+#include "lfi/drivers/display_registry.h"
 #include "lfi/drivers/gv_camera_server.h"
+#include "lfi/drivers/registry.h"
 #include "lfi/sim/sim_camera.h"
 #include "lfi/sim/scene_file.h"
 #include "lfi/study/study.h"
@@ -174,6 +177,31 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   serve->add_option("--threads", serveThreads, "Render threads (0 = all cores)")->check(CLI::NonNegativeNumber);
 
+  // lfi inspect
+  auto* inspect = app.add_subcommand(
+      "inspect", "Capture the reference light field, emit it with the display, inspect through the camera");
+  std::string cameraUri, displayUri, captureUri;
+  fs::path referenceFile, inspectOut;
+  int frames = 1;
+  double exposure_us = 10'000, gain = 0;
+  std::string pixelFormat = "Mono12";
+  bool inspectForce = false;
+  inspect->add_option("--camera", cameraUri, "Camera URI (aravis:<id>, sim:<scene-file>)")->required();
+  inspect->add_option("--display", displayUri, "Display URI (usb:<vid>:<pid>[/<serial>], sim:<scene-file>)")->required();
+  auto* captureOption =
+      inspect->add_option("--capture", captureUri, "Light field capture URI (sim:<scene-file>[?...])");
+  inspect->add_option("--light-field", referenceFile, "Use this reference light field (EXR) instead of capturing")
+      ->check(CLI::ExistingFile)
+      ->excludes(captureOption);
+  inspect->add_option("--out", inspectOut, "Output folder (inspection.exr/.png, lightfield.exr)")->required();
+  inspect->add_option("--frames", frames, "Frames averaged")->check(CLI::PositiveNumber)->capture_default_str();
+  inspect->add_option("--exposure-us", exposure_us, "Exposure time (µs)")->capture_default_str();
+  inspect->add_option("--gain", gain, "Gain (device unit, dB for SFNC cameras)")->capture_default_str();
+  inspect->add_option("--pixel-format", pixelFormat, "Mono8 | Mono12 | Mono16")
+      ->check(CLI::IsMember({"Mono8", "Mono12", "Mono16"}))
+      ->capture_default_str();
+  inspect->add_flag("--force", inspectForce, "Replace existing output files");
+
   // lfi lf-info
   auto* lfInfo = app.add_subcommand("lf-info", "Validate a light field EXR and print its parametrisation");
   fs::path lfFile;
@@ -230,6 +258,65 @@ int main(int argc, char** argv) {
       }
       const double samples = static_cast<double>(image.total()) * d.render.samplesPerPixel;
       spdlog::info("{:.0f} samples in {:.2f} s: {:.2f} M samples/s", samples, seconds, samples / seconds / 1e6);
+    } else if (*inspect) {
+      if (captureUri.empty() && referenceFile.empty())
+        lfi::fail(lfi::Errc::Config, "inspect: give --capture <uri> or --light-field <file>");
+      lfi::registerBuiltinBackends();
+      lfi::registerBuiltinDisplayBackends();
+      lfi::sim::registerSimBackends();
+      const auto overwrite = inspectForce ? lfi::Overwrite::Allow : lfi::Overwrite::Refuse;
+      fs::create_directories(inspectOut);
+      for (const char* name : {"inspection.exr", "inspection.png", "lightfield.exr"})
+        if (!inspectForce && fs::exists(inspectOut / name))
+          lfi::fail(lfi::Errc::Exists, "'{}' exists; refusing to overwrite it (use --force to replace it)",
+                    (inspectOut / name).string());
+      auto camera = lfi::openCamera(cameraUri);
+      lfi::CameraSettings settings;
+      settings.exposure_us = exposure_us;
+      settings.gain = gain;
+      settings.pixelFormat = pixelFormat == "Mono8"    ? lfi::PixelFormat::Mono8
+                             : pixelFormat == "Mono16" ? lfi::PixelFormat::Mono16
+                                                       : lfi::PixelFormat::Mono12;
+      camera->configure(settings);
+      auto display = lfi::openDisplay(displayUri);
+      std::unique_ptr<lfi::LightFieldCapture> capture =
+          captureUri.empty() ? nullptr : lfi::openLightFieldCapture(captureUri);
+      lfi::ControllerOptions options;
+      options.frames = frames;
+      ProgressBar bar;
+      // A reference from a file needs no capture device: step 1 is skipped.
+      class FileCapture final : public lfi::LightFieldCapture {
+      public:
+        explicit FileCapture(fs::path file) : file_(std::move(file)), lf_(lfi::readLightFieldExr(file_)) {}
+        lfi::LightFieldGeometry geometry() const override { return lf_.geometry(); }
+        lfi::LightField capture(const std::function<void(double)>&) override { return lf_; }
+        std::string description() const override { return "file " + file_.string(); }
+
+      private:
+        fs::path file_;
+        lfi::LightField lf_;
+      };
+      std::unique_ptr<lfi::LightFieldCapture> fromFile =
+          referenceFile.empty() ? nullptr : std::make_unique<FileCapture>(referenceFile);
+      lfi::Controller controller(capture ? *capture : *fromFile, *display, *camera, options);
+      const lfi::LightField reference = controller.captureReference([&](const char* step, double f) {
+        if (!quiet) bar(step, f);
+      });
+      bar.finish();
+      if (capture) lfi::writeLightFieldExr(inspectOut / "lightfield.exr", reference, overwrite);
+      controller.emit(reference);
+      const cv::Mat image = controller.inspect();
+      const auto info = camera->info();
+      lfi::writeRadianceExr(inspectOut / "inspection.exr", image,
+                            {0, fmt::format("inspection image (DN, mean of {} frames) from {} {} via {}", frames,
+                                            info.vendor, info.model, cameraUri)},
+                            overwrite);
+      double maxValue = 0;
+      cv::minMaxLoc(image, nullptr, &maxValue);
+      cv::Mat png8;
+      image.convertTo(png8, CV_8U, maxValue > 0 ? 255.0 / maxValue : 1.0);
+      writePng(inspectOut / "inspection.png", png8, overwrite);
+      fmt::print("{}\n{}\n", (inspectOut / "inspection.exr").string(), (inspectOut / "inspection.png").string());
     } else if (*serve) {
       serveCamera(serveScene, serveOptions, serveThreads, quiet);
     } else if (*lfInfo) {

@@ -9,17 +9,11 @@
 #include "lfi/drivers/aravis_camera.h"
 #include "lfi/drivers/registry.h"
 
-#include <arpa/inet.h>
+#include "gige_device_process.h"
+
 #include <arv.h>
-#include <fcntl.h>
 #include <fmt/format.h>
-#include <netinet/in.h>
-#include <poll.h>
 #include <signal.h>
-#include <spawn.h>
-#include <sys/file.h>
-#include <sys/socket.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
 #include <chrono>
@@ -30,7 +24,6 @@
 #include <thread>
 #include <vector>
 
-extern char** environ;
 
 namespace {
 
@@ -41,24 +34,6 @@ double seconds(Clock::time_point a, Clock::time_point b) {
   return std::chrono::duration<double>(b - a).count();
 }
 
-bool answersGvcp() {
-  const int fd = ::socket(AF_INET, SOCK_DGRAM | SOCK_CLOEXEC, 0);
-  if (fd < 0) return false;
-  sockaddr_in address{};
-  address.sin_family = AF_INET;
-  address.sin_port = htons(3956);
-  address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-  const std::uint8_t packet[12] = {0x42, 0x01, 0x00, 0x80, 0x00, 0x04, 0x00, 0x01, 0x00, 0x00, 0x0a, 0x00};
-  bool answered = false;
-  if (::connect(fd, reinterpret_cast<const sockaddr*>(&address), sizeof address) == 0 &&
-      ::send(fd, packet, sizeof packet, 0) == sizeof packet) {
-    pollfd pfd{.fd = fd, .events = POLLIN, .revents = 0};
-    std::uint8_t reply[64];
-    answered = ::poll(&pfd, 1, 100) > 0 && ::recv(fd, reply, sizeof reply, 0) >= 8;
-  }
-  ::close(fd);
-  return answered;
-}
 
 struct Result {
   double fps = 0;
@@ -229,26 +204,12 @@ int main(int argc, char** argv) {
   std::ofstream(scene) << text;
 
   // One GigE Vision device on 127.0.0.1 at a time (the loopback tests hold the same lock).
-  const int lock = ::open("/tmp/lfi-fake-gv-camera.lock", O_RDWR | O_CREAT | O_CLOEXEC, 0666);
-  if (lock < 0 || ::flock(lock, LOCK_EX) != 0) return 1;
+  const lfi::testing_support::LoopbackGigeLock lock;
   const std::string serial = fmt::format("BENCH{}", ::getpid() % 100000);
-  std::vector<std::string> args = {LFI_EXECUTABLE, "-q", "serve-camera", scene.string(), "--serial", serial};
-  std::vector<char*> childArgv;
-  for (std::string& a : args) childArgv.push_back(a.data());
-  childArgv.push_back(nullptr);
-  pid_t pid = -1;
-  posix_spawn_file_actions_t actions;
-  posix_spawn_file_actions_init(&actions);
-  posix_spawn_file_actions_addopen(&actions, STDOUT_FILENO, "/dev/null", O_WRONLY, 0);
-  if (posix_spawn(&pid, LFI_EXECUTABLE, &actions, nullptr, childArgv.data(), environ) != 0) return 1;
-  posix_spawn_file_actions_destroy(&actions);
   int status = 0;
   try {
-    const auto t0 = Clock::now();
-    while (!answersGvcp()) {
-      if (seconds(t0, Clock::now()) > 60) throw std::runtime_error("lfi serve-camera did not start within 60 s");
-      std::this_thread::sleep_for(std::chrono::milliseconds(50));
-    }
+    lfi::testing_support::GigeDeviceProcess server(
+        {LFI_EXECUTABLE, "-q", "serve-camera", scene.string(), "--serial", serial}, std::chrono::seconds(60), false);
     lfi::registerBuiltinBackends();
     const std::string id = "lfi-SimCamera-" + serial;
     const double megabytes = size * size * (format == lfi::PixelFormat::Mono8 ? 1.0 : 2.0) / 1e6;
@@ -276,12 +237,11 @@ int main(int argc, char** argv) {
     else
       fmt::print("per-frame overhead: not measured (the device did not keep up with {} Hz, no frames were waiting)\n",
                  rate);
+    server.signal(SIGTERM);
   } catch (const std::exception& e) {
     fmt::print(stderr, "lfi-camera-bench: {}\n", e.what());
     status = 1;
   }
-  ::kill(pid, SIGTERM);
-  ::waitpid(pid, nullptr, 0);
   std::error_code ignored;
   fs::remove_all(dir, ignored);
   return status;

@@ -53,10 +53,14 @@ double emittedRadiance(const Scene& scene, const Hit& hit, const Emission& emiss
           return cosTheta >= std::cos(e.halfAngle_rad) ? e.radiance : 0.0;
         } else if constexpr (std::is_same_v<T, LambertianEmission>) {
           return cosTheta > 0 ? e.radiance : 0.0;
-        } else {
+        } else if constexpr (std::is_same_v<T, LightFieldEmission>) {
           if (!e.lightField) return 0.0;
           const Vec3 d = scene.objectFromWorld(hit.object).vector(towardsSensor);
           return e.lightField->radiance({hit.localPoint.x, hit.localPoint.y}, d, e.lookup);
+        } else {
+          static_assert(std::is_same_v<T, PanelEmission>);
+          const Vec3 d = scene.objectFromWorld(hit.object).vector(towardsSensor);
+          return e.radiance({hit.localPoint.x, hit.localPoint.y}, d);
         }
       },
       emission);

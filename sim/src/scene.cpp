@@ -224,3 +224,13 @@ Hit Scene::intersect(const Ray& ray, double tMin, double tMax) const {
 const Rigid3& Scene::objectFromWorld(int index) const { return impl_->objectFromWorld[static_cast<size_t>(index)]; }
 
 }  // namespace lfi::sim
+
+namespace lfi::sim {
+
+void Scene::setEmission(int index, std::optional<Emission> emission) {
+  if (index < 0 || static_cast<size_t>(index) >= objects_.size())
+    fail(Errc::InvalidArgument, "Scene::setEmission: object {} of {}", index, objects_.size());
+  objects_[static_cast<size_t>(index)].emission = std::move(emission);
+}
+
+}  // namespace lfi::sim

@@ -3,6 +3,7 @@
 #include "lfi/core/config.h"
 #include "lfi/core/error.h"
 #include "lfi/core/exr_io.h"
+#include "lfi/drivers/display_optics.h"
 
 #include <tiny_obj_loader.h>
 
@@ -134,6 +135,43 @@ Object readObject(ConfigTable& t) {
   return obj;
 }
 
+DisplayParameters readDisplay(ConfigTable& t) {
+  const DisplayInfo defaults = defaultLenticularDisplay();
+  DisplayParameters d;
+  DisplayInfo& info = d.info;
+  info.vendor = "lfi";
+  info.model = "SimDisplay";
+  d.worldFromDisplay = readPlacement(t);
+  info.panelWidth_px = t.integer("panel_width_px", defaults.panelWidth_px, 1, 16384);
+  info.panelHeight_px = t.integer("panel_height_px", defaults.panelHeight_px, 1, 16384);
+  info.pixelPitch_mm = t.number("pixel_pitch_mm", defaults.pixelPitch_mm, 1e-4, 10);
+  const std::string sub = t.string("subpixels", "rgb", {"mono", "rgb", "bgr"});
+  info.subpixels = sub == "mono" ? SubpixelLayout::Mono : sub == "rgb" ? SubpixelLayout::RgbStripe
+                                                                        : SubpixelLayout::BgrStripe;
+  DisplayOpticsParams& o = info.optics;
+  const bool barrier = t.string("optics", "lenslet", {"lenslet", "barrier"}) == "barrier";
+  o.type = barrier ? OpticsType::Barrier : OpticsType::Lenslet;
+  o.lensPitch_px = t.number("lens_pitch_px", defaults.optics.lensPitch_px, 1, 1000);
+  o.slant_rad = t.number("slant_rad", defaults.optics.slant_rad, -0.785, 0.785);
+  o.offset_px = t.number("offset_px", defaults.optics.offset_px, -1e6, 1e6);
+  o.gap_mm = t.number("gap_mm", defaults.optics.gap_mm, 1e-6, 100);
+  if (barrier)
+    o.slitWidth_mm = t.number("slit_width_mm", std::nullopt, 1e-6, 1e3);
+  else
+    o.focalLength_mm = t.number("focal_length_mm", o.gap_mm, 1e-6, 1e6);
+  info.viewCount = t.integer("view_count", defaults.viewCount, 1, 1 << 20);
+  info.brightnessMin = t.integer("brightness_min", defaults.brightnessMin, 0, 1 << 20);
+  info.brightnessMax = t.integer("brightness_max", defaults.brightnessMax, 0, 1 << 20);
+  d.brightness = t.number("brightness", 1.0, 0, 1e12);
+  t.finish();
+  try {
+    info.validate();
+  } catch (const Error& e) {
+    fail(Errc::Config, "{}: [display]: {}", t.file(), e.what());
+  }
+  return d;
+}
+
 }  // namespace
 
 SceneDescription loadSceneFile(const fs::path& path) {
@@ -194,6 +232,18 @@ SceneDescription loadSceneFile(const fs::path& path) {
     c.finish();
   }
   for (ConfigTable& o : root.tables("object")) d.objects.push_back(readObject(o));
+  if (root.has("display")) {
+    ConfigTable t = root.table("display");
+    d.display = readDisplay(t);
+    const DisplayInfo& info = d.display->info;
+    Object obj;
+    obj.name = "display";
+    obj.shape = Rectangle{info.panelWidth_px * info.pixelPitch_mm, info.panelHeight_px * info.pixelPitch_mm};
+    obj.worldFromObject = d.display->worldFromDisplay;
+    obj.emission = makePanelEmission(std::make_shared<const PanelOptics>(info), cv::Mat(), d.display->brightness);
+    d.displayObject = static_cast<int>(d.objects.size());
+    d.objects.push_back(std::move(obj));
+  }
   if (d.objects.empty()) fail(Errc::Config, "{}: the scene has no [[object]]", path.string());
   root.finish();
   return d;

@@ -4,10 +4,14 @@
 
 #include "lfi/sim/sim_camera.h"
 
+#include "lfi/sim/sim_light_field_capture.h"
+
 #include "lfi/core/error.h"
 #include "lfi/drivers/registry.h"
 #include "lfi/sim/render.h"
 #include "lfi/sim/scene.h"
+#include "lfi/sim/sim_bench.h"
+#include "lfi/sim/sim_display.h"
 
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
@@ -50,8 +54,8 @@ std::uint64_t frameNoiseSeed(std::uint64_t sceneSeed, std::uint64_t frameId) {
 }
 
 SimImager::SimImager(const fs::path& sceneFile) : sceneFile_(sceneFile) {
-  if (!fs::exists(sceneFile)) fail(Errc::NotFound, "camera 'sim:{}': no such scene file", sceneFile.string());
-  description_ = loadSceneFile(sceneFile);
+  bench_ = SimBench::open(sceneFile, fmt::format("camera 'sim:{}'", sceneFile.string()));
+  description_ = bench_->description();
   const auto* camera = std::get_if<TelecentricCamera>(&description_.sensor);
   if (camera == nullptr)
     fail(Errc::Config, "camera 'sim:{}': the scene has a [light_field_sensor], the sim camera needs a [camera]",
@@ -116,6 +120,10 @@ CameraSensorModel SimImager::sensorModel(const CameraSettings& s) const {
 }
 
 const cv::Mat& SimImager::radiance(int binning) {
+  if (bench_->version() != radianceVersion_) {
+    radianceByBinning_.clear();
+    radianceVersion_ = bench_->applyDisplay(*scene_);
+  }
   auto it = radianceByBinning_.find(binning);
   if (it != radianceByBinning_.end()) return it->second;
   TelecentricCamera binned = camera_;
@@ -399,6 +407,8 @@ std::unique_ptr<Camera> openSimCamera(const fs::path& sceneFile) {
 }
 
 void registerSimBackends() {
+  registerSimDisplayBackend();
+  registerSimLightFieldCapture();
   const std::vector<std::string> schemes = cameraSchemes();
   if (std::ranges::find(schemes, std::string("sim")) != schemes.end()) return;
   try {

@@ -9,17 +9,13 @@
 
 #include "lfi/drivers/aravis_camera.h"
 #include "lfi/drivers/registry.h"
+
+#include "gige_device_process.h"
 #include "lfi_test_support.h"
 
-#include <arpa/inet.h>
 #include <fcntl.h>
 #include <gtest/gtest.h>
-#include <netinet/in.h>
-#include <poll.h>
 #include <signal.h>
-#include <spawn.h>
-#include <sys/file.h>
-#include <sys/socket.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -31,7 +27,6 @@
 #include <string>
 #include <thread>
 
-extern char** environ;
 
 namespace lfi {
 namespace {
@@ -39,6 +34,9 @@ namespace {
 using namespace std::chrono_literals;
 using testing_support::throwsError;
 using Clock = std::chrono::steady_clock;
+using lfi::testing_support::gigeDeviceAnswers;
+using lfi::testing_support::GigeDeviceProcess;
+using lfi::testing_support::LoopbackGigeLock;
 
 constexpr const char* kFakeCameraBinary = "arv-fake-gv-camera-0.8";
 
@@ -65,70 +63,28 @@ double secondsSince(Clock::time_point t0) {
 class FakeGvCamera {
  public:
   explicit FakeGvCamera(std::string serial) : serial_(std::move(serial)) {}
-  FakeGvCamera(const FakeGvCamera&) = delete;
-  FakeGvCamera& operator=(const FakeGvCamera&) = delete;
-  ~FakeGvCamera() { kill(); }
 
   std::string id() const { return "Aravis-Fake-" + serial_; }
   const std::string& serial() const { return serial_; }
 
-  // Starts the process and waits (up to 5 s) until discovery sees it.
+  // Starts the process and waits (up to 5 s) until it answers GVCP.
   void start(const std::string& binary, int lostPacketsPerThousand = 0) {
     std::vector<std::string> args = {binary, "-i", "127.0.0.1", "-s", serial_};
     if (lostPacketsPerThousand > 0) {
       args.push_back("-r");
       args.push_back(std::to_string(lostPacketsPerThousand));
     }
-    std::vector<char*> argv;
-    for (std::string& a : args) argv.push_back(a.data());
-    argv.push_back(nullptr);
-    posix_spawn_file_actions_t actions;
-    posix_spawn_file_actions_init(&actions);
-    posix_spawn_file_actions_addopen(&actions, STDOUT_FILENO, "/dev/null", O_WRONLY, 0);
-    posix_spawn_file_actions_addopen(&actions, STDERR_FILENO, "/dev/null", O_WRONLY, 0);
-    const int rc = posix_spawn(&pid_, binary.c_str(), &actions, nullptr, argv.data(), environ);
-    posix_spawn_file_actions_destroy(&actions);
-    ASSERT_EQ(rc, 0) << "posix_spawn " << binary << ": " << std::strerror(rc);
-    const auto t0 = Clock::now();
-    while (secondsSince(t0) < 5) {
-      if (answersGvcp()) return;
-      std::this_thread::sleep_for(20ms);
-    }
-    FAIL() << "the fake camera " << id() << " did not answer on 127.0.0.1:3956 within 5 s";
+    process_ = std::make_unique<GigeDeviceProcess>(args, 5s);
   }
 
-  // A GVCP READREG of the control channel privilege register (0x0A00) gets an answer.
-  static bool answersGvcp() {
-    const int fd = ::socket(AF_INET, SOCK_DGRAM | SOCK_CLOEXEC, 0);
-    if (fd < 0) return false;
-    sockaddr_in address{};
-    address.sin_family = AF_INET;
-    address.sin_port = htons(3956);
-    address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-    const std::uint8_t packet[12] = {0x42, 0x01, 0x00, 0x80, 0x00, 0x04, 0x00, 0x01, 0x00, 0x00, 0x0a, 0x00};
-    bool answered = false;
-    if (::connect(fd, reinterpret_cast<const sockaddr*>(&address), sizeof address) == 0 &&
-        ::send(fd, packet, sizeof packet, 0) == sizeof packet) {
-      pollfd pfd{.fd = fd, .events = POLLIN, .revents = 0};
-      std::uint8_t reply[64];
-      answered = ::poll(&pfd, 1, 100) > 0 && ::recv(fd, reply, sizeof reply, 0) >= 8;
-    }
-    ::close(fd);
-    return answered;
-  }
+  static bool answersGvcp() { return gigeDeviceAnswers(); }
 
   // SIGKILL: the device vanishes without a word, like a pulled cable.
-  void kill() {
-    if (pid_ <= 0) return;
-    ::kill(pid_, SIGKILL);
-    int status = 0;
-    ::waitpid(pid_, &status, 0);
-    pid_ = -1;
-  }
+  void kill() { process_.reset(); }
 
  private:
   std::string serial_;
-  pid_t pid_ = -1;
+  std::unique_ptr<GigeDeviceProcess> process_;
 };
 
 class AravisCameraTest : public ::testing::Test {
@@ -138,9 +94,7 @@ class AravisCameraTest : public ::testing::Test {
     if (binary_.empty())
       GTEST_SKIP() << kFakeCameraBinary << " not found in PATH: install Debian's aravis-tools "
                    << "(scripts/install-deps.sh) to run the GigE Vision loopback tests";
-    lockFd_ = ::open("/tmp/lfi-fake-gv-camera.lock", O_RDWR | O_CREAT | O_CLOEXEC, 0666);
-    ASSERT_GE(lockFd_, 0);
-    ASSERT_EQ(::flock(lockFd_, LOCK_EX), 0);
+    lock_ = std::make_unique<LoopbackGigeLock>();
     registerBuiltinBackends();
     fake_ = std::make_unique<FakeGvCamera>("LFI" + std::to_string(::getpid()));
     fake_->start(binary_);
@@ -148,7 +102,7 @@ class AravisCameraTest : public ::testing::Test {
 
   void TearDown() override {
     fake_.reset();
-    if (lockFd_ >= 0) ::close(lockFd_);  // releases the lock
+    lock_.reset();
   }
 
   std::unique_ptr<Camera> openFake() { return openCamera("aravis:" + fake_->id()); }
@@ -164,7 +118,7 @@ class AravisCameraTest : public ::testing::Test {
   }
 
   std::string binary_;
-  int lockFd_ = -1;
+  std::unique_ptr<LoopbackGigeLock> lock_;
   std::unique_ptr<FakeGvCamera> fake_;
 };
 

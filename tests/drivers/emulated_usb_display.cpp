@@ -649,7 +649,9 @@ void EmulatedUsbDisplay::unplug() {
   umockdev_testbed_remove_device(d.testbed, d.syspath.c_str());
   // The node file is not part of the sysfs tree; remove it so the device is gone for good.
   std::error_code ec;
-  std::filesystem::remove(std::filesystem::path(umockdev_testbed_get_root_dir(d.testbed)) / d.devnode.substr(1), ec);
+  gchar* root = umockdev_testbed_get_root_dir(d.testbed);  // transfer full
+  std::filesystem::remove(std::filesystem::path(root) / d.devnode.substr(1), ec);
+  g_free(root);
 }
 
 void EmulatedUsbDisplay::stallNextFrame() {

@@ -11,10 +11,9 @@
 // ones in lfi_drivers ("usb"); other libraries add theirs with
 // registerDisplayBackend(). The registry is process-wide and thread-safe.
 
+#include "lfi/drivers/device_registry.h"
 #include "lfi/drivers/display.h"
 
-#include <functional>
-#include <map>
 #include <memory>
 #include <string>
 #include <string_view>
@@ -22,27 +21,13 @@
 
 namespace lfi {
 
-struct DisplayUri {
-  std::string text;                          // the whole URI, for messages
-  std::string scheme;                        // before the first ':'
-  std::string path;                          // between the first ':' and '?'
-  std::map<std::string, std::string> query;  // key → value, keys unique
-};
+using DisplayUri = DeviceUri;
+using DisplayBackend = DeviceBackend<Display>;
+using DisplayFactory = decltype(DisplayBackend::factory);
 
 // Splits a URI. Throws Errc::Config naming the URI for a missing scheme, an empty
 // key, a key without '=' or a repeated key.
 DisplayUri parseDisplayUri(std::string_view uri);
-
-// Returns an Open display; throws what the backend throws (Errc::NotFound for a
-// device that is not there).
-using DisplayFactory = std::function<std::unique_ptr<Display>(const DisplayUri& uri)>;
-
-struct DisplayBackend {
-  std::string scheme;
-  std::vector<std::string> queryKeys;  // keys the factory understands; others are rejected before it runs
-  std::string description;             // one line for help texts
-  DisplayFactory factory;
-};
 
 // Throws Errc::InvalidArgument if the scheme is empty, has characters other than
 // [a-z0-9+.-], has no factory, or is taken.

@@ -12,9 +12,8 @@
 // The registry is process-wide and thread-safe.
 
 #include "lfi/drivers/camera.h"
+#include "lfi/drivers/device_registry.h"
 
-#include <functional>
-#include <map>
 #include <memory>
 #include <string>
 #include <string_view>
@@ -22,30 +21,16 @@
 
 namespace lfi {
 
-struct CameraUri {
-  std::string text;                          // the whole URI, for messages
-  std::string scheme;                        // before the first ':'
-  std::string path;                          // between ':' and '?'
-  std::map<std::string, std::string> query;  // key → value, keys unique
-};
+using CameraUri = DeviceUri;
+using CameraBackend = DeviceBackend<Camera>;
+using CameraFactory = decltype(CameraBackend::factory);
 
 // Splits a URI. Throws Errc::Config naming the URI for a missing scheme, an
 // empty key, a key without '=' or a repeated key.
 CameraUri parseCameraUri(std::string_view uri);
 
-// Returns an Open camera; throws what the backend throws (Errc::NotFound for a
-// device that is not there).
-using CameraFactory = std::function<std::unique_ptr<Camera>(const CameraUri& uri)>;
-
-struct CameraBackend {
-  std::string scheme;
-  std::vector<std::string> queryKeys;  // keys the factory understands; others are rejected before it runs
-  std::string description;             // one line for help texts, e.g. "aravis:<device-id> GenICam camera via Aravis"
-  CameraFactory factory;
-};
-
 // Throws Errc::InvalidArgument if the scheme is empty, has characters other than
-// [a-z0-9+.-], or is taken.
+// [a-z0-9+.-], has no factory, or is taken.
 void registerCameraBackend(CameraBackend backend);
 
 // Registers the backends built into lfi_drivers. Idempotent.

@@ -15,11 +15,17 @@
 //   LambertianEmission  radiance L                        L into the whole outer hemisphere
 //   LightFieldEmission  light field, lookup               SPEC §2 light field emitter; the
 //                                                         object's local frame is the plane frame
+//   PanelEmission       panel optics, drive levels,       the physical light field display: panel
+//                       brightness                        pixels behind lenslets or a barrier (below);
+//                                                         the object's local frame is the display frame
 // World frame: mm, +z along the optical axis towards the camera.
 
 #include "lfi/core/geometry.h"
 #include "lfi/core/light_field.h"
+#include "lfi/drivers/display.h"
 #include "lfi/sim/solid.h"
+
+#include <opencv2/core.hpp>
 
 #include <memory>
 #include <optional>
@@ -50,7 +56,70 @@ struct LightFieldEmission {
   std::shared_ptr<const LightField> lightField;
   LightFieldLookup lookup = LightFieldLookup::Nearest;
 };
-using Emission = std::variant<ParallelEmission, LambertianEmission, LightFieldEmission>;
+
+// The physical model of a light field display (issue 6), precomputed from its
+// DisplayInfo. Frame: the display frame of display.h (origin at the panel's
+// centre, x along columns, y up, z = 0 the lens/barrier plane, +z the emitting
+// side); the pixel plane is at z = -gap. Millimetres, radians.
+//
+//   parameter (DisplayInfo)     meaning here
+//   panel size, pixelPitch_mm   the pixel plane; subpixels are pitch/3 wide stripes (RGB/BGR) or
+//                               whole pixels (mono), 100 % fill factor, each a uniform emitter
+//   lensPitch_px, slant_rad,    lens axes / slit centre lines w = n·x = w0 + m P (display_optics.h)
+//   offset_px
+//   gap_mm                      lens/barrier plane to pixel plane (optical, air-equivalent)
+//   focalLength_mm (lenslet)    f of each cylindrical lens (power across its axis only)
+//   slitWidth_mm (barrier)      open width of each slit; the barrier between slits is black
+//
+// A ray leaving the plane at q in direction d (dz > 0) is followed back to the
+// pixel plane: across the lens (coordinate w, lens m nearest to q, h = w(q) - w_m,
+// tan across t = d·n / dz) an ideal thin lens gives w_p = w_m + h (1 - gap/f) - gap t
+// — with f = gap every point of a lens sees the same pixel for a given direction;
+// f ≠ gap blurs neighbouring views together; a slit is the same with 1/f = 0 and
+// passes only |h| <= slitWidth/2. Along the axis (no power) u_p = u(q) - gap (d·a)/dz.
+// The ray gets the radiance of the subpixel at (u_p, w_p): nearest, no lens
+// aberrations or diffraction. Pixels under the neighbouring lens are reached at
+// steep angles (the repeated view zones of a real lenticular display); the bezel
+// around the panel is black. Finite angular resolution (a subpixel spans
+// ≈ pitch / gap across), slant crosstalk and barrier loss follow from this geometry.
+class PanelOptics {
+public:
+  // Validates `info` (Errc::InvalidArgument naming the field).
+  explicit PanelOptics(const DisplayInfo& info);
+  const DisplayInfo& info() const { return info_; }
+  // Column in the level image (col · subpixels + subpixel) and row of the subpixel
+  // that the ray (q on z = 0, direction d, display frame) comes from; false when the
+  // barrier blocks it, d points backwards or the pixel is off the panel.
+  bool subpixelOfRay(const Vec2& q, const Vec3& d, int& column, int& row) const;
+
+private:
+  DisplayInfo info_;
+  Vec2 axis_, normal_;                // lens axis direction a and in-plane normal n
+  double pitch_ = 0, w0_ = 0;         // perpendicular lens pitch P and axis 0's w, mm
+  double gap_ = 0, defocus_ = 1;      // gap and 1 - gap / f (1 for a barrier)
+  double halfSlit_ = 0;               // barrier: half the slit width; lenslet: infinity
+  double invPitch_ = 0, halfWidth_ = 0, halfHeight_ = 0;  // 1 / pixel pitch; panel half size in pixels
+  int subpixels_ = 1;
+};
+
+// Emission of a display object: the level image is what the panel shows, one float
+// per subpixel (CV_32FC1, panelHeight x panelWidth · subpixels, drive level 0..1),
+// `brightness` the radiance at drive level 1. Build it with makePanelEmission().
+struct PanelEmission {
+  std::shared_ptr<const PanelOptics> optics;
+  std::shared_ptr<const cv::Mat> levels;
+  double brightness = 1;
+  // Radiance along the ray leaving the display plane at q with direction d (display frame).
+  double radiance(const Vec2& q, const Vec3& d) const;
+};
+
+// `panel`: panelWidth x panelHeight, channels = subpixels per pixel in subpixel order,
+// CV_8U (level / 255) or CV_32F (level as is, clamped to >= 0); empty = a dark panel.
+// Throws Errc::InvalidArgument for a wrong size or type.
+cv::Mat panelLevels(const DisplayInfo& info, const cv::Mat& panel);
+PanelEmission makePanelEmission(std::shared_ptr<const PanelOptics> optics, const cv::Mat& panel, double brightness);
+
+using Emission = std::variant<ParallelEmission, LambertianEmission, LightFieldEmission, PanelEmission>;
 
 // A rectangle in its local xy plane, centred at the origin, normal +z.
 struct Rectangle {
@@ -96,6 +165,9 @@ public:
   const std::vector<Object>& objects() const { return objects_; }
   const Object& object(int index) const { return objects_[static_cast<size_t>(index)]; }
   const Rigid3& objectFromWorld(int index) const;
+  // Replaces what an object emits (geometry and material stay). For the display's
+  // changing panel; not while another thread renders this scene.
+  void setEmission(int index, std::optional<Emission> emission);
   // Index of refraction of the medium around every object (air: 1.0). Paths
   // start in this medium: sensors sit outside the parts.
   double ambientIor() const { return ambientIor_; }

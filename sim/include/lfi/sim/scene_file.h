@@ -8,6 +8,7 @@
 #include "lfi/sim/sensors.h"
 
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -23,13 +24,23 @@ struct CameraSensorParameters {
   double electronsPerUnitPerUs = 0.7;  // e- per unit radiance per µs: 10 ms fills 70 % of the well at radiance 1
 };
 
+// [display]: the simulated light field display (the `sim:` display backend,
+// sim_display.h). Defaults are those of defaultLenticularDisplay() (display_optics.h).
+struct DisplayParameters {
+  DisplayInfo info;         // vendor "lfi", model "SimDisplay"; optics from the file
+  Rigid3 worldFromDisplay;  // placement of the display frame (display.h) in the world
+  double brightness = 1;    // radiance at drive level 255 and backlight level brightnessMax
+};
+
 struct SceneDescription {
   std::string name;
-  std::vector<Object> objects;
+  std::vector<Object> objects;  // with [display]: its object last, emitting a dark panel
   double ambientIor = 1.0;
   Sensor sensor;
   RenderOptions render;
   CameraSensorParameters cameraSensor;  // defaults unless the file has [camera_sensor]
+  std::optional<DisplayParameters> display;
+  int displayObject = -1;  // index of the display's object in `objects`, -1 without [display]
 };
 
 SceneDescription loadSceneFile(const std::filesystem::path& path);

@@ -17,9 +17,11 @@
 //
 // Frames are reproducible: frame `frameId` draws its noise from
 // frameNoiseSeed(scene seed, frameId), whatever was grabbed before. The scene
-// is static, so its radiance is rendered once per binning (the expensive part,
-// at the first frame after a new binning) and every frame is a new noise draw
-// on that radiance; a ROI is a crop of the binned radiance. Frame ids start at 1
+// is static between display changes, so its radiance is rendered once per
+// binning and per bench version (the expensive part, at the first frame after a
+// new binning or after a SimDisplay on the same scene file showed, blanked or
+// changed brightness: sim_bench.h) and every frame is a new noise draw on that
+// radiance; a ROI is a crop of the binned radiance. Frame ids start at 1
 // after each start() and grow by 1 per frame the "device" produces (frames the
 // caller was too slow for count as underruns, and their ids are skipped).
 // Timestamps are the host's steady clock in ns at the frame's due time.
@@ -42,6 +44,7 @@
 namespace lfi::sim {
 
 class Scene;
+class SimBench;
 
 // The per-frame noise seed: a hash of the scene's render seed and the frame id.
 std::uint64_t frameNoiseSeed(std::uint64_t sceneSeed, std::uint64_t frameId);
@@ -57,7 +60,9 @@ class SimImager {
     double maxFrameRate_hz = 1000, defaultFrameRate_hz = 25;
   };
 
-  // Loads the scene file; throws Errc::Config if it has no [camera].
+  // Opens the scene file's bench (sim_bench.h: shared with a SimDisplay on the same
+  // file in this process); throws Errc::NotFound for a missing file, Errc::Config
+  // for a bad one or one without [camera].
   explicit SimImager(const std::filesystem::path& sceneFile);
   ~SimImager();
   SimImager(const SimImager&) = delete;
@@ -77,7 +82,8 @@ class SimImager {
   // The sensor model for these (resolved) settings: exposure, gain and binning applied.
   CameraSensorModel sensorModel(const CameraSettings& settings) const;
 
-  // Relative radiance of the whole binned sensor (CV_32FC1), rendered at the first call per binning.
+  // Relative radiance of the whole binned sensor (CV_32FC1), rendered at the first
+  // call per binning and bench version. The reference is valid until the next call.
   const cv::Mat& radiance(int binning);
 
   // Frame `frameId` for resolved `settings`: CV_8UC1 for Mono8, else CV_16UC1,
@@ -91,8 +97,10 @@ class SimImager {
   std::filesystem::path sceneFile_;
   SceneDescription description_;
   TelecentricCamera camera_;
+  std::shared_ptr<SimBench> bench_;
   std::unique_ptr<Scene> scene_;
   std::map<int, cv::Mat> radianceByBinning_;
+  std::uint64_t radianceVersion_ = 0;  // bench version the cached radiance shows
   int renderThreads_ = 0;
   std::function<void(double)> renderProgress_;
 };
@@ -101,7 +109,8 @@ class SimImager {
 // file, Errc::Config for a bad one.
 std::unique_ptr<Camera> openSimCamera(const std::filesystem::path& sceneFile);
 
-// Adds the "sim" scheme to the camera registry. Idempotent.
+// Adds the "sim" scheme to the camera, display (sim_display.h) and light field
+// capture (sim_light_field_capture.h) registries. Idempotent.
 void registerSimBackends();
 
 }  // namespace lfi::sim

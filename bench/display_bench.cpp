@@ -1,0 +1,107 @@
+// lfi-display-bench: light field → panel image encoding (encodeLightField, the
+// display's optics model) for a 3840 x 2160 panel, next to a memcpy of the same
+// number of bytes measured in the same run.
+//
+//   encode   best time of encodeLightField (interpolated light field lookup along
+//            every subpixel's chief ray) on OpenCV's thread pool, and on 1 thread
+//   memcpy   best time of copying the encoded panel's bytes (3840 x 2160 x 3 = 24.9 MB)
+//            into a second, already touched buffer: the floor for any per-frame step
+//   ratio    encode / memcpy
+//   levels   the sim: display's conversion of the panel to emitter drive levels
+//            (panelLevels, what SimDisplay::show adds on top of the encode)
+//
+// Display: the lenticular class of display_optics.h (7.22 px per lens, 10.5° slant,
+// 40° cone, RGB stripe, 0.0751 mm pixels) on a 3840 x 2160 panel (289 x 162 mm).
+// Light field: 292 x 164 spatial elements of 1 mm, 16 x 16 angular, random radiance.
+//
+// Usage: lfi-display-bench [--repeats N] [--mono]
+
+#include "lfi/drivers/display_optics.h"
+#include "lfi/sim/scene.h"
+
+#include <fmt/format.h>
+
+#include <opencv2/core.hpp>
+
+#include <algorithm>
+#include <chrono>
+#include <cstring>
+#include <functional>
+#include <string>
+#include <vector>
+
+using namespace lfi;
+
+namespace {
+
+double bestSeconds(int repeats, const std::function<void()>& f) {
+  double best = 1e300;
+  for (int r = 0; r < repeats; ++r) {
+    const auto t0 = std::chrono::steady_clock::now();
+    f();
+    best = std::min(best, std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+  }
+  return best;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  int repeats = 5;
+  bool mono = false;
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    if (a == "--repeats" && i + 1 < argc)
+      repeats = std::max(1, std::stoi(argv[++i]));
+    else if (a == "--mono")
+      mono = true;
+    else {
+      fmt::print(stderr, "usage: lfi-display-bench [--repeats N] [--mono]\n");
+      return 2;
+    }
+  }
+
+  DisplayInfo info = defaultLenticularDisplay();
+  info.panelWidth_px = 3840;
+  info.panelHeight_px = 2160;
+  if (mono) info.subpixels = SubpixelLayout::Mono;
+  const DisplayOptics optics(info);
+
+  LightFieldGeometry g{.spatialX = 292, .spatialY = 164, .angular = 16, .pixelPitch_mm = 1.0 / 16, .distance_mm = 30};
+  LightField lightField(g);
+  cv::RNG rng(1);
+  rng.fill(lightField.lensletImage(), cv::RNG::UNIFORM, 0.0, 1.0);
+
+  const int threads = cv::getNumThreads();
+  cv::Mat panel;
+  const double encode = bestSeconds(repeats, [&] { panel = encodeLightField(lightField, optics, 1.0); });
+  cv::setNumThreads(1);
+  const double encode1 =
+      bestSeconds(std::max(1, repeats / 2), [&] { panel = encodeLightField(lightField, optics, 1.0); });
+  cv::setNumThreads(threads);
+
+  const std::size_t bytes = panel.total() * panel.elemSize();
+  std::vector<unsigned char> copy(bytes, 1);  // touched: no page faults inside the timing
+  const double copyTime = bestSeconds(std::max(repeats, 20), [&] {
+    std::memcpy(copy.data(), panel.data, bytes);
+    asm volatile("" : : "r"(copy.data()) : "memory");
+  });
+
+  const double levels = bestSeconds(repeats, [&] {
+    const cv::Mat l = sim::panelLevels(info, panel);
+    asm volatile("" : : "r"(l.data) : "memory");
+  });
+
+  const double subpixels = static_cast<double>(info.panelWidth_px) * info.panelHeight_px * info.subpixelsPerPixel();
+  fmt::print("panel {} x {} {} ({:.1f} MB), light field {} x {} x {}^2, {} OpenCV threads, best of {}\n",
+             info.panelWidth_px, info.panelHeight_px, toString(info.subpixels), bytes / 1e6, g.spatialX, g.spatialY,
+             g.angular, threads, repeats);
+  fmt::print("encode ({} threads)  {:8.2f} ms  {:6.1f} M subpixels/s\n", threads, 1e3 * encode,
+             subpixels / encode / 1e6);
+  fmt::print("encode (1 thread)    {:8.2f} ms  {:6.1f} M subpixels/s\n", 1e3 * encode1, subpixels / encode1 / 1e6);
+  fmt::print("memcpy same bytes    {:8.3f} ms  {:6.2f} GB/s\n", 1e3 * copyTime, bytes / copyTime / 1e9);
+  fmt::print("ratio encode/memcpy  {:8.0f} x ({} threads), {:.0f} x (1 thread)\n", encode / copyTime, threads,
+             encode1 / copyTime);
+  fmt::print("sim panel levels     {:8.2f} ms  (panel → emitter drive levels, SimDisplay::show)\n", 1e3 * levels);
+  return 0;
+}

@@ -1,0 +1,74 @@
+#pragma once
+// The inverse schlieren cycle, one code path whatever the backends (SPEC §1, §4):
+//
+//   1. capture  the reference light field of the intact part (LightFieldCapture)
+//   2. emit     it with the light field display (Display::show(LightField))
+//   3. inspect  the part through the telecentric camera (Camera): intact regions
+//               bright, defects dark
+//
+// The same Controller drives the physical bench (aravis:, usb:) and the
+// ray-traced one (sim:). It owns none of the devices; it leaves the camera
+// streaming after inspect() and stops it in its destructor only if it started it.
+//
+//   option         default  meaning
+//   grabTimeout    5 s      per frame
+//   frames         1        complete frames averaged into one inspection image
+//   retries        3        incomplete or timed-out frames tolerated per inspection
+//   white          0        radiance shown at full drive level; 0 = the light
+//                           field's 99.9th percentile (so the panel's range is used)
+
+#include "lfi/core/light_field.h"
+#include "lfi/drivers/camera.h"
+#include "lfi/drivers/display.h"
+#include "lfi/drivers/light_field_capture.h"
+
+#include <opencv2/core.hpp>
+
+#include <chrono>
+#include <functional>
+
+namespace lfi {
+
+struct ControllerOptions {
+  std::chrono::milliseconds grabTimeout{5000};
+  int frames = 1;
+  int retries = 3;
+  double white = 0;
+};
+
+class Controller {
+public:
+  // Progress of the whole cycle: a step label and the fraction done.
+  using Progress = std::function<void(const char* step, double fraction)>;
+
+  Controller(LightFieldCapture& capture, Display& display, Camera& camera, ControllerOptions options = {});
+  ~Controller();
+  Controller(const Controller&) = delete;
+  Controller& operator=(const Controller&) = delete;
+
+  // Step 1. The display must not be needed for it; the camera is untouched.
+  LightField captureReference(const Progress& progress = {});
+  // Step 2. The display must be Open or Showing; a rejected or timed-out frame
+  // throws Errc::Device with the device's reason.
+  void emit(const LightField& reference);
+  // Step 3. The camera must be Configured (it is started with a small buffer
+  // pool) or Streaming. Returns the mean of `frames` complete frames, CV_32FC1,
+  // in the camera's digital numbers. More than `retries` bad frames throw
+  // Errc::Device (Errc::Timeout when nothing arrived at all).
+  cv::Mat inspect();
+  // Steps 1-3.
+  cv::Mat run(const Progress& progress = {});
+
+  // The drive level scale used by the last emit(): radiance shown at full level.
+  double white() const { return white_; }
+
+private:
+  LightFieldCapture& capture_;
+  Display& display_;
+  Camera& camera_;
+  ControllerOptions options_;
+  bool startedCamera_ = false;
+  double white_ = 0;
+};
+
+}  // namespace lfi

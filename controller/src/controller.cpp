@@ -1,0 +1,102 @@
+#include "lfi/controller/controller.h"
+
+#include "lfi/core/error.h"
+#include "lfi/core/log.h"
+
+#include <algorithm>
+#include <vector>
+
+namespace lfi {
+
+Controller::Controller(LightFieldCapture& capture, Display& display, Camera& camera, ControllerOptions options)
+    : capture_(capture), display_(display), camera_(camera), options_(options) {
+  if (options_.frames < 1) fail(Errc::InvalidArgument, "controller: frames = {} must be >= 1", options_.frames);
+  if (options_.retries < 0) fail(Errc::InvalidArgument, "controller: retries = {} must be >= 0", options_.retries);
+  if (options_.grabTimeout.count() <= 0) fail(Errc::InvalidArgument, "controller: grabTimeout must be positive");
+  if (!(options_.white >= 0)) fail(Errc::InvalidArgument, "controller: white = {} must be >= 0", options_.white);
+}
+
+Controller::~Controller() {
+  if (startedCamera_ && camera_.state() == Camera::State::Streaming) {
+    try {
+      camera_.stop();
+    } catch (const std::exception& e) {
+      spdlog::warn("controller: stopping the camera failed: {}", e.what());
+    }
+  }
+}
+
+LightField Controller::captureReference(const Progress& progress) {
+  spdlog::info("capture: {}", capture_.description());
+  return capture_.capture([&](double f) {
+    if (progress) progress("capture", f);
+  });
+}
+
+void Controller::emit(const LightField& reference) {
+  white_ = options_.white;
+  if (white_ == 0) {
+    // The 99.9th percentile: a few hot samples must not darken the whole panel.
+    const cv::Mat& image = reference.lensletImage();
+    std::vector<float> values(image.begin<float>(), image.end<float>());
+    const size_t k = std::min(values.size() - 1, static_cast<size_t>(0.999 * static_cast<double>(values.size())));
+    std::nth_element(values.begin(), values.begin() + static_cast<std::ptrdiff_t>(k), values.end());
+    white_ = values[k] > 0 ? values[k] : 1.0;
+  }
+  const PresentResult r = display_.show(reference, white_);
+  if (r.status != PresentStatus::Presented)
+    fail(Errc::Device, "emit: the display did not show the light field ({}{}{})", toString(r.status),
+         r.message.empty() ? "" : ": ", r.message);
+  spdlog::info("emit: light field shown (sequence {}, white = {:.4g})", r.sequence, white_);
+}
+
+cv::Mat Controller::inspect() {
+  if (camera_.state() == Camera::State::Configured) {
+    camera_.start(std::max(4, options_.frames + 2));
+    startedCamera_ = true;
+  }
+  if (camera_.state() != Camera::State::Streaming)
+    fail(Errc::InvalidArgument, "inspect: the camera must be configured or streaming (it is {})",
+         toString(camera_.state()));
+  const bool software = camera_.settings().trigger == TriggerMode::Software;
+  cv::Mat sum;
+  int good = 0, bad = 0, timeouts = 0;
+  Frame frame;
+  while (good < options_.frames) {
+    if (software) camera_.softwareTrigger();
+    camera_.grabInto(frame, options_.grabTimeout);
+    if (frame.status != FrameStatus::Complete) {
+      (frame.status == FrameStatus::Timeout ? timeouts : bad) += 1;
+      if (bad + timeouts > options_.retries) {
+        if (good == 0 && bad == 0)
+          fail(Errc::Timeout, "inspect: no frame from the camera in {} tries of {} ms", timeouts,
+               options_.grabTimeout.count());
+        fail(Errc::Device, "inspect: {} incomplete and {} timed-out frames (more than {} allowed)", bad, timeouts,
+             options_.retries);
+      }
+      continue;
+    }
+    cv::Mat f;
+    frame.image.convertTo(f, CV_32F);
+    if (sum.empty())
+      sum = f;
+    else if (f.size() != sum.size())
+      fail(Errc::Device, "inspect: the camera changed its image size mid-inspection");
+    else
+      sum += f;
+    ++good;
+  }
+  return sum / good;
+}
+
+cv::Mat Controller::run(const Progress& progress) {
+  const LightField reference = captureReference(progress);
+  if (progress) progress("emit", 0);
+  emit(reference);
+  if (progress) progress("inspect", 0);
+  cv::Mat image = inspect();
+  if (progress) progress("inspect", 1);
+  return image;
+}
+
+}  // namespace lfi

@@ -1,0 +1,124 @@
+#pragma once
+// Device backends by URI scheme (STYLE.md §2), shared by the camera and the
+// display registries (registry.h, display_registry.h). A URI is
+//
+//   <scheme>:<path>[?<key>=<value>[&<key>=<value>...]]
+//
+// The path goes to the backend as is (no percent-decoding); each backend
+// declares the query keys it accepts and any other key is an error. Backends
+// are registered explicitly; a registry is process-wide and thread-safe.
+
+#include "lfi/core/error.h"
+
+#include <fmt/format.h>
+#include <fmt/ranges.h>
+
+#include <algorithm>
+#include <functional>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace lfi {
+
+struct DeviceUri {
+  std::string text;                          // the whole URI, for messages
+  std::string scheme;                        // before the first ':'
+  std::string path;                          // between the first ':' and '?'
+  std::map<std::string, std::string> query;  // key → value, keys unique
+};
+
+// Splits a URI. Throws Errc::Config naming the URI (as a "<kind> URI") for a
+// missing scheme (the message shows `example`), an empty key, a key without '=',
+// a repeated key or a trailing '&'.
+DeviceUri parseDeviceUri(std::string_view text, std::string_view kind, std::string_view example);
+
+// Non-empty and only [a-z0-9+.-].
+bool validDeviceScheme(const std::string& scheme);
+
+template <typename Device>
+struct DeviceBackend {
+  std::string scheme;
+  std::vector<std::string> queryKeys;  // keys the factory understands; others are rejected before it runs
+  std::string description;             // one line for help texts
+  std::function<std::unique_ptr<Device>(const DeviceUri& uri)> factory;  // returns an Open device
+};
+
+template <typename Device>
+class DeviceRegistry {
+public:
+  // kind: "camera" or "display"; example: a URI for the no-scheme message;
+  // builtinCall: the function that registers the built-in backends, named when
+  // nothing is registered.
+  DeviceRegistry(std::string kind, std::string example, std::string builtinCall)
+      : kind_(std::move(kind)), example_(std::move(example)), builtinCall_(std::move(builtinCall)) {}
+
+  DeviceUri parse(std::string_view text) const { return parseDeviceUri(text, kind_, example_); }
+
+  // Throws Errc::InvalidArgument for a bad scheme, a missing factory or a taken scheme.
+  void add(DeviceBackend<Device> backend) {
+    std::lock_guard lock(mutex_);
+    check(backend);
+    if (backends_.contains(backend.scheme))
+      fail(Errc::InvalidArgument, "{} backend scheme '{}' is already registered", kind_, backend.scheme);
+    std::string scheme = backend.scheme;
+    backends_.emplace(std::move(scheme), std::move(backend));
+  }
+
+  // Adds the backend unless its scheme is taken (idempotent built-in registration).
+  void addOnce(DeviceBackend<Device> backend) {
+    std::lock_guard lock(mutex_);
+    check(backend);
+    std::string scheme = backend.scheme;
+    backends_.try_emplace(std::move(scheme), std::move(backend));
+  }
+
+  std::vector<std::string> schemes() const {
+    std::lock_guard lock(mutex_);
+    std::vector<std::string> out;
+    for (const auto& [scheme, backend] : backends_) out.push_back(scheme);
+    return out;
+  }
+
+  // Parses `text`, checks its query keys against the backend's and runs the
+  // factory. An unknown scheme or key throws Errc::Config listing what is known.
+  std::unique_ptr<Device> open(std::string_view text) const {
+    const DeviceUri uri = parse(text);
+    DeviceBackend<Device> backend;
+    {
+      std::lock_guard lock(mutex_);
+      auto it = backends_.find(uri.scheme);
+      if (it == backends_.end()) {
+        std::vector<std::string> known;
+        for (const auto& [scheme, b] : backends_) known.push_back(scheme + ":");
+        fail(Errc::Config, "{} URI '{}': unknown scheme '{}:' (known: {})", kind_, uri.text, uri.scheme,
+             known.empty() ? fmt::format("none; was {}() called?", builtinCall_)
+                           : fmt::format("{}", fmt::join(known, ", ")));
+      }
+      backend = it->second;  // copy: the factory runs without the lock (opening a device takes time)
+    }
+    for (const auto& [key, value] : uri.query)
+      if (std::find(backend.queryKeys.begin(), backend.queryKeys.end(), key) == backend.queryKeys.end())
+        fail(Errc::Config, "{} URI '{}': unknown key '{}' for scheme '{}:' (accepted: {})", kind_, uri.text, key,
+             uri.scheme,
+             backend.queryKeys.empty() ? std::string("none") : fmt::format("{}", fmt::join(backend.queryKeys, ", ")));
+    return backend.factory(uri);
+  }
+
+private:
+  void check(const DeviceBackend<Device>& backend) const {
+    if (!validDeviceScheme(backend.scheme))
+      fail(Errc::InvalidArgument, "{} backend scheme '{}' must be non-empty and use only [a-z0-9+.-]", kind_,
+           backend.scheme);
+    if (!backend.factory) fail(Errc::InvalidArgument, "{} backend '{}' has no factory", kind_, backend.scheme);
+  }
+
+  std::string kind_, example_, builtinCall_;
+  mutable std::mutex mutex_;
+  std::map<std::string, DeviceBackend<Device>> backends_;
+};
+
+}  // namespace lfi

@@ -1,0 +1,40 @@
+#pragma once
+// The sim: light field capture (SPEC §1 step 1): the parts of a scene file,
+// lit by a collimated beam from the camera side, recorded by the lensless
+// light field sensor of SPEC §2 on the plane Δ below the part.
+//
+//   URI: sim:<scene-file>[?<key>=<value>&...]
+//   key                  default  units  meaning
+//   spatial              40       -      spatial elements per side
+//   angular              16       -      angular elements per side
+//   pitch_mm             0.05     mm     sensor pixel pitch
+//   distance_mm          30       mm     Δ: sensor plane at world z = -Δ, looking +z
+//   beam_half_angle_rad  0.0087   rad    divergence of the collimated beam
+//   beam_distance_mm     50       mm     beam plane at world z = +beam_distance_mm, facing -z
+//   spp                  64       -      samples per sensor pixel
+//
+// The scene's emitters (back lights, displays) are left out; its sensor and
+// render settings are not used (the seed is).
+
+#include "lfi/drivers/light_field_capture.h"
+
+#include <filesystem>
+#include <memory>
+
+namespace lfi::sim {
+
+struct SimCaptureSettings {
+  LightFieldGeometry geometry{.spatialX = 40, .spatialY = 40, .angular = 16, .pixelPitch_mm = 0.05, .distance_mm = 30};
+  double beamHalfAngle_rad = 0.0087;
+  double beamDistance_mm = 50;
+  int samplesPerPixel = 64;
+  int threads = 0;
+};
+
+std::unique_ptr<LightFieldCapture> openSimLightFieldCapture(const std::filesystem::path& sceneFile,
+                                                            const SimCaptureSettings& settings);
+
+// Registers the "sim" light field capture scheme. Idempotent.
+void registerSimLightFieldCapture();
+
+}  // namespace lfi::sim

@@ -1,0 +1,127 @@
+// The ray-traced display backend (sim_display.h): the Display state machine over
+// the shared SimBench's panel.
+
+#include "lfi/sim/sim_display.h"
+
+#include "lfi/core/error.h"
+#include "lfi/drivers/display_registry.h"
+#include "lfi/sim/sim_bench.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+
+namespace lfi::sim {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+class SimDisplay final : public Display {
+ public:
+  explicit SimDisplay(fs::path sceneFile) : sceneFile_(std::move(sceneFile)), name_("sim:" + sceneFile_.string()) {
+    open();
+  }
+  ~SimDisplay() override { close(); }
+
+  State state() const override { return state_; }
+
+  void open() override {
+    requireDisplayState(state_, {State::Closed}, "open", name_);
+    auto bench = SimBench::open(sceneFile_, fmt::format("display '{}'", name_));
+    if (!bench->hasDisplay())
+      fail(Errc::Config, "display '{}': the scene file has no [display] table (docs/scene-files.md)", name_);
+    info_ = bench->description().display->info;
+    info_.serial = bench->description().name;
+    info_.deviceId = sceneFile_.string();
+    bench->blankPanel();
+    bench->setBacklight(info_.brightnessMax);
+    bench_ = std::move(bench);
+    state_ = State::Open;
+  }
+
+  void close() noexcept override {
+    if (bench_) {
+      try {
+        bench_->blankPanel();
+      } catch (...) {  // the bench has a display (checked at open): blankPanel() cannot throw
+      }
+    }
+    bench_.reset();
+    state_ = State::Closed;
+  }
+
+  DisplayInfo info() const override {
+    requireDisplayState(state_, {State::Open, State::Showing}, "info", name_);
+    return info_;
+  }
+
+  PresentResult show(const cv::Mat& panel) override {
+    requireDisplayState(state_, {State::Open, State::Showing}, "show", name_);
+    if (panel.empty() || panel.type() != info_.panelType() || panel.cols != info_.panelWidth_px ||
+        panel.rows != info_.panelHeight_px)
+      fail(Errc::InvalidArgument, "{}: show needs a {}x{} {} panel image, got {}x{} of type {}", name_,
+           info_.panelWidth_px, info_.panelHeight_px, info_.panelType() == CV_8UC1 ? "CV_8UC1" : "CV_8UC3", panel.cols,
+           panel.rows, panel.type());
+    bench_->showPanel(panel);
+    ++framesPresented_;
+    state_ = State::Showing;
+    return {PresentStatus::Presented, ++sequence_, {}};
+  }
+
+  void blank() override {
+    requireDisplayState(state_, {State::Open, State::Showing}, "blank", name_);
+    bench_->blankPanel();
+    state_ = State::Open;
+  }
+
+  void setBrightness(int level) override {
+    requireDisplayState(state_, {State::Open, State::Showing}, "setBrightness", name_);
+    if (level < info_.brightnessMin || level > info_.brightnessMax)
+      fail(Errc::InvalidArgument, "{}: brightness {} is outside {}..{}", name_, level, info_.brightnessMin,
+           info_.brightnessMax);
+    bench_->setBacklight(level);
+  }
+
+  DisplayStatus status() override {
+    requireDisplayState(state_, {State::Open, State::Showing}, "status", name_);
+    DisplayStatus s;
+    s.showing = state_ == State::Showing;
+    s.presentedSequence = sequence_;
+    s.framesPresented = framesPresented_;
+    s.brightness = bench_->backlight();
+    return s;
+  }
+
+ private:
+  fs::path sceneFile_;
+  std::string name_;
+  State state_ = State::Closed;
+  std::shared_ptr<SimBench> bench_;
+  DisplayInfo info_;
+  std::uint32_t sequence_ = 0;
+  std::uint64_t framesPresented_ = 0;
+};
+
+}  // namespace
+
+std::unique_ptr<Display> openSimDisplay(const fs::path& sceneFile) {
+  return std::make_unique<SimDisplay>(sceneFile);
+}
+
+void registerSimDisplayBackend() {
+  const std::vector<std::string> schemes = displaySchemes();
+  if (std::ranges::find(schemes, std::string("sim")) != schemes.end()) return;
+  try {
+    registerDisplayBackend(DisplayBackend{
+        .scheme = "sim",
+        .queryKeys = {},
+        .description = "sim:<scene-file>  ray-traced light field display (the scene file's [display])",
+        .factory = [](const DisplayUri& uri) { return openSimDisplay(uri.path); },
+    });
+  } catch (const Error&) {
+    // Registered by another thread in between: fine, the scheme is there.
+  }
+}
+
+}  // namespace lfi::sim

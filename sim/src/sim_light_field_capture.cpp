@@ -1,0 +1,116 @@
+#include "lfi/sim/sim_light_field_capture.h"
+
+#include "lfi/core/error.h"
+#include "lfi/sim/render.h"
+#include "lfi/sim/scene_file.h"
+
+#include <charconv>
+#include <mutex>
+#include <numbers>
+
+namespace lfi::sim {
+namespace {
+
+class SimLightFieldCapture final : public LightFieldCapture {
+public:
+  SimLightFieldCapture(const std::filesystem::path& sceneFile, const SimCaptureSettings& settings)
+      : sceneFile_(sceneFile), settings_(settings) {
+    settings_.geometry.validate();
+    if (!(settings_.beamHalfAngle_rad > 0 && settings_.beamHalfAngle_rad < 1.5))
+      fail(Errc::Config, "sim light field capture: beam_half_angle_rad = {} is outside (0, 1.5)",
+           settings_.beamHalfAngle_rad);
+    if (!(settings_.beamDistance_mm > 0))
+      fail(Errc::Config, "sim light field capture: beam_distance_mm = {} must be > 0", settings_.beamDistance_mm);
+    if (settings_.samplesPerPixel < 1) fail(Errc::Config, "sim light field capture: spp must be >= 1");
+    // Load now, so that a bad scene file is reported at open.
+    SceneDescription d = loadSceneFile(sceneFile_);
+    seed_ = d.render.seed;
+    for (Object& o : d.objects)
+      if (!o.emission) parts_.push_back(std::move(o));
+    if (parts_.empty()) fail(Errc::Config, "'{}': no part to capture (every object emits)", sceneFile_.string());
+  }
+
+  LightFieldGeometry geometry() const override { return settings_.geometry; }
+
+  std::string description() const override {
+    const auto& g = settings_.geometry;
+    return fmt::format("sim:{} ({}x{} elements of {}x{}, pitch {} mm, Δ = {} mm, beam {} rad, {} spp)",
+                       sceneFile_.string(), g.spatialX, g.spatialY, g.angular, g.angular, g.pixelPitch_mm,
+                       g.distance_mm, settings_.beamHalfAngle_rad, settings_.samplesPerPixel);
+  }
+
+  LightField capture(const std::function<void(double)>& progress) override {
+    std::vector<Object> objects = parts_;
+    const double size = 4 * std::max(settings_.geometry.extentX_mm(), settings_.geometry.extentY_mm()) + 200;
+    Rigid3 facingDown = Rigid3::rotation({1, 0, 0}, std::numbers::pi);
+    facingDown.t = {0, 0, settings_.beamDistance_mm};
+    objects.push_back({"collimated beam", Rectangle{size, size}, facingDown, Absorber{},
+                       ParallelEmission{1.0, settings_.beamHalfAngle_rad}});
+    const Scene scene(std::move(objects));
+    const LightFieldSensor sensor{settings_.geometry,
+                                  Rigid3::translation({0, 0, -settings_.geometry.distance_mm})};
+    RenderOptions ro;
+    ro.samplesPerPixel = settings_.samplesPerPixel;
+    ro.seed = seed_ ^ 0x4c46ull;
+    ro.threads = settings_.threads;
+    ro.progress = progress;
+    return LightField(settings_.geometry, render(scene, sensor, ro));
+  }
+
+private:
+  std::filesystem::path sceneFile_;
+  SimCaptureSettings settings_;
+  std::vector<Object> parts_;
+  std::uint64_t seed_ = 1;
+};
+
+template <typename T>
+T parseValue(const DeviceUri& uri, const std::string& key, T fallback) {
+  auto it = uri.query.find(key);
+  if (it == uri.query.end()) return fallback;
+  T value{};
+  const std::string& text = it->second;
+  const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), value);
+  if (ec != std::errc() || end != text.data() + text.size())
+    fail(Errc::Config, "light field capture URI '{}': {} = '{}' is not a number", uri.text, key, text);
+  return value;
+}
+
+}  // namespace
+
+std::unique_ptr<LightFieldCapture> openSimLightFieldCapture(const std::filesystem::path& sceneFile,
+                                                            const SimCaptureSettings& settings) {
+  return std::make_unique<SimLightFieldCapture>(sceneFile, settings);
+}
+
+void registerSimLightFieldCapture() {
+  static std::once_flag once;
+  std::call_once(once, [] {
+    registerLightFieldCaptureBackend(LightFieldCaptureBackend{
+        .scheme = "sim",
+        .queryKeys = {"spatial", "angular", "pitch_mm", "distance_mm", "beam_half_angle_rad", "beam_distance_mm",
+                      "spp"},
+        .description = "sim:<scene-file>[?spatial=&angular=&pitch_mm=&distance_mm=&beam_half_angle_rad=&"
+                       "beam_distance_mm=&spp=]  simulated lensless light field sensor",
+        .factory =
+            [](const DeviceUri& uri) -> std::unique_ptr<LightFieldCapture> {
+              SimCaptureSettings s;
+              s.geometry.spatialX = s.geometry.spatialY = parseValue(uri, "spatial", s.geometry.spatialX);
+              s.geometry.angular = parseValue(uri, "angular", s.geometry.angular);
+              s.geometry.pixelPitch_mm = parseValue(uri, "pitch_mm", s.geometry.pixelPitch_mm);
+              s.geometry.distance_mm = parseValue(uri, "distance_mm", s.geometry.distance_mm);
+              s.beamHalfAngle_rad = parseValue(uri, "beam_half_angle_rad", s.beamHalfAngle_rad);
+              s.beamDistance_mm = parseValue(uri, "beam_distance_mm", s.beamDistance_mm);
+              s.samplesPerPixel = parseValue(uri, "spp", s.samplesPerPixel);
+              try {
+                s.geometry.validate();
+              } catch (const Error& e) {
+                fail(Errc::Config, "light field capture URI '{}': {}", uri.text, e.what());
+              }
+              return openSimLightFieldCapture(uri.path, s);
+            },
+    });
+  });
+}
+
+}  // namespace lfi::sim
