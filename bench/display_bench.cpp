@@ -19,6 +19,8 @@
 #include "lfi/drivers/display_optics.h"
 #include "lfi/sim/scene.h"
 
+#include "bench_util.h"
+
 #include <fmt/format.h>
 
 #include <opencv2/core.hpp>
@@ -32,17 +34,9 @@
 
 using namespace lfi;
 
-namespace {
+using lfi::bench::bestSeconds;
 
-double bestSeconds(int repeats, const std::function<void()>& f) {
-  double best = 1e300;
-  for (int r = 0; r < repeats; ++r) {
-    const auto t0 = std::chrono::steady_clock::now();
-    f();
-    best = std::min(best, std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
-  }
-  return best;
-}
+namespace {
 
 }  // namespace
 

@@ -20,6 +20,8 @@
 #include "lfi/sim/render.h"
 #include "lfi/sim/scene_file.h"
 
+#include "bench_util.h"
+
 #include <OpenEXR/ImfRgbaFile.h>
 #include <embree3/rtcore.h>
 #include <fmt/format.h>
@@ -34,17 +36,9 @@
 using namespace lfi;
 using namespace lfi::sim;
 
-namespace {
+using lfi::bench::bestSeconds;
 
-double bestSeconds(int repeats, const std::function<void()>& f) {
-  double best = 1e300;
-  for (int r = 0; r < repeats; ++r) {
-    const auto t0 = std::chrono::steady_clock::now();
-    f();
-    best = std::min(best, std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
-  }
-  return best;
-}
+namespace {
 
 // The lens surface as triangles: both spherical caps on a polar grid and the
 // edge cylinder, wound outwards.

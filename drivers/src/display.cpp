@@ -89,4 +89,12 @@ void requireDisplayState(Display::State current, std::initializer_list<Display::
        fmt::join(names, ", "));
 }
 
+void requirePanelImage(const DisplayInfo& info, const cv::Mat& panel, const std::string& device) {
+  if (panel.empty() || panel.type() != info.panelType() || panel.cols != info.panelWidth_px ||
+      panel.rows != info.panelHeight_px)
+    fail(Errc::InvalidArgument, "{}: show needs a {}x{} {} panel image, got {}x{} of type {}", device,
+         info.panelWidth_px, info.panelHeight_px, info.panelType() == CV_8UC1 ? "CV_8UC1" : "CV_8UC3", panel.cols,
+         panel.rows, panel.type());
+}
+
 }  // namespace lfi

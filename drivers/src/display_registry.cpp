@@ -24,6 +24,7 @@ std::unique_ptr<Display> openUsbFromUri(const DisplayUri& uri) {
     options.controlTimeout = std::chrono::milliseconds(value);
     options.transferTimeout = std::chrono::milliseconds(value);
   }
+  if (auto it = uri.query.find("calibration"); it != uri.query.end()) options.opticsOverride = it->second;
   return openUsbDisplay(selector, options);
 }
 
@@ -36,9 +37,9 @@ void registerDisplayBackend(DisplayBackend backend) { registry().add(std::move(b
 void registerBuiltinDisplayBackends() {
   registry().addOnce(DisplayBackend{
       .scheme = "usb",
-      .queryKeys = {"timeout_ms"},
-      .description = "usb:<vid>:<pid>[/<serial>][?timeout_ms=<ms>]  light field display over USB (libusb, lfi vendor "
-                     "protocol)",
+      .queryKeys = {"timeout_ms", "calibration"},
+      .description = "usb:<vid>:<pid>[/<serial>][?timeout_ms=<ms>&calibration=<file>]  light field display over USB "
+                     "(libusb, lfi vendor protocol); calibration overrides the optics the device reports",
       .factory = openUsbFromUri,
   });
 }

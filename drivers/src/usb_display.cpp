@@ -1,5 +1,7 @@
 #include "lfi/drivers/usb_display.h"
 
+#include "lfi/drivers/display_calibration_file.h"
+
 #include "lfi/core/error.h"
 #include "lfi/drivers/usb_display_protocol.h"
 
@@ -106,11 +108,7 @@ public:
 
   PresentResult show(const cv::Mat& panel) override {
     requireDisplayState(state_, {State::Open, State::Showing}, "show", name_);
-    if (panel.empty() || panel.type() != info_.panelType() || panel.cols != info_.panelWidth_px ||
-        panel.rows != info_.panelHeight_px)
-      fail(Errc::InvalidArgument, "{}: show needs a {}x{} {} panel image, got {}x{} of type {}", name_,
-           info_.panelWidth_px, info_.panelHeight_px, info_.panelType() == CV_8UC1 ? "CV_8UC1" : "CV_8UC3", panel.cols,
-           panel.rows, panel.type());
+    requirePanelImage(info_, panel, name_);
     const std::uint32_t sequence = ++sequence_;
     buildFrame(panel, sequence);
 
@@ -301,6 +299,7 @@ private:
     info.optics.gap_mm = cal.gap_mm;
     info.optics.focalLength_mm = cal.focalLength_mm;
     info.optics.slitWidth_mm = cal.slitWidth_mm;
+    if (!options_.opticsOverride.empty()) info.optics = readDisplayOpticsFile(options_.opticsOverride, info.optics);
     info.viewCount = block.viewCount;
     info.brightnessMin = 0;
     info.brightnessMax = block.brightnessMax;

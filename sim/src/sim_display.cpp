@@ -58,11 +58,7 @@ class SimDisplay final : public Display {
 
   PresentResult show(const cv::Mat& panel) override {
     requireDisplayState(state_, {State::Open, State::Showing}, "show", name_);
-    if (panel.empty() || panel.type() != info_.panelType() || panel.cols != info_.panelWidth_px ||
-        panel.rows != info_.panelHeight_px)
-      fail(Errc::InvalidArgument, "{}: show needs a {}x{} {} panel image, got {}x{} of type {}", name_,
-           info_.panelWidth_px, info_.panelHeight_px, info_.panelType() == CV_8UC1 ? "CV_8UC1" : "CV_8UC3", panel.cols,
-           panel.rows, panel.type());
+    requirePanelImage(info_, panel, name_);
     bench_->showPanel(panel);
     ++framesPresented_;
     state_ = State::Showing;

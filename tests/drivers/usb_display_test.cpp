@@ -12,6 +12,10 @@
 
 #include <gtest/gtest.h>
 
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+
 #include <chrono>
 #include <cmath>
 
@@ -78,6 +82,28 @@ TEST_F(UsbDisplayTest, OpenReadsInfoAndCalibrationFromTheDevice) {
   EXPECT_NO_THROW(openDisplay("usb:1209:4c46/" + c.serial));
   EXPECT_TRUE(throwsError([] { openDisplay("usb:1209:4c46/NOPE"); }, Errc::NotFound, {"usb:1209:4c46/NOPE"}));
   EXPECT_TRUE(throwsError([] { openDisplay("usb:1209:0001"); }, Errc::NotFound, {"no such USB device", "1209:4c46"}));
+}
+
+TEST_F(UsbDisplayTest, ABenchFileOverridesTheOpticsTheDeviceReports) {
+  EmulatedUsbDisplay device;
+  device.plug();
+  const std::filesystem::path dir = std::filesystem::path(std::getenv("TMPDIR") ? std::getenv("TMPDIR") : "/tmp");
+  const std::filesystem::path file = dir / "bench-optics.toml";
+  std::ofstream(file) << "format = \"lfi-display-calibration\"\nversion = 1\n[optics]\nslant_rad = 0.2\n"
+                         "gap_mm = 0.8\n";
+  const DisplayInfo reported = openDisplay("usb:1209:4c46")->info();
+  const DisplayInfo overridden = openDisplay("usb:1209:4c46?calibration=" + file.string())->info();
+  // The measured keys replace the device's; the others stay as the device said.
+  EXPECT_DOUBLE_EQ(overridden.optics.slant_rad, 0.2);
+  EXPECT_DOUBLE_EQ(overridden.optics.gap_mm, 0.8);
+  EXPECT_DOUBLE_EQ(overridden.optics.lensPitch_px, reported.optics.lensPitch_px);
+  EXPECT_NE(reported.optics.slant_rad, 0.2);
+  // A typo in the bench file is an error naming the file, line and key.
+  std::ofstream(file) << "format = \"lfi-display-calibration\"\nversion = 1\n[optics]\nslant = 0.2\n";
+  EXPECT_TRUE(throwsError([&] { openDisplay("usb:1209:4c46?calibration=" + file.string()); }, Errc::Config,
+                          {file.string() + ":4", "optics.slant"}));
+  EXPECT_TRUE(throwsError([&] { openDisplay("usb:1209:4c46?calibration=" + (dir / "none.toml").string()); },
+                          Errc::NotFound, {"none.toml"}));
 }
 
 TEST_F(UsbDisplayTest, UriErrorsNameTheUri) {

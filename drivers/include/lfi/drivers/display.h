@@ -151,6 +151,10 @@ public:
 
 const char* toString(Display::State state);
 
+// For backends: throws Errc::InvalidArgument naming the device unless `panel` is
+// a non-empty panelWidth_px x panelHeight_px image of info.panelType().
+void requirePanelImage(const DisplayInfo& info, const cv::Mat& panel, const std::string& device);
+
 // For backends: throws Errc::InvalidArgument "<device>: <method> is not allowed in
 // state <state> (allowed: ...)" unless `current` is one of `allowed`.
 void requireDisplayState(Display::State current, std::initializer_list<Display::State> allowed, const char* method,

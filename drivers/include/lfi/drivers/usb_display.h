@@ -20,6 +20,7 @@
 #include "lfi/drivers/display.h"
 
 #include <chrono>
+#include <filesystem>
 #include <cstddef>
 #include <cstdint>
 #include <memory>
@@ -46,6 +47,8 @@ struct UsbDisplayOptions {
   int transfersInFlight = 4;                        // 1..32
   std::size_t transferSize_bytes = 1 << 20;         // 512 B .. 16 MiB, a multiple of 512
   int stallRetries = 1;                             // frame resends after clearing a halt
+  // A bench file overriding the optics the device reports (display_calibration_file.h).
+  std::filesystem::path opticsOverride;
 };
 
 // Returns an Open display. Throws Errc::NotFound when no device matches,
