@@ -37,8 +37,6 @@ bool Bounds::finite() const {
   return true;
 }
 
-Bounds Bounds::everything() { return {Vec3(-kInf), Vec3(kInf)}; }
-
 Bounds Bounds::transformed(const Rigid3& x) const {
   if (lo.x > hi.x || lo.y > hi.y || lo.z > hi.z) return *this;  // empty
   // Interval arithmetic per output axis (for a finite box, the same box as its

@@ -59,7 +59,6 @@ struct Bounds {
   Vec3 lo{std::numeric_limits<double>::infinity()};
   Vec3 hi{-std::numeric_limits<double>::infinity()};
   bool finite() const;
-  static Bounds everything();
   Bounds transformed(const Rigid3& parentFromLocal) const;
   Bounds intersect(const Bounds& other) const;
   Bounds unite(const Bounds& other) const;
