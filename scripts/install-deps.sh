@@ -15,8 +15,8 @@ PACKAGES=(
   libusb-1.0-0-dev
   # images, light fields, analysis
   libopencv-dev libopencv-contrib-dev libopenexr-dev libimath-dev zlib1g-dev
-  # meshes
-  libtinyobjloader-dev
+  # meshes (OBJ, PLY, STL, ...)
+  libassimp-dev
   # small libraries instead of hand-written code
   libcli11-dev libtomlplusplus-dev nlohmann-json3-dev libspdlog-dev libfmt-dev
   # tests and benchmarks

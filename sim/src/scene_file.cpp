@@ -5,7 +5,9 @@
 #include "lfi/core/exr_io.h"
 #include "lfi/drivers/display_optics.h"
 
-#include <tiny_obj_loader.h>
+#include <assimp/Importer.hpp>
+#include <assimp/postprocess.h>
+#include <assimp/scene.h>
 
 #include <cmath>
 #include <numbers>
@@ -22,32 +24,33 @@ Rigid3 placement(const std::vector<double>& p, const std::vector<double>& r) {
   return x;
 }
 
-TriangleMesh loadObjMesh(const fs::path& path) {
+TriangleMesh loadMesh(const fs::path& path) {
   if (!fs::exists(path)) fail(Errc::NotFound, "'{}': no such mesh file", path.string());
-  tinyobj::ObjReader reader;
-  tinyobj::ObjReaderConfig config;
-  config.triangulate = true;
-  if (!reader.ParseFromFile(path.string(), config))
-    fail(Errc::InvalidFile, "'{}': not a readable OBJ mesh: {}", path.string(), reader.Error());
-  const auto& attrib = reader.GetAttrib();
+  Assimp::Importer importer;
+  // Triangles with shared vertices; the data structure is checked (indices in
+  // range, no empty meshes) before anything reads it.
+  const aiScene* scene = importer.ReadFile(
+      path.string(), aiProcess_Triangulate | aiProcess_JoinIdenticalVertices | aiProcess_ValidateDataStructure |
+                         aiProcess_FindDegenerates | aiProcess_SortByPType);
+  if (!scene || (scene->mFlags & AI_SCENE_FLAGS_INCOMPLETE) || !scene->HasMeshes())
+    fail(Errc::InvalidFile, "'{}': not a readable mesh: {}", path.string(), importer.GetErrorString());
   TriangleMesh mesh;
-  for (size_t i = 0; i + 2 < attrib.vertices.size(); i += 3) {
-    const Vec3 v(attrib.vertices[i], attrib.vertices[i + 1], attrib.vertices[i + 2]);
-    if (!std::isfinite(v.x) || !std::isfinite(v.y) || !std::isfinite(v.z))
-      fail(Errc::InvalidFile, "'{}': vertex {} is not finite", path.string(), i / 3 + 1);
-    mesh.vertices.push_back(v);
-  }
-  for (const auto& shape : reader.GetShapes())
-    for (size_t k = 0; k + 2 < shape.mesh.indices.size(); k += 3) {
-      std::array<unsigned, 3> t{};
-      for (int c = 0; c < 3; ++c) {
-        const int idx = shape.mesh.indices[k + static_cast<size_t>(c)].vertex_index;
-        if (idx < 0 || static_cast<size_t>(idx) >= mesh.vertices.size())
-          fail(Errc::InvalidFile, "'{}': face uses vertex {} of {}", path.string(), idx + 1, mesh.vertices.size());
-        t[static_cast<size_t>(c)] = static_cast<unsigned>(idx);
-      }
-      mesh.triangles.push_back(t);
+  for (unsigned m = 0; m < scene->mNumMeshes; ++m) {
+    const aiMesh* in = scene->mMeshes[m];
+    if (!(in->mPrimitiveTypes & aiPrimitiveType_TRIANGLE)) continue;  // points and lines have no surface
+    const auto base = static_cast<unsigned>(mesh.vertices.size());
+    for (unsigned v = 0; v < in->mNumVertices; ++v) {
+      const aiVector3D& p = in->mVertices[v];
+      if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
+        fail(Errc::InvalidFile, "'{}': vertex {} is not finite", path.string(), mesh.vertices.size() + 1);
+      mesh.vertices.push_back({p.x, p.y, p.z});
     }
+    for (unsigned f = 0; f < in->mNumFaces; ++f) {
+      const aiFace& face = in->mFaces[f];
+      if (face.mNumIndices != 3) continue;
+      mesh.triangles.push_back({base + face.mIndices[0], base + face.mIndices[1], base + face.mIndices[2]});
+    }
+  }
   if (mesh.triangles.empty()) fail(Errc::InvalidFile, "'{}': the mesh has no faces", path.string());
   // Smooth normals: the cross product's length weights each face by its area.
   mesh.normals.assign(mesh.vertices.size(), Vec3(0, 0, 0));
@@ -97,7 +100,7 @@ Object readObject(ConfigTable& t) {
   } else if (kind == "mesh") {
     fs::path file = t.string("file");
     if (file.is_relative()) file = t.directory() / file;
-    obj.shape = loadObjMesh(file);
+    obj.shape = loadMesh(file);
   } else {
     std::shared_ptr<const Solid> solid = readSolid(t, kind);
     // Cut-outs: spheres subtracted from the solid (object frame).

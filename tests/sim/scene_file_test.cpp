@@ -121,20 +121,35 @@ TEST_F(SceneFile, BadValuesAreErrors) {
       Errc::InvalidFile, {"lf.exr"}));
 }
 
-TEST_F(SceneFile, ObjMeshLoadsWithOutwardSmoothNormals) {
-  // An octahedron: 6 vertices, 8 outward-wound triangles.
+TEST_F(SceneFile, MeshesLoadWithOutwardSmoothNormals) {
+  // An octahedron, as OBJ and as PLY: 6 vertices, 8 outward-wound triangles.
   write("octa.obj",
         "v 1 0 0\nv -1 0 0\nv 0 1 0\nv 0 -1 0\nv 0 0 1\nv 0 0 -1\n"
         "f 1 3 5\nf 3 2 5\nf 2 4 5\nf 4 1 5\nf 3 1 6\nf 2 3 6\nf 4 2 6\nf 1 4 6\n");
-  const TriangleMesh mesh = loadObjMesh(dir_ / "octa.obj");
-  ASSERT_EQ(mesh.vertices.size(), 6u);
-  ASSERT_EQ(mesh.triangles.size(), 8u);
-  ASSERT_EQ(mesh.normals.size(), 6u);
-  // By symmetry each vertex normal points along the vertex itself.
-  for (size_t i = 0; i < 6; ++i) EXPECT_NEAR(mesh.normals[i].dot(mesh.vertices[i]), 1.0, 1e-12);
+  write("octa.ply",
+        "ply\nformat ascii 1.0\nelement vertex 6\nproperty float x\nproperty float y\nproperty float z\n"
+        "element face 8\nproperty list uchar int vertex_indices\nend_header\n"
+        "1 0 0\n-1 0 0\n0 1 0\n0 -1 0\n0 0 1\n0 0 -1\n"
+        "3 0 2 4\n3 2 1 4\n3 1 3 4\n3 3 0 4\n3 2 0 5\n3 1 2 5\n3 3 1 5\n3 0 3 5\n");
+  for (const char* file : {"octa.obj", "octa.ply"}) {
+    SCOPED_TRACE(file);
+    const TriangleMesh mesh = loadMesh(dir_ / file);
+    ASSERT_EQ(mesh.vertices.size(), 6u);
+    ASSERT_EQ(mesh.triangles.size(), 8u);
+    ASSERT_EQ(mesh.normals.size(), 6u);
+    // By symmetry each vertex normal points along the vertex itself.
+    for (size_t i = 0; i < 6; ++i) EXPECT_NEAR(mesh.normals[i].dot(mesh.vertices[i]), 1.0, 1e-6);
+    // Outward winding: every face normal points away from the centre.
+    for (const auto& t : mesh.triangles) {
+      const Vec3 n = (mesh.vertices[t[1]] - mesh.vertices[t[0]]).cross(mesh.vertices[t[2]] - mesh.vertices[t[0]]);
+      EXPECT_GT(n.dot(mesh.vertices[t[0]] + mesh.vertices[t[1]] + mesh.vertices[t[2]]), 0);
+    }
+  }
   write("bad.obj", "v 0 0 0\nv 1 0 0\nf 1 2 7\n");
-  EXPECT_THROW(loadObjMesh(dir_ / "bad.obj"), lfi::Error);
-  EXPECT_TRUE(throwsError([&] { loadObjMesh(dir_ / "none.obj"); }, Errc::NotFound, {"none.obj"}));
+  EXPECT_THROW(loadMesh(dir_ / "bad.obj"), lfi::Error);
+  write("text.ply", "this is not a mesh\n");
+  EXPECT_TRUE(throwsError([&] { loadMesh(dir_ / "text.ply"); }, Errc::InvalidFile, {"text.ply"}));
+  EXPECT_TRUE(throwsError([&] { loadMesh(dir_ / "none.obj"); }, Errc::NotFound, {"none.obj"}));
 }
 
 TEST_F(SceneFile, MeshAndAnalyticSphereRefractAlike) {

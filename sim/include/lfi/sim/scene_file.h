@@ -45,10 +45,11 @@ struct SceneDescription {
 
 SceneDescription loadSceneFile(const std::filesystem::path& path);
 
-// A Wavefront OBJ triangle mesh (polygons are fan-triangulated) with smooth
-// per-vertex normals averaged from the faces around each vertex (area-weighted).
-// Units: the file's units are taken as millimetres.
-TriangleMesh loadObjMesh(const std::filesystem::path& path);
+// A triangle mesh from any format Assimp reads (Wavefront OBJ, PLY, STL, ...;
+// polygons are triangulated, identical vertices joined) with smooth per-vertex
+// normals averaged from the faces around each vertex (area-weighted). The
+// file's units are taken as millimetres; faces must wind outwards.
+TriangleMesh loadMesh(const std::filesystem::path& path);
 
 // position (mm) and rotation (degrees, applied about x, then y, then z).
 Rigid3 placement(const std::vector<double>& position_mm, const std::vector<double>& rotation_deg);
