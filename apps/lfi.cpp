@@ -18,7 +18,6 @@
 #include <fmt/format.h>
 #include <unistd.h>
 
-#include <opencv2/imgcodecs.hpp>
 
 #include <atomic>
 #include <chrono>
@@ -62,12 +61,6 @@ private:
 // Ctrl-C asks long work to stop cleanly (renders check it between tiles).
 std::atomic<bool> gCancel{false};
 extern "C" void onInterrupt(int) { gCancel = true; }
-
-void writePng(const fs::path& path, const cv::Mat& image8, lfi::Overwrite overwrite) {
-  std::vector<uchar> bytes;
-  if (!cv::imencode(".png", image8, bytes)) lfi::fail(lfi::Errc::Io, "cannot encode '{}'", path.string());
-  lfi::writeFileAtomically(path, overwrite, std::string_view(reinterpret_cast<const char*>(bytes.data()), bytes.size()));
-}
 
 fs::path defaultBench() {
   const fs::path installed = fs::path(LFI_DATA_DIR) / "benches" / "reference.toml";
@@ -253,7 +246,7 @@ int main(int argc, char** argv) {
         const auto& cam = std::get<lfi::sim::TelecentricCamera>(d.sensor);
         const fs::path exr = renderOut / (d.name + ".exr"), png = renderOut / (d.name + ".png");
         lfi::writeRadianceExr(exr, image, {cam.objectPixel_mm(), "rendered radiance of scene " + d.name}, overwrite);
-        writePng(png, lfi::toneMapForDisplay(image), overwrite);
+        lfi::writePngAtomically(png, lfi::toneMapForDisplay(image), overwrite);
         fmt::print("{}\n{}\n", exr.string(), png.string());
       }
       const double samples = static_cast<double>(image.total()) * d.render.samplesPerPixel;
@@ -315,7 +308,7 @@ int main(int argc, char** argv) {
       cv::minMaxLoc(image, nullptr, &maxValue);
       cv::Mat png8;
       image.convertTo(png8, CV_8U, maxValue > 0 ? 255.0 / maxValue : 1.0);
-      writePng(inspectOut / "inspection.png", png8, overwrite);
+      lfi::writePngAtomically(inspectOut / "inspection.png", png8, overwrite);
       fmt::print("{}\n{}\n", (inspectOut / "inspection.exr").string(), (inspectOut / "inspection.png").string());
     } else if (*serve) {
       serveCamera(serveScene, serveOptions, serveThreads, quiet);

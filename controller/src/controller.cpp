@@ -1,6 +1,7 @@
 #include "lfi/controller/controller.h"
 
 #include "lfi/core/error.h"
+#include "lfi/core/image.h"
 #include "lfi/core/log.h"
 
 #include <algorithm>
@@ -37,11 +38,8 @@ void Controller::emit(const LightField& reference) {
   white_ = options_.white;
   if (white_ == 0) {
     // The 99.9th percentile: a few hot samples must not darken the whole panel.
-    const cv::Mat& image = reference.lensletImage();
-    std::vector<float> values(image.begin<float>(), image.end<float>());
-    const size_t k = std::min(values.size() - 1, static_cast<size_t>(0.999 * static_cast<double>(values.size())));
-    std::nth_element(values.begin(), values.begin() + static_cast<std::ptrdiff_t>(k), values.end());
-    white_ = values[k] > 0 ? values[k] : 1.0;
+    white_ = percentile(reference.lensletImage(), 0.999);
+    if (!(white_ > 0)) white_ = 1.0;
   }
   const PresentResult r = display_.show(reference, white_);
   if (r.status != PresentStatus::Presented)

@@ -2,6 +2,7 @@
 
 #include "lfi/core/error.h"
 
+#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include <algorithm>
@@ -17,13 +18,26 @@ void requireImageType(const cv::Mat& image, int cvType, const std::string& what)
          cv::typeToString(cvType));
 }
 
+double percentile(const cv::Mat& image, double fraction) {
+  requireImageType(image, CV_32FC1, "image for a percentile");
+  std::vector<float> values(image.begin<float>(), image.end<float>());
+  const size_t k = std::min(values.size() - 1,
+                            static_cast<size_t>(std::clamp(fraction, 0.0, 1.0) * static_cast<double>(values.size())));
+  std::nth_element(values.begin(), values.begin() + static_cast<std::ptrdiff_t>(k), values.end());
+  return values[k];
+}
+
+void writePngAtomically(const std::filesystem::path& path, const cv::Mat& image8, Overwrite overwrite) {
+  std::vector<uchar> bytes;
+  if (!cv::imencode(".png", image8, bytes)) fail(Errc::Io, "cannot encode '{}' as PNG", path.string());
+  writeFileAtomically(path, overwrite, std::string_view(reinterpret_cast<const char*>(bytes.data()), bytes.size()));
+}
+
 cv::Mat toneMapForDisplay(const cv::Mat& radiance, double white) {
   requireImageType(radiance, CV_32FC1, "radiance image to tone-map");
   if (white <= 0) {
-    std::vector<float> values(radiance.begin<float>(), radiance.end<float>());
-    const size_t k = std::min(values.size() - 1, static_cast<size_t>(0.999 * values.size()));
-    std::nth_element(values.begin(), values.begin() + k, values.end());
-    white = values[k] > 0 ? values[k] : 1.0;
+    white = percentile(radiance, 0.999);
+    if (!(white > 0)) white = 1.0;
   }
   cv::Mat out(radiance.size(), CV_8UC1);
   for (int r = 0; r < radiance.rows; ++r) {

@@ -7,7 +7,6 @@
 #include "lfi/sim/render.h"
 
 #include <fmt/format.h>
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include <cmath>
@@ -175,6 +174,45 @@ cv::Mat defectMask(const sim::Scene& scene, const sim::TelecentricCamera& camera
   return mask;
 }
 
+// Ground truth from the geometry, per scene: each defect's pixels (chief rays
+// followed through the part by refraction touch it; a defect smaller than a
+// pixel gets the pixel its centre projects to; dilated by one pixel for the
+// depth-of-field blur), and the intact lens's pixels. It depends on the part
+// and the camera only, not on the illumination, so it is traced once per camera.
+struct GroundTruth {
+  std::vector<std::vector<cv::Mat>> masks;  // [scene][defect]
+  std::vector<cv::Mat> allDefects;          // [scene]
+  cv::Mat lens;                             // the intact lens
+};
+
+GroundTruth traceGroundTruth(const Bench& bench, const std::vector<SceneSpec>& specs,
+                             const sim::TelecentricCamera& camera) {
+  GroundTruth truth;
+  for (const SceneSpec& spec : specs) {
+    const std::vector<Object> part = partObjects(bench, spec);
+    if (spec.name == "intact")
+      truth.lens = defectMask(sim::Scene(part), camera, *std::get<std::shared_ptr<const Solid>>(part[0].shape));
+    const sim::Scene scene(part);
+    cv::Mat all = cv::Mat::zeros(camera.height, camera.width, CV_8UC1);
+    std::vector<cv::Mat> masks;
+    for (const Defect& defect : spec.defects) {
+      cv::Mat m = defectMask(scene, camera, *defect.marker);
+      if (cv::countNonZero(m) == 0) {
+        const sim::Bounds b = defect.marker->bounds();
+        const Vec2 p = camera.project((b.lo + b.hi) * 0.5);
+        const cv::Point px(static_cast<int>(p.x), static_cast<int>(p.y));
+        if (px.inside(cv::Rect(0, 0, m.cols, m.rows))) m.at<uchar>(px) = 255;
+      }
+      cv::dilate(m, m, cv::Mat::ones(3, 3, CV_8U));
+      masks.push_back(m);
+      all |= m;
+    }
+    truth.masks.push_back(std::move(masks));
+    truth.allDefects.push_back(all);
+  }
+  return truth;
+}
+
 double robustSigma(const cv::Mat& values, const cv::Mat& exclude) {
   std::vector<float> v;
   for (int r = 0; r < values.rows; ++r)
@@ -229,12 +267,6 @@ cv::Mat toFloat(const cv::Mat& frame) {
   return f;
 }
 
-void writePng(const fs::path& path, const cv::Mat& image8, Overwrite overwrite) {
-  std::vector<uchar> bytes;
-  if (!cv::imencode(".png", image8, bytes)) fail(Errc::Io, "cannot encode '{}'", path.string());
-  writeFileAtomically(path, overwrite, std::string_view(reinterpret_cast<const char*>(bytes.data()), bytes.size()));
-}
-
 std::string htmlReport(const nlohmann::ordered_json& study);
 
 }  // namespace
@@ -276,7 +308,7 @@ struct Evaluation {
 // and judges it against the intact lens by the declared criterion. Writes the
 // frames and difference images to imagesDir when it is given.
 Evaluation evaluate(const Bench& bench, const Illumination& light, const std::vector<SceneSpec>& specs,
-                    const sim::TelecentricCamera& camera, sim::CameraSensorModel sensor, sim::RenderOptions ro,
+                    const GroundTruth& truth, const sim::TelecentricCamera& camera, sim::CameraSensorModel sensor, sim::RenderOptions ro,
                     std::uint64_t seed, Progress& progress, double renderUnits, const fs::path* imagesDir,
                     Overwrite overwrite) {
   auto renderScene = [&](const SceneSpec& spec, std::uint64_t mcSeed, const std::string& label) {
@@ -318,12 +350,9 @@ Evaluation evaluate(const Bench& bench, const Illumination& light, const std::ve
   };
   Evaluation out;
   {
-    std::vector<Object> objects = partObjects(bench, specs[0]);
-    objects.push_back(backlight(bench, light));
-    const cv::Mat lens = defectMask(sim::Scene(std::move(objects)), camera,
-                                    *std::get<std::shared_ptr<const Solid>>(partObjects(bench, specs[0])[0].shape));
     const cv::Mat bright = smooth > 0.25 * brightest;
-    out.intactLitFraction = static_cast<double>(cv::countNonZero(bright & lens)) / std::max(1, cv::countNonZero(lens));
+    out.intactLitFraction =
+        static_cast<double>(cv::countNonZero(bright & truth.lens)) / std::max(1, cv::countNonZero(truth.lens));
   }
   if (imagesDir) {
     // How large the Monte Carlo noise of one rendering is against the camera's
@@ -345,25 +374,8 @@ Evaluation evaluate(const Bench& bench, const Illumination& light, const std::ve
     const auto index = static_cast<std::uint64_t>(&spec - specs.data());
     const cv::Mat frame = isIntact ? controlFrame : toFloat(sensor.capture(radiance, seed * 7919 + 100 * (index + 1)));
     const cv::Mat diff = zScore(frame, radiance);
-    // Ground-truth masks from the geometry (chief rays through this scene).
-    std::vector<Object> objects = partObjects(bench, spec);
-    objects.push_back(backlight(bench, light));
-    const sim::Scene scene(std::move(objects));
-    cv::Mat allDefects = cv::Mat::zeros(diff.size(), CV_8UC1);
-    std::vector<cv::Mat> masks;
-    for (const Defect& defect : spec.defects) {
-      cv::Mat m = defectMask(scene, camera, *defect.marker);
-      if (cv::countNonZero(m) == 0) {
-        // Smaller than a pixel: the pixel its centre projects to.
-        const sim::Bounds b = defect.marker->bounds();
-        const Vec2 p = camera.project((b.lo + b.hi) * 0.5);
-        const cv::Point px(static_cast<int>(p.x), static_cast<int>(p.y));
-        if (px.inside(cv::Rect(0, 0, m.cols, m.rows))) m.at<uchar>(px) = 255;
-      }
-      cv::dilate(m, m, cv::Mat::ones(3, 3, CV_8U));  // depth-of-field blur reaches one pixel further
-      masks.push_back(m);
-      allDefects |= m;
-    }
+    const std::vector<cv::Mat>& masks = truth.masks[index];
+    const cv::Mat& allDefects = truth.allDefects[index];
     // z has unit variance where the camera's noise is all there is; a larger
     // spread raises the bar accordingly.
     const double sigma = std::max(1.0, robustSigma(diff, allDefects));
@@ -390,10 +402,10 @@ Evaluation evaluate(const Bench& bench, const Illumination& light, const std::ve
                        overwrite);
       cv::Mat png8;
       frame.convertTo(png8, CV_8U, 255.0 / sensor.maxDigitalNumber());
-      writePng(*imagesDir / (stem + ".png"), png8, overwrite);
+      writePngAtomically(*imagesDir / (stem + ".png"), png8, overwrite);
       cv::Mat diff8;
       diff.convertTo(diff8, CV_8U, 127.0 / 8, 128);  // +-8 sigma fills the range
-      writePng(*imagesDir / (stem + "_diff.png"), diff8, overwrite);
+      writePngAtomically(*imagesDir / (stem + "_diff.png"), diff8, overwrite);
     }
   }
   return out;
@@ -483,9 +495,10 @@ nlohmann::ordered_json runStudy(const Bench& bench, const fs::path& outDir, cons
   ro.samplesPerPixel = q.samplesPerPixel;
   ro.threads = options.threads;
   const fs::path imagesDir = outDir / "images";
+  const GroundTruth truth = traceGroundTruth(bench, specs, camera);
   for (size_t si = 0; si < kSetups.size(); ++si) {
     const Illumination light{kSetups[si], lightField, bench.inverseSchlieren.lookup, 0};
-    const Evaluation e = evaluate(bench, light, specs, camera, bench.sensorModel(), ro, options.seed * 1000 + si * 100,
+    const Evaluation e = evaluate(bench, light, specs, truth, camera, bench.sensorModel(), ro, options.seed * 1000 + si * 100,
                                   progress, 1.0, &imagesDir, overwrite);
     study["noise"][kSetups[si]] = e.noise;
     for (const auto& [scene, result] : e.scenes.items()) {
@@ -502,6 +515,8 @@ nlohmann::ordered_json runStudy(const Bench& bench, const fs::path& outDir, cons
     // (only as large as the lens's footprint on the display plane needs) and
     // renders the inverse schlieren setup with both lookups.
     const sim::TelecentricCamera sweepCamera = binned(sweepQuality.binning);
+    // The quick quality's camera is the sweep's: its ground truth is traced already.
+    const GroundTruth sweepTruth = sweepQuality.binning == q.binning ? truth : traceGroundTruth(bench, specs, sweepCamera);
     sim::RenderOptions sro;
     sro.samplesPerPixel = sweepQuality.samplesPerPixel;
     sro.threads = options.threads;
@@ -541,7 +556,7 @@ nlohmann::ordered_json runStudy(const Bench& bench, const fs::path& outDir, cons
           {"nearest", LightFieldLookup::Nearest}, {"interpolated", LightFieldLookup::Interpolated}};
       for (const auto& [name, lookup] : lookups) {
         const Evaluation e = evaluate(bench, Illumination{"inverse_schlieren", lf, lookup, displayError}, specs,
-                                      sweepCamera, bench.sensorModel(), sro, options.seed * 1000 + 777, progress,
+                                      sweepTruth, sweepCamera, bench.sensorModel(), sro, options.seed * 1000 + 777, progress,
                                       kSweepRender, nullptr, overwrite);
         for (const auto& [scene, result] : e.scenes.items())
           for (const auto& [defect, cell] : result["defects"].items())

@@ -11,6 +11,8 @@
 // Row 0 is the top of the image; for camera images the top is world +y and
 // columns run along world +x (the camera model makes the image upright).
 
+#include "lfi/core/atomic_file.h"
+
 #include <opencv2/core.hpp>
 
 #include <filesystem>
@@ -21,6 +23,13 @@ namespace lfi {
 // Throws Errc::InvalidArgument naming `what` unless `image` has type `cvType`
 // and is not empty.
 void requireImageType(const cv::Mat& image, int cvType, const std::string& what);
+
+// The value below which `fraction` (0..1) of a CV_32FC1 image's pixels lie
+// (nearest rank). Throws Errc::InvalidArgument for an empty image.
+double percentile(const cv::Mat& image, double fraction);
+
+// Encodes an 8-bit image as PNG and writes it atomically (atomic_file.h).
+void writePngAtomically(const std::filesystem::path& path, const cv::Mat& image8, Overwrite overwrite);
 
 // Tone-maps a linear radiance image to 8 bits for people: divides by `white`
 // (<= 0: the 99.9th percentile), clamps, applies the sRGB transfer curve.
