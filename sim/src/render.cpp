@@ -150,71 +150,88 @@ struct PathState {
   int depth = 0;
 };
 
-// One walk through the scene. The policy decides each Fresnel event (split
-// into both branches, or choose one), bounces off diffuse surfaces and sees
-// every hit. Returns the radiance carried back.
+// What one interaction did to a path.
+enum class Step {
+  Done,      // ended (an emitter, an absorber, left the scene): `radiance` is its contribution
+  Continue,  // goes on along p.ray
+  Split,     // goes on along p.ray (refracted) and along `branch` (reflected), both weighted
+};
+
+// One interaction of path p with what it hit. The policy decides each Fresnel
+// event (split into both branches, or choose one) and bounces off diffuse
+// surfaces. Shared by the one-ray walk and the packet renderer.
+template <typename Policy>
+Step interact(const Scene& scene, const Hit& hit, PathState& p, PathState& branch, double& radiance, Policy& policy) {
+  radiance = 0;
+  if (!hit.valid()) return Step::Done;
+  if (p.media.size()) p.throughput *= std::exp(-p.media.absorption(scene) * hit.t);
+  const Object& obj = scene.object(hit.object);
+  if (obj.emission) {
+    radiance = p.throughput * emittedRadiance(scene, hit, *obj.emission, -p.ray.direction);
+    return Step::Done;
+  }
+  const Vec3 d = p.ray.direction;
+  const bool entering = d.dot(hit.normal) < 0;
+  const Vec3 facing = entering ? hit.normal : -hit.normal;  // towards the incoming side
+  // Meshes are intersected in float: step off the surface to avoid re-hits.
+  const bool exact = std::holds_alternative<std::shared_ptr<const Solid>>(obj.shape);
+  auto leave = [&](const Vec3& dir) {
+    const double offset = exact ? 0.0 : 1e-4 * (dir.dot(facing) > 0 ? 1 : -1);
+    return Ray{hit.point + facing * offset, dir};
+  };
+  const int depth = p.depth++;
+
+  if (std::holds_alternative<Absorber>(obj.material)) return Step::Done;
+  if (const auto* diffuse = std::get_if<Diffuse>(&obj.material)) {
+    if (!policy.diffuse) return Step::Done;
+    p.throughput *= diffuse->albedo;
+    p.ray = leave(policy.bounce(facing));
+    return Step::Continue;
+  }
+  const auto& glass = std::get<Dielectric>(obj.material);
+  // Entering: from the current medium into the glass. Leaving: from the
+  // glass into whatever medium contains it (a bubble in glass exits to glass).
+  const double n1 = entering ? p.media.ior(scene) : glass.ior;
+  const double n2 = entering ? glass.ior : p.media.ior(scene, hit.object);
+  Vec3 refracted;
+  if (!refract(d, facing, n1 / n2, refracted)) {  // total internal reflection
+    p.ray = leave(reflect(d, facing));
+    return Step::Continue;
+  }
+  const double reflectance = fresnelReflectance(-d.dot(facing), n1, n2);
+  const bool split = depth < policy.splitDepth;
+  if (split) {
+    // Splitting: both branches, weighted, instead of a random choice.
+    branch = p;
+    branch.ray = leave(reflect(d, facing));
+    branch.throughput *= reflectance;
+    p.throughput *= 1 - reflectance;
+  } else if (policy.chooseReflection(reflectance)) {
+    p.ray = leave(reflect(d, facing));
+    return Step::Continue;
+  }
+  p.ray = leave(refracted);
+  if (entering)
+    p.media.push(hit.object);
+  else
+    p.media.remove(hit.object);
+  return split ? Step::Split : Step::Continue;
+}
+
+// One path and its split branches, one ray at a time. Returns the radiance carried back.
 template <typename Policy>
 double walk(const Scene& scene, PathState p, Policy& policy) {
-  for (; p.depth < policy.maxDepth; ++p.depth) {
+  double sum = 0;
+  while (p.depth < policy.maxDepth) {
     const Hit hit = scene.intersect(p.ray);
     policy.visit(hit, p.ray);
-    if (!hit.valid()) return 0;
-    if (p.media.size()) p.throughput *= std::exp(-p.media.absorption(scene) * hit.t);
-    const Object& obj = scene.object(hit.object);
-    if (obj.emission) return p.throughput * emittedRadiance(scene, hit, *obj.emission, -p.ray.direction);
-
-    const Vec3 d = p.ray.direction;
-    const bool entering = d.dot(hit.normal) < 0;
-    const Vec3 facing = entering ? hit.normal : -hit.normal;  // towards the incoming side
-    // Meshes are intersected in float: step off the surface to avoid re-hits.
-    const bool exact = std::holds_alternative<std::shared_ptr<const Solid>>(obj.shape);
-    auto leave = [&](const Vec3& dir) {
-      const double offset = exact ? 0.0 : 1e-4 * (dir.dot(facing) > 0 ? 1 : -1);
-      return Ray{hit.point + facing * offset, dir};
-    };
-
-    if (std::holds_alternative<Absorber>(obj.material)) return 0;
-    if (const auto* diffuse = std::get_if<Diffuse>(&obj.material)) {
-      if (!policy.diffuse) return 0;
-      p.throughput *= diffuse->albedo;
-      p.ray = leave(policy.bounce(facing));
-      continue;
-    }
-    const auto& glass = std::get<Dielectric>(obj.material);
-    // Entering: from the current medium into the glass. Leaving: from the
-    // glass into whatever medium contains it (a bubble in glass exits to glass).
-    const double n1 = entering ? p.media.ior(scene) : glass.ior;
-    const double n2 = entering ? glass.ior : p.media.ior(scene, hit.object);
-    const double reflectance = fresnelReflectance(-d.dot(facing), n1, n2);
-    Vec3 refracted;
-    if (!refract(d, facing, n1 / n2, refracted)) {  // total internal reflection
-      p.ray = leave(reflect(d, facing));
-      continue;
-    }
-    PathState t = p;
-    t.ray = leave(refracted);
-    if (entering)
-      t.media.push(hit.object);
-    else
-      t.media.remove(hit.object);
-    ++t.depth;
-    if (p.depth < policy.splitDepth) {
-      // Splitting: both branches, weighted, instead of a random choice.
-      PathState r = p;
-      r.ray = leave(reflect(d, facing));
-      r.throughput *= reflectance;
-      ++r.depth;
-      t.throughput *= 1 - reflectance;
-      return walk(scene, r, policy) + walk(scene, t, policy);
-    }
-    if (policy.chooseReflection(reflectance)) {
-      p.ray = leave(reflect(d, facing));
-      continue;
-    }
-    p = t;
-    --p.depth;  // the loop increments it
+    PathState branch = p;  // overwritten by a split
+    double radiance;
+    const Step step = interact(scene, hit, p, branch, radiance, policy);
+    if (step == Step::Done) return sum + radiance;
+    if (step == Step::Split) sum += walk(scene, branch, policy);
   }
-  return 0;
+  return sum;
 }
 
 struct SampledPolicy {
@@ -266,6 +283,197 @@ std::vector<Vec3> refractionPath(const Scene& scene, const Ray& ray, int maxDept
 // Fresnel choices per sample drawn from a Latin hypercube rather than at random.
 constexpr int kStratifiedChoices = 4;
 
+namespace {
+
+// A pixel whose samples are being traced: its sample plan and running sum.
+struct PixelWork {
+  int i = 0, j = 0;
+  int issued = 0;    // samples started
+  int inFlight = 0;  // paths (samples and their split branches) not yet ended
+  double sum = 0;
+  std::vector<int> permutation;   // stop strata, independently permuted
+  std::vector<double> decisions;  // Latin hypercube, kStratifiedChoices per sample
+};
+
+// A path in the packet: its state, its random stream and its pixel.
+struct Lane {
+  PathState path;
+  Sampler sampler{0, 0};
+  const double* decisions = nullptr;
+  int decisionCount = 0;
+  int pixel = 0;  // index into the tile's PixelWork slots
+};
+
+// Renders one tile: the pixels' samples are traced as packets of up to
+// Scene::kPacket paths through Embree, refilled as paths end, so that a
+// packet stays full and coherent (neighbouring samples of one or two pixels).
+// Every path draws only from its own random stream, so the result does not
+// depend on how paths share packets.
+class TileRenderer {
+public:
+  TileRenderer(const Scene& scene, const Sensor& sensor, const RenderOptions& options)
+      : scene_(scene), sensor_(sensor), options_(options), width_(sensorWidth(sensor)),
+        side_(static_cast<int>(std::sqrt(static_cast<double>(options.samplesPerPixel)))), strata_(side_ * side_) {}
+
+  void render(int x0, int y0, int x1, int y1, cv::Mat& image) {
+    nextI_ = x0, nextJ_ = y0, x0_ = x0, x1_ = x1, y1_ = y1;
+    image_ = &image;
+    int issuing = -1;
+    std::array<Lane*, Scene::kPacket> active{};
+    std::array<Ray, Scene::kPacket> rays;
+    std::array<Hit, Scene::kPacket> hits;
+    std::vector<Lane> lanes(Scene::kPacket);
+    std::vector<int> freeLanes;
+    for (int k = static_cast<int>(Scene::kPacket) - 1; k >= 0; --k) freeLanes.push_back(k);
+    size_t n = 0;
+    for (;;) {
+      // Fill the packet: split branches first, then new samples.
+      while (n < Scene::kPacket) {
+        Lane* lane = &lanes[static_cast<size_t>(freeLanes.back())];
+        if (!pending_.empty()) {
+          *lane = pending_.back();
+          pending_.pop_back();
+        } else {
+          if (issuing < 0 || pixels_[static_cast<size_t>(issuing)].issued == options_.samplesPerPixel) {
+            if (issuing >= 0) finishIfDone(issuing);
+            issuing = startPixel();
+            if (issuing < 0) break;
+          }
+          if (!startSample(issuing, *lane)) continue;
+        }
+        freeLanes.pop_back();
+        active[n++] = lane;
+      }
+      if (n == 0) break;
+      for (size_t k = 0; k < n; ++k) rays[k] = active[k]->path.ray;
+      scene_.intersect(std::span(rays.data(), n), std::span(hits.data(), n));
+      size_t kept = 0;
+      for (size_t k = 0; k < n; ++k) {
+        Lane& lane = *active[k];
+        SampledPolicy policy{lane.sampler, options_.maxDepth, options_.splitDepth, lane.decisions, lane.decisionCount};
+        PathState branch = lane.path;
+        double radiance;
+        const Step step = interact(scene_, hits[k], lane.path, branch, radiance, policy);
+        lane.decisions = policy.decisions;
+        lane.decisionCount = policy.decisionCount;
+        PixelWork& px = pixels_[static_cast<size_t>(lane.pixel)];
+        if (step == Step::Split) {
+          // The branch gets its own stream, keyed by the parent's state and depth.
+          pending_.push_back({branch, Sampler(lane.sampler.state + static_cast<std::uint64_t>(branch.depth),
+                                              lane.sampler.increment),
+                              lane.decisions, lane.decisionCount, lane.pixel});
+          ++px.inFlight;
+        }
+        if (step != Step::Done && lane.path.depth < options_.maxDepth) {
+          active[kept++] = &lane;
+          continue;
+        }
+        px.sum += radiance;
+        --px.inFlight;
+        freeLanes.push_back(static_cast<int>(&lane - lanes.data()));
+        if (lane.pixel != issuing) finishIfDone(lane.pixel);
+      }
+      n = kept;
+    }
+  }
+
+private:
+  // Claims a slot for the tile's next pixel and plans its samples; -1 when the tile is done.
+  int startPixel() {
+    if (nextJ_ >= y1_) return -1;
+    int slot;
+    if (!freeSlots_.empty()) {
+      slot = freeSlots_.back();
+      freeSlots_.pop_back();
+    } else {
+      slot = static_cast<int>(pixels_.size());
+      pixels_.emplace_back();
+    }
+    PixelWork& px = pixels_[static_cast<size_t>(slot)];
+    px.i = nextI_, px.j = nextJ_, px.issued = 0, px.inFlight = 0, px.sum = 0;
+    if (++nextI_ == x1_) nextI_ = x0_, ++nextJ_;
+    const int spp = options_.samplesPerPixel;
+    Sampler pixelSampler(options_.seed, pixelIndex(px));
+    // Jittered strata for the pixel area and, independently permuted, for
+    // the stop: the first m^2 samples cover both evenly; the rest are random.
+    px.permutation.resize(static_cast<size_t>(strata_));
+    for (int k = 0; k < strata_; ++k) px.permutation[static_cast<size_t>(k)] = k;
+    for (int k = strata_ - 1; k > 0; --k)
+      std::swap(px.permutation[static_cast<size_t>(k)],
+                px.permutation[static_cast<size_t>(pixelSampler.nextU32() % static_cast<std::uint32_t>(k + 1))]);
+    // Latin hypercube for the first Fresnel choices: across the pixel's
+    // samples each choice's random value covers [0,1) evenly, so the few
+    // reflect/refract branches of a lens are taken in proportion.
+    px.decisions.resize(static_cast<size_t>(spp) * kStratifiedChoices);
+    order_.resize(static_cast<size_t>(spp));
+    for (int d = 0; d < kStratifiedChoices; ++d) {
+      for (int k = 0; k < spp; ++k) order_[static_cast<size_t>(k)] = k;
+      for (int k = spp - 1; k > 0; --k)
+        std::swap(order_[static_cast<size_t>(k)],
+                  order_[static_cast<size_t>(pixelSampler.nextU32() % static_cast<std::uint32_t>(k + 1))]);
+      for (int k = 0; k < spp; ++k)
+        px.decisions[static_cast<size_t>(k) * kStratifiedChoices + d] = (order_[static_cast<size_t>(k)] + pixelSampler.next()) / spp;
+    }
+    return slot;
+  }
+
+  // Starts the pixel's next sample in `lane`; false when its ray does not exist
+  // (outside a light field sensor's disc: the sample contributes 0).
+  bool startSample(int slot, Lane& lane) {
+    PixelWork& px = pixels_[static_cast<size_t>(slot)];
+    const int s = px.issued++;
+    // One random stream per sample: two scenes that differ only where a path
+    // can reach (a defect) give identical samples everywhere else.
+    lane.sampler = Sampler(options_.seed, (pixelIndex(px) << 24) ^ static_cast<std::uint64_t>(s) ^ 0x5bd1e995ull);
+    auto stratified = [&](int stratum) {
+      const double u = lane.sampler.next(), v = lane.sampler.next();
+      if (stratum >= strata_) return Vec2(u, v);
+      return Vec2((stratum % side_ + u) / side_, (stratum / side_ + v) / side_);
+    };
+    const Vec2 offset = stratified(s);
+    std::optional<Ray> ray;
+    if (const auto* cam = std::get_if<TelecentricCamera>(&sensor_)) {
+      const Vec2 u = stratified(s < strata_ ? px.permutation[static_cast<size_t>(s)] : s);
+      ray = cam->ray(px.i, px.j, offset, concentricDisc(u.x, u.y));
+    } else {
+      ray = std::get<LightFieldSensor>(sensor_).ray(px.i, px.j, offset);
+    }
+    if (!ray) return false;
+    lane.path = PathState{.ray = *ray};
+    lane.decisions = &px.decisions[static_cast<size_t>(s) * kStratifiedChoices];
+    lane.decisionCount = kStratifiedChoices;
+    lane.pixel = slot;
+    ++px.inFlight;
+    return true;
+  }
+
+  // Writes a pixel whose samples have all been started and ended, and frees its slot.
+  void finishIfDone(int slot) {
+    PixelWork& px = pixels_[static_cast<size_t>(slot)];
+    if (px.issued < options_.samplesPerPixel || px.inFlight > 0) return;
+    image_->ptr<float>(px.j)[px.i] = static_cast<float>(px.sum / options_.samplesPerPixel);
+    px.issued = -1;  // freed
+    freeSlots_.push_back(slot);
+  }
+
+  std::uint64_t pixelIndex(const PixelWork& px) const {
+    return static_cast<std::uint64_t>(px.j) * static_cast<std::uint64_t>(width_) + static_cast<std::uint64_t>(px.i);
+  }
+
+  const Scene& scene_;
+  const Sensor& sensor_;
+  const RenderOptions& options_;
+  int width_, side_, strata_;
+  int nextI_ = 0, nextJ_ = 0, x0_ = 0, x1_ = 0, y1_ = 0;
+  cv::Mat* image_ = nullptr;
+  std::vector<PixelWork> pixels_;
+  std::vector<int> freeSlots_;
+  std::vector<Lane> pending_;
+  std::vector<int> order_;
+};
+
+}  // namespace
+
 cv::Mat render(const Scene& scene, const Sensor& sensor, const RenderOptions& options) {
   if (options.samplesPerPixel < 1) fail(Errc::InvalidArgument, "render: samplesPerPixel must be >= 1");
   if (options.splitDepth < 0 || options.splitDepth > 12)
@@ -280,67 +488,13 @@ cv::Mat render(const Scene& scene, const Sensor& sensor, const RenderOptions& op
   std::atomic<int> done{0};
   std::atomic<bool> stopped{false};
 
-  const int side = static_cast<int>(std::sqrt(static_cast<double>(options.samplesPerPixel)));
-  const int strata = side * side;
   auto renderTile = [&](int tile) {
     if (options.cancel && options.cancel->load(std::memory_order_relaxed)) {
       stopped = true;
       return;
     }
     const int x0 = (tile % tilesX) * ts, y0 = (tile / tilesX) * ts;
-    std::vector<int> permutation(static_cast<size_t>(strata));
-    const int spp = options.samplesPerPixel;
-    std::vector<double> decisions(static_cast<size_t>(spp) * kStratifiedChoices);
-    std::vector<int> order(static_cast<size_t>(spp));
-    for (int j = y0; j < std::min(y0 + ts, height); ++j) {
-      float* row = image.ptr<float>(j);
-      for (int i = x0; i < std::min(x0 + ts, width); ++i) {
-        const auto pixel = static_cast<std::uint64_t>(j) * static_cast<std::uint64_t>(width) + i;
-        Sampler pixelSampler(options.seed, pixel);
-        // Jittered strata for the pixel area and, independently permuted, for
-        // the stop: the first m^2 samples cover both evenly; the rest are random.
-        for (int k = 0; k < strata; ++k) permutation[static_cast<size_t>(k)] = k;
-        for (int k = strata - 1; k > 0; --k)
-          std::swap(permutation[static_cast<size_t>(k)],
-                    permutation[static_cast<size_t>(pixelSampler.nextU32() % static_cast<std::uint32_t>(k + 1))]);
-        // Latin hypercube for the first Fresnel choices: across the pixel's
-        // samples each choice's random value covers [0,1) evenly, so the few
-        // reflect/refract branches of a lens are taken in proportion.
-        for (int d = 0; d < kStratifiedChoices; ++d) {
-          for (int k = 0; k < spp; ++k) order[static_cast<size_t>(k)] = k;
-          for (int k = spp - 1; k > 0; --k)
-            std::swap(order[static_cast<size_t>(k)],
-                      order[static_cast<size_t>(pixelSampler.nextU32() % static_cast<std::uint32_t>(k + 1))]);
-          for (int k = 0; k < spp; ++k)
-            decisions[static_cast<size_t>(k) * kStratifiedChoices + d] =
-                (order[static_cast<size_t>(k)] + pixelSampler.next()) / spp;
-        }
-        double sum = 0;
-        for (int s = 0; s < options.samplesPerPixel; ++s) {
-          // One random stream per sample: two scenes that differ only where a
-          // path can reach (a defect) give identical samples everywhere else.
-          Sampler sampler(options.seed, (pixel << 24) ^ static_cast<std::uint64_t>(s) ^ 0x5bd1e995ull);
-          auto stratified = [&](int stratum) {
-            const double u = sampler.next(), v = sampler.next();
-            if (stratum >= strata) return Vec2(u, v);
-            return Vec2((stratum % side + u) / side, (stratum / side + v) / side);
-          };
-          const Vec2 offset = stratified(s);
-          std::optional<Ray> ray;
-          if (const auto* cam = std::get_if<TelecentricCamera>(&sensor)) {
-            const Vec2 u = stratified(s < strata ? permutation[static_cast<size_t>(s)] : s);
-            const Vec2 disc = concentricDisc(u.x, u.y);
-            ray = cam->ray(i, j, offset, disc);
-          } else {
-            ray = std::get<LightFieldSensor>(sensor).ray(i, j, offset);
-          }
-          if (ray)
-            sum += traceRadiance(scene, *ray, sampler, options.maxDepth, options.splitDepth,
-                                 &decisions[static_cast<size_t>(s) * kStratifiedChoices], kStratifiedChoices);
-        }
-        row[i] = static_cast<float>(sum / options.samplesPerPixel);
-      }
-    }
+    TileRenderer(scene, sensor, options).render(x0, y0, std::min(x0 + ts, width), std::min(y0 + ts, height), image);
     const int finished = ++done;
     if (options.progress) options.progress(static_cast<double>(finished) / tiles);
   };

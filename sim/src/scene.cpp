@@ -5,6 +5,8 @@
 
 #include <embree3/rtcore.h>
 
+#include <algorithm>
+#include <array>
 #include <cmath>
 
 namespace lfi::sim {
@@ -19,16 +21,53 @@ struct SolidGeometry {
   int object;
 };
 
-// Embree's context, extended with the double-precision ray and best hit so
-// that analytic shapes are intersected and reported without float rounding.
+// Embree finds which solids each ray may hit (their bounds); the exact
+// crossings are then computed in double precision for all candidate rays of a
+// solid at once, after the traversal: Embree's packet traversal hands the
+// callback only one or a few rays at a time, while the solids' convex kernel
+// is lane-parallel. Lanes are the rays' ids (their index in the packet).
+struct Candidate {
+  const SolidGeometry* solid;
+  unsigned lane;
+};
+
 struct HitContext {
   RTCIntersectContext embree;
-  Ray ray;  // world frame
+  const Ray* rays;  // world frame
   double tMin;
-  double bestT;
-  Vec3 bestNormal;  // world frame
-  int bestObject;
+  double* bestT;
+  Vec3* bestNormal;  // world frame
+  int* bestObject;
+  std::array<Candidate, 4 * Solid::kBatch> pending;
+  int count = 0;
 };
+
+// Intersects the pending candidates exactly and keeps each lane's nearest.
+void resolveCandidates(HitContext& ctx) {
+  std::sort(ctx.pending.begin(), ctx.pending.begin() + ctx.count,
+            [](const Candidate& a, const Candidate& b) { return a.solid < b.solid || (a.solid == b.solid && a.lane < b.lane); });
+  Ray local[Solid::kBatch];
+  double t[Solid::kBatch];
+  Vec3 normal[Solid::kBatch];
+  for (int begin = 0; begin < ctx.count;) {
+    const SolidGeometry* g = ctx.pending[static_cast<size_t>(begin)].solid;
+    int m = 0;
+    for (; begin + m < ctx.count && m < Solid::kBatch && ctx.pending[static_cast<size_t>(begin + m)].solid == g; ++m) {
+      const Ray& ray = ctx.rays[ctx.pending[static_cast<size_t>(begin + m)].lane];
+      local[m] = {g->objectFromWorld.point(ray.origin), g->objectFromWorld.vector(ray.direction)};
+    }
+    g->solid->nearestCrossings(m, local, ctx.tMin, t, normal);
+    for (int i = 0; i < m; ++i) {
+      const unsigned lane = ctx.pending[static_cast<size_t>(begin + i)].lane;
+      if (!(t[i] < ctx.bestT[lane])) continue;
+      ctx.bestT[lane] = t[i];
+      ctx.bestNormal[lane] = g->worldFromObject.vector(normal[i]);
+      ctx.bestObject[lane] = g->object;
+    }
+    begin += m;
+  }
+  ctx.count = 0;
+}
 
 void solidBounds(const RTCBoundsFunctionArguments* args) {
   const auto* g = static_cast<const SolidGeometry*>(args->geometryUserPtr);
@@ -46,36 +85,13 @@ void solidBounds(const RTCBoundsFunctionArguments* args) {
 }
 
 void solidIntersect(const RTCIntersectFunctionNArguments* args) {
-  if (args->N != 1 || !args->valid[0]) return;  // the scene is only traced with rtcIntersect1
+  auto& ctx = *reinterpret_cast<HitContext*>(args->context);
   const auto* g = static_cast<const SolidGeometry*>(args->geometryUserPtr);
-  auto* ctx = reinterpret_cast<HitContext*>(args->context);
-  const Ray local{g->objectFromWorld.point(ctx->ray.origin), g->objectFromWorld.vector(ctx->ray.direction)};
-  IntervalList list;
-  g->solid->intervals(local, list);
-  RTCRayN* rays = RTCRayHitN_RayN(args->rayhit, 1);
-  RTCHitN* hits = RTCRayHitN_HitN(args->rayhit, 1);
-  for (int i = 0; i < list.size(); ++i) {
-    for (const SurfacePoint* s : {&list[i].enter, &list[i].exit}) {
-      // Embree's own geometry (rectangles, meshes) may already have shortened
-      // the ray without touching bestT: tfar bounds the search as well.
-      if (s->t <= ctx->tMin || s->t >= ctx->bestT || s->t > RTCRayN_tfar(rays, 1, 0) || !std::isfinite(s->t))
-        continue;
-      ctx->bestT = s->t;
-      ctx->bestNormal = g->worldFromObject.vector(s->normal);
-      ctx->bestObject = g->object;
-      // Round tfar up, so that it never cuts below bestT (a nearer solid still passes).
-      float tfar = static_cast<float>(s->t);
-      if (tfar < s->t) tfar = std::nextafter(tfar, std::numeric_limits<float>::infinity());
-      RTCRayN_tfar(rays, 1, 0) = tfar;
-      RTCHitN_Ng_x(hits, 1, 0) = static_cast<float>(ctx->bestNormal.x);
-      RTCHitN_Ng_y(hits, 1, 0) = static_cast<float>(ctx->bestNormal.y);
-      RTCHitN_Ng_z(hits, 1, 0) = static_cast<float>(ctx->bestNormal.z);
-      RTCHitN_u(hits, 1, 0) = 0;
-      RTCHitN_v(hits, 1, 0) = 0;
-      RTCHitN_primID(hits, 1, 0) = args->primID;
-      RTCHitN_geomID(hits, 1, 0) = args->geomID;
-      RTCHitN_instID(hits, 1, 0, 0) = args->context->instID[0];
-    }
+  RTCRayN* rays = RTCRayHitN_RayN(args->rayhit, args->N);
+  for (unsigned k = 0; k < args->N; ++k) {
+    if (!args->valid[k]) continue;
+    if (ctx.count == static_cast<int>(ctx.pending.size())) resolveCandidates(ctx);
+    ctx.pending[static_cast<size_t>(ctx.count++)] = {g, RTCRayN_id(rays, args->N, k)};
   }
 }
 
@@ -173,12 +189,11 @@ Scene::Scene(std::vector<Object> objects, double ambientIor)
 Scene::~Scene() = default;
 
 Hit Scene::intersect(const Ray& ray, double tMin, double tMax) const {
-  HitContext ctx;
+  double bestT = tMax;
+  Vec3 bestNormal;
+  int bestObject = -1;
+  HitContext ctx{{}, &ray, tMin, &bestT, &bestNormal, &bestObject, {}, 0};
   rtcInitIntersectContext(&ctx.embree);
-  ctx.ray = ray;
-  ctx.tMin = tMin;
-  ctx.bestT = tMax;
-  ctx.bestObject = -1;
   RTCRayHit rh;
   rh.ray.org_x = static_cast<float>(ray.origin.x);
   rh.ray.org_y = static_cast<float>(ray.origin.y);
@@ -195,29 +210,78 @@ Hit Scene::intersect(const Ray& ray, double tMin, double tMax) const {
   rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
   rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
   rtcIntersect1(impl_->scene, &ctx.embree, &rh);
+  resolveCandidates(ctx);
+  return completeHit(ray, rh.hit.geomID, rh.hit.primID, rh.ray.tfar, {rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z},
+                     rh.hit.u, rh.hit.v, bestObject, bestT, bestNormal);
+}
 
+void Scene::intersect(std::span<const Ray> rays, std::span<Hit> hits, double tMin) const {
+  if (rays.size() > kPacket || hits.size() < rays.size())
+    fail(Errc::InvalidArgument, "Scene::intersect: {} rays for {} hits (at most {} at once)", rays.size(), hits.size(),
+         kPacket);
+  double bestT[kPacket];
+  Vec3 bestNormal[kPacket];
+  int bestObject[kPacket];
+  HitContext ctx{{}, rays.data(), tMin, bestT, bestNormal, bestObject, {}, 0};
+  rtcInitIntersectContext(&ctx.embree);
+  ctx.embree.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+  alignas(64) int valid[kPacket];
+  alignas(64) RTCRayHit16 rh;
+  const int n = static_cast<int>(rays.size());
+  for (int k = 0; k < static_cast<int>(kPacket); ++k) {
+    valid[k] = k < n ? -1 : 0;
+    const Ray& ray = rays[static_cast<size_t>(k < n ? k : 0)];
+    rh.ray.org_x[k] = static_cast<float>(ray.origin.x);
+    rh.ray.org_y[k] = static_cast<float>(ray.origin.y);
+    rh.ray.org_z[k] = static_cast<float>(ray.origin.z);
+    rh.ray.dir_x[k] = static_cast<float>(ray.direction.x);
+    rh.ray.dir_y[k] = static_cast<float>(ray.direction.y);
+    rh.ray.dir_z[k] = static_cast<float>(ray.direction.z);
+    rh.ray.tnear[k] = static_cast<float>(tMin);
+    rh.ray.tfar[k] = std::numeric_limits<float>::infinity();
+    rh.ray.time[k] = 0;
+    rh.ray.mask[k] = 0xffffffffu;
+    rh.ray.id[k] = static_cast<unsigned>(k);
+    rh.ray.flags[k] = 0;
+    rh.hit.geomID[k] = RTC_INVALID_GEOMETRY_ID;
+    rh.hit.instID[0][k] = RTC_INVALID_GEOMETRY_ID;
+    bestT[k] = std::numeric_limits<double>::infinity();
+    bestObject[k] = -1;
+  }
+  rtcIntersect16(valid, impl_->scene, &ctx.embree, &rh);
+  resolveCandidates(ctx);
+  for (int k = 0; k < n; ++k)
+    hits[static_cast<size_t>(k)] = completeHit(rays[static_cast<size_t>(k)], rh.hit.geomID[k], rh.hit.primID[k], rh.ray.tfar[k],
+                                               {rh.hit.Ng_x[k], rh.hit.Ng_y[k], rh.hit.Ng_z[k]}, rh.hit.u[k], rh.hit.v[k],
+                                               bestObject[k], bestT[k], bestNormal[k]);
+}
+
+Hit Scene::completeHit(const Ray& ray, unsigned geomID, unsigned primID, float tfar, const Vec3& ng, float u, float v,
+                       int bestObject, double bestT, const Vec3& bestNormal) const {
   Hit hit;
-  if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return hit;
-  hit.object = static_cast<int>(rh.hit.geomID);
-  const Object& obj = objects_[rh.hit.geomID];
-  if (ctx.bestObject == hit.object) {
-    hit.t = ctx.bestT;
-    hit.normal = ctx.bestNormal.normalized();
+  const bool native = geomID != RTC_INVALID_GEOMETRY_ID;
+  if (bestObject >= 0 && (!native || bestT <= tfar)) {  // a solid is nearest
+    hit.object = bestObject;
+    hit.t = bestT;
+    hit.normal = bestNormal.normalized();
+  } else if (!native) {
+    return hit;
   } else {
-    hit.t = rh.ray.tfar;
-    hit.normal = Vec3(rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z).normalized();
+    hit.object = static_cast<int>(geomID);
+    const Object& obj = objects_[geomID];
+    hit.t = tfar;
+    hit.normal = ng.normalized();
     if (std::holds_alternative<Rectangle>(obj.shape)) hit.normal = obj.worldFromObject.vector({0, 0, 1});
     if (const auto* mesh = std::get_if<TriangleMesh>(&obj.shape); mesh && !mesh->normals.empty()) {
-      const auto& tri = mesh->triangles[rh.hit.primID];
-      const double u = rh.hit.u, v = rh.hit.v;
-      const Vec3 n = mesh->normals[tri[0]] * (1 - u - v) + mesh->normals[tri[1]] * u + mesh->normals[tri[2]] * v;
+      const auto& tri = mesh->triangles[primID];
+      const Vec3 n = mesh->normals[tri[0]] * (1.0 - u - v) + mesh->normals[tri[1]] * u + mesh->normals[tri[2]] * v;
       const Vec3 shading = obj.worldFromObject.vector(n).normalized();
       // Keep the interpolated normal on the geometric normal's side.
       hit.normal = shading.dot(hit.normal) > 0 ? shading : hit.normal;
     }
   }
   hit.point = ray.at(hit.t);
-  hit.localPoint = impl_->objectFromWorld[rh.hit.geomID].point(hit.point);
+  hit.localPoint = impl_->objectFromWorld[static_cast<size_t>(hit.object)].point(hit.point);
   return hit;
 }
 

@@ -26,6 +26,83 @@ struct Event {
 
 }  // namespace
 
+namespace {
+
+// The interval [t0, t1] of a primitive along a line in its own frame; false
+// when the line misses it. Ends may be infinite (a line parallel to a
+// cylinder's axis or a half space's plane, inside it).
+bool primitiveSpan(Solid::Kind kind, double radius, const Ray& ray, double& t0, double& t1) {
+  const Vec3& o = ray.origin;
+  const Vec3& d = ray.direction;
+  switch (kind) {
+    case Solid::Kind::Sphere: {
+      const double b = o.dot(d);
+      const double c = o.dot(o) - radius * radius;
+      const double disc = b * b - c;
+      if (disc < 0) return false;
+      const double sq = std::sqrt(disc);
+      // Stable roots: avoid cancellation in -b +- sq.
+      if (b > 0) {
+        t0 = -b - sq;
+        t1 = c / t0;
+      } else {
+        t1 = -b + sq;
+        t0 = t1 != 0 ? c / t1 : -b - sq;
+      }
+      if (t0 > t1) std::swap(t0, t1);
+      return true;
+    }
+    case Solid::Kind::Cylinder: {
+      const double a = d.x * d.x + d.y * d.y;
+      const double c = o.x * o.x + o.y * o.y - radius * radius;
+      if (a < 1e-300) {
+        t0 = -kInf, t1 = kInf;
+        return c <= 0;
+      }
+      const double b = o.x * d.x + o.y * d.y;
+      const double disc = b * b - a * c;
+      if (disc < 0) return false;
+      const double sq = std::sqrt(disc);
+      const double q = b > 0 ? -(b + sq) : -(b - sq);
+      t0 = q / a, t1 = q != 0 ? c / q : t0;
+      if (t0 > t1) std::swap(t0, t1);
+      return true;
+    }
+    case Solid::Kind::HalfSpace: {
+      if (d.z == 0) {
+        t0 = -kInf, t1 = kInf;
+        return o.z <= 0;
+      }
+      const double t = -o.z / d.z;
+      t0 = d.z > 0 ? -kInf : t;
+      t1 = d.z > 0 ? t : kInf;
+      return true;
+    }
+    default: return false;
+  }
+}
+
+// Outward normal of a primitive where the line meets it at t (its own frame).
+// At an infinite end there is no surface; the normal then just points along
+// the line's way out (-z entering, +z leaving) and is never used for shading.
+Vec3 primitiveNormal(Solid::Kind kind, double radius, const Ray& ray, double t, bool entering) {
+  if (!std::isfinite(t)) return {0, 0, entering ? -1.0 : 1.0};
+  switch (kind) {
+    case Solid::Kind::Sphere: return ray.at(t) / radius;
+    case Solid::Kind::Cylinder: {
+      const Vec3 p = ray.at(t);
+      return Vec3(p.x, p.y, 0) / radius;
+    }
+    default: return {0, 0, 1};
+  }
+}
+
+bool isPrimitive(Solid::Kind kind) {
+  return kind == Solid::Kind::Sphere || kind == Solid::Kind::Cylinder || kind == Solid::Kind::HalfSpace;
+}
+
+}  // namespace
+
 void IntervalList::push(const Interval& interval) {
   if (size_ == kCapacity) fail(Errc::InvalidArgument, "solid: more than {} intervals along one ray", kCapacity);
   items_[size_++] = interval;
@@ -101,6 +178,22 @@ std::shared_ptr<Solid> Solid::combine(Kind op, std::shared_ptr<const Solid> a, s
     fail(Errc::InvalidArgument, "Solid::combine needs a boolean operation");
   if (!a || !b) fail(Errc::InvalidArgument, "Solid::combine needs two operands");
   auto s = std::shared_ptr<Solid>(new Solid(op, 0, parentFromLocal));
+  // Both operands convex: flatten their primitives into this node's frame.
+  auto convexParts = [](const Solid& x, std::vector<ConvexPart>& parts) {
+    if (isPrimitive(x.kind_)) {
+      parts.push_back({x.kind_, x.radius_, x.parentFromLocal_, x.localFromParent_, x.identity_});
+      return true;
+    }
+    if (x.convex_.empty()) return false;
+    for (const ConvexPart& p : x.convex_) {
+      const Rigid3 localFromPart = x.parentFromLocal_ * p.localFromPart;
+      parts.push_back({p.kind, p.radius, localFromPart, localFromPart.inverse(), isIdentity(localFromPart)});
+    }
+    return true;
+  };
+  std::vector<ConvexPart> parts;
+  if (op == Kind::Intersection && convexParts(*a, parts) && convexParts(*b, parts) && parts.size() <= kMaxConvexParts)
+    s->convex_ = std::move(parts);
   s->a_ = std::move(a);
   s->b_ = std::move(b);
   return s;
@@ -154,59 +247,177 @@ void Solid::intervals(const Ray& ray, IntervalList& out) const {
   }
 }
 
+bool Solid::convexIntervals(const Ray& ray, IntervalList& out) const {
+  double enter = -kInf, exit = kInf;
+  int enterPart = -1, exitPart = -1;
+  Ray enterRay = ray, exitRay = ray;
+  for (int i = 0; i < static_cast<int>(convex_.size()); ++i) {
+    const ConvexPart& part = convex_[static_cast<size_t>(i)];
+    const Ray local = part.identity ? ray : Ray{part.partFromLocal.point(ray.origin), part.partFromLocal.vector(ray.direction)};
+    double t0, t1;
+    if (!primitiveSpan(part.kind, part.radius, local, t0, t1)) return false;
+    if (t0 > enter || enterPart < 0) enter = t0, enterPart = i, enterRay = local;
+    if (t1 < exit || exitPart < 0) exit = t1, exitPart = i, exitRay = local;
+    if (exit <= enter) return false;
+  }
+  const ConvexPart& a = convex_[static_cast<size_t>(enterPart)];
+  const ConvexPart& b = convex_[static_cast<size_t>(exitPart)];
+  out.push({{enter, a.localFromPart.vector(primitiveNormal(a.kind, a.radius, enterRay, enter, true))},
+            {exit, b.localFromPart.vector(primitiveNormal(b.kind, b.radius, exitRay, exit, false))}});
+  return true;
+}
+
+namespace {
+
+// The convex kernel below runs the same arithmetic on every lane with selects
+// instead of branches, so that the compiler vectorises each loop; the clones
+// pick AVX-512, AVX2 or the baseline at load time.
+#if defined(__x86_64__) && !defined(__SANITIZE_ADDRESS__)
+#define LFI_SIMD_CLONES __attribute__((target_clones("avx512f", "avx2", "default")))
+#else
+#define LFI_SIMD_CLONES
+#endif
+
+constexpr int kLanes = Solid::kBatch;
+
+struct LaneRays {
+  double ox[kLanes], oy[kLanes], oz[kLanes], dx[kLanes], dy[kLanes], dz[kLanes];
+};
+
+// Rays into a part's frame: p' = R p + t, d' = R d.
+LFI_SIMD_CLONES void transformLanes(const Rigid3& x, const LaneRays& __restrict in, LaneRays& __restrict out) {
+  const double* r = x.r.data();
+  for (int k = 0; k < kLanes; ++k) {
+    out.ox[k] = r[0] * in.ox[k] + r[1] * in.oy[k] + r[2] * in.oz[k] + x.t.x;
+    out.oy[k] = r[3] * in.ox[k] + r[4] * in.oy[k] + r[5] * in.oz[k] + x.t.y;
+    out.oz[k] = r[6] * in.ox[k] + r[7] * in.oy[k] + r[8] * in.oz[k] + x.t.z;
+    out.dx[k] = r[0] * in.dx[k] + r[1] * in.dy[k] + r[2] * in.dz[k];
+    out.dy[k] = r[3] * in.dx[k] + r[4] * in.dy[k] + r[5] * in.dz[k];
+    out.dz[k] = r[6] * in.dx[k] + r[7] * in.dy[k] + r[8] * in.dz[k];
+  }
+}
+
+// One primitive's span [t0, t1] on every lane (primitiveSpan's arithmetic,
+// branch-free; a miss is the empty span [inf, -inf]), folded into the running
+// intersection [enter, exit].
+LFI_SIMD_CLONES void foldSpan(Solid::Kind kind, double radius, const LaneRays& __restrict l, double* __restrict t0,
+                              double* __restrict t1,
+                              double* __restrict enter, double* __restrict exit) {
+  switch (kind) {
+    case Solid::Kind::Sphere:
+      for (int k = 0; k < kLanes; ++k) {
+        const double b = l.ox[k] * l.dx[k] + l.oy[k] * l.dy[k] + l.oz[k] * l.dz[k];
+        const double c = l.ox[k] * l.ox[k] + l.oy[k] * l.oy[k] + l.oz[k] * l.oz[k] - radius * radius;
+        const double disc = b * b - c;
+        const double sq = std::sqrt(disc > 0 ? disc : 0);
+        const double q = b > 0 ? -b - sq : -b + sq;  // the root without cancellation
+        const double other = q != 0 ? c / q : q;
+        t0[k] = disc < 0 ? kInf : (q < other ? q : other);
+        t1[k] = disc < 0 ? -kInf : (q < other ? other : q);
+      }
+      break;
+    case Solid::Kind::Cylinder:
+      for (int k = 0; k < kLanes; ++k) {
+        const double a = l.dx[k] * l.dx[k] + l.dy[k] * l.dy[k];
+        const double c = l.ox[k] * l.ox[k] + l.oy[k] * l.oy[k] - radius * radius;
+        const double b = l.ox[k] * l.dx[k] + l.oy[k] * l.dy[k];
+        const bool parallel = a < 1e-300;
+        const double disc = b * b - a * c;
+        const double sq = std::sqrt(disc > 0 ? disc : 0);
+        const double q = b > 0 ? -(b + sq) : -(b - sq);
+        const double r0 = q / (parallel ? 1.0 : a), r1 = q != 0 ? c / q : r0;
+        const bool none = parallel ? c > 0 : disc < 0;
+        t0[k] = none ? kInf : parallel ? -kInf : (r0 < r1 ? r0 : r1);
+        t1[k] = none ? -kInf : parallel ? kInf : (r0 < r1 ? r1 : r0);
+      }
+      break;
+    default:  // HalfSpace
+      for (int k = 0; k < kLanes; ++k) {
+        const bool flat = l.dz[k] == 0;
+        const double t = -l.oz[k] / (flat ? 1.0 : l.dz[k]);
+        const bool none = flat && l.oz[k] > 0;
+        t0[k] = none ? kInf : flat || l.dz[k] > 0 ? -kInf : t;
+        t1[k] = none ? -kInf : flat || l.dz[k] < 0 ? kInf : t;
+      }
+      break;
+  }
+  for (int k = 0; k < kLanes; ++k) {
+    enter[k] = t0[k] > enter[k] ? t0[k] : enter[k];
+    exit[k] = t1[k] < exit[k] ? t1[k] : exit[k];
+  }
+}
+
+}  // namespace
+
+void Solid::nearestCrossings(int n, const Ray* rays, double tMin, double* t, Vec3* normal) const {
+  if (n < 0 || n > kBatch) fail(Errc::InvalidArgument, "Solid::nearestCrossings: {} rays (at most {})", n, kBatch);
+  if (convex_.empty()) {
+    IntervalList list;
+    for (int k = 0; k < n; ++k) {
+      intervals(rays[k], list);
+      t[k] = kInf;
+      for (int i = 0; i < list.size() && t[k] == kInf; ++i)
+        for (const SurfacePoint* s : {&list[i].enter, &list[i].exit})
+          if (s->t > tMin && std::isfinite(s->t)) {
+            t[k] = s->t;
+            normal[k] = s->normal;
+            break;
+          }
+    }
+    return;
+  }
+  // Lanes beyond n carry a harmless ray; their results are not read.
+  LaneRays parent, local, part;
+  for (int k = 0; k < kLanes; ++k) {
+    const Ray& r = rays[k < n ? k : 0];
+    parent.ox[k] = r.origin.x, parent.oy[k] = r.origin.y, parent.oz[k] = r.origin.z;
+    parent.dx[k] = r.direction.x, parent.dy[k] = r.direction.y, parent.dz[k] = r.direction.z;
+  }
+  if (identity_)
+    local = parent;
+  else
+    transformLanes(localFromParent_, parent, local);
+  double enter[kLanes], exit[kLanes], t0[kMaxConvexParts][kLanes], t1[kMaxConvexParts][kLanes];
+  for (int k = 0; k < kLanes; ++k) enter[k] = -kInf, exit[k] = kInf;
+  const int parts = static_cast<int>(convex_.size());
+  for (int p = 0; p < parts; ++p) {
+    const ConvexPart& c = convex_[static_cast<size_t>(p)];
+    if (!c.identity) transformLanes(c.partFromLocal, local, part);
+    foldSpan(c.kind, c.radius, c.identity ? local : part, t0[p], t1[p], enter, exit);
+  }
+  for (int k = 0; k < n; ++k) {
+    t[k] = kInf;
+    if (!(exit[k] > enter[k])) continue;
+    const bool front = enter[k] > tMin;
+    const double hit = front ? enter[k] : exit[k];
+    if (!(hit > tMin) || !std::isfinite(hit)) continue;
+    // The part that set the crossing: the first whose span end equals it.
+    int which = 0;
+    while (which + 1 < parts && (front ? t0[which][k] : t1[which][k]) != hit) ++which;
+    const Ray l{{local.ox[k], local.oy[k], local.oz[k]}, {local.dx[k], local.dy[k], local.dz[k]}};
+    const ConvexPart& c = convex_[static_cast<size_t>(which)];
+    const Ray inPart = c.identity ? l : Ray{c.partFromLocal.point(l.origin), c.partFromLocal.vector(l.direction)};
+    const Vec3 n1 = c.localFromPart.vector(primitiveNormal(c.kind, c.radius, inPart, hit, front));
+    t[k] = hit;
+    normal[k] = identity_ ? n1 : parentFromLocal_.vector(n1);
+  }
+}
+
 void Solid::localIntervals(const Ray& ray, IntervalList& out) const {
-  const Vec3& o = ray.origin;
-  const Vec3& d = ray.direction;
+  if (isPrimitive(kind_)) {
+    double t0, t1;
+    if (primitiveSpan(kind_, radius_, ray, t0, t1))
+      out.push({{t0, primitiveNormal(kind_, radius_, ray, t0, true)}, {t1, primitiveNormal(kind_, radius_, ray, t1, false)}});
+    return;
+  }
+  if (!convex_.empty()) {
+    convexIntervals(ray, out);
+    return;
+  }
   switch (kind_) {
-    case Kind::Sphere: {
-      const double b = o.dot(d);
-      const double c = o.dot(o) - radius_ * radius_;
-      const double disc = b * b - c;
-      if (disc < 0) return;
-      const double sq = std::sqrt(disc);
-      // Stable roots: avoid cancellation in -b +- sq.
-      double t0, t1;
-      if (b > 0) {
-        t0 = -b - sq;
-        t1 = c / t0;
-      } else {
-        t1 = -b + sq;
-        t0 = t1 != 0 ? c / t1 : -b - sq;
-      }
-      if (t0 > t1) std::swap(t0, t1);
-      out.push({{t0, (o + d * t0) / radius_}, {t1, (o + d * t1) / radius_}});
-      return;
-    }
-    case Kind::Cylinder: {
-      const double a = d.x * d.x + d.y * d.y;
-      const double c = o.x * o.x + o.y * o.y - radius_ * radius_;
-      if (a < 1e-300) {
-        if (c <= 0) out.push({{-kInf, {0, 0, -1}}, {kInf, {0, 0, 1}}});
-        return;
-      }
-      const double b = o.x * d.x + o.y * d.y;
-      const double disc = b * b - a * c;
-      if (disc < 0) return;
-      const double sq = std::sqrt(disc);
-      const double q = b > 0 ? -(b + sq) : -(b - sq);
-      double t0 = q / a, t1 = q != 0 ? c / q : t0;
-      if (t0 > t1) std::swap(t0, t1);
-      const Vec3 p0 = o + d * t0, p1 = o + d * t1;
-      out.push({{t0, Vec3(p0.x, p0.y, 0) / radius_}, {t1, Vec3(p1.x, p1.y, 0) / radius_}});
-      return;
-    }
-    case Kind::HalfSpace: {
-      if (d.z == 0) {
-        if (o.z <= 0) out.push({{-kInf, {0, 0, -1}}, {kInf, {0, 0, 1}}});
-        return;
-      }
-      const double t = -o.z / d.z;
-      if (d.z > 0)
-        out.push({{-kInf, {0, 0, -1}}, {t, {0, 0, 1}}});
-      else
-        out.push({{t, {0, 0, 1}}, {kInf, {0, 0, -1}}});
-      return;
-    }
+    case Kind::Sphere:
+    case Kind::Cylinder:
+    case Kind::HalfSpace: return;
     case Kind::Union:
     case Kind::Intersection:
     case Kind::Difference: {

@@ -192,6 +192,42 @@ TEST(Solid, ContainsAgreesWithIntervals) {
   EXPECT_GT(outside, 10000);
 }
 
+// An intersection of convex primitives takes a flattened single-interval path;
+// wrapping each primitive in a union with itself forces the general event
+// merge. Both must give the same interval and normals on random lines,
+// including placed (rotated, shifted) primitives and half spaces.
+TEST(Solid, ConvexIntersectionFastPathMatchesTheGeneralMerge) {
+  using K = Solid::Kind;
+  auto general = [](std::shared_ptr<const Solid> s) { return Solid::combine(K::Union, s, s); };
+  const Rigid3 tilt = Rigid3::translation({1, -2, 0.5}) * Rigid3::rotation({1, 1, 0}, 0.3);
+  const Rigid3 flip = Rigid3::translation({0, 0, 3}) * Rigid3::rotation({1, 0, 0}, std::numbers::pi);
+  const auto cyl = Solid::cylinder(12, tilt), ball = Solid::sphere(14, Rigid3::translation({0, 1, 2}));
+  const auto below = Solid::halfSpace(Rigid3::translation({0, 0, 4})), above = Solid::halfSpace(flip);
+  const auto fast = Solid::combine(K::Intersection, Solid::combine(K::Intersection, cyl, ball),
+                                   Solid::combine(K::Intersection, below, above), Rigid3::rotation({0, 1, 0}, 0.2));
+  const auto slow = Solid::combine(K::Intersection, Solid::combine(K::Intersection, general(cyl), general(ball)),
+                                   Solid::combine(K::Intersection, general(below), general(above)),
+                                   Rigid3::rotation({0, 1, 0}, 0.2));
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> u(-1, 1);
+  int hits = 0;
+  for (int line = 0; line < 2000; ++line) {
+    const Vec3 origin(40 * u(rng), 40 * u(rng), 40 * u(rng));
+    const Vec3 dir = (Vec3(10 * u(rng), 10 * u(rng), 4 * u(rng)) - origin).normalized();
+    IntervalList a, b;
+    fast->intervals({origin, dir}, a);
+    slow->intervals({origin, dir}, b);
+    ASSERT_EQ(a.size(), b.size()) << "line " << line;
+    if (a.size() == 0) continue;
+    ++hits;
+    EXPECT_NEAR(a[0].enter.t, b[0].enter.t, 1e-12);
+    EXPECT_NEAR(a[0].exit.t, b[0].exit.t, 1e-12);
+    expectNear(a[0].enter.normal, b[0].enter.normal, 1e-12);
+    expectNear(a[0].exit.normal, b[0].exit.normal, 1e-12);
+  }
+  EXPECT_GT(hits, 200);
+}
+
 TEST(Solid, LensBoundsAreFiniteAndEncloseTheLens) {
   for (auto lens : {Solid::sphericalLens(100, -100, 7, 50), Solid::sphericalLens(-100, 0, 3, 50),
                     Solid::sphericalLens(0, 0, 5, 30)}) {

@@ -29,6 +29,7 @@
 
 #include <memory>
 #include <optional>
+#include <span>
 #include <string>
 #include <variant>
 #include <vector>
@@ -161,6 +162,11 @@ public:
 
   // Nearest hit with t in (tMin, tMax); invalid Hit when there is none.
   Hit intersect(const Ray& ray, double tMin = 1e-6, double tMax = std::numeric_limits<double>::infinity()) const;
+  // The same for up to kPacket rays at once, traced as one Embree packet: much
+  // cheaper per ray when the rays are coherent (a pixel's samples). hits[k] is
+  // rays[k]'s nearest hit with t > tMin.
+  static constexpr size_t kPacket = 16;
+  void intersect(std::span<const Ray> rays, std::span<Hit> hits, double tMin = 1e-6) const;
 
   const std::vector<Object>& objects() const { return objects_; }
   const Object& object(int index) const { return objects_[static_cast<size_t>(index)]; }
@@ -173,6 +179,9 @@ public:
   double ambientIor() const { return ambientIor_; }
 
 private:
+  Hit completeHit(const Ray& ray, unsigned geomID, unsigned primID, float tfar, const Vec3& ng, float u, float v,
+                  int bestObject, double bestT, const Vec3& bestNormal) const;
+
   struct Impl;
   std::unique_ptr<Impl> impl_;
   std::vector<Object> objects_;

@@ -82,6 +82,13 @@ public:
 
   // All intervals of the line origin + t direction (any t), in the parent frame.
   void intervals(const Ray& ray, IntervalList& out) const;
+  // For each of n <= kBatch rays (parent frame): the nearest crossing of the
+  // solid's boundary with tMin < t < infinity, as t[k] and the outward unit
+  // normal[k]; t[k] = infinity when there is none. The same crossings as
+  // intervals(), many rays at once: an intersection of convex primitives (a
+  // lens) is computed lane-parallel, in SIMD where the CPU has it.
+  static constexpr int kBatch = 16;
+  void nearestCrossings(int n, const Ray* rays, double tMin, double* t, Vec3* normal) const;
   Bounds bounds() const;  // in the parent frame
   bool contains(const Vec3& point) const;  // in the parent frame
   Kind kind() const { return kind_; }
@@ -90,12 +97,27 @@ private:
   Solid(Kind kind, double radius, const Rigid3& parentFromLocal);
   void localIntervals(const Ray& local, IntervalList& out) const;
 
+  // An intersection of convex primitives (a lens, a cylinder cut by planes) is
+  // one interval along any line: [latest entry, earliest exit]. Such nodes keep
+  // their primitives flattened here, each with its frame relative to this
+  // node, and skip the general event merge.
+  struct ConvexPart {
+    Kind kind;
+    double radius;
+    Rigid3 localFromPart;
+    Rigid3 partFromLocal;
+    bool identity;
+  };
+  static constexpr size_t kMaxConvexParts = 8;  // longer chains take the general path
+  bool convexIntervals(const Ray& local, IntervalList& out) const;
+
   Kind kind_;
   double radius_ = 0;
   Rigid3 parentFromLocal_;
   Rigid3 localFromParent_;
   bool identity_ = true;
   std::shared_ptr<const Solid> a_, b_;
+  std::vector<ConvexPart> convex_;  // empty unless the node is such an intersection
 };
 
 }  // namespace lfi::sim
