@@ -100,24 +100,22 @@ private:
 
 }  // namespace
 
-Sampler::Sampler(std::uint64_t seed, std::uint64_t stream) : state(0), increment((splitMix64(stream) << 1) | 1) {
-  nextU32();
-  state += splitMix64(seed);
-  nextU32();
+Sampler::Sampler(std::uint64_t seed, std::uint64_t stream) : state(splitMix64(stream ^ splitMix64(seed))) {}
+
+std::uint64_t Sampler::nextU64() {
+  const std::uint64_t x = state;
+  state += 0x9e3779b97f4a7c15ull;  // the golden-ratio increment; splitMix64 mixes x + increment
+  return splitMix64(x);
 }
 
-std::uint32_t Sampler::nextU32() {
-  const std::uint64_t old = state;
-  state = old * 6364136223846793005ull + increment;
-  const auto xorshifted = static_cast<std::uint32_t>(((old >> 18u) ^ old) >> 27u);
-  const auto rot = static_cast<std::uint32_t>(old >> 59u);
-  return (xorshifted >> rot) | (xorshifted << ((-rot) & 31));
-}
-
-double Sampler::next() {
-  // 53 random bits from two outputs.
-  const std::uint64_t hi = nextU32(), lo = nextU32();
-  return static_cast<double>(((hi << 32) | lo) >> 11) * 0x1.0p-53;
+std::uint32_t Sampler::below(std::uint32_t bound) {
+  // Multiply and keep the high half; reject the few low halves that would bias it.
+  std::uint64_t m = static_cast<std::uint64_t>(nextU32()) * bound;
+  if (static_cast<std::uint32_t>(m) < bound) {
+    const std::uint32_t threshold = -bound % bound;
+    while (static_cast<std::uint32_t>(m) < threshold) m = static_cast<std::uint64_t>(nextU32()) * bound;
+  }
+  return static_cast<std::uint32_t>(m >> 32);
 }
 
 double fresnelReflectance(double cosI, double n1, double n2) {
@@ -222,10 +220,10 @@ Step interact(const Scene& scene, const Hit& hit, PathState& p, PathState& branc
 template <typename Policy>
 double walk(const Scene& scene, PathState p, Policy& policy) {
   double sum = 0;
+  PathState branch = p;  // written by a split
   while (p.depth < policy.maxDepth) {
     const Hit hit = scene.intersect(p.ray);
     policy.visit(hit, p.ray);
-    PathState branch = p;  // overwritten by a split
     double radiance;
     const Step step = interact(scene, hit, p, branch, radiance, policy);
     if (step == Step::Done) return sum + radiance;
@@ -351,16 +349,14 @@ public:
       for (size_t k = 0; k < n; ++k) {
         Lane& lane = *active[k];
         SampledPolicy policy{lane.sampler, options_.maxDepth, options_.splitDepth, lane.decisions, lane.decisionCount};
-        PathState branch = lane.path;
         double radiance;
-        const Step step = interact(scene_, hits[k], lane.path, branch, radiance, policy);
+        const Step step = interact(scene_, hits[k], lane.path, branch_, radiance, policy);
         lane.decisions = policy.decisions;
         lane.decisionCount = policy.decisionCount;
         PixelWork& px = pixels_[static_cast<size_t>(lane.pixel)];
         if (step == Step::Split) {
           // The branch gets its own stream, keyed by the parent's state and depth.
-          pending_.push_back({branch, Sampler(lane.sampler.state + static_cast<std::uint64_t>(branch.depth),
-                                              lane.sampler.increment),
+          pending_.push_back({branch_, Sampler(lane.sampler.state, static_cast<std::uint64_t>(branch_.depth)),
                               lane.decisions, lane.decisionCount, lane.pixel});
           ++px.inFlight;
         }
@@ -400,7 +396,7 @@ private:
     for (int k = 0; k < strata_; ++k) px.permutation[static_cast<size_t>(k)] = k;
     for (int k = strata_ - 1; k > 0; --k)
       std::swap(px.permutation[static_cast<size_t>(k)],
-                px.permutation[static_cast<size_t>(pixelSampler.nextU32() % static_cast<std::uint32_t>(k + 1))]);
+                px.permutation[static_cast<size_t>(pixelSampler.below(static_cast<std::uint32_t>(k + 1)))]);
     // Latin hypercube for the first Fresnel choices: across the pixel's
     // samples each choice's random value covers [0,1) evenly, so the few
     // reflect/refract branches of a lens are taken in proportion.
@@ -410,7 +406,7 @@ private:
       for (int k = 0; k < spp; ++k) order_[static_cast<size_t>(k)] = k;
       for (int k = spp - 1; k > 0; --k)
         std::swap(order_[static_cast<size_t>(k)],
-                  order_[static_cast<size_t>(pixelSampler.nextU32() % static_cast<std::uint32_t>(k + 1))]);
+                  order_[static_cast<size_t>(pixelSampler.below(static_cast<std::uint32_t>(k + 1)))]);
       for (int k = 0; k < spp; ++k)
         px.decisions[static_cast<size_t>(k) * kStratifiedChoices + d] = (order_[static_cast<size_t>(k)] + pixelSampler.next()) / spp;
     }
@@ -470,6 +466,7 @@ private:
   std::vector<int> freeSlots_;
   std::vector<Lane> pending_;
   std::vector<int> order_;
+  PathState branch_;  // written by a split
 };
 
 }  // namespace

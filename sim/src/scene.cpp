@@ -38,14 +38,16 @@ struct HitContext {
   double* bestT;
   Vec3* bestNormal;  // world frame
   int* bestObject;
-  std::array<Candidate, 4 * Solid::kBatch> pending;
-  int count = 0;
+  int count;
+  std::array<Candidate, 4 * Solid::kBatch> pending;  // not initialised: count says what is valid
 };
 
 // Intersects the pending candidates exactly and keeps each lane's nearest.
 void resolveCandidates(HitContext& ctx) {
-  std::sort(ctx.pending.begin(), ctx.pending.begin() + ctx.count,
-            [](const Candidate& a, const Candidate& b) { return a.solid < b.solid || (a.solid == b.solid && a.lane < b.lane); });
+  // Group by solid (usually one or two), so that each gets full batches.
+  const auto bySolid = [](const Candidate& a, const Candidate& b) { return a.solid < b.solid; };
+  if (!std::is_sorted(ctx.pending.begin(), ctx.pending.begin() + ctx.count, bySolid))
+    std::sort(ctx.pending.begin(), ctx.pending.begin() + ctx.count, bySolid);
   Ray local[Solid::kBatch];
   double t[Solid::kBatch];
   Vec3 normal[Solid::kBatch];
@@ -192,8 +194,10 @@ Hit Scene::intersect(const Ray& ray, double tMin, double tMax) const {
   double bestT = tMax;
   Vec3 bestNormal;
   int bestObject = -1;
-  HitContext ctx{{}, &ray, tMin, &bestT, &bestNormal, &bestObject, {}, 0};
+  HitContext ctx;
   rtcInitIntersectContext(&ctx.embree);
+  ctx.rays = &ray, ctx.tMin = tMin, ctx.bestT = &bestT, ctx.bestNormal = &bestNormal, ctx.bestObject = &bestObject;
+  ctx.count = 0;
   RTCRayHit rh;
   rh.ray.org_x = static_cast<float>(ray.origin.x);
   rh.ray.org_y = static_cast<float>(ray.origin.y);
@@ -222,8 +226,10 @@ void Scene::intersect(std::span<const Ray> rays, std::span<Hit> hits, double tMi
   double bestT[kPacket];
   Vec3 bestNormal[kPacket];
   int bestObject[kPacket];
-  HitContext ctx{{}, rays.data(), tMin, bestT, bestNormal, bestObject, {}, 0};
+  HitContext ctx;
   rtcInitIntersectContext(&ctx.embree);
+  ctx.rays = rays.data(), ctx.tMin = tMin, ctx.bestT = bestT, ctx.bestNormal = bestNormal, ctx.bestObject = bestObject;
+  ctx.count = 0;
   ctx.embree.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
   alignas(64) int valid[kPacket];
   alignas(64) RTCRayHit16 rh;

@@ -228,6 +228,48 @@ TEST(Solid, ConvexIntersectionFastPathMatchesTheGeneralMerge) {
   EXPECT_GT(hits, 200);
 }
 
+// nearestCrossings (many rays at once; lane-parallel for convex intersections)
+// finds the same first crossing beyond tMin as the intervals do.
+TEST(Solid, NearestCrossingsAgreeWithIntervals) {
+  const std::vector<std::shared_ptr<const Solid>> solids = {
+      Solid::sphericalLens(100, -100, 7, 50),                   // convex kernel
+      Solid::sphericalLens(50, 120, 6, 40),                     // concave back: general merge
+      Solid::combine(Solid::Kind::Intersection, Solid::cylinder(8), Solid::halfSpace(Rigid3::translation({0, 0, 2})),
+                     Rigid3::rotation({0, 1, 0}, 0.4)),        // unbounded along some lines
+  };
+  std::mt19937_64 rng(3);
+  std::uniform_real_distribution<double> u(-1, 1);
+  int found = 0;
+  for (const auto& solid : solids)
+    for (int batch = 0; batch < 300; ++batch) {
+      const int n = 1 + batch % Solid::kBatch;
+      const double tMin = batch % 3 == 0 ? 1e-6 : 30 * (u(rng) + 1);  // also from inside
+      Ray rays[Solid::kBatch];
+      double t[Solid::kBatch];
+      Vec3 normal[Solid::kBatch];
+      for (int k = 0; k < n; ++k) {
+        const Vec3 origin(40 * u(rng), 40 * u(rng), 40 * u(rng));
+        rays[k] = {origin, (Vec3(20 * u(rng), 20 * u(rng), 4 * u(rng)) - origin).normalized()};
+      }
+      solid->nearestCrossings(n, rays, tMin, t, normal);
+      for (int k = 0; k < n; ++k) {
+        IntervalList list;
+        solid->intervals(rays[k], list);
+        double expected = std::numeric_limits<double>::infinity();
+        Vec3 expectedNormal;
+        for (int i = list.size() - 1; i >= 0; --i)
+          for (const SurfacePoint* s : {&list[i].exit, &list[i].enter})
+            if (s->t > tMin && std::isfinite(s->t)) expected = s->t, expectedNormal = s->normal;
+        ASSERT_EQ(std::isfinite(t[k]), std::isfinite(expected)) << "batch " << batch << " ray " << k;
+        if (!std::isfinite(expected)) continue;
+        ++found;
+        EXPECT_NEAR(t[k], expected, 1e-12 * (1 + std::abs(expected)));
+        expectNear(normal[k], expectedNormal, 1e-12);
+      }
+    }
+  EXPECT_GT(found, 1000);
+}
+
 TEST(Solid, LensBoundsAreFiniteAndEncloseTheLens) {
   for (auto lens : {Solid::sphericalLens(100, -100, 7, 50), Solid::sphericalLens(-100, 0, 3, 50),
                     Solid::sphericalLens(0, 0, 5, 30)}) {

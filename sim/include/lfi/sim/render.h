@@ -50,13 +50,16 @@ double traceRadiance(const Scene& scene, const Ray& ray, Sampler& sampler, int m
 // when it leaves the scene, with one more vertex at `escape` mm along the ray.
 std::vector<Vec3> refractionPath(const Scene& scene, const Ray& ray, int maxDepth = 64, double escape = 1e4);
 
-// Deterministic per-pixel random numbers (PCG32 seeded by a hash of the key).
+// Deterministic random numbers, one stream per key: SplitMix64 (Steele, Lea
+// and Flood 2014; passes BigCrush) started at a hash of (seed, stream). A path
+// draws a few dozen numbers, so streams of distinct keys do not overlap.
 struct Sampler {
   std::uint64_t state;
-  std::uint64_t increment;
   Sampler(std::uint64_t seed, std::uint64_t stream);
-  std::uint32_t nextU32();
-  double next();  // uniform in [0, 1)
+  std::uint64_t nextU64();
+  std::uint32_t nextU32() { return static_cast<std::uint32_t>(nextU64() >> 32); }
+  double next() { return static_cast<double>(nextU64() >> 11) * 0x1.0p-53; }  // uniform in [0, 1)
+  std::uint32_t below(std::uint32_t bound);  // uniform in [0, bound), unbiased (Lemire 2019); bound > 0
 };
 
 // Fresnel reflectance of unpolarised light at an interface n1 -> n2 for the
