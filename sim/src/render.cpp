@@ -118,26 +118,46 @@ std::uint32_t Sampler::below(std::uint32_t bound) {
   return static_cast<std::uint32_t>(m >> 32);
 }
 
-double fresnelReflectance(double cosI, double n1, double n2) {
-  cosI = std::clamp(cosI, 0.0, 1.0);
-  const double eta = n1 / n2;
+namespace {
+
+// Unit vector along v (v != 0).
+Vec3 unit(const Vec3& v) { return v * (1 / std::sqrt(v.dot(v))); }
+
+// Cosine of the transmitted angle (Snell) for incidence cosine cosI in [0, 1]
+// and eta = n1 / n2; -1 under total internal reflection.
+double transmittedCosine(double cosI, double eta) {
   const double sin2T = eta * eta * (1 - cosI * cosI);
-  if (sin2T >= 1) return 1;
-  const double cosT = std::sqrt(1 - sin2T);
+  return sin2T >= 1 ? -1 : std::sqrt(1 - sin2T);
+}
+
+// Unpolarised Fresnel reflectance from both angles' cosines.
+double fresnelFromCosines(double cosI, double cosT, double n1, double n2) {
   const double rs = (n1 * cosI - n2 * cosT) / (n1 * cosI + n2 * cosT);
   const double rp = (n2 * cosI - n1 * cosT) / (n2 * cosI + n1 * cosT);
   return 0.5 * (rs * rs + rp * rp);
 }
 
+Vec3 refractedDirection(const Vec3& d, const Vec3& n, double eta, double cosI, double cosT) {
+  return unit(d * eta + n * (eta * cosI - cosT));
+}
+
+}  // namespace
+
+double fresnelReflectance(double cosI, double n1, double n2) {
+  cosI = std::clamp(cosI, 0.0, 1.0);
+  const double cosT = transmittedCosine(cosI, n1 / n2);
+  return cosT < 0 ? 1.0 : fresnelFromCosines(cosI, cosT, n1, n2);
+}
+
 bool refract(const Vec3& d, const Vec3& n, double eta, Vec3& out) {
-  const double cosI = -d.dot(n);
-  const double sin2T = eta * eta * (1 - cosI * cosI);
-  if (sin2T >= 1) return false;
-  out = (d * eta + n * (eta * cosI - std::sqrt(1 - sin2T))).normalized();
+  const double cosI = std::clamp(-d.dot(n), 0.0, 1.0);
+  const double cosT = transmittedCosine(cosI, eta);
+  if (cosT < 0) return false;
+  out = refractedDirection(d, n, eta, cosI, cosT);
   return true;
 }
 
-Vec3 reflect(const Vec3& d, const Vec3& n) { return (d - n * (2 * d.dot(n))).normalized(); }
+Vec3 reflect(const Vec3& d, const Vec3& n) { return unit(d - n * (2 * d.dot(n))); }
 
 namespace {
 
@@ -191,12 +211,13 @@ Step interact(const Scene& scene, const Hit& hit, PathState& p, PathState& branc
   // glass into whatever medium contains it (a bubble in glass exits to glass).
   const double n1 = entering ? p.media.ior(scene) : glass.ior;
   const double n2 = entering ? glass.ior : p.media.ior(scene, hit.object);
-  Vec3 refracted;
-  if (!refract(d, facing, n1 / n2, refracted)) {  // total internal reflection
+  const double cosI = std::clamp(-d.dot(facing), 0.0, 1.0);
+  const double cosT = transmittedCosine(cosI, n1 / n2);
+  if (cosT < 0) {  // total internal reflection
     p.ray = leave(reflect(d, facing));
     return Step::Continue;
   }
-  const double reflectance = fresnelReflectance(-d.dot(facing), n1, n2);
+  const double reflectance = fresnelFromCosines(cosI, cosT, n1, n2);
   const bool split = depth < policy.splitDepth;
   if (split) {
     // Splitting: both branches, weighted, instead of a random choice.
@@ -208,7 +229,7 @@ Step interact(const Scene& scene, const Hit& hit, PathState& p, PathState& branc
     p.ray = leave(reflect(d, facing));
     return Step::Continue;
   }
-  p.ray = leave(refracted);
+  p.ray = leave(refractedDirection(d, facing, n1 / n2, cosI, cosT));
   if (entering)
     p.media.push(hit.object);
   else
@@ -311,7 +332,8 @@ class TileRenderer {
 public:
   TileRenderer(const Scene& scene, const Sensor& sensor, const RenderOptions& options)
       : scene_(scene), sensor_(sensor), options_(options), width_(sensorWidth(sensor)),
-        side_(static_cast<int>(std::sqrt(static_cast<double>(options.samplesPerPixel)))), strata_(side_ * side_) {}
+        side_(static_cast<int>(std::sqrt(static_cast<double>(options.samplesPerPixel)))), strata_(side_ * side_),
+        invSide_(1.0 / side_), invSpp_(1.0 / options.samplesPerPixel) {}
 
   void render(int x0, int y0, int x1, int y1, cv::Mat& image) {
     nextI_ = x0, nextJ_ = y0, x0_ = x0, x1_ = x1, y1_ = y1;
@@ -408,7 +430,7 @@ private:
         std::swap(order_[static_cast<size_t>(k)],
                   order_[static_cast<size_t>(pixelSampler.below(static_cast<std::uint32_t>(k + 1)))]);
       for (int k = 0; k < spp; ++k)
-        px.decisions[static_cast<size_t>(k) * kStratifiedChoices + d] = (order_[static_cast<size_t>(k)] + pixelSampler.next()) / spp;
+        px.decisions[static_cast<size_t>(k) * kStratifiedChoices + d] = (order_[static_cast<size_t>(k)] + pixelSampler.next()) * invSpp_;
     }
     return slot;
   }
@@ -424,7 +446,8 @@ private:
     auto stratified = [&](int stratum) {
       const double u = lane.sampler.next(), v = lane.sampler.next();
       if (stratum >= strata_) return Vec2(u, v);
-      return Vec2((stratum % side_ + u) / side_, (stratum / side_ + v) / side_);
+      const int row = stratum / side_;
+      return Vec2((stratum - row * side_ + u) * invSide_, (row + v) * invSide_);
     };
     const Vec2 offset = stratified(s);
     std::optional<Ray> ray;
@@ -460,6 +483,7 @@ private:
   const Sensor& sensor_;
   const RenderOptions& options_;
   int width_, side_, strata_;
+  double invSide_, invSpp_;
   int nextI_ = 0, nextJ_ = 0, x0_ = 0, x1_ = 0, y1_ = 0;
   cv::Mat* image_ = nullptr;
   std::vector<PixelWork> pixels_;

@@ -321,23 +321,25 @@ LFI_SIMD_CLONES void foldSpan(Solid::Kind kind, double radius, const LaneRays& _
         const double a = l.dx[k] * l.dx[k] + l.dy[k] * l.dy[k];
         const double c = l.ox[k] * l.ox[k] + l.oy[k] * l.oy[k] - radius * radius;
         const double b = l.ox[k] * l.dx[k] + l.oy[k] * l.dy[k];
-        const bool parallel = a < 1e-300;
         const double disc = b * b - a * c;
         const double sq = std::sqrt(disc > 0 ? disc : 0);
         const double q = b > 0 ? -(b + sq) : -(b - sq);
-        const double r0 = q / (parallel ? 1.0 : a), r1 = q != 0 ? c / q : r0;
-        const bool none = parallel ? c > 0 : disc < 0;
-        t0[k] = none ? kInf : parallel ? -kInf : (r0 < r1 ? r0 : r1);
-        t1[k] = none ? -kInf : parallel ? kInf : (r0 < r1 ? r1 : r0);
+        const double r0 = q / (a < 1e-300 ? 1.0 : a);
+        const double r1 = q != 0 ? c / q : r0;
+        // Parallel to the axis: all of the line inside, or none of it.
+        const double parallel0 = c > 0 ? kInf : -kInf, parallel1 = c > 0 ? -kInf : kInf;
+        t0[k] = a < 1e-300 ? parallel0 : disc < 0 ? kInf : (r0 < r1 ? r0 : r1);
+        t1[k] = a < 1e-300 ? parallel1 : disc < 0 ? -kInf : (r0 < r1 ? r1 : r0);
       }
       break;
     default:  // HalfSpace
       for (int k = 0; k < kLanes; ++k) {
-        const bool flat = l.dz[k] == 0;
-        const double t = -l.oz[k] / (flat ? 1.0 : l.dz[k]);
-        const bool none = flat && l.oz[k] > 0;
-        t0[k] = none ? kInf : flat || l.dz[k] > 0 ? -kInf : t;
-        t1[k] = none ? -kInf : flat || l.dz[k] < 0 ? kInf : t;
+        const double dz = l.dz[k], oz = l.oz[k];
+        const double t = -oz / (dz == 0 ? 1.0 : dz);
+        // Parallel to the plane: all of the line inside, or none of it.
+        const double flat0 = oz > 0 ? kInf : -kInf, flat1 = oz > 0 ? -kInf : kInf;
+        t0[k] = dz == 0 ? flat0 : dz > 0 ? -kInf : t;
+        t1[k] = dz == 0 ? flat1 : dz < 0 ? kInf : t;
       }
       break;
   }
@@ -351,7 +353,11 @@ LFI_SIMD_CLONES void foldSpan(Solid::Kind kind, double radius, const LaneRays& _
 
 void Solid::nearestCrossings(int n, const Ray* rays, double tMin, double* t, Vec3* normal) const {
   if (n < 0 || n > kBatch) fail(Errc::InvalidArgument, "Solid::nearestCrossings: {} rays (at most {})", n, kBatch);
-  if (convex_.empty()) {
+  // The lane-parallel kernel costs about as much as three one-ray queries
+  // whatever the number of rays (measured: 141 ns for 1 ray, 280 ns for 16,
+  // 48 ns per ray one at a time): a few rays go one at a time.
+  constexpr int kFewRays = 3;
+  if (convex_.empty() || n <= kFewRays) {
     IntervalList list;
     for (int k = 0; k < n; ++k) {
       intervals(rays[k], list);
@@ -367,16 +373,14 @@ void Solid::nearestCrossings(int n, const Ray* rays, double tMin, double* t, Vec
     return;
   }
   // Lanes beyond n carry a harmless ray; their results are not read.
-  LaneRays parent, local, part;
+  LaneRays parent, transformed, part;
   for (int k = 0; k < kLanes; ++k) {
     const Ray& r = rays[k < n ? k : 0];
     parent.ox[k] = r.origin.x, parent.oy[k] = r.origin.y, parent.oz[k] = r.origin.z;
     parent.dx[k] = r.direction.x, parent.dy[k] = r.direction.y, parent.dz[k] = r.direction.z;
   }
-  if (identity_)
-    local = parent;
-  else
-    transformLanes(localFromParent_, parent, local);
+  if (!identity_) transformLanes(localFromParent_, parent, transformed);
+  const LaneRays& local = identity_ ? parent : transformed;
   double enter[kLanes], exit[kLanes], t0[kMaxConvexParts][kLanes], t1[kMaxConvexParts][kLanes];
   for (int k = 0; k < kLanes; ++k) enter[k] = -kInf, exit[k] = kInf;
   const int parts = static_cast<int>(convex_.size());
