@@ -182,7 +182,8 @@ template <typename Policy>
 Step interact(const Scene& scene, const Hit& hit, PathState& p, PathState& branch, double& radiance, Policy& policy) {
   radiance = 0;
   if (!hit.valid()) return Step::Done;
-  if (p.media.size()) p.throughput *= std::exp(-p.media.absorption(scene) * hit.t);
+  if (p.media.size())
+    if (const double a = p.media.absorption(scene); a > 0) p.throughput *= std::exp(-a * hit.t);
   const Object& obj = scene.object(hit.object);
   if (obj.emission) {
     radiance = p.throughput * emittedRadiance(scene, hit, *obj.emission, -p.ray.direction);

@@ -269,7 +269,7 @@ Hit Scene::completeHit(const Ray& ray, unsigned geomID, unsigned primID, float t
   if (bestObject >= 0 && (!native || bestT <= tfar)) {  // a solid is nearest
     hit.object = bestObject;
     hit.t = bestT;
-    hit.normal = bestNormal.normalized();
+    hit.normal = bestNormal * (1 / std::sqrt(bestNormal.dot(bestNormal)));  // unit already, up to rounding
   } else if (!native) {
     return hit;
   } else {
