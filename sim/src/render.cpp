@@ -305,30 +305,40 @@ constexpr int kStratifiedChoices = 4;
 
 namespace {
 
-// A pixel whose samples are being traced: its sample plan and running sum.
+// A pixel whose samples are being traced: its sample plan and their results.
 struct PixelWork {
   int i = 0, j = 0;
   int issued = 0;    // samples started
-  int inFlight = 0;  // paths (samples and their split branches) not yet ended
-  double sum = 0;
+  int inFlight = 0;  // samples started and not yet ended
+  std::vector<double> values;     // each sample's radiance, summed in sample order at the end
   std::vector<int> permutation;   // stop strata, independently permuted
   std::vector<double> decisions;  // Latin hypercube, kStratifiedChoices per sample
 };
 
-// A path in the packet: its state, its random stream and its pixel.
-struct Lane {
+// Where a path goes on: its state, random stream and stratified choices.
+struct Walker {
   PathState path;
   Sampler sampler{0, 0};
   const double* decisions = nullptr;
   int decisionCount = 0;
+};
+
+// One sample in the packet. Its split branches wait on its own stack and are
+// traced depth first in the same lane, so each sample's radiance is summed in
+// the same order however samples share packets: the image is bit-identical
+// for any tile size and thread count.
+struct Lane {
+  Walker walker;
+  std::array<Walker, 12> branches;  // splitDepth <= 12: at most one waiting branch per split depth
+  int waiting = 0;
+  double radiance = 0;
   int pixel = 0;  // index into the tile's PixelWork slots
+  int sample = 0;
 };
 
 // Renders one tile: the pixels' samples are traced as packets of up to
-// Scene::kPacket paths through Embree, refilled as paths end, so that a
+// Scene::kPacket paths through Embree, refilled as samples end, so that a
 // packet stays full and coherent (neighbouring samples of one or two pixels).
-// Every path draws only from its own random stream, so the result does not
-// depend on how paths share packets.
 class TileRenderer {
 public:
   TileRenderer(const Scene& scene, const Sensor& sensor, const RenderOptions& options)
@@ -348,46 +358,50 @@ public:
     for (int k = static_cast<int>(Scene::kPacket) - 1; k >= 0; --k) freeLanes.push_back(k);
     size_t n = 0;
     for (;;) {
-      // Fill the packet: split branches first, then new samples.
+      // Fill the packet with new samples.
       while (n < Scene::kPacket) {
-        Lane* lane = &lanes[static_cast<size_t>(freeLanes.back())];
-        if (!pending_.empty()) {
-          *lane = pending_.back();
-          pending_.pop_back();
-        } else {
-          if (issuing < 0 || pixels_[static_cast<size_t>(issuing)].issued == options_.samplesPerPixel) {
-            if (issuing >= 0) finishIfDone(issuing);
-            issuing = startPixel();
-            if (issuing < 0) break;
-          }
-          if (!startSample(issuing, *lane)) continue;
+        if (issuing < 0 || pixels_[static_cast<size_t>(issuing)].issued == options_.samplesPerPixel) {
+          if (issuing >= 0) finishIfDone(issuing);
+          issuing = startPixel();
+          if (issuing < 0) break;
         }
+        Lane* lane = &lanes[static_cast<size_t>(freeLanes.back())];
+        if (!startSample(issuing, *lane)) continue;
         freeLanes.pop_back();
         active[n++] = lane;
       }
       if (n == 0) break;
-      for (size_t k = 0; k < n; ++k) rays[k] = active[k]->path.ray;
+      for (size_t k = 0; k < n; ++k) rays[k] = active[k]->walker.path.ray;
       scene_.intersect(std::span(rays.data(), n), std::span(hits.data(), n));
       size_t kept = 0;
       for (size_t k = 0; k < n; ++k) {
         Lane& lane = *active[k];
-        SampledPolicy policy{lane.sampler, options_.maxDepth, options_.splitDepth, lane.decisions, lane.decisionCount};
+        Walker& w = lane.walker;
+        SampledPolicy policy{w.sampler, options_.maxDepth, options_.splitDepth, w.decisions, w.decisionCount};
         double radiance;
-        const Step step = interact(scene_, hits[k], lane.path, branch_, radiance, policy);
-        lane.decisions = policy.decisions;
-        lane.decisionCount = policy.decisionCount;
-        PixelWork& px = pixels_[static_cast<size_t>(lane.pixel)];
-        if (step == Step::Split) {
-          // The branch gets its own stream, keyed by the parent's state and depth.
-          pending_.push_back({branch_, Sampler(lane.sampler.state, static_cast<std::uint64_t>(branch_.depth)),
-                              lane.decisions, lane.decisionCount, lane.pixel});
-          ++px.inFlight;
-        }
-        if (step != Step::Done && lane.path.depth < options_.maxDepth) {
+        const Step step = interact(scene_, hits[k], w.path, branch_, radiance, policy);
+        w.decisions = policy.decisions;
+        w.decisionCount = policy.decisionCount;
+        if (step == Step::Split)  // the branch gets its own stream, keyed by the parent's state and depth
+          lane.branches[static_cast<size_t>(lane.waiting++)] = {
+              branch_, Sampler(w.sampler.state, static_cast<std::uint64_t>(branch_.depth)), w.decisions, w.decisionCount};
+        if (step != Step::Done && w.path.depth < options_.maxDepth) {
           active[kept++] = &lane;
           continue;
         }
-        px.sum += radiance;
+        lane.radiance += radiance;
+        // The path ended: go on with the sample's latest waiting branch, if any.
+        bool resumed = false;
+        while (!resumed && lane.waiting > 0) {
+          w = lane.branches[static_cast<size_t>(--lane.waiting)];
+          resumed = w.path.depth < options_.maxDepth;
+        }
+        if (resumed) {
+          active[kept++] = &lane;
+          continue;
+        }
+        PixelWork& px = pixels_[static_cast<size_t>(lane.pixel)];
+        px.values[static_cast<size_t>(lane.sample)] = lane.radiance;
         --px.inFlight;
         freeLanes.push_back(static_cast<int>(&lane - lanes.data()));
         if (lane.pixel != issuing) finishIfDone(lane.pixel);
@@ -409,7 +423,8 @@ private:
       pixels_.emplace_back();
     }
     PixelWork& px = pixels_[static_cast<size_t>(slot)];
-    px.i = nextI_, px.j = nextJ_, px.issued = 0, px.inFlight = 0, px.sum = 0;
+    px.i = nextI_, px.j = nextJ_, px.issued = 0, px.inFlight = 0;
+    px.values.resize(static_cast<size_t>(options_.samplesPerPixel));
     if (++nextI_ == x1_) nextI_ = x0_, ++nextJ_;
     const int spp = options_.samplesPerPixel;
     Sampler pixelSampler(options_.seed, pixelIndex(px));
@@ -443,9 +458,10 @@ private:
     const int s = px.issued++;
     // One random stream per sample: two scenes that differ only where a path
     // can reach (a defect) give identical samples everywhere else.
-    lane.sampler = Sampler(options_.seed, (pixelIndex(px) << 24) ^ static_cast<std::uint64_t>(s) ^ 0x5bd1e995ull);
+    Sampler& sampler = lane.walker.sampler;
+    sampler = Sampler(options_.seed, (pixelIndex(px) << 24) ^ static_cast<std::uint64_t>(s) ^ 0x5bd1e995ull);
     auto stratified = [&](int stratum) {
-      const double u = lane.sampler.next(), v = lane.sampler.next();
+      const double u = sampler.next(), v = sampler.next();
       if (stratum >= strata_) return Vec2(u, v);
       const int row = stratum / side_;
       return Vec2((stratum - row * side_ + u) * invSide_, (row + v) * invSide_);
@@ -458,11 +474,17 @@ private:
     } else {
       ray = std::get<LightFieldSensor>(sensor_).ray(px.i, px.j, offset);
     }
-    if (!ray) return false;
-    lane.path = PathState{.ray = *ray};
-    lane.decisions = &px.decisions[static_cast<size_t>(s) * kStratifiedChoices];
-    lane.decisionCount = kStratifiedChoices;
+    if (!ray) {
+      px.values[static_cast<size_t>(s)] = 0;
+      return false;
+    }
+    lane.walker.path = PathState{.ray = *ray};
+    lane.walker.decisions = &px.decisions[static_cast<size_t>(s) * kStratifiedChoices];
+    lane.walker.decisionCount = kStratifiedChoices;
+    lane.waiting = 0;
+    lane.radiance = 0;
     lane.pixel = slot;
+    lane.sample = s;
     ++px.inFlight;
     return true;
   }
@@ -471,7 +493,9 @@ private:
   void finishIfDone(int slot) {
     PixelWork& px = pixels_[static_cast<size_t>(slot)];
     if (px.issued < options_.samplesPerPixel || px.inFlight > 0) return;
-    image_->ptr<float>(px.j)[px.i] = static_cast<float>(px.sum / options_.samplesPerPixel);
+    double sum = 0;
+    for (const double v : px.values) sum += v;
+    image_->ptr<float>(px.j)[px.i] = static_cast<float>(sum * invSpp_);
     px.issued = -1;  // freed
     freeSlots_.push_back(slot);
   }
@@ -489,7 +513,6 @@ private:
   cv::Mat* image_ = nullptr;
   std::vector<PixelWork> pixels_;
   std::vector<int> freeSlots_;
-  std::vector<Lane> pending_;
   std::vector<int> order_;
   PathState branch_;  // written by a split
 };
