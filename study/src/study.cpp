@@ -464,8 +464,14 @@ nlohmann::ordered_json runStudy(const Bench& bench, const fs::path& outDir, cons
       options.sweep ? *options.sweep : (options.quality == Quality::Quick ? std::vector<SweepPoint>{} : defaultSweep());
 
   // The sweep runs the inverse schlieren setup only, at the quick camera
-  // resolution, so that its many variants fit the time budget.
-  const QualitySettings sweepQuality = settingsFor(Quality::Quick);
+  // resolution, so that its many variants fit the time budget; its light
+  // fields are captured at the study's own quality (noise in a captured light
+  // field decides which lens regions its display lights).
+  const QualitySettings sweepQuality = [&] {
+    QualitySettings s = settingsFor(Quality::Quick);
+    s.captureSamples = q.captureSamples;
+    return s;
+  }();
   const double rendersPerSetup = static_cast<double>(specs.size());
   // Progress units: one full-quality render each; the sweep's renders are
   // smaller (quick camera) and count a tenth.
@@ -538,6 +544,7 @@ nlohmann::ordered_json runStudy(const Bench& bench, const fs::path& outDir, cons
     out["setup"] = "inverse_schlieren";
     out["camera"] = {{"width", sweepCamera.width}, {"height", sweepCamera.height},
                      {"samples_per_pixel", sro.samplesPerPixel}};
+    out["capture_samples_per_pixel"] = sweepQuality.captureSamples;
     out["reference"] = {{"angular", reference.angular}, {"element_mm", reference.elementPitch_mm()},
                         {"distance_mm", delta}};
     for (const SweepPoint& point : sweep) {
