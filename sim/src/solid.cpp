@@ -247,7 +247,7 @@ void Solid::intervals(const Ray& ray, IntervalList& out) const {
   }
 }
 
-bool Solid::convexIntervals(const Ray& ray, IntervalList& out) const {
+void Solid::convexIntervals(const Ray& ray, IntervalList& out) const {
   double enter = -kInf, exit = kInf;
   int enterPart = -1, exitPart = -1;
   Ray enterRay = ray, exitRay = ray;
@@ -255,23 +255,23 @@ bool Solid::convexIntervals(const Ray& ray, IntervalList& out) const {
     const ConvexPart& part = convex_[static_cast<size_t>(i)];
     const Ray local = part.identity ? ray : Ray{part.partFromLocal.point(ray.origin), part.partFromLocal.vector(ray.direction)};
     double t0, t1;
-    if (!primitiveSpan(part.kind, part.radius, local, t0, t1)) return false;
+    if (!primitiveSpan(part.kind, part.radius, local, t0, t1)) return;
     if (t0 > enter || enterPart < 0) enter = t0, enterPart = i, enterRay = local;
     if (t1 < exit || exitPart < 0) exit = t1, exitPart = i, exitRay = local;
-    if (exit <= enter) return false;
+    if (exit <= enter) return;
   }
   const ConvexPart& a = convex_[static_cast<size_t>(enterPart)];
   const ConvexPart& b = convex_[static_cast<size_t>(exitPart)];
   out.push({{enter, a.localFromPart.vector(primitiveNormal(a.kind, a.radius, enterRay, enter, true))},
             {exit, b.localFromPart.vector(primitiveNormal(b.kind, b.radius, exitRay, exit, false))}});
-  return true;
 }
 
 namespace {
 
 // The convex kernel below runs the same arithmetic on every lane with selects
 // instead of branches, so that the compiler vectorises each loop; the clones
-// pick AVX-512, AVX2 or the baseline at load time.
+// pick AVX-512, AVX2 or the baseline at load time (not under AddressSanitizer,
+// whose run time is not up yet when the loader runs the clones' resolvers).
 #if defined(__x86_64__) && !defined(__SANITIZE_ADDRESS__)
 #define LFI_SIMD_CLONES __attribute__((target_clones("avx512f", "avx2", "default")))
 #else

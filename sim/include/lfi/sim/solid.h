@@ -109,7 +109,7 @@ private:
     bool identity;
   };
   static constexpr size_t kMaxConvexParts = 8;  // longer chains take the general path
-  bool convexIntervals(const Ray& local, IntervalList& out) const;
+  void convexIntervals(const Ray& local, IntervalList& out) const;
 
   Kind kind_;
   double radius_ = 0;
