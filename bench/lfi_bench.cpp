@@ -102,7 +102,8 @@ RayBatch recordRays(const Scene& scene, const TelecentricCamera& cam, int spp) {
         RTCRayHit rh{};
         rh.ray.org_x = static_cast<float>(path[segment].x), rh.ray.org_y = static_cast<float>(path[segment].y);
         rh.ray.org_z = static_cast<float>(path[segment].z);
-        rh.ray.dir_x = static_cast<float>(d.x), rh.ray.dir_y = static_cast<float>(d.y), rh.ray.dir_z = static_cast<float>(d.z);
+        rh.ray.dir_x = static_cast<float>(d.x), rh.ray.dir_y = static_cast<float>(d.y);
+        rh.ray.dir_z = static_cast<float>(d.z);
         rh.ray.tnear = 1e-4f;
         rh.ray.mask = 0xffffffffu;
         batch.rays.push_back(rh);
@@ -308,10 +309,12 @@ int main(int argc, char** argv) {
     rtcAttachGeometry(hull, g);
     rtcReleaseGeometry(g);
     RTCGeometry q = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_QUAD);
-    auto* qv = static_cast<float*>(rtcSetNewGeometryBuffer(q, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), 4));
+    auto* qv = static_cast<float*>(
+        rtcSetNewGeometryBuffer(q, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), 4));
     const float corners[12] = {-200, -200, -100, 200, -200, -100, 200, 200, -100, -200, 200, -100};
     std::memcpy(qv, corners, sizeof(corners));
-    auto* qi = static_cast<unsigned*>(rtcSetNewGeometryBuffer(q, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT4, 4 * sizeof(unsigned), 1));
+    auto* qi = static_cast<unsigned*>(
+        rtcSetNewGeometryBuffer(q, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT4, 4 * sizeof(unsigned), 1));
     qi[0] = 0, qi[1] = 1, qi[2] = 2, qi[3] = 3;
     rtcCommitGeometry(q);
     rtcAttachGeometry(hull, q);

@@ -384,7 +384,8 @@ public:
         w.decisionCount = policy.decisionCount;
         if (step == Step::Split)  // the branch gets its own stream, keyed by the parent's state and depth
           lane.branches[static_cast<size_t>(lane.waiting++)] = {
-              branch_, Sampler(w.sampler.state, static_cast<std::uint64_t>(branch_.depth)), w.decisions, w.decisionCount};
+              branch_, Sampler(w.sampler.state, static_cast<std::uint64_t>(branch_.depth)), w.decisions,
+              w.decisionCount};
         if (step != Step::Done && w.path.depth < options_.maxDepth) {
           active[kept++] = &lane;
           continue;
@@ -446,7 +447,8 @@ private:
         std::swap(order_[static_cast<size_t>(k)],
                   order_[static_cast<size_t>(pixelSampler.below(static_cast<std::uint32_t>(k + 1)))]);
       for (int k = 0; k < spp; ++k)
-        px.decisions[static_cast<size_t>(k) * kStratifiedChoices + d] = (order_[static_cast<size_t>(k)] + pixelSampler.next()) * invSpp_;
+        px.decisions[static_cast<size_t>(k) * kStratifiedChoices + d] =
+            (order_[static_cast<size_t>(k)] + pixelSampler.next()) * invSpp_;
     }
     return slot;
   }

@@ -257,9 +257,9 @@ void Scene::intersect(std::span<const Ray> rays, std::span<Hit> hits, double tMi
   rtcIntersect16(valid, impl_->scene, &ctx.embree, &rh);
   resolveCandidates(ctx);
   for (int k = 0; k < n; ++k)
-    hits[static_cast<size_t>(k)] = completeHit(rays[static_cast<size_t>(k)], rh.hit.geomID[k], rh.hit.primID[k], rh.ray.tfar[k],
-                                               {rh.hit.Ng_x[k], rh.hit.Ng_y[k], rh.hit.Ng_z[k]}, rh.hit.u[k], rh.hit.v[k],
-                                               bestObject[k], bestT[k], bestNormal[k]);
+    hits[static_cast<size_t>(k)] = completeHit(rays[static_cast<size_t>(k)], rh.hit.geomID[k], rh.hit.primID[k],
+                                               rh.ray.tfar[k], {rh.hit.Ng_x[k], rh.hit.Ng_y[k], rh.hit.Ng_z[k]},
+                                               rh.hit.u[k], rh.hit.v[k], bestObject[k], bestT[k], bestNormal[k]);
 }
 
 Hit Scene::completeHit(const Ray& ray, unsigned geomID, unsigned primID, float tfar, const Vec3& ng, float u, float v,

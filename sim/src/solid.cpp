@@ -253,7 +253,8 @@ void Solid::convexIntervals(const Ray& ray, IntervalList& out) const {
   Ray enterRay = ray, exitRay = ray;
   for (int i = 0; i < static_cast<int>(convex_.size()); ++i) {
     const ConvexPart& part = convex_[static_cast<size_t>(i)];
-    const Ray local = part.identity ? ray : Ray{part.partFromLocal.point(ray.origin), part.partFromLocal.vector(ray.direction)};
+    const Ray local =
+        part.identity ? ray : Ray{part.partFromLocal.point(ray.origin), part.partFromLocal.vector(ray.direction)};
     double t0, t1;
     if (!primitiveSpan(part.kind, part.radius, local, t0, t1)) return;
     if (t0 > enter || enterPart < 0) enter = t0, enterPart = i, enterRay = local;
@@ -411,7 +412,8 @@ void Solid::localIntervals(const Ray& ray, IntervalList& out) const {
   if (isPrimitive(kind_)) {
     double t0, t1;
     if (primitiveSpan(kind_, radius_, ray, t0, t1))
-      out.push({{t0, primitiveNormal(kind_, radius_, ray, t0, true)}, {t1, primitiveNormal(kind_, radius_, ray, t1, false)}});
+      out.push({{t0, primitiveNormal(kind_, radius_, ray, t0, true)},
+                {t1, primitiveNormal(kind_, radius_, ray, t1, false)}});
     return;
   }
   if (!convex_.empty()) {

@@ -124,7 +124,9 @@ TEST(Scene, PacketIntersectEqualsOneRayIntersect) {
   std::vector<Object> objects = {
       {.name = "lens", .shape = std::shared_ptr<const Solid>(Solid::sphericalLens(20, -30, 3, 10)),
        .worldFromObject = Rigid3::translation({0, 0, 10}) * Rigid3::rotation({1, 0, 0}, 0.2), .material = Dielectric{}},
-      {.name = "cut lens", .shape = std::shared_ptr<const Solid>(cut), .worldFromObject = Rigid3::translation({1, 0, -5}),
+      {.name = "cut lens",
+       .shape = std::shared_ptr<const Solid>(cut),
+       .worldFromObject = Rigid3::translation({1, 0, -5}),
        .material = Dielectric{}},
       {.name = "tetra", .shape = tetra, .worldFromObject = Rigid3::translation({2, 1, 3}), .material = Dielectric{}},
       {.name = "back", .shape = Rectangle{30, 30}, .worldFromObject = Rigid3::translation({0, 0, -20}),
@@ -139,8 +141,10 @@ TEST(Scene, PacketIntersectEqualsOneRayIntersect) {
     const Vec3 centre(8 * u(rng), 8 * u(rng), 30);
     std::vector<Ray> rays;
     for (size_t k = 0; k < n; ++k) {
-      const Vec3 origin = coherent ? centre + Vec3(0.2 * u(rng), 0.2 * u(rng), 0) : Vec3(10 * u(rng), 10 * u(rng), 30 * u(rng));
-      const Vec3 dir = coherent ? Vec3(0.01 * u(rng), 0.01 * u(rng), -1).normalized() : Vec3(u(rng), u(rng), u(rng)).normalized();
+      const Vec3 origin = coherent ? centre + Vec3(0.2 * u(rng), 0.2 * u(rng), 0)
+                                   : Vec3(10 * u(rng), 10 * u(rng), 30 * u(rng));
+      const Vec3 dir = coherent ? Vec3(0.01 * u(rng), 0.01 * u(rng), -1).normalized()
+                                : Vec3(u(rng), u(rng), u(rng)).normalized();
       rays.push_back({origin, dir});
     }
     std::vector<Hit> packed(n);
