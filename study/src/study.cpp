@@ -500,9 +500,9 @@ nlohmann::ordered_json runStudy(const Bench& bench, const fs::path& outDir, cons
                         {"weak_at_least", kWeakCnr},
                         {"flag_sigma", kFlagSigma},
                         {"false_positives", "flagged regions (mean of z over the n <= 9 pixels of the 3x3 "
-                                            "neighbourhood inside the frame > flag_sigma s / sqrt(n)) away from the masks "
-                                            "where the rendered radiance equals the intact lens's (common random "
-                                            "numbers): the camera's noise alone"},
+                                            "neighbourhood inside the frame > flag_sigma s / sqrt(n)) away from "
+                                            "the masks where the rendered radiance equals the intact lens's "
+                                            "(common random numbers): the camera's noise alone"},
                         {"secondary_regions", "flagged regions away from the masks where light that touched the "
                                               "defect lands (e.g. after internal reflection)"}};
 
