@@ -329,7 +329,8 @@ struct Walker {
 // for any tile size and thread count.
 struct Lane {
   Walker walker;
-  std::array<Walker, 12> branches;  // splitDepth <= 12: at most one waiting branch per split depth
+  // At most one waiting branch per split depth.
+  std::array<Walker, RenderOptions::kMaxSplitDepth> branches;
   int waiting = 0;
   double radiance = 0;
   int pixel = 0;  // index into the tile's PixelWork slots
@@ -523,8 +524,9 @@ private:
 
 cv::Mat render(const Scene& scene, const Sensor& sensor, const RenderOptions& options) {
   if (options.samplesPerPixel < 1) fail(Errc::InvalidArgument, "render: samplesPerPixel must be >= 1");
-  if (options.splitDepth < 0 || options.splitDepth > 12)
-    fail(Errc::InvalidArgument, "render: splitDepth = {} is outside [0, 12]", options.splitDepth);
+  if (options.splitDepth < 0 || options.splitDepth > RenderOptions::kMaxSplitDepth)
+    fail(Errc::InvalidArgument, "render: splitDepth = {} is outside [0, {}]", options.splitDepth,
+         RenderOptions::kMaxSplitDepth);
   if (options.tileSize < 1) fail(Errc::InvalidArgument, "render: tileSize must be >= 1");
   if (const auto* cam = std::get_if<TelecentricCamera>(&sensor)) cam->validate();
   if (const auto* lfs = std::get_if<LightFieldSensor>(&sensor)) lfs->geometry.validate();

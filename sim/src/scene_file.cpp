@@ -188,7 +188,7 @@ SceneDescription loadSceneFile(const fs::path& path) {
     ConfigTable r = root.table("render");
     d.render.samplesPerPixel = r.integer("samples_per_pixel", 16, 1, 1 << 20);
     d.render.seed = static_cast<std::uint64_t>(r.integer("seed", 1, 0, 1 << 30));
-    d.render.splitDepth = r.integer("split_depth", 4, 0, 12);
+    d.render.splitDepth = r.integer("split_depth", 4, 0, RenderOptions::kMaxSplitDepth);
     d.render.maxDepth = r.integer("max_depth", 64, 1, 1024);
     r.finish();
   }

@@ -25,7 +25,9 @@ struct RenderOptions {
   int maxDepth = 64;   // interactions per path; longer paths contribute 0
   // Fresnel events among the first splitDepth interactions are split (both
   // branches traced, weighted F and 1 - F) rather than sampled: same mean, far
-  // less noise for the few interfaces of a lens. 0 = pure sampling.
+  // less noise for the few interfaces of a lens. 0 = pure sampling; at most
+  // kMaxSplitDepth (each split doubles a sample's paths).
+  static constexpr int kMaxSplitDepth = 12;
   int splitDepth = 4;
   int threads = 0;     // 0 = all cores
   int tileSize = 16;
