@@ -287,7 +287,6 @@ Hit Scene::completeHit(const Ray& ray, unsigned geomID, unsigned primID, float t
     }
   }
   hit.point = ray.at(hit.t);
-  hit.localPoint = impl_->objectFromWorld[static_cast<size_t>(hit.object)].point(hit.point);
   return hit;
 }
 

@@ -22,18 +22,17 @@ void TelecentricCamera::validate() const {
     fail(Errc::InvalidArgument, "telecentric camera: size {}x{} is out of range", width, height);
 }
 
+TelecentricCamera::RayMap::RayMap(const TelecentricCamera& cam)
+    : world_(cam.worldFromCamera), halfW_(0.5 * cam.width), halfH_(0.5 * cam.height) {
+  // Thin lens: the plane in focus is at wz = b f / (b - f) = focusDistance_mm().
+  const double b = cam.imageDistance_mm, f = cam.focalLength_mm, k = 1 / (b - f), wz = b * f * k;
+  pixel_ = f * k * cam.pixelPitch_mm;
+  stop_ = b * k * 0.5 * cam.stopDiameter_mm;
+  slope_ = stop_ / wz;
+}
+
 Ray TelecentricCamera::ray(int i, int j, const Vec2& pixelOffset, const Vec2& disc) const {
-  // Thin lens: the plane in focus is at wz = b f / (b - f) = focusDistance_mm(),
-  // imaged with wz / b = f / (b - f); one division for all of it.
-  const double b = imageDistance_mm, f = focalLength_mm, k = 1 / (b - f), wz = b * f * k;
-  const Vec3 s(-(i + pixelOffset.x - 0.5 * width) * pixelPitch_mm, -(j + pixelOffset.y - 0.5 * height) * pixelPitch_mm,
-               -b);
-  const Vec3 a(0.5 * stopDiameter_mm * disc.x, 0.5 * stopDiameter_mm * disc.y, -f);
-  const Vec3 w(-(f * k) * s.x, -(f * k) * s.y, wz);
-  const Vec3 o = s + (a - s) * (b * k);  // z: -b + (b - f) b / (b - f) = 0
-  const Vec3 chord = w - o;
-  const Vec3 dir = chord * (1 / std::sqrt(chord.dot(chord)));
-  return {worldFromCamera.point(Vec3(o.x, o.y, 0)), worldFromCamera.vector(dir)};
+  return RayMap(*this)(i, j, pixelOffset, disc);
 }
 
 Vec2 TelecentricCamera::project(const Vec3& worldPoint) const {

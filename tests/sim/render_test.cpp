@@ -302,6 +302,40 @@ TEST(Sampler, BoundedDrawsAreInRangeAndUniform) {
   EXPECT_NEAR(sum / 100000, 0.5, 5 * std::sqrt(1.0 / 12 / 100000));
 }
 
+// The concentric map (Shirley and Chiu 1997): square (u1, u2) -> 2u - 1 =
+// (a, b); for |a| > |b| the point is a (cos phi, sin phi) with phi = pi/4 b/a,
+// otherwise b (sin psi, cos psi) with psi = pi/4 a/b. The renderer's own sin
+// and cos (series on |x| <= pi/4) must agree with libm to rounding; the map
+// keeps radius max(|a|, |b|) and is uniform: a quadrant's share is 1/4 and the
+// mean of r^2 over a uniform disc is 1/2.
+TEST(ConcentricDisc, IsShirleysMapToRoundingAndUniform) {
+  Sampler sampler(5, 1);
+  double r2 = 0;
+  int firstQuadrant = 0;
+  const int n = 200000;
+  for (int k = 0; k < n; ++k) {
+    const double u1 = sampler.next(), u2 = sampler.next();
+    const Vec2 p = concentricDisc(u1, u2);
+    const double a = 2 * u1 - 1, b = 2 * u2 - 1;
+    const Vec2 expected = std::abs(a) > std::abs(b)
+                              ? Vec2(a * std::cos(std::numbers::pi / 4 * b / a), a * std::sin(std::numbers::pi / 4 * b / a))
+                              : Vec2(b * std::sin(std::numbers::pi / 4 * a / b), b * std::cos(std::numbers::pi / 4 * a / b));
+    ASSERT_NEAR(p.x, expected.x, 4e-16) << u1 << " " << u2;
+    ASSERT_NEAR(p.y, expected.y, 4e-16) << u1 << " " << u2;
+    ASSERT_NEAR(std::hypot(p.x, p.y), std::max(std::abs(a), std::abs(b)), 1e-15);
+    r2 += p.x * p.x + p.y * p.y;
+    firstQuadrant += p.x > 0 && p.y > 0;
+  }
+  EXPECT_NEAR(r2 / n, 0.5, 5 * std::sqrt(1.0 / 12 / n));  // r^2 is uniform on [0, 1)
+  EXPECT_NEAR(firstQuadrant, n / 4, 5 * std::sqrt(n * 0.25 * 0.75));
+  // Square edges and corners land on the circle at the angles the map gives them.
+  EXPECT_NEAR(concentricDisc(1, 0.5).x, 1, 1e-16);
+  EXPECT_NEAR(concentricDisc(1, 1).x, std::sqrt(0.5), 2e-16);
+  EXPECT_NEAR(concentricDisc(1, 1).y, std::sqrt(0.5), 2e-16);
+  EXPECT_NEAR(concentricDisc(0.5, 0).y, -1, 1e-16);
+  EXPECT_EQ(concentricDisc(0.5, 0.5).x, 0);
+}
+
 TEST(Render, CancelFlagSetBeforehandThrowsCancelled) {
   SmallLensScene s;
   std::atomic<bool> cancel{true};

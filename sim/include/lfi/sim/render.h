@@ -65,6 +65,11 @@ struct Sampler {
   std::uint32_t below(std::uint32_t bound);  // uniform in [0, bound), unbiased (Lemire 2019); bound > 0
 };
 
+// Shirley and Chiu's concentric map of the unit square onto the unit disc:
+// area-preserving (uniform u gives a uniform point), keeps strata compact,
+// no singular centre. Square edges go to the circle.
+Vec2 concentricDisc(double u1, double u2);
+
 // Fresnel reflectance of unpolarised light at an interface n1 -> n2 for the
 // cosine of the incidence angle (1 under total internal reflection).
 double fresnelReflectance(double cosIncidence, double n1, double n2);

@@ -149,7 +149,6 @@ struct Hit {
   double t = 0;
   Vec3 point;
   Vec3 normal;        // outward (for solids and meshes) or +z local (rectangles), world frame, unit
-  Vec3 localPoint;    // in the object's frame
   bool valid() const { return object >= 0; }
 };
 

@@ -29,6 +29,7 @@
 #include "lfi/core/light_field.h"
 #include "lfi/sim/solid.h"
 
+#include <cmath>
 #include <optional>
 #include <variant>
 
@@ -51,6 +52,26 @@ struct TelecentricCamera {
 
   // pixel + offset in [0,1)^2, stop sample in the unit disc.
   Ray ray(int i, int j, const Vec2& pixelOffset, const Vec2& unitDiscSample) const;
+
+  // ray() with the camera's constants worked out once, for the renderer's inner loop.
+  // With k = 1/(b - f) the formulas above reduce to: o = (P (i + ju - W/2) + Q ax,
+  // P (j + jv - H/2) + Q ay, 0) and w - o = (-Q ax, -Q ay, wz), where P = f k p is
+  // the object-side pixel, Q = b k D/2 and wz = b f k: rays through one stop point
+  // are parallel (telecentric), and the stop sample alone sets the direction.
+  class RayMap {
+  public:
+    explicit RayMap(const TelecentricCamera& cam);
+    Ray operator()(int i, int j, const Vec2& pixelOffset, const Vec2& disc) const {
+      const double ox = pixel_ * (i + pixelOffset.x - halfW_) + stop_ * disc.x;
+      const double oy = pixel_ * (j + pixelOffset.y - halfH_) + stop_ * disc.y;
+      const double dx = -slope_ * disc.x, dy = -slope_ * disc.y, inv = 1 / std::sqrt(1 + dx * dx + dy * dy);
+      return {world_.point({ox, oy, 0}), world_.vector({dx * inv, dy * inv, inv})};
+    }
+
+  private:
+    Rigid3 world_;
+    double pixel_, stop_, slope_, halfW_, halfH_;  // P, Q, Q / wz, W/2, H/2
+  };
   // Where the world point projects on the image (continuous pixel coordinates;
   // exact on the focal plane, the chief ray elsewhere).
   Vec2 project(const Vec3& worldPoint) const;
