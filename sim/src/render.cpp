@@ -2,6 +2,8 @@
 
 #include "lfi/core/error.h"
 
+#include "camera_samples.h"
+
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
@@ -12,46 +14,10 @@
 
 namespace lfi::sim {
 
-namespace {
-
-std::uint64_t splitMix64(std::uint64_t x) {
-  x += 0x9e3779b97f4a7c15ull;
-  x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ull;
-  x = (x ^ (x >> 27)) * 0x94d049bb133111ebull;
-  return x ^ (x >> 31);
-}
-
-// sin x and cos x for |x| <= pi/4 by their Taylor series to x^15 and x^16
-// (remainders below 5e-17, so exact to rounding), evaluated by Estrin's scheme
-// for a short dependency chain: a fraction of a general sincos's cost, and the
-// camera draws one per sample.
-void sinCosQuarter(double x, double& sinX, double& cosX) {
-  const double y = -x * x, y2 = y * y, y4 = y2 * y2;
-  auto series = [&](const double (&c)[9]) {  // sum of c[k] y^k
-    const double p01 = c[0] + c[1] * y, p23 = c[2] + c[3] * y, p45 = c[4] + c[5] * y, p67 = c[6] + c[7] * y;
-    return (p01 + p23 * y2) + (p45 + p67 * y2) * y4 + c[8] * (y4 * y4);
-  };
-  static constexpr double kSin[9] = {1, 1.0 / 6, 1.0 / 120, 1.0 / 5040, 1.0 / 362880, 1.0 / 39916800,
-                                     1.0 / 6227020800, 1.0 / 1307674368000, 0};  // 1/(2k+1)!
-  static constexpr double kCos[9] = {1, 1.0 / 2, 1.0 / 24, 1.0 / 720, 1.0 / 40320, 1.0 / 3628800,
-                                     1.0 / 479001600, 1.0 / 87178291200, 1.0 / 20922789888000};  // 1/(2k)!
-  sinX = x * series(kSin);
-  cosX = series(kCos);
-}
-
-}  // namespace
-
 Vec2 concentricDisc(double u1, double u2) {
-  const double a = 2 * u1 - 1, b = 2 * u2 - 1;
-  // |a| > |b|: r = a, phi = pi/4 b/a, point r (cos phi, sin phi); otherwise
-  // r = b, phi = pi/2 - pi/4 a/b, point r (sin psi, cos psi) with psi = pi/4 a/b.
-  // Selects rather than branches: which case holds is a coin toss per sample.
-  const bool wide = std::abs(a) > std::abs(b);
-  const double r = wide ? a : b, other = wide ? b : a;
-  if (r == 0) return {0, 0};
-  double s, c;
-  sinCosQuarter((std::numbers::pi / 4) * (other / r), s, c);
-  return {r * (wide ? c : s), r * (wide ? s : c)};
+  Vec2 p;
+  detail::concentricDisc(u1, u2, p.x, p.y);
+  return p;
 }
 
 namespace {
@@ -122,22 +88,22 @@ private:
 
 }  // namespace
 
-Sampler::Sampler(std::uint64_t seed, std::uint64_t stream) : state(splitMix64(stream ^ splitMix64(seed))) {}
-
-std::uint64_t Sampler::nextU64() {
-  const std::uint64_t x = state;
-  state += 0x9e3779b97f4a7c15ull;  // the golden-ratio increment; splitMix64 mixes x + increment
-  return splitMix64(x);
-}
-
-std::uint32_t Sampler::below(std::uint32_t bound) {
-  // Multiply and keep the high half; reject the few low halves that would bias it.
-  std::uint64_t m = static_cast<std::uint64_t>(nextU32()) * bound;
-  if (static_cast<std::uint32_t>(m) < bound) {
-    const std::uint32_t threshold = -bound % bound;
-    while (static_cast<std::uint32_t>(m) < threshold) m = static_cast<std::uint64_t>(nextU32()) * bound;
-  }
-  return static_cast<std::uint32_t>(m >> 32);
+std::uint32_t permutationElement(std::uint32_t i, std::uint32_t n, std::uint32_t key) {
+  // Kensler's hash (Correlated Multi-Jittered Sampling, Pixar 2013): every step
+  // (xor with the key, odd multiplies, xor-shifts of the bits under the mask)
+  // is invertible on the low k bits, so it permutes [0, 2^k); values >= n are
+  // hashed again (cycle walking), which permutes [0, n); a final rotation by
+  // the key.
+  std::uint32_t mask = n - 1;
+  mask |= mask >> 1, mask |= mask >> 2, mask |= mask >> 4, mask |= mask >> 8, mask |= mask >> 16;
+  do {
+    i ^= key, i *= 0xe170893du, i ^= key >> 16, i ^= (i & mask) >> 4;
+    i ^= key >> 8, i *= 0x0929eb3fu, i ^= key >> 23, i ^= (i & mask) >> 1;
+    i *= 1 | key >> 27, i *= 0x6935fa69u, i ^= (i & mask) >> 11, i *= 0x74dcb303u;
+    i ^= (i & mask) >> 2, i *= 0x9e501cc3u, i ^= (i & mask) >> 2, i *= 0xc860a3dfu;
+    i &= mask, i ^= i >> 5;
+  } while (i >= n);
+  return (i + key) % n;
 }
 
 namespace {
@@ -276,18 +242,37 @@ double walk(const Scene& scene, PathState p, Policy& policy) {
   return sum;
 }
 
+// Fresnel choices per sample drawn from a Latin hypercube rather than at random.
+constexpr int kStratifiedChoices = 4;
+
+// The first kStratifiedChoices Fresnel choices of a pixel's samples: choice d
+// of sample s falls in stratum permutationElement(s, spp, keys[d]) of [0, 1)
+// cut into spp, jittered. Across the pixel's samples each choice's value then
+// covers [0, 1) evenly, so the few reflect/refract branches of a lens are
+// taken in proportion.
+struct StratifiedChoices {
+  std::array<std::uint32_t, kStratifiedChoices> keys{};
+  std::uint32_t sample = 0, samples = 1;
+  int used = kStratifiedChoices;  // none left
+  bool next(double& u) {
+    if (used == kStratifiedChoices) return false;
+    const std::uint32_t key = keys[static_cast<size_t>(used++)];
+    const double jitter = Sampler::unitInterval(splitMix64((std::uint64_t{key} << 32) | sample));
+    u = (permutationElement(sample, samples, key) + jitter) / samples;
+    return true;
+  }
+};
+
 struct SampledPolicy {
   Sampler& sampler;
   int maxDepth;
   int splitDepth;
-  // Stratified values for the first Fresnel choices of this sample (Latin
-  // hypercube across the pixel's samples); later choices draw at random.
-  const double* decisions = nullptr;
-  int decisionCount = 0;
+  StratifiedChoices* choices = nullptr;  // then random choices
   bool diffuse = true;
   void visit(const Hit&, const Ray&) {}
   bool chooseReflection(double reflectance) {
-    const double u = decisionCount > 0 ? (--decisionCount, *decisions++) : sampler.next();
+    double u;
+    if (!choices || !choices->next(u)) u = sampler.next();
     return u < reflectance;
   }
   Vec3 bounce(const Vec3& n) {
@@ -309,9 +294,8 @@ struct RefractionPathPolicy {
 
 }  // namespace
 
-double traceRadiance(const Scene& scene, const Ray& ray, Sampler& sampler, int maxDepth, int splitDepth,
-                     const double* decisions, int decisionCount) {
-  SampledPolicy policy{sampler, maxDepth, splitDepth, decisions, decisionCount};
+double traceRadiance(const Scene& scene, const Ray& ray, Sampler& sampler, int maxDepth, int splitDepth) {
+  SampledPolicy policy{sampler, maxDepth, splitDepth};
   return walk(scene, PathState{.ray = ray}, policy);
 }
 
@@ -322,9 +306,6 @@ std::vector<Vec3> refractionPath(const Scene& scene, const Ray& ray, int maxDept
   return vertices;
 }
 
-// Fresnel choices per sample drawn from a Latin hypercube rather than at random.
-constexpr int kStratifiedChoices = 4;
-
 namespace {
 
 // A pixel whose samples are being traced: its sample plan and their results.
@@ -332,17 +313,16 @@ struct PixelWork {
   int i = 0, j = 0;
   int issued = 0;    // samples started
   int inFlight = 0;  // samples started and not yet ended
-  std::vector<double> values;     // each sample's radiance, summed in sample order at the end
-  std::vector<int> permutation;   // stop strata, independently permuted
-  std::vector<double> decisions;  // Latin hypercube, kStratifiedChoices per sample
+  std::vector<double> values;  // each sample's radiance, summed in sample order at the end
+  std::uint32_t stopKey = 0;   // permutes the stop strata against the pixel-area strata
+  std::array<std::uint32_t, kStratifiedChoices> choiceKeys{};
 };
 
 // Where a path goes on: its state, random stream and stratified choices.
 struct Walker {
   PathState path;
   Sampler sampler{0, 0};
-  const double* decisions = nullptr;
-  int decisionCount = 0;
+  StratifiedChoices choices;
 };
 
 // One sample in the packet. Its split branches wait on its own stack and are
@@ -375,7 +355,7 @@ public:
   void render(int x0, int y0, int x1, int y1, cv::Mat& image) {
     nextI_ = x0, nextJ_ = y0, x0_ = x0, x1_ = x1, y1_ = y1;
     image_ = &image;
-    int issuing = -1;
+    issuing_ = -1;
     std::array<Lane*, Scene::kPacket> active{};
     std::array<Ray, Scene::kPacket> rays;
     std::array<Hit, Scene::kPacket> hits;
@@ -384,17 +364,31 @@ public:
     for (int k = static_cast<int>(Scene::kPacket) - 1; k >= 0; --k) freeLanes.push_back(k);
     size_t n = 0;
     for (;;) {
-      // Fill the packet with new samples.
-      while (n < Scene::kPacket) {
-        if (issuing < 0 || pixels_[static_cast<size_t>(issuing)].issued == options_.samplesPerPixel) {
-          if (issuing >= 0) finishIfDone(issuing);
-          issuing = startPixel();
-          if (issuing < 0) break;
+      // Fill the packet with new samples: plan them, then make their rays in one pass.
+      for (size_t planned; n < Scene::kPacket && (planned = planSamples(Scene::kPacket - n)) > 0;) {
+        startSamples(planned);
+        for (size_t k = 0; k < planned; ++k) {
+          const Start& start = starts_[k];
+          if (!start.hasRay) {  // no ray (outside a light field sensor's disc): the sample is 0
+            PixelWork& px = pixels_[static_cast<size_t>(start.slot)];
+            px.values[static_cast<size_t>(start.sample)] = 0;
+            --px.inFlight;
+            if (start.slot != issuing_) finishIfDone(start.slot);
+            continue;
+          }
+          Lane& lane = lanes[static_cast<size_t>(freeLanes.back())];
+          freeLanes.pop_back();
+          const PixelWork& px = pixels_[static_cast<size_t>(start.slot)];
+          lane.walker.path = PathState{.ray = start.ray};
+          lane.walker.sampler = start.sampler;
+          lane.walker.choices = {px.choiceKeys, static_cast<std::uint32_t>(start.sample),
+                                 static_cast<std::uint32_t>(options_.samplesPerPixel), 0};
+          lane.waiting = 0;
+          lane.radiance = 0;
+          lane.pixel = start.slot;
+          lane.sample = start.sample;
+          active[n++] = &lane;
         }
-        Lane* lane = &lanes[static_cast<size_t>(freeLanes.back())];
-        if (!startSample(issuing, *lane)) continue;
-        freeLanes.pop_back();
-        active[n++] = lane;
       }
       if (n == 0) break;
       for (size_t k = 0; k < n; ++k) rays[k] = active[k]->walker.path.ray;
@@ -403,15 +397,12 @@ public:
       for (size_t k = 0; k < n; ++k) {
         Lane& lane = *active[k];
         Walker& w = lane.walker;
-        SampledPolicy policy{w.sampler, options_.maxDepth, options_.splitDepth, w.decisions, w.decisionCount};
+        SampledPolicy policy{w.sampler, options_.maxDepth, options_.splitDepth, &w.choices};
         double radiance;
         const Step step = interact(scene_, hits[k], w.path, branch_, radiance, policy);
-        w.decisions = policy.decisions;
-        w.decisionCount = policy.decisionCount;
         if (step == Step::Split)  // the branch gets its own stream, keyed by the parent's state and depth
           lane.branches[static_cast<size_t>(lane.waiting++)] = {
-              branch_, Sampler(w.sampler.state, static_cast<std::uint64_t>(branch_.depth)), w.decisions,
-              w.decisionCount};
+              branch_, Sampler(w.sampler.state, static_cast<std::uint64_t>(branch_.depth)), w.choices};
         if (step != Step::Done && w.path.depth < options_.maxDepth) {
           active[kept++] = &lane;
           continue;
@@ -431,14 +422,40 @@ public:
         px.values[static_cast<size_t>(lane.sample)] = lane.radiance;
         --px.inFlight;
         freeLanes.push_back(static_cast<int>(&lane - lanes.data()));
-        if (lane.pixel != issuing) finishIfDone(lane.pixel);
+        if (lane.pixel != issuing_) finishIfDone(lane.pixel);
       }
       n = kept;
     }
   }
 
 private:
-  // Claims a slot for the tile's next pixel and plans its samples; -1 when the tile is done.
+  // A sample about to start: which, and (from startSamples) its ray and stream.
+  struct Start {
+    int slot = 0, sample = 0;
+    bool hasRay = false;
+    Ray ray;
+    Sampler sampler{0, 0};
+  };
+
+  // Plans up to `room` new samples in starts_ (the tile's pixels in order,
+  // each pixel's samples in order); returns how many.
+  size_t planSamples(size_t room) {
+    size_t m = 0;
+    while (m < room) {
+      if (issuing_ < 0 || pixels_[static_cast<size_t>(issuing_)].issued == options_.samplesPerPixel) {
+        if (issuing_ >= 0) finishIfDone(issuing_);
+        issuing_ = startPixel();
+        if (issuing_ < 0) break;
+      }
+      PixelWork& px = pixels_[static_cast<size_t>(issuing_)];
+      starts_[m].slot = issuing_;
+      starts_[m++].sample = px.issued++;
+      ++px.inFlight;
+    }
+    return m;
+  }
+
+  // Claims a slot for the tile's next pixel; -1 when the tile is done.
   int startPixel() {
     if (nextJ_ >= y1_) return -1;
     int slot;
@@ -453,68 +470,56 @@ private:
     px.i = nextI_, px.j = nextJ_, px.issued = 0, px.inFlight = 0;
     px.values.resize(static_cast<size_t>(options_.samplesPerPixel));
     if (++nextI_ == x1_) nextI_ = x0_, ++nextJ_;
-    const int spp = options_.samplesPerPixel;
-    Sampler pixelSampler(options_.seed, pixelIndex(px));
-    // Jittered strata for the pixel area and, independently permuted, for
-    // the stop: the first m^2 samples cover both evenly; the rest are random.
-    px.permutation.resize(static_cast<size_t>(strata_));
-    for (int k = 0; k < strata_; ++k) px.permutation[static_cast<size_t>(k)] = k;
-    for (int k = strata_ - 1; k > 0; --k)
-      std::swap(px.permutation[static_cast<size_t>(k)],
-                px.permutation[static_cast<size_t>(pixelSampler.below(static_cast<std::uint32_t>(k + 1)))]);
-    // Latin hypercube for the first Fresnel choices: across the pixel's
-    // samples each choice's random value covers [0,1) evenly, so the few
-    // reflect/refract branches of a lens are taken in proportion.
-    px.decisions.resize(static_cast<size_t>(spp) * kStratifiedChoices);
-    order_.resize(static_cast<size_t>(spp));
-    for (int d = 0; d < kStratifiedChoices; ++d) {
-      for (int k = 0; k < spp; ++k) order_[static_cast<size_t>(k)] = k;
-      for (int k = spp - 1; k > 0; --k)
-        std::swap(order_[static_cast<size_t>(k)],
-                  order_[static_cast<size_t>(pixelSampler.below(static_cast<std::uint32_t>(k + 1)))]);
-      for (int k = 0; k < spp; ++k)
-        px.decisions[static_cast<size_t>(k) * kStratifiedChoices + d] =
-            (order_[static_cast<size_t>(k)] + pixelSampler.next()) * invSpp_;
-    }
+    Sampler keys(options_.seed, pixelIndex(px));
+    px.stopKey = keys.nextU32();
+    for (auto& key : px.choiceKeys) key = keys.nextU32();
     return slot;
   }
 
-  // Starts the pixel's next sample in `lane`; false when its ray does not exist
-  // (outside a light field sensor's disc: the sample contributes 0).
-  bool startSample(int slot, Lane& lane) {
-    PixelWork& px = pixels_[static_cast<size_t>(slot)];
-    const int s = px.issued++;
-    // One random stream per sample: two scenes that differ only where a path
-    // can reach (a defect) give identical samples everywhere else.
-    Sampler& sampler = lane.walker.sampler;
-    sampler = Sampler(options_.seed, (pixelIndex(px) << 24) ^ static_cast<std::uint64_t>(s) ^ 0x5bd1e995ull);
-    auto stratified = [&](int stratum) {
-      const double u = sampler.next(), v = sampler.next();
-      if (stratum >= strata_) return Vec2(u, v);
-      const int row = stratum / side_;
-      return Vec2((stratum - row * side_ + u) * invSide_, (row + v) * invSide_);
-    };
-    const Vec2 offset = stratified(s);
-    std::optional<Ray> ray;
+  // Each planned sample's random stream and ray of sight. One random stream
+  // per sample: two scenes that differ only where a path can reach (a defect)
+  // give identical samples everywhere else. Jittered strata for the pixel
+  // area and, independently permuted, for the stop: the first m^2 samples
+  // cover both evenly; the rest are random.
+  void startSamples(size_t m) {
     if (cameraRays_) {
-      const Vec2 u = stratified(s < strata_ ? px.permutation[static_cast<size_t>(s)] : s);
-      ray = (*cameraRays_)(px.i, px.j, offset, concentricDisc(u.x, u.y));
-    } else {
-      ray = std::get<LightFieldSensor>(sensor_).ray(px.i, px.j, offset);
+      for (size_t k = 0; k < m; ++k) {
+        const PixelWork& px = pixels_[static_cast<size_t>(starts_[k].slot)];
+        const int s = starts_[k].sample;
+        batch_.stream[k] = sampleStream(px, s);
+        batch_.pixelX[k] = px.i, batch_.pixelY[k] = px.j;
+        batch_.areaStratum[k] = s < strata_ ? s : -1.0;
+        batch_.stopStratum[k] =
+            s < strata_ ? permutationElement(static_cast<std::uint32_t>(s), static_cast<std::uint32_t>(strata_), px.stopKey)
+                        : -1.0;
+      }
+      detail::makeCameraSamples(*cameraRays_, options_.seed, side_, static_cast<int>(m), batch_);
+      for (size_t k = 0; k < m; ++k) {
+        Start& start = starts_[k];
+        start.ray = {{batch_.ox[k], batch_.oy[k], batch_.oz[k]}, {batch_.dx[k], batch_.dy[k], batch_.dz[k]}};
+        start.sampler.state = batch_.state[k];
+        start.hasRay = true;
+      }
+      return;
     }
-    if (!ray) {
-      px.values[static_cast<size_t>(s)] = 0;
-      return false;
+    for (size_t k = 0; k < m; ++k) {
+      Start& start = starts_[k];
+      const PixelWork& px = pixels_[static_cast<size_t>(start.slot)];
+      const int s = start.sample;
+      start.sampler = Sampler(options_.seed, sampleStream(px, s));
+      Vec2 offset(start.sampler.next(), start.sampler.next());
+      if (s < strata_) {
+        const int row = s / side_;
+        offset = Vec2((s - row * side_ + offset.x) * invSide_, (row + offset.y) * invSide_);
+      }
+      const auto ray = std::get<LightFieldSensor>(sensor_).ray(px.i, px.j, offset);
+      start.hasRay = ray.has_value();
+      if (ray) start.ray = *ray;
     }
-    lane.walker.path = PathState{.ray = *ray};
-    lane.walker.decisions = &px.decisions[static_cast<size_t>(s) * kStratifiedChoices];
-    lane.walker.decisionCount = kStratifiedChoices;
-    lane.waiting = 0;
-    lane.radiance = 0;
-    lane.pixel = slot;
-    lane.sample = s;
-    ++px.inFlight;
-    return true;
+  }
+
+  std::uint64_t sampleStream(const PixelWork& px, int s) const {
+    return (pixelIndex(px) << 24) ^ static_cast<std::uint64_t>(s) ^ 0x5bd1e995ull;
   }
 
   // Writes a pixel whose samples have all been started and ended, and frees its slot.
@@ -540,10 +545,13 @@ private:
   int side_, strata_;
   double invSide_, invSpp_;
   int nextI_ = 0, nextJ_ = 0, x0_ = 0, x1_ = 0, y1_ = 0;
+  int issuing_ = -1;  // the pixel whose samples are being planned
   cv::Mat* image_ = nullptr;
   std::vector<PixelWork> pixels_;
   std::vector<int> freeSlots_;
-  std::vector<int> order_;
+  std::array<Start, Scene::kPacket> starts_;
+  detail::CameraSampleBatch batch_;
+  static_assert(detail::CameraSampleBatch::kSize >= static_cast<int>(Scene::kPacket));
   PathState branch_;  // written by a split
 };
 

@@ -23,12 +23,12 @@ void TelecentricCamera::validate() const {
 }
 
 TelecentricCamera::RayMap::RayMap(const TelecentricCamera& cam)
-    : world_(cam.worldFromCamera), halfW_(0.5 * cam.width), halfH_(0.5 * cam.height) {
+    : world(cam.worldFromCamera), halfW(0.5 * cam.width), halfH(0.5 * cam.height) {
   // Thin lens: the plane in focus is at wz = b f / (b - f) = focusDistance_mm().
   const double b = cam.imageDistance_mm, f = cam.focalLength_mm, k = 1 / (b - f), wz = b * f * k;
-  pixel_ = f * k * cam.pixelPitch_mm;
-  stop_ = b * k * 0.5 * cam.stopDiameter_mm;
-  slope_ = stop_ / wz;
+  pixel = f * k * cam.pixelPitch_mm;
+  stop = b * k * 0.5 * cam.stopDiameter_mm;
+  slope = stop / wz;
 }
 
 Ray TelecentricCamera::ray(int i, int j, const Vec2& pixelOffset, const Vec2& disc) const {

@@ -28,13 +28,6 @@ namespace fs = std::filesystem;
 
 namespace {
 
-std::uint64_t splitMix64(std::uint64_t x) {
-  x += 0x9e3779b97f4a7c15ull;
-  x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ull;
-  x = (x ^ (x >> 27)) * 0x94d049bb133111ebull;
-  return x ^ (x >> 31);
-}
-
 int formatBits(PixelFormat format) {
   switch (format) {
     case PixelFormat::Mono8:

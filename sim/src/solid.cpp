@@ -2,6 +2,8 @@
 
 #include "lfi/core/error.h"
 
+#include "simd.h"
+
 #include <algorithm>
 #include <cmath>
 #include <numbers>
@@ -268,16 +270,6 @@ void Solid::convexIntervals(const Ray& ray, IntervalList& out) const {
 }
 
 namespace {
-
-// The convex kernel below runs the same arithmetic on every lane with selects
-// instead of branches, so that the compiler vectorises each loop; the clones
-// pick AVX-512, AVX2 or the baseline at load time (not under AddressSanitizer,
-// whose run time is not up yet when the loader runs the clones' resolvers).
-#if defined(__x86_64__) && !defined(__SANITIZE_ADDRESS__)
-#define LFI_SIMD_CLONES __attribute__((target_clones("avx512f", "avx2", "default")))
-#else
-#define LFI_SIMD_CLONES
-#endif
 
 constexpr int kLanes = Solid::kBatch;
 

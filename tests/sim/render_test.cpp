@@ -277,21 +277,38 @@ TEST(Render, BitIdenticalForAnyThreadCountAndTileSize) {
   EXPECT_GT(cv::norm(reference, render(s.scene, s.cam, sampled), cv::NORM_L1), 1);
 }
 
-// Bounded draws (the per-pixel shuffles) stay in range and are uniform: with
-// 70 000 draws from 7 values each count is 10 000 +- 95 (binomial sigma); 5
-// sigma bounds it. bound = 1 always gives 0.
-TEST(Sampler, BoundedDrawsAreInRangeAndUniform) {
-  Sampler sampler(3, 9);
-  std::array<int, 7> counts{};
-  for (int k = 0; k < 70000; ++k) {
-    const std::uint32_t v = sampler.below(7);
-    ASSERT_LT(v, 7u);
-    ++counts[v];
+// permutationElement permutes [0, n) for any n (powers of two and, by cycle
+// walking, the rest); distinct keys give distinct permutations; over many keys
+// each element lands in each position equally often (here 4000 keys, n = 8:
+// each count is 500 +- 21 (binomial sigma), bounded at 5 sigma).
+TEST(Sampler, PermutationElementsPermuteAndAreUniform) {
+  for (std::uint32_t n : {1u, 2u, 3u, 7u, 16u, 64u, 100u, 1000u})
+    for (std::uint32_t key : {0u, 1u, 0xdeadbeefu, 0x9e3779b9u}) {
+      std::vector<int> seen(n, 0);
+      for (std::uint32_t i = 0; i < n; ++i) {
+        const std::uint32_t v = permutationElement(i, n, key);
+        ASSERT_LT(v, n);
+        ++seen[v];
+      }
+      for (std::uint32_t v = 0; v < n; ++v) ASSERT_EQ(seen[v], 1) << "n = " << n << ", key = " << key;
+    }
+  int same = 0;
+  for (std::uint32_t i = 0; i < 64; ++i) same += permutationElement(i, 64, 11) == permutationElement(i, 64, 12);
+  EXPECT_LT(same, 16);
+  std::array<std::array<int, 8>, 8> counts{};
+  Sampler keys(3, 9);
+  for (int k = 0; k < 4000; ++k) {
+    const std::uint32_t key = keys.nextU32();
+    for (std::uint32_t i = 0; i < 8; ++i) ++counts[i][permutationElement(i, 8, key)];
   }
-  const double sigma = std::sqrt(70000 * (1.0 / 7) * (6.0 / 7));
-  for (int c : counts) EXPECT_NEAR(c, 10000, 5 * sigma);
-  for (int k = 0; k < 100; ++k) EXPECT_EQ(sampler.below(1), 0u);
-  // Uniform doubles in [0, 1) with mean 1/2.
+  const double sigma = std::sqrt(4000 * (1.0 / 8) * (7.0 / 8));
+  for (const auto& row : counts)
+    for (int c : row) EXPECT_NEAR(c, 500, 5 * sigma);
+}
+
+// Uniform doubles in [0, 1) with mean 1/2.
+TEST(Sampler, UniformDoublesAreInRange) {
+  Sampler sampler(3, 9);
   double sum = 0;
   for (int k = 0; k < 100000; ++k) {
     const double u = sampler.next();

@@ -13,6 +13,7 @@
 #include <opencv2/core.hpp>
 
 #include <atomic>
+#include <bit>
 #include <cstdint>
 #include <functional>
 #include <vector>
@@ -42,10 +43,7 @@ cv::Mat render(const Scene& scene, const Sensor& sensor, const RenderOptions& op
 
 // Radiance carried back along one ray of sight (exposed for tests and tools).
 struct Sampler;
-// `decisions`: optional values in [0,1) for the first `decisionCount` Fresnel
-// choices (render() passes a Latin hypercube across a pixel's samples).
-double traceRadiance(const Scene& scene, const Ray& ray, Sampler& sampler, int maxDepth, int splitDepth = 0,
-                     const double* decisions = nullptr, int decisionCount = 0);
+double traceRadiance(const Scene& scene, const Ray& ray, Sampler& sampler, int maxDepth, int splitDepth = 0);
 
 // The deterministic refraction-only path of a ray (reflection only under total
 // internal reflection): its vertices, starting with the origin. The path ends
@@ -53,17 +51,37 @@ double traceRadiance(const Scene& scene, const Ray& ray, Sampler& sampler, int m
 // when it leaves the scene, with one more vertex at `escape` mm along the ray.
 std::vector<Vec3> refractionPath(const Scene& scene, const Ray& ray, int maxDepth = 64, double escape = 1e4);
 
-// Deterministic random numbers, one stream per key: SplitMix64 (Steele, Lea
-// and Flood 2014; passes BigCrush) started at a hash of (seed, stream). A path
-// draws a few dozen numbers, so streams of distinct keys do not overlap.
+// SplitMix64's output function (Steele, Lea and Flood 2014): a 64-bit mix.
+inline std::uint64_t splitMix64(std::uint64_t x) {
+  x += 0x9e3779b97f4a7c15ull;
+  x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ull;
+  x = (x ^ (x >> 27)) * 0x94d049bb133111ebull;
+  return x ^ (x >> 31);
+}
+
+// Deterministic random numbers, one stream per key: SplitMix64 (passes
+// BigCrush) started at a hash of (seed, stream). A path draws a few dozen
+// numbers, so streams of distinct keys do not overlap.
 struct Sampler {
   std::uint64_t state;
-  Sampler(std::uint64_t seed, std::uint64_t stream);
-  std::uint64_t nextU64();
+  Sampler(std::uint64_t seed, std::uint64_t stream) : state(splitMix64(stream ^ splitMix64(seed))) {}
+  std::uint64_t nextU64() {
+    const std::uint64_t x = state;
+    state += 0x9e3779b97f4a7c15ull;  // the golden-ratio increment; splitMix64 mixes x + increment
+    return splitMix64(x);
+  }
   std::uint32_t nextU32() { return static_cast<std::uint32_t>(nextU64() >> 32); }
-  double next() { return static_cast<double>(nextU64() >> 11) * 0x1.0p-53; }  // uniform in [0, 1)
-  std::uint32_t below(std::uint32_t bound);  // uniform in [0, bound), unbiased (Lemire 2019); bound > 0
+  double next() { return unitInterval(nextU64()); }  // uniform in [0, 1)
+  // The top 52 bits as the mantissa of a double in [1, 2), minus 1: uniform
+  // in [0, 1) in steps of 2^-52, with integer operations only.
+  static double unitInterval(std::uint64_t bits) {
+    return std::bit_cast<double>((bits >> 12) | 0x3ff0000000000000ull) - 1.0;
+  }
 };
+
+// Element i of a pseudo-random permutation of [0, n) chosen by `key` (Kensler
+// 2013): computed on its own, without building the permutation. 0 <= i < n.
+std::uint32_t permutationElement(std::uint32_t i, std::uint32_t n, std::uint32_t key);
 
 // Shirley and Chiu's concentric map of the unit square onto the unit disc:
 // area-preserving (uniform u gives a uniform point), keeps strata compact,

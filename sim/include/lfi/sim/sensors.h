@@ -58,19 +58,16 @@ struct TelecentricCamera {
   // P (j + jv - H/2) + Q ay, 0) and w - o = (-Q ax, -Q ay, wz), where P = f k p is
   // the object-side pixel, Q = b k D/2 and wz = b f k: rays through one stop point
   // are parallel (telecentric), and the stop sample alone sets the direction.
-  class RayMap {
-  public:
+  struct RayMap {
     explicit RayMap(const TelecentricCamera& cam);
     Ray operator()(int i, int j, const Vec2& pixelOffset, const Vec2& disc) const {
-      const double ox = pixel_ * (i + pixelOffset.x - halfW_) + stop_ * disc.x;
-      const double oy = pixel_ * (j + pixelOffset.y - halfH_) + stop_ * disc.y;
-      const double dx = -slope_ * disc.x, dy = -slope_ * disc.y, inv = 1 / std::sqrt(1 + dx * dx + dy * dy);
-      return {world_.point({ox, oy, 0}), world_.vector({dx * inv, dy * inv, inv})};
+      const double ox = pixel * (i + pixelOffset.x - halfW) + stop * disc.x;
+      const double oy = pixel * (j + pixelOffset.y - halfH) + stop * disc.y;
+      const double dx = -slope * disc.x, dy = -slope * disc.y, inv = 1 / std::sqrt(1 + dx * dx + dy * dy);
+      return {world.point({ox, oy, 0}), world.vector({dx * inv, dy * inv, inv})};
     }
-
-  private:
-    Rigid3 world_;
-    double pixel_, stop_, slope_, halfW_, halfH_;  // P, Q, Q / wz, W/2, H/2
+    Rigid3 world;  // worldFromCamera
+    double pixel, stop, slope, halfW, halfH;  // P, Q, Q / wz, W/2, H/2
   };
   // Where the world point projects on the image (continuous pixel coordinates;
   // exact on the focal plane, the chief ray elsewhere).

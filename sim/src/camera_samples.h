@@ -1,0 +1,61 @@
+#pragma once
+// Internal to lfi_sim: the telecentric camera's samples for many pixel
+// samples at once (structure of arrays), for the renderer's packets. One
+// sample is: its random stream, four draws (pixel area, stop), the jittered
+// strata, Shirley's concentric map of the stop draw and the ray of sight of
+// TelecentricCamera::RayMap. render.cpp's concentricDisc() and this batch
+// share the disc arithmetic below, so both give the same bits.
+
+#include "lfi/sim/sensors.h"
+
+#include <cstdint>
+#include <numbers>
+
+namespace lfi::sim::detail {
+
+// sin x and cos x for |x| <= pi/4 by their Taylor series to x^15 and x^16
+// (remainders below 5e-17, so exact to rounding), by Estrin's scheme for a
+// short dependency chain.
+inline void sinCosQuarter(double x, double& sinX, double& cosX) {
+  const double y = -x * x, y2 = y * y, y4 = y2 * y2, y8 = y4 * y4;
+  // sin x / x = sum y^k / (2k+1)!, cos x = sum y^k / (2k)!, k = 0..7 (cos: ..8)
+  const double s01 = 1 + y * (1.0 / 6), s23 = 1.0 / 120 + y * (1.0 / 5040);
+  const double s45 = 1.0 / 362880 + y * (1.0 / 39916800), s67 = 1.0 / 6227020800 + y * (1.0 / 1307674368000);
+  const double c01 = 1 + y * 0.5, c23 = 1.0 / 24 + y * (1.0 / 720);
+  const double c45 = 1.0 / 40320 + y * (1.0 / 3628800), c67 = 1.0 / 479001600 + y * (1.0 / 87178291200);
+  sinX = x * ((s01 + s23 * y2) + (s45 + s67 * y2) * y4);
+  cosX = (c01 + c23 * y2) + (c45 + c67 * y2) * y4 + y8 * (1.0 / 20922789888000);
+}
+
+// Shirley and Chiu's concentric map, branch-free: for |a| > |b| (a = 2 u1 - 1,
+// b = 2 u2 - 1) the point is a (cos phi, sin phi) with phi = pi/4 b/a,
+// otherwise b (sin psi, cos psi) with psi = pi/4 a/b.
+inline void concentricDisc(double u1, double u2, double& x, double& y) {
+  const double a = 2 * u1 - 1, b = 2 * u2 - 1;
+  const bool wide = std::abs(a) > std::abs(b);
+  const double r = wide ? a : b, other = wide ? b : a;
+  const double ratio = r != 0 ? other / r : 0;
+  double s, c;
+  sinCosQuarter((std::numbers::pi / 4) * ratio, s, c);
+  x = r * (wide ? c : s);
+  y = r * (wide ? s : c);
+}
+
+// What the samples are (filled by the renderer) and what they give.
+struct CameraSampleBatch {
+  static constexpr int kSize = 16;
+  // In: each sample's random stream (Sampler(seed, stream)), pixel, and the
+  // strata of its pixel-area and stop draws (-1: not stratified, plain draws).
+  std::uint64_t stream[kSize];
+  double pixelX[kSize], pixelY[kSize];
+  double areaStratum[kSize], stopStratum[kSize];
+  // Out: the ray of sight (world frame) and the stream's state after the four draws.
+  double ox[kSize], oy[kSize], oz[kSize], dx[kSize], dy[kSize], dz[kSize];
+  std::uint64_t state[kSize];
+};
+
+// Samples 0..n-1 of `batch`; `side` strata per axis (side^2 stratified samples).
+void makeCameraSamples(const TelecentricCamera::RayMap& camera, std::uint64_t seed, int side, int n,
+                       CameraSampleBatch& batch);
+
+}  // namespace lfi::sim::detail
