@@ -74,12 +74,10 @@ public:
   // Index of refraction of the innermost medium, ignoring `skip`.
   double ior(const Scene& scene, int skip = -1) const {
     for (int i = size_ - 1; i >= 0; --i)
-      if (items_[i] != skip) return std::get<Dielectric>(scene.object(items_[i]).material).ior;
+      if (items_[i] != skip) return scene.surface(items_[i]).ior;
     return scene.ambientIor();
   }
-  double absorption(const Scene& scene) const {
-    return size_ ? std::get<Dielectric>(scene.object(top()).material).absorption_per_mm : 0.0;
-  }
+  double absorption(const Scene& scene) const { return size_ ? scene.surface(top()).absorption_per_mm : 0.0; }
 
 private:
   std::array<int, kDepth> items_{};
@@ -172,34 +170,32 @@ Step interact(const Scene& scene, const Hit& hit, PathState& p, PathState& branc
   if (!hit.valid()) return Step::Done;
   if (p.media.size())
     if (const double a = p.media.absorption(scene); a > 0) p.throughput *= std::exp(-a * hit.t);
-  const Object& obj = scene.object(hit.object);
-  if (obj.emission) {
-    radiance = p.throughput * emittedRadiance(scene, hit, *obj.emission, -p.ray.direction);
+  const Surface& surface = scene.surface(hit.object);
+  if (surface.kind == Surface::Kind::Emitter) {
+    radiance = p.throughput * emittedRadiance(scene, hit, *scene.object(hit.object).emission, -p.ray.direction);
     return Step::Done;
   }
   const Vec3 d = p.ray.direction;
   const bool entering = d.dot(hit.normal) < 0;
   const Vec3 facing = entering ? hit.normal : -hit.normal;  // towards the incoming side
   // Meshes are intersected in float: step off the surface to avoid re-hits.
-  const bool exact = std::holds_alternative<std::shared_ptr<const Solid>>(obj.shape);
   auto leave = [&](const Vec3& dir) {
-    const double offset = exact ? 0.0 : 1e-4 * (dir.dot(facing) > 0 ? 1 : -1);
+    const double offset = surface.exact ? 0.0 : 1e-4 * (dir.dot(facing) > 0 ? 1 : -1);
     return Ray{hit.point + facing * offset, dir};
   };
   const int depth = p.depth++;
 
-  if (std::holds_alternative<Absorber>(obj.material)) return Step::Done;
-  if (const auto* diffuse = std::get_if<Diffuse>(&obj.material)) {
+  if (surface.kind == Surface::Kind::Absorber) return Step::Done;
+  if (surface.kind == Surface::Kind::Diffuse) {
     if (!policy.diffuse) return Step::Done;
-    p.throughput *= diffuse->albedo;
+    p.throughput *= surface.albedo;
     p.ray = leave(policy.bounce(facing));
     return Step::Continue;
   }
-  const auto& glass = std::get<Dielectric>(obj.material);
   // Entering: from the current medium into the glass. Leaving: from the
   // glass into whatever medium contains it (a bubble in glass exits to glass).
-  const double n1 = entering ? p.media.ior(scene) : glass.ior;
-  const double n2 = entering ? glass.ior : p.media.ior(scene, hit.object);
+  const double n1 = entering ? p.media.ior(scene) : surface.ior;
+  const double n2 = entering ? surface.ior : p.media.ior(scene, hit.object);
   const double cosI = std::clamp(-d.dot(facing), 0.0, 1.0);
   const double cosT = transmittedCosine(cosI, n1 / n2);
   if (cosT < 0) {  // total internal reflection

@@ -97,6 +97,22 @@ void solidIntersect(const RTCIntersectFunctionNArguments* args) {
   }
 }
 
+Surface surfaceOf(const Object& obj) {
+  Surface s;
+  s.exact = std::holds_alternative<std::shared_ptr<const Solid>>(obj.shape);
+  if (obj.emission) {
+    s.kind = Surface::Kind::Emitter;
+  } else if (const auto* glass = std::get_if<Dielectric>(&obj.material)) {
+    s.kind = Surface::Kind::Dielectric;
+    s.ior = glass->ior;
+    s.absorption_per_mm = glass->absorption_per_mm;
+  } else if (const auto* diffuse = std::get_if<Diffuse>(&obj.material)) {
+    s.kind = Surface::Kind::Diffuse;
+    s.albedo = diffuse->albedo;
+  }
+  return s;
+}
+
 void embreeError(void*, RTCError code, const char* message) {
   spdlog::error("embree: error {}: {}", static_cast<int>(code), message ? message : "");
 }
@@ -126,6 +142,7 @@ Scene::Scene(std::vector<Object> objects, double ambientIor)
   for (size_t i = 0; i < objects_.size(); ++i) {
     const Object& obj = objects_[i];
     impl_->objectFromWorld.push_back(obj.worldFromObject.inverse());
+    surfaces_.push_back(surfaceOf(obj));
     RTCGeometry geom = nullptr;
     if (const auto* solid = std::get_if<std::shared_ptr<const Solid>>(&obj.shape)) {
       if (!*solid) fail(Errc::InvalidArgument, "scene object '{}' has no solid", obj.name);
@@ -300,6 +317,7 @@ void Scene::setEmission(int index, std::optional<Emission> emission) {
   if (index < 0 || static_cast<size_t>(index) >= objects_.size())
     fail(Errc::InvalidArgument, "Scene::setEmission: object {} of {}", index, objects_.size());
   objects_[static_cast<size_t>(index)].emission = std::move(emission);
+  surfaces_[static_cast<size_t>(index)] = surfaceOf(objects_[static_cast<size_t>(index)]);
 }
 
 }  // namespace lfi::sim

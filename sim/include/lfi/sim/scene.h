@@ -27,6 +27,7 @@
 
 #include <opencv2/core.hpp>
 
+#include <cstdint>
 #include <memory>
 #include <optional>
 #include <span>
@@ -143,6 +144,17 @@ struct Object {
   std::optional<Emission> emission;
 };
 
+// What the tracer needs of an object where a path meets it, flattened from the
+// object's shape, material and emission variants (Scene keeps one per object).
+struct Surface {
+  enum class Kind : std::uint8_t { Emitter, Absorber, Diffuse, Dielectric };
+  Kind kind = Kind::Absorber;  // an emitting object is opaque: Emitter whatever its material
+  bool exact = true;           // an analytic solid (double precision); meshes and rectangles are float
+  double ior = 1;              // Dielectric
+  double absorption_per_mm = 0;
+  double albedo = 0;           // Diffuse
+};
+
 // What a ray hit: the object, the distance and the surface there.
 struct Hit {
   int object = -1;
@@ -170,6 +182,7 @@ public:
   const std::vector<Object>& objects() const { return objects_; }
   const Object& object(int index) const { return objects_[static_cast<size_t>(index)]; }
   const Rigid3& objectFromWorld(int index) const;
+  const Surface& surface(int index) const { return surfaces_[static_cast<size_t>(index)]; }
   // Replaces what an object emits (geometry and material stay). For the display's
   // changing panel; not while another thread renders this scene.
   void setEmission(int index, std::optional<Emission> emission);
@@ -184,6 +197,7 @@ private:
   struct Impl;
   std::unique_ptr<Impl> impl_;
   std::vector<Object> objects_;
+  std::vector<Surface> surfaces_;  // one per object
   double ambientIor_;
 };
 
