@@ -124,6 +124,7 @@ struct Scene::Impl {
   RTCScene scene = nullptr;
   std::vector<std::unique_ptr<SolidGeometry>> solids;
   std::vector<Rigid3> objectFromWorld;
+  std::vector<Vec3> rectangleNormal;  // per object: a rectangle's world normal (local +z)
   ~Impl() {
     if (scene) rtcReleaseScene(scene);
     if (device) rtcReleaseDevice(device);
@@ -142,6 +143,7 @@ Scene::Scene(std::vector<Object> objects, double ambientIor)
   for (size_t i = 0; i < objects_.size(); ++i) {
     const Object& obj = objects_[i];
     impl_->objectFromWorld.push_back(obj.worldFromObject.inverse());
+    impl_->rectangleNormal.push_back(obj.worldFromObject.vector({0, 0, 1}));
     surfaces_.push_back(surfaceOf(obj));
     RTCGeometry geom = nullptr;
     if (const auto* solid = std::get_if<std::shared_ptr<const Solid>>(&obj.shape)) {
@@ -232,8 +234,10 @@ Hit Scene::intersect(const Ray& ray, double tMin, double tMax) const {
   rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
   rtcIntersect1(impl_->scene, &ctx.embree, &rh);
   resolveCandidates(ctx);
-  return completeHit(ray, rh.hit.geomID, rh.hit.primID, rh.ray.tfar, {rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z},
-                     rh.hit.u, rh.hit.v, bestObject, bestT, bestNormal);
+  Hit hit;
+  completeHit(ray, rh.hit.geomID, rh.hit.primID, rh.ray.tfar, {rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z}, rh.hit.u,
+              rh.hit.v, bestObject, bestT, bestNormal, hit);
+  return hit;
 }
 
 void Scene::intersect(std::span<const Ray> rays, std::span<Hit> hits, double tMin) const {
@@ -274,37 +278,40 @@ void Scene::intersect(std::span<const Ray> rays, std::span<Hit> hits, double tMi
   rtcIntersect16(valid, impl_->scene, &ctx.embree, &rh);
   resolveCandidates(ctx);
   for (int k = 0; k < n; ++k)
-    hits[static_cast<size_t>(k)] = completeHit(rays[static_cast<size_t>(k)], rh.hit.geomID[k], rh.hit.primID[k],
-                                               rh.ray.tfar[k], {rh.hit.Ng_x[k], rh.hit.Ng_y[k], rh.hit.Ng_z[k]},
-                                               rh.hit.u[k], rh.hit.v[k], bestObject[k], bestT[k], bestNormal[k]);
+    completeHit(rays[static_cast<size_t>(k)], rh.hit.geomID[k], rh.hit.primID[k], rh.ray.tfar[k],
+                {rh.hit.Ng_x[k], rh.hit.Ng_y[k], rh.hit.Ng_z[k]}, rh.hit.u[k], rh.hit.v[k], bestObject[k], bestT[k],
+                bestNormal[k], hits[static_cast<size_t>(k)]);
 }
 
-Hit Scene::completeHit(const Ray& ray, unsigned geomID, unsigned primID, float tfar, const Vec3& ng, float u, float v,
-                       int bestObject, double bestT, const Vec3& bestNormal) const {
-  Hit hit;
+void Scene::completeHit(const Ray& ray, unsigned geomID, unsigned primID, float tfar, const Vec3& ng, float u, float v,
+                        int bestObject, double bestT, const Vec3& bestNormal, Hit& hit) const {
   const bool native = geomID != RTC_INVALID_GEOMETRY_ID;
-  if (bestObject >= 0 && (!native || bestT <= tfar)) {  // a solid is nearest
+  if (bestObject >= 0 && (!native || bestT <= tfar)) {  // a solid is nearest; its normal is unit
     hit.object = bestObject;
     hit.t = bestT;
-    hit.normal = bestNormal * (1 / std::sqrt(bestNormal.dot(bestNormal)));  // unit already, up to rounding
+    hit.normal = bestNormal;
   } else if (!native) {
-    return hit;
+    hit.object = -1;
+    return;
   } else {
     hit.object = static_cast<int>(geomID);
-    const Object& obj = objects_[geomID];
     hit.t = tfar;
-    hit.normal = ng.normalized();
-    if (std::holds_alternative<Rectangle>(obj.shape)) hit.normal = obj.worldFromObject.vector({0, 0, 1});
-    if (const auto* mesh = std::get_if<TriangleMesh>(&obj.shape); mesh && !mesh->normals.empty()) {
-      const auto& tri = mesh->triangles[primID];
-      const Vec3 n = mesh->normals[tri[0]] * (1.0 - u - v) + mesh->normals[tri[1]] * u + mesh->normals[tri[2]] * v;
-      const Vec3 shading = obj.worldFromObject.vector(n).normalized();
-      // Keep the interpolated normal on the geometric normal's side.
-      hit.normal = shading.dot(hit.normal) > 0 ? shading : hit.normal;
+    const Object& obj = objects_[geomID];
+    if (std::holds_alternative<Rectangle>(obj.shape)) {
+      hit.normal = impl_->rectangleNormal[geomID];
+    } else {
+      hit.normal = ng.normalized();
+      const auto& mesh = std::get<TriangleMesh>(obj.shape);
+      if (!mesh.normals.empty()) {
+        const auto& tri = mesh.triangles[primID];
+        const Vec3 n = mesh.normals[tri[0]] * (1.0 - u - v) + mesh.normals[tri[1]] * u + mesh.normals[tri[2]] * v;
+        const Vec3 shading = obj.worldFromObject.vector(n).normalized();
+        // Keep the interpolated normal on the geometric normal's side.
+        hit.normal = shading.dot(hit.normal) > 0 ? shading : hit.normal;
+      }
     }
   }
   hit.point = ray.at(hit.t);
-  return hit;
 }
 
 const Rigid3& Scene::objectFromWorld(int index) const { return impl_->objectFromWorld[static_cast<size_t>(index)]; }

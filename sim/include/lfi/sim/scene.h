@@ -191,8 +191,8 @@ public:
   double ambientIor() const { return ambientIor_; }
 
 private:
-  Hit completeHit(const Ray& ray, unsigned geomID, unsigned primID, float tfar, const Vec3& ng, float u, float v,
-                  int bestObject, double bestT, const Vec3& bestNormal) const;
+  void completeHit(const Ray& ray, unsigned geomID, unsigned primID, float tfar, const Vec3& ng, float u, float v,
+                   int bestObject, double bestT, const Vec3& bestNormal, Hit& hit) const;
 
   struct Impl;
   std::unique_ptr<Impl> impl_;
