@@ -19,6 +19,7 @@ struct SolidGeometry {
   Rigid3 worldFromObject;
   Rigid3 objectFromWorld;
   int object;
+  bool placed;  // false: the object frame is the world frame
 };
 
 // Embree finds which solids each ray may hit (their bounds); the exact
@@ -56,14 +57,14 @@ void resolveCandidates(HitContext& ctx) {
     int m = 0;
     for (; begin + m < ctx.count && m < Solid::kBatch && ctx.pending[static_cast<size_t>(begin + m)].solid == g; ++m) {
       const Ray& ray = ctx.rays[ctx.pending[static_cast<size_t>(begin + m)].lane];
-      local[m] = {g->objectFromWorld.point(ray.origin), g->objectFromWorld.vector(ray.direction)};
+      local[m] = g->placed ? Ray{g->objectFromWorld.point(ray.origin), g->objectFromWorld.vector(ray.direction)} : ray;
     }
     g->solid->nearestCrossings(m, local, ctx.tMin, t, normal);
     for (int i = 0; i < m; ++i) {
       const unsigned lane = ctx.pending[static_cast<size_t>(begin + i)].lane;
       if (!(t[i] < ctx.bestT[lane])) continue;
       ctx.bestT[lane] = t[i];
-      ctx.bestNormal[lane] = g->worldFromObject.vector(normal[i]);
+      ctx.bestNormal[lane] = g->placed ? g->worldFromObject.vector(normal[i]) : normal[i];
       ctx.bestObject[lane] = g->object;
     }
     begin += m;
@@ -90,11 +91,14 @@ void solidIntersect(const RTCIntersectFunctionNArguments* args) {
   auto& ctx = *reinterpret_cast<HitContext*>(args->context);
   const auto* g = static_cast<const SolidGeometry*>(args->geometryUserPtr);
   RTCRayN* rays = RTCRayHitN_RayN(args->rayhit, args->N);
+  if (ctx.count + static_cast<int>(args->N) > static_cast<int>(ctx.pending.size())) resolveCandidates(ctx);
+  // Every lane is written and the valid ones kept: no branch on the (random) valid mask.
+  int count = ctx.count;
   for (unsigned k = 0; k < args->N; ++k) {
-    if (!args->valid[k]) continue;
-    if (ctx.count == static_cast<int>(ctx.pending.size())) resolveCandidates(ctx);
-    ctx.pending[static_cast<size_t>(ctx.count++)] = {g, RTCRayN_id(rays, args->N, k)};
+    ctx.pending[static_cast<size_t>(count)] = {g, RTCRayN_id(rays, args->N, k)};
+    count += args->valid[k] != 0;
   }
+  ctx.count = count;
 }
 
 Surface surfaceOf(const Object& obj) {
@@ -151,7 +155,8 @@ Scene::Scene(std::vector<Object> objects, double ambientIor)
       if (!(*solid)->bounds().transformed(obj.worldFromObject).finite())
         fail(Errc::InvalidArgument, "scene object '{}' is unbounded (intersect it with a finite solid)", obj.name);
       auto data = std::make_unique<SolidGeometry>(
-          SolidGeometry{solid->get(), obj.worldFromObject, obj.worldFromObject.inverse(), static_cast<int>(i)});
+          SolidGeometry{solid->get(), obj.worldFromObject, obj.worldFromObject.inverse(), static_cast<int>(i),
+                        !obj.worldFromObject.isIdentity()});
       geom = rtcNewGeometry(impl_->device, RTC_GEOMETRY_TYPE_USER);
       rtcSetGeometryUserPrimitiveCount(geom, 1);
       rtcSetGeometryUserData(geom, data.get());

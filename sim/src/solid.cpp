@@ -14,11 +14,6 @@ namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
-bool isIdentity(const Rigid3& x) {
-  const Rigid3 id;
-  return x.r == id.r && x.t == id.t;
-}
-
 struct Event {
   double t;
   Vec3 normal;
@@ -158,7 +153,7 @@ Bounds Bounds::unite(const Bounds& o) const {
 
 Solid::Solid(Kind kind, double radius, const Rigid3& parentFromLocal)
     : kind_(kind), radius_(radius), parentFromLocal_(parentFromLocal),
-      localFromParent_(parentFromLocal.inverse()), identity_(isIdentity(parentFromLocal)) {}
+      localFromParent_(parentFromLocal.inverse()), identity_(parentFromLocal.isIdentity()) {}
 
 std::shared_ptr<Solid> Solid::sphere(double radius, const Rigid3& parentFromLocal) {
   if (!(radius > 0) || !std::isfinite(radius)) fail(Errc::InvalidArgument, "sphere radius {} must be > 0", radius);
@@ -189,7 +184,7 @@ std::shared_ptr<Solid> Solid::combine(Kind op, std::shared_ptr<const Solid> a, s
     if (x.convex_.empty()) return false;
     for (const ConvexPart& p : x.convex_) {
       const Rigid3 localFromPart = x.parentFromLocal_ * p.localFromPart;
-      parts.push_back({p.kind, p.radius, localFromPart, localFromPart.inverse(), isIdentity(localFromPart)});
+      parts.push_back({p.kind, p.radius, localFromPart, localFromPart.inverse(), localFromPart.isIdentity()});
     }
     return true;
   };

@@ -25,6 +25,7 @@ struct Rigid3 {
   }
   Vec3 point(const Vec3& p) const { return rotate(p) + t; }
   Vec3 vector(const Vec3& v) const { return rotate(v); }
+  bool isIdentity() const { return r == Rigid3().r && t == Vec3(0, 0, 0); }
 
   Rigid3 inverse() const {
     Rigid3 inv;
