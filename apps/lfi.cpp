@@ -250,7 +250,7 @@ int main(int argc, char** argv) {
         fmt::print("{}\n{}\n", exr.string(), png.string());
       }
       const double samples = static_cast<double>(image.total()) * d.render.samplesPerPixel;
-      spdlog::info("{:.0f} samples in {:.2f} s: {:.2f} M samples/s", samples, seconds, samples / seconds / 1e6);
+      spdlog::info("{:.0f} samples in {:.3f} s: {:.2f} M samples/s", samples, seconds, samples / seconds / 1e6);
     } else if (*inspect) {
       if (captureUri.empty() && referenceFile.empty())
         lfi::fail(lfi::Errc::Config, "inspect: give --capture <uri> or --light-field <file>");

@@ -4,8 +4,10 @@
 #       throughput of both renderers (M samples/s)
 #   scripts/compare-cycles.sh convergence [res=128] [threads=nproc]
 #       the fair figure: relative RMS error against each renderer's own
-#       converged image (4096 spp, another seed) and the time it took, for
-#       4..256 spp
+#       converged image (another seed; lfi: 1024 spp with Fresnel splitting,
+#       Cycles: 4096 spp) and the time it took, for 1..256 spp; lfi both as the
+#       reference scene samples (Fresnel choices drawn, like Cycles) and with
+#       its default Fresnel splitting (split depth 4)
 # Installs Debian's blender if missing (root or sudo) and builds lfi if needed.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -18,15 +20,16 @@ fi
 OUT=$(mktemp -d)
 trap 'rm -rf "$OUT"' EXIT
 
-scene() {  # scene <res>: the reference scene at another resolution, same field
+scene() {  # scene <res>: the reference scene at another resolution, same field; also with splitting
   local pitch
   pitch=$(awk "BEGIN { printf \"%.9f\", 60 / $1 }")
   sed "s/^width = .*/width = $1/; s/^height = .*/height = $1/; s#^pixel_pitch_mm = .*#pixel_pitch_mm = ${pitch}#" \
     data/scenes/reference.toml > "$OUT/reference.toml"
+  sed "s/^split_depth = .*/split_depth = 4/" "$OUT/reference.toml" > "$OUT/split.toml"
 }
-lfi_render() {  # lfi_render <spp> <threads> <seed> <name>: prints seconds
-  build/release/apps/lfi render "$OUT/reference.toml" --out "$OUT/$4" --spp "$1" --threads "$2" --seed "$3" --force 2>&1 |
-    sed -n 's/.* samples in \([0-9.]*\) s.*/\1/p'
+lfi_render() {  # lfi_render <spp> <threads> <seed> <name> [scene=reference]: prints seconds
+  build/release/apps/lfi render "$OUT/${5:-reference}.toml" --out "$OUT/$4" --spp "$1" --threads "$2" --seed "$3" \
+    --force 2>&1 | sed -n 's/.* samples in \([0-9.]*\) s.*/\1/p'
 }
 cycles_render() {  # cycles_render <spp> <res> <threads> <seed> <file>: prints seconds
   blender -b -noaudio -P scripts/cycles/reference_scene.py -- "$1" "$2" "$3" "$5" "$4" 2>&1 |
@@ -46,15 +49,18 @@ case "$MODE" in
   convergence)
     RES=${2:-128} THREADS=${3:-$(nproc)}
     scene "$RES"
-    lfi_render 4096 "$THREADS" 999 lfi-ref >/dev/null
+    lfi_render 1024 "$THREADS" 999 lfi-ref split >/dev/null
     cycles_render 4096 "$RES" "$THREADS" 999 "$OUT/cycles-ref.exr" >/dev/null
-    printf "%6s %12s %12s %12s %12s\n" spp "lfi s" "lfi rmse" "Cycles s" "Cycles rmse"
-    for spp in 4 16 64 256; do
+    rmse() { build/release/bench/lfi-bench --rmse "$1" "$2" | cut -d= -f2; }
+    printf "%6s %10s %10s %10s %10s %10s %10s\n" spp "lfi s" "lfi rmse" "split s" "split rmse" "Cycles s" "Cyc. rmse"
+    for spp in 1 4 16 64 256; do
       tl=$(lfi_render "$spp" "$THREADS" 1 lfi)
-      el=$(build/release/bench/lfi-bench --rmse "$OUT/lfi/reference.exr" "$OUT/lfi-ref/reference.exr" | cut -d= -f2)
+      el=$(rmse "$OUT/lfi/reference.exr" "$OUT/lfi-ref/split.exr")
+      ts=$(lfi_render "$spp" "$THREADS" 1 lfi-split split)
+      es=$(rmse "$OUT/lfi-split/split.exr" "$OUT/lfi-ref/split.exr")
       tc=$(cycles_render "$spp" "$RES" "$THREADS" 0 "$OUT/cycles.exr")
-      ec=$(build/release/bench/lfi-bench --rmse "$OUT/cycles.exr" "$OUT/cycles-ref.exr" | cut -d= -f2)
-      printf "%6d %12s %12s %12s %12s\n" "$spp" "$tl" "$el" "$tc" "$ec"
+      ec=$(rmse "$OUT/cycles.exr" "$OUT/cycles-ref.exr")
+      printf "%6d %10s %10s %10s %10s %10s %10s\n" "$spp" "$tl" "$el" "$ts" "$es" "$tc" "$ec"
     done
     ;;
   *) echo "usage: $0 speed|convergence [...]" >&2; exit 2 ;;
