@@ -91,7 +91,7 @@ std::uint32_t permutationElement(std::uint32_t i, std::uint32_t n, std::uint32_t
   // (xor with the key, odd multiplies, xor-shifts of the bits under the mask)
   // is invertible on the low k bits, so it permutes [0, 2^k); values >= n are
   // hashed again (cycle walking), which permutes [0, n); a final rotation by
-  // the key.
+  // the key (in 64 bits: i + key must not wrap).
   std::uint32_t mask = n - 1;
   mask |= mask >> 1, mask |= mask >> 2, mask |= mask >> 4, mask |= mask >> 8, mask |= mask >> 16;
   do {
@@ -101,7 +101,7 @@ std::uint32_t permutationElement(std::uint32_t i, std::uint32_t n, std::uint32_t
     i ^= (i & mask) >> 2, i *= 0x9e501cc3u, i ^= (i & mask) >> 2, i *= 0xc860a3dfu;
     i &= mask, i ^= i >> 5;
   } while (i >= n);
-  return (i + key) % n;
+  return static_cast<std::uint32_t>((std::uint64_t{i} + key) % n);
 }
 
 namespace {
@@ -485,9 +485,9 @@ private:
         batch_.stream[k] = sampleStream(px, s);
         batch_.pixelX[k] = px.i, batch_.pixelY[k] = px.j;
         batch_.areaStratum[k] = s < strata_ ? s : -1.0;
+        const auto stratum = static_cast<std::uint32_t>(s);
         batch_.stopStratum[k] =
-            s < strata_ ? permutationElement(static_cast<std::uint32_t>(s), static_cast<std::uint32_t>(strata_), px.stopKey)
-                        : -1.0;
+            s < strata_ ? permutationElement(stratum, static_cast<std::uint32_t>(strata_), px.stopKey) : -1.0;
       }
       detail::makeCameraSamples(*cameraRays_, options_.seed, side_, static_cast<int>(m), batch_);
       for (size_t k = 0; k < m; ++k) {

@@ -283,7 +283,7 @@ TEST(Render, BitIdenticalForAnyThreadCountAndTileSize) {
 // each count is 500 +- 21 (binomial sigma), bounded at 5 sigma).
 TEST(Sampler, PermutationElementsPermuteAndAreUniform) {
   for (std::uint32_t n : {1u, 2u, 3u, 7u, 16u, 64u, 100u, 1000u})
-    for (std::uint32_t key : {0u, 1u, 0xdeadbeefu, 0x9e3779b9u}) {
+    for (std::uint32_t key : {0u, 1u, 0xdeadbeefu, 0x9e3779b9u, 0xffffffffu, 0xfffffc00u}) {
       std::vector<int> seen(n, 0);
       for (std::uint32_t i = 0; i < n; ++i) {
         const std::uint32_t v = permutationElement(i, n, key);
@@ -334,9 +334,9 @@ TEST(ConcentricDisc, IsShirleysMapToRoundingAndUniform) {
     const double u1 = sampler.next(), u2 = sampler.next();
     const Vec2 p = concentricDisc(u1, u2);
     const double a = 2 * u1 - 1, b = 2 * u2 - 1;
-    const Vec2 expected = std::abs(a) > std::abs(b)
-                              ? Vec2(a * std::cos(std::numbers::pi / 4 * b / a), a * std::sin(std::numbers::pi / 4 * b / a))
-                              : Vec2(b * std::sin(std::numbers::pi / 4 * a / b), b * std::cos(std::numbers::pi / 4 * a / b));
+    const double phi = std::abs(a) > std::abs(b) ? std::numbers::pi / 4 * b / a : std::numbers::pi / 4 * a / b;
+    const Vec2 expected = std::abs(a) > std::abs(b) ? Vec2(a * std::cos(phi), a * std::sin(phi))
+                                                    : Vec2(b * std::sin(phi), b * std::cos(phi));
     ASSERT_NEAR(p.x, expected.x, 4e-16) << u1 << " " << u2;
     ASSERT_NEAR(p.y, expected.y, 4e-16) << u1 << " " << u2;
     ASSERT_NEAR(std::hypot(p.x, p.y), std::max(std::abs(a), std::abs(b)), 1e-15);
