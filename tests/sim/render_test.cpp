@@ -6,6 +6,8 @@
 #include "lfi/sim/scene.h"
 #include "lfi/sim/sensors.h"
 
+#include "camera_samples.h"  // sim/src: the renderer's vectorised sample pass
+
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 
@@ -351,6 +353,48 @@ TEST(ConcentricDisc, IsShirleysMapToRoundingAndUniform) {
   EXPECT_NEAR(concentricDisc(1, 1).y, std::sqrt(0.5), 2e-16);
   EXPECT_NEAR(concentricDisc(0.5, 0).y, -1, 1e-16);
   EXPECT_EQ(concentricDisc(0.5, 0.5).x, 0);
+}
+
+// The renderer makes a packet's camera samples in one vectorised pass (an
+// AVX-512, AVX2 or baseline clone). Each must be, to the bit, what the public
+// one-sample formulas give: the sample's stream Sampler(seed, stream) and its
+// first four draws, the jittered pixel stratum, the stop stratum through
+// concentricDisc, and TelecentricCamera::ray; a stratum of -1 means plain draws.
+TEST(CameraSamples, VectorisedPassEqualsOneSampleAtATime) {
+  TelecentricCamera cam;
+  cam.width = 300, cam.height = 200, cam.pixelPitch_mm = 0.05;
+  cam.worldFromCamera = Rigid3::rotation(Vec3(1, 2, 3).normalized(), 0.7);
+  cam.worldFromCamera.t = {3, -4, 150};
+  const TelecentricCamera::RayMap map(cam);
+  const int side = 3;
+  const std::uint64_t seed = 42;
+  detail::CameraSampleBatch batch;
+  for (int k = 0; k < detail::CameraSampleBatch::kSize; ++k) {
+    batch.stream[k] = 1000003ull * static_cast<std::uint64_t>(k) + 17;
+    batch.pixelX[k] = 37 * k % cam.width, batch.pixelY[k] = 11 * k % cam.height;
+    batch.areaStratum[k] = k < 9 ? k : -1;
+    batch.stopStratum[k] = k < 9 ? (5 * k + 2) % 9 : -1;
+  }
+  detail::makeCameraSamples(map, seed, side, detail::CameraSampleBatch::kSize, batch);
+  for (int k = 0; k < detail::CameraSampleBatch::kSize; ++k) {
+    Sampler sampler(seed, batch.stream[k]);
+    const double u0 = sampler.next(), u1 = sampler.next(), u2 = sampler.next(), u3 = sampler.next();
+    auto stratified = [&](double stratum, double u, double v) {
+      if (stratum < 0) return Vec2(u, v);
+      const int s = static_cast<int>(stratum), row = s / side, col = s - row * side;
+      return Vec2((col + u) * (1.0 / side), (row + v) * (1.0 / side));  // the renderer's jittered stratum
+    };
+    const Vec2 stop = stratified(batch.stopStratum[k], u2, u3);
+    const Ray ray = cam.ray(static_cast<int>(batch.pixelX[k]), static_cast<int>(batch.pixelY[k]),
+                            stratified(batch.areaStratum[k], u0, u1), concentricDisc(stop.x, stop.y));
+    EXPECT_EQ(batch.ox[k], ray.origin.x) << k;
+    EXPECT_EQ(batch.oy[k], ray.origin.y) << k;
+    EXPECT_EQ(batch.oz[k], ray.origin.z) << k;
+    EXPECT_EQ(batch.dx[k], ray.direction.x) << k;
+    EXPECT_EQ(batch.dy[k], ray.direction.y) << k;
+    EXPECT_EQ(batch.dz[k], ray.direction.z) << k;
+    EXPECT_EQ(batch.state[k], sampler.state) << k;
+  }
 }
 
 TEST(Render, CancelFlagSetBeforehandThrowsCancelled) {
