@@ -9,8 +9,6 @@
 #include <tbb/task_arena.h>
 
 #include <cmath>
-#include <functional>
-#include <numbers>
 
 namespace lfi::sim {
 
