@@ -13,8 +13,6 @@ LFI_SIMD_CLONES void makeCameraSamples(const TelecentricCamera::RayMap& camera, 
   constexpr std::uint64_t kGolden = 0x9e3779b97f4a7c15ull;  // Sampler's increment
   const std::uint64_t seedHash = splitMix64(seed);
   const double invSide = 1.0 / side;
-  const double* r = camera.world.r.data();
-  const Vec3 t = camera.world.t;
   for (int k = 0; k < n; ++k) {
     // Sampler(seed, stream) and its first four draws.
     const std::uint64_t state = splitMix64(b.stream[k] ^ seedHash);
@@ -33,17 +31,7 @@ LFI_SIMD_CLONES void makeCameraSamples(const TelecentricCamera::RayMap& camera, 
     stratify(b.areaStratum[k], u0, u1, jx, jy);
     stratify(b.stopStratum[k], u2, u3, su, sv);
     concentricDisc(su, sv, ax, ay);
-    // TelecentricCamera::RayMap, lane by lane.
-    const double cx = camera.pixel * (b.pixelX[k] + jx - camera.halfW) + camera.stop * ax;
-    const double cy = camera.pixel * (b.pixelY[k] + jy - camera.halfH) + camera.stop * ay;
-    const double dx = -camera.slope * ax, dy = -camera.slope * ay, inv = 1 / std::sqrt(1 + dx * dx + dy * dy);
-    const double ex = dx * inv, ey = dy * inv;
-    b.ox[k] = r[0] * cx + r[1] * cy + t.x;
-    b.oy[k] = r[3] * cx + r[4] * cy + t.y;
-    b.oz[k] = r[6] * cx + r[7] * cy + t.z;
-    b.dx[k] = r[0] * ex + r[1] * ey + r[2] * inv;
-    b.dy[k] = r[3] * ex + r[4] * ey + r[5] * inv;
-    b.dz[k] = r[6] * ex + r[7] * ey + r[8] * inv;
+    camera.trace(b.pixelX[k] + jx, b.pixelY[k] + jy, ax, ay, b.ox[k], b.oy[k], b.oz[k], b.dx[k], b.dy[k], b.dz[k]);
   }
 }
 

@@ -61,10 +61,23 @@ struct TelecentricCamera {
   struct RayMap {
     explicit RayMap(const TelecentricCamera& cam);
     Ray operator()(int i, int j, const Vec2& pixelOffset, const Vec2& disc) const {
-      const double ox = pixel * (i + pixelOffset.x - halfW) + stop * disc.x;
-      const double oy = pixel * (j + pixelOffset.y - halfH) + stop * disc.y;
-      const double dx = -slope * disc.x, dy = -slope * disc.y, inv = 1 / std::sqrt(1 + dx * dx + dy * dy);
-      return {world.point({ox, oy, 0}), world.vector({dx * inv, dy * inv, inv})};
+      Ray ray;
+      trace(i + pixelOffset.x, j + pixelOffset.y, disc.x, disc.y, ray.origin.x, ray.origin.y, ray.origin.z,
+            ray.direction.x, ray.direction.y, ray.direction.z);
+      return ray;
+    }
+    // The same on plain numbers (the renderer's vectorised pass): sensor
+    // position (x, y) in pixels, stop sample (ax, ay); world-frame origin o and direction d.
+    void trace(double x, double y, double ax, double ay, double& ox, double& oy, double& oz, double& dx, double& dy,
+               double& dz) const {
+      const double cx = pixel * (x - halfW) + stop * ax, cy = pixel * (y - halfH) + stop * ay;  // camera frame, z = 0
+      const double sx = -slope * ax, sy = -slope * ay, inv = 1 / std::sqrt(1 + sx * sx + sy * sy);
+      const double ex = sx * inv, ey = sy * inv;
+      const double* r = world.r.data();
+      ox = r[0] * cx + r[1] * cy + world.t.x, oy = r[3] * cx + r[4] * cy + world.t.y;
+      oz = r[6] * cx + r[7] * cy + world.t.z;
+      dx = r[0] * ex + r[1] * ey + r[2] * inv, dy = r[3] * ex + r[4] * ey + r[5] * inv;
+      dz = r[6] * ex + r[7] * ey + r[8] * inv;
     }
     Rigid3 world;  // worldFromCamera
     double pixel, stop, slope, halfW, halfH;  // P, Q, Q / wz, W/2, H/2
