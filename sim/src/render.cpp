@@ -351,11 +351,9 @@ public:
     image_ = &image;
     issuing_ = -1;
     std::array<Lane*, Scene::kPacket> active{};
-    std::array<Ray, Scene::kPacket> rays;
-    std::array<Hit, Scene::kPacket> hits;
-    std::vector<Lane> lanes(Scene::kPacket);
-    std::vector<int> freeLanes;
-    for (int k = static_cast<int>(Scene::kPacket) - 1; k >= 0; --k) freeLanes.push_back(k);
+    lanes_.assign(Scene::kPacket, Lane{});
+    freeLanes_.clear();
+    for (int k = static_cast<int>(Scene::kPacket) - 1; k >= 0; --k) freeLanes_.push_back(k);
     size_t n = 0;
     for (;;) {
       // Fill the packet with new samples: plan them, then make their rays in one pass.
@@ -370,8 +368,8 @@ public:
             if (start.slot != issuing_) finishIfDone(start.slot);
             continue;
           }
-          Lane& lane = lanes[static_cast<size_t>(freeLanes.back())];
-          freeLanes.pop_back();
+          Lane& lane = lanes_[static_cast<size_t>(freeLanes_.back())];
+          freeLanes_.pop_back();
           const PixelWork& px = pixels_[static_cast<size_t>(start.slot)];
           lane.walker.path = PathState{.ray = start.ray};
           lane.walker.sampler = start.sampler;
@@ -385,44 +383,71 @@ public:
         }
       }
       if (n == 0) break;
-      for (size_t k = 0; k < n; ++k) rays[k] = active[k]->walker.path.ray;
-      scene_.intersect(std::span(rays.data(), n), std::span(hits.data(), n));
-      size_t kept = 0;
-      for (size_t k = 0; k < n; ++k) {
-        Lane& lane = *active[k];
-        Walker& w = lane.walker;
-        SampledPolicy policy{w.sampler, options_.maxDepth, options_.splitDepth, &w.choices};
-        double radiance;
-        const Step step = interact(scene_, hits[k], w.path, branch_, radiance, policy);
-        if (step == Step::Split)  // the branch gets its own stream, keyed by the parent's state and depth
-          lane.branches[static_cast<size_t>(lane.waiting++)] = {
-              branch_, Sampler(w.sampler.state, static_cast<std::uint64_t>(branch_.depth)), w.choices};
-        if (step != Step::Done && w.path.depth < options_.maxDepth) {
-          active[kept++] = &lane;
-          continue;
+      n = advance(active, n);
+      // Paths that went into an isolated solid (a lens) meet only its surface
+      // next: the solid answers them without a traversal, so step them at once
+      // and keep the Embree packets for the rays that need one.
+      for (;;) {
+        std::array<Lane*, Scene::kPacket> inner;
+        size_t m = 0, outer = 0;
+        for (size_t k = 0; k < n; ++k) {
+          const MediumStack& media = active[k]->walker.path.media;
+          (media.size() && scene_.isolated(media.top()) ? inner[m++] : active[outer++]) = active[k];
         }
-        lane.radiance += radiance;
-        // The path ended: go on with the sample's latest waiting branch, if any.
-        bool resumed = false;
-        while (!resumed && lane.waiting > 0) {
-          w = lane.branches[static_cast<size_t>(--lane.waiting)];
-          resumed = w.path.depth < options_.maxDepth;
-        }
-        if (resumed) {
-          active[kept++] = &lane;
-          continue;
-        }
-        PixelWork& px = pixels_[static_cast<size_t>(lane.pixel)];
-        px.values[static_cast<size_t>(lane.sample)] = lane.radiance;
-        --px.inFlight;
-        freeLanes.push_back(static_cast<int>(&lane - lanes.data()));
-        if (lane.pixel != issuing_) finishIfDone(lane.pixel);
+        if (m == 0) break;
+        m = advance(inner, m);
+        std::copy_n(inner.begin(), m, active.begin() + static_cast<std::ptrdiff_t>(outer));
+        n = outer + m;
       }
-      n = kept;
     }
   }
 
 private:
+  // Traces one step of paths lanes[0, n): their next hits, in one packet, and
+  // what they do there. Keeps the paths that go on in lanes[0, kept) and
+  // returns kept; writes the samples that end.
+  size_t advance(std::array<Lane*, Scene::kPacket>& lanes, size_t n) {
+    for (size_t k = 0; k < n; ++k) {
+      const PathState& path = lanes[k]->walker.path;
+      rays_[k] = path.ray;
+      media_[k] = path.media.size() ? path.media.top() : -1;
+    }
+    scene_.intersect(std::span(rays_.data(), n), std::span(hits_.data(), n), Scene::kTMin, std::span(media_.data(), n));
+    size_t kept = 0;
+    for (size_t k = 0; k < n; ++k) {
+      Lane& lane = *lanes[k];
+      Walker& w = lane.walker;
+      SampledPolicy policy{w.sampler, options_.maxDepth, options_.splitDepth, &w.choices};
+      double radiance;
+      const Step step = interact(scene_, hits_[k], w.path, branch_, radiance, policy);
+      if (step == Step::Split)  // the branch gets its own stream, keyed by the parent's state and depth
+        lane.branches[static_cast<size_t>(lane.waiting++)] = {
+            branch_, Sampler(w.sampler.state, static_cast<std::uint64_t>(branch_.depth)), w.choices};
+      if (step != Step::Done && w.path.depth < options_.maxDepth) {
+        lanes[kept++] = &lane;
+        continue;
+      }
+      lane.radiance += radiance;
+      // The path ended: go on with the sample's latest waiting branch, if any.
+      bool resumed = false;
+      while (!resumed && lane.waiting > 0) {
+        w = lane.branches[static_cast<size_t>(--lane.waiting)];
+        resumed = w.path.depth < options_.maxDepth;
+      }
+      if (resumed) {
+        lanes[kept++] = &lane;
+        continue;
+      }
+      PixelWork& px = pixels_[static_cast<size_t>(lane.pixel)];
+      px.values[static_cast<size_t>(lane.sample)] = lane.radiance;
+      --px.inFlight;
+      freeLanes_.push_back(static_cast<int>(&lane - lanes_.data()));
+      if (lane.pixel != issuing_) finishIfDone(lane.pixel);
+    }
+    return kept;
+  }
+
+
   // A sample about to start: which, and (from startSamples) its ray and stream.
   struct Start {
     int slot = 0, sample = 0;
@@ -547,6 +572,11 @@ private:
   detail::CameraSampleBatch batch_;
   static_assert(detail::CameraSampleBatch::kSize >= static_cast<int>(Scene::kPacket));
   PathState branch_;  // written by a split
+  std::vector<Lane> lanes_;
+  std::vector<int> freeLanes_;
+  std::array<Ray, Scene::kPacket> rays_;
+  std::array<Hit, Scene::kPacket> hits_;
+  std::array<int, Scene::kPacket> media_;  // the innermost medium each ray starts in (-1: the ambient one)
 };
 
 }  // namespace

@@ -20,7 +20,32 @@ struct SolidGeometry {
   Rigid3 objectFromWorld;
   int object;
   bool placed;  // false: the object frame is the world frame
+  Bounds box;   // world frame, padded as Embree sees it
 };
+
+// World bounds of a solid, padded so that Embree's float traversal never culls
+// a real hit.
+Bounds paddedWorldBounds(const Solid& solid, const Rigid3& worldFromObject) {
+  Bounds b = solid.bounds().transformed(worldFromObject);
+  const double pad = 1e-3 + 1e-6 * std::max({std::abs(b.lo.x), std::abs(b.lo.y), std::abs(b.lo.z),
+                                             std::abs(b.hi.x), std::abs(b.hi.y), std::abs(b.hi.z)});
+  b.lo = b.lo - Vec3(pad), b.hi = b.hi + Vec3(pad);
+  return b;
+}
+
+bool contains(const Bounds& b, const Vec3& p) {
+  return p.x >= b.lo.x && p.x <= b.hi.x && p.y >= b.lo.y && p.y <= b.hi.y && p.z >= b.lo.z && p.z <= b.hi.z;
+}
+
+bool overlap(const Bounds& a, const Bounds& b) {
+  return a.lo.x <= b.hi.x && b.lo.x <= a.hi.x && a.lo.y <= b.hi.y && b.lo.y <= a.hi.y && a.lo.z <= b.hi.z &&
+         b.lo.z <= a.hi.z;
+}
+
+// Rays of a solid's batch in its object frame.
+void toObjectFrame(const SolidGeometry& g, const Ray& ray, Ray& local) {
+  local = g.placed ? Ray{g.objectFromWorld.point(ray.origin), g.objectFromWorld.vector(ray.direction)} : ray;
+}
 
 // Embree finds which solids each ray may hit (their bounds); the exact
 // crossings are then computed in double precision for all candidate rays of a
@@ -56,8 +81,7 @@ void resolveCandidates(HitContext& ctx) {
     const SolidGeometry* g = ctx.pending[static_cast<size_t>(begin)].solid;
     int m = 0;
     for (; begin + m < ctx.count && m < Solid::kBatch && ctx.pending[static_cast<size_t>(begin + m)].solid == g; ++m) {
-      const Ray& ray = ctx.rays[ctx.pending[static_cast<size_t>(begin + m)].lane];
-      local[m] = g->placed ? Ray{g->objectFromWorld.point(ray.origin), g->objectFromWorld.vector(ray.direction)} : ray;
+      toObjectFrame(*g, ctx.rays[ctx.pending[static_cast<size_t>(begin + m)].lane], local[m]);
     }
     g->solid->nearestCrossings(m, local, ctx.tMin, t, normal);
     for (int i = 0; i < m; ++i) {
@@ -73,18 +97,14 @@ void resolveCandidates(HitContext& ctx) {
 }
 
 void solidBounds(const RTCBoundsFunctionArguments* args) {
-  const auto* g = static_cast<const SolidGeometry*>(args->geometryUserPtr);
-  Bounds b = g->solid->bounds().transformed(g->worldFromObject);
-  // Embree traverses in float; pad so that rounding never culls a real hit.
-  const double pad = 1e-3 + 1e-6 * std::max({std::abs(b.lo.x), std::abs(b.lo.y), std::abs(b.lo.z),
-                                             std::abs(b.hi.x), std::abs(b.hi.y), std::abs(b.hi.z)});
+  const Bounds& b = static_cast<const SolidGeometry*>(args->geometryUserPtr)->box;
   RTCBounds* o = args->bounds_o;
-  o->lower_x = static_cast<float>(b.lo.x - pad);
-  o->lower_y = static_cast<float>(b.lo.y - pad);
-  o->lower_z = static_cast<float>(b.lo.z - pad);
-  o->upper_x = static_cast<float>(b.hi.x + pad);
-  o->upper_y = static_cast<float>(b.hi.y + pad);
-  o->upper_z = static_cast<float>(b.hi.z + pad);
+  o->lower_x = static_cast<float>(b.lo.x);
+  o->lower_y = static_cast<float>(b.lo.y);
+  o->lower_z = static_cast<float>(b.lo.z);
+  o->upper_x = static_cast<float>(b.hi.x);
+  o->upper_y = static_cast<float>(b.hi.y);
+  o->upper_z = static_cast<float>(b.hi.z);
 }
 
 void solidIntersect(const RTCIntersectFunctionNArguments* args) {
@@ -99,6 +119,37 @@ void solidIntersect(const RTCIntersectFunctionNArguments* args) {
     count += args->valid[k] != 0;
   }
   ctx.count = count;
+}
+
+// Per object: its solid when no other object's bounds meet the solid's padded
+// bounds, else null.
+std::vector<const SolidGeometry*> isolatedSolids(const std::vector<Object>& objects,
+                                                 const std::vector<std::unique_ptr<SolidGeometry>>& solids) {
+  std::vector<Bounds> boxes;  // world bounds of every object's surface
+  std::vector<const SolidGeometry*> solidOf(objects.size(), nullptr);
+  for (const auto& g : solids) solidOf[static_cast<size_t>(g->object)] = g.get();
+  for (size_t i = 0; i < objects.size(); ++i) {
+    Bounds b;
+    auto add = [&](const Vec3& p) { b = b.unite({p, p}); };
+    const Object& obj = objects[i];
+    if (solidOf[i]) {
+      b = solidOf[i]->box;
+    } else if (const auto* rect = std::get_if<Rectangle>(&obj.shape)) {
+      for (const double x : {-rect->sizeX / 2, rect->sizeX / 2})
+        for (const double y : {-rect->sizeY / 2, rect->sizeY / 2}) add(obj.worldFromObject.point({x, y, 0}));
+    } else {
+      for (const Vec3& v : std::get<TriangleMesh>(obj.shape).vertices) add(obj.worldFromObject.point(v));
+    }
+    boxes.push_back(b);
+  }
+  std::vector<const SolidGeometry*> isolated(objects.size(), nullptr);
+  for (size_t i = 0; i < objects.size(); ++i) {
+    if (!solidOf[i]) continue;
+    bool alone = true;
+    for (size_t j = 0; j < objects.size() && alone; ++j) alone = j == i || !overlap(boxes[i], boxes[j]);
+    if (alone) isolated[i] = solidOf[i];
+  }
+  return isolated;
 }
 
 Surface surfaceOf(const Object& obj) {
@@ -129,6 +180,10 @@ struct Scene::Impl {
   std::vector<std::unique_ptr<SolidGeometry>> solids;
   std::vector<Rigid3> objectFromWorld;
   std::vector<Vec3> rectangleNormal;  // per object: a rectangle's world normal (local +z)
+  // Per object: its solid when no other object's bounds meet the solid's padded
+  // bounds, else null. A ray starting in such a box that crosses the solid
+  // crosses it before anything else (see intersect), so the solid alone answers.
+  std::vector<const SolidGeometry*> isolated;
   ~Impl() {
     if (scene) rtcReleaseScene(scene);
     if (device) rtcReleaseDevice(device);
@@ -156,7 +211,7 @@ Scene::Scene(std::vector<Object> objects, double ambientIor)
         fail(Errc::InvalidArgument, "scene object '{}' is unbounded (intersect it with a finite solid)", obj.name);
       auto data = std::make_unique<SolidGeometry>(
           SolidGeometry{solid->get(), obj.worldFromObject, obj.worldFromObject.inverse(), static_cast<int>(i),
-                        !obj.worldFromObject.isIdentity()});
+                        !obj.worldFromObject.isIdentity(), paddedWorldBounds(**solid, obj.worldFromObject)});
       geom = rtcNewGeometry(impl_->device, RTC_GEOMETRY_TYPE_USER);
       rtcSetGeometryUserPrimitiveCount(geom, 1);
       rtcSetGeometryUserData(geom, data.get());
@@ -210,6 +265,7 @@ Scene::Scene(std::vector<Object> objects, double ambientIor)
     rtcReleaseGeometry(geom);
   }
   rtcCommitScene(impl_->scene);
+  impl_->isolated = isolatedSolids(objects_, impl_->solids);
 }
 
 Scene::~Scene() = default;
@@ -245,10 +301,45 @@ Hit Scene::intersect(const Ray& ray, double tMin, double tMax) const {
   return hit;
 }
 
-void Scene::intersect(std::span<const Ray> rays, std::span<Hit> hits, double tMin) const {
-  if (rays.size() > kPacket || hits.size() < rays.size())
-    fail(Errc::InvalidArgument, "Scene::intersect: {} rays for {} hits (at most {} at once)", rays.size(), hits.size(),
-         kPacket);
+void Scene::intersect(std::span<const Ray> rays, std::span<Hit> hits, double tMin, std::span<const int> inside) const {
+  if (rays.size() > kPacket || hits.size() < rays.size() || (!inside.empty() && inside.size() < rays.size()))
+    fail(Errc::InvalidArgument, "Scene::intersect: {} rays for {} hits and {} media (at most {} at once)", rays.size(),
+         hits.size(), inside.size(), kPacket);
+  const int n = static_cast<int>(rays.size());
+  // Rays starting inside an isolated solid's box: the solid's nearest crossing,
+  // if any, comes before every other object's surface (those lie outside the
+  // box, and the ray stays in the box up to the crossing, which is in it), so
+  // the solid answers without a traversal. Rays that do not cross it go on to
+  // Embree. The hint only picks which rays to try: the answer is the same.
+  bool done[kPacket] = {};
+  int traced = n;
+  if (!inside.empty()) {
+    const SolidGeometry* g = nullptr;  // one solid per packet: its rays are one batch
+    int lanes[kPacket], m = 0;
+    Ray local[kPacket];
+    for (int k = 0; k < n; ++k) {
+      const int object = inside[static_cast<size_t>(k)];
+      const SolidGeometry* s = object >= 0 ? impl_->isolated[static_cast<size_t>(object)] : nullptr;
+      if (!s || (g && s != g) || !contains(s->box, rays[static_cast<size_t>(k)].origin)) continue;
+      g = s;
+      toObjectFrame(*g, rays[static_cast<size_t>(k)], local[m]);
+      lanes[m++] = k;
+    }
+    if (m > 0) {
+      double t[kPacket];
+      Vec3 normal[kPacket];
+      g->solid->nearestCrossings(m, local, tMin, t, normal);
+      for (int i = 0; i < m; ++i) {
+        if (!std::isfinite(t[i])) continue;
+        const auto k = static_cast<size_t>(lanes[i]);
+        completeHit(rays[k], RTC_INVALID_GEOMETRY_ID, 0, 0, {}, 0, 0, g->object, t[i],
+                    g->placed ? g->worldFromObject.vector(normal[i]) : normal[i], hits[k]);
+        done[k] = true;
+        --traced;
+      }
+    }
+  }
+  if (traced == 0) return;
   double bestT[kPacket];
   Vec3 bestNormal[kPacket];
   int bestObject[kPacket];
@@ -259,9 +350,8 @@ void Scene::intersect(std::span<const Ray> rays, std::span<Hit> hits, double tMi
   ctx.embree.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
   alignas(64) int valid[kPacket];
   alignas(64) RTCRayHit16 rh;
-  const int n = static_cast<int>(rays.size());
   for (int k = 0; k < static_cast<int>(kPacket); ++k) {
-    valid[k] = k < n ? -1 : 0;
+    valid[k] = k < n && !done[k] ? -1 : 0;
     const Ray& ray = rays[static_cast<size_t>(k < n ? k : 0)];
     rh.ray.org_x[k] = static_cast<float>(ray.origin.x);
     rh.ray.org_y[k] = static_cast<float>(ray.origin.y);
@@ -283,9 +373,10 @@ void Scene::intersect(std::span<const Ray> rays, std::span<Hit> hits, double tMi
   rtcIntersect16(valid, impl_->scene, &ctx.embree, &rh);
   resolveCandidates(ctx);
   for (int k = 0; k < n; ++k)
-    completeHit(rays[static_cast<size_t>(k)], rh.hit.geomID[k], rh.hit.primID[k], rh.ray.tfar[k],
-                {rh.hit.Ng_x[k], rh.hit.Ng_y[k], rh.hit.Ng_z[k]}, rh.hit.u[k], rh.hit.v[k], bestObject[k], bestT[k],
-                bestNormal[k], hits[static_cast<size_t>(k)]);
+    if (!done[k])
+      completeHit(rays[static_cast<size_t>(k)], rh.hit.geomID[k], rh.hit.primID[k], rh.ray.tfar[k],
+                  {rh.hit.Ng_x[k], rh.hit.Ng_y[k], rh.hit.Ng_z[k]}, rh.hit.u[k], rh.hit.v[k], bestObject[k], bestT[k],
+                  bestNormal[k], hits[static_cast<size_t>(k)]);
 }
 
 void Scene::completeHit(const Ray& ray, unsigned geomID, unsigned primID, float tfar, const Vec3& ng, float u, float v,
@@ -318,6 +409,8 @@ void Scene::completeHit(const Ray& ray, unsigned geomID, unsigned primID, float 
   }
   hit.point = ray.at(hit.t);
 }
+
+bool Scene::isolated(int index) const { return impl_->isolated[static_cast<size_t>(index)] != nullptr; }
 
 const Rigid3& Scene::objectFromWorld(int index) const { return impl_->objectFromWorld[static_cast<size_t>(index)]; }
 

@@ -198,3 +198,74 @@ TEST(Scene, RectangleInsideASolidsBoundsInFrontOfItsSurface) {
 }
 
 }  // namespace
+
+namespace {
+
+// A solid whose bounds meet no other object's answers the rays hinted to start
+// inside it without a traversal. The answer must be the one-ray query's: for
+// rays inside it, rays in its box but outside it, rays that leave it without a
+// crossing, and wrong hints; solids sharing their box with another object are
+// never isolated.
+TEST(Scene, IsolatedSolidsAnswerHintedRaysAsTheOneRayQuery) {
+  std::vector<Object> objects = {
+      {.name = "lone lens", .shape = std::shared_ptr<const Solid>(Solid::sphericalLens(20, -30, 3, 10)),
+       .worldFromObject = Rigid3::translation({0, 0, 2}) * Rigid3::rotation({1, 0, 0}, 0.2), .material = Dielectric{}},
+      {.name = "lens with a slide", .shape = std::shared_ptr<const Solid>(Solid::sphericalLens(20, -30, 3, 10)),
+       .worldFromObject = Rigid3::translation({0, 0, 20}), .material = Dielectric{}},
+      {.name = "slide", .shape = Rectangle{4, 4}, .worldFromObject = Rigid3::translation({0, 0, 21.4}),
+       .material = Absorber{}},
+      {.name = "glass ball", .shape = std::shared_ptr<const Solid>(Solid::sphere(4)),
+       .worldFromObject = Rigid3::translation({15, 0, 0}), .material = Dielectric{}},
+      {.name = "bubble", .shape = std::shared_ptr<const Solid>(Solid::sphere(1)),
+       .worldFromObject = Rigid3::translation({15.5, 0, 0}), .material = Dielectric{1.0}},
+      {.name = "back", .shape = Rectangle{60, 60}, .worldFromObject = Rigid3::translation({0, 0, -20}),
+       .emission = LambertianEmission{1}},
+  };
+  const Scene scene(objects);
+  EXPECT_TRUE(scene.isolated(0));
+  for (int k = 1; k < 6; ++k) EXPECT_FALSE(scene.isolated(k)) << objects[static_cast<size_t>(k)].name;
+
+  std::mt19937_64 rng(3);
+  std::uniform_real_distribution<double> u(-1, 1);
+  int direct = 0;
+  for (int packet = 0; packet < 3000; ++packet) {
+    const size_t n = 1 + static_cast<size_t>(packet % static_cast<int>(Scene::kPacket));
+    std::vector<Ray> rays;
+    std::vector<int> inside;
+    for (size_t k = 0; k < n; ++k) {
+      // Around each solid's box (some rays start just outside), any direction,
+      // hinted with the right solid, another one or none.
+      const int around = packet % 3 == 0 ? 0 : packet % 3 == 1 ? 1 : 3;
+      const Vec3 centre = objects[static_cast<size_t>(around)].worldFromObject.t;
+      const Vec3 origin = centre + Vec3(5.5 * u(rng), 5.5 * u(rng), 3 * u(rng));
+      rays.push_back({origin, Vec3(u(rng), u(rng), u(rng)).normalized()});
+      const double pick = u(rng);
+      inside.push_back(pick < 0.5 ? around : pick < 0.75 ? -1 : static_cast<int>(rng() % 6));
+    }
+    std::vector<Hit> hinted(n), plain(n);
+    scene.intersect(rays, hinted, Scene::kTMin, inside);
+    scene.intersect(rays, plain);
+    for (size_t k = 0; k < n; ++k) {
+      const Hit one = scene.intersect(rays[k]);
+      ASSERT_EQ(hinted[k].object, one.object) << "packet " << packet << " ray " << k;
+      ASSERT_EQ(plain[k].object, one.object) << "packet " << packet << " ray " << k;
+      if (!one.valid()) continue;
+      direct += inside[k] == 0 && one.object == 0;
+      // A solid's crossing is the same double-precision arithmetic however it was found.
+      if (std::holds_alternative<std::shared_ptr<const Solid>>(objects[static_cast<size_t>(one.object)].shape)) {
+        EXPECT_EQ(hinted[k].t, one.t);
+        EXPECT_EQ(hinted[k].normal, one.normal);
+        EXPECT_EQ(hinted[k].point, one.point);
+      } else {
+        EXPECT_NEAR(hinted[k].t, one.t, 1e-5);
+      }
+    }
+  }
+  EXPECT_GT(direct, 3000);
+  std::vector<Ray> rays(2, Ray{{0, 0, 2}, {0, 0, -1}});
+  std::vector<Hit> hits(2);
+  const std::vector<int> tooFew{0};
+  EXPECT_THROW(scene.intersect(rays, hits, Scene::kTMin, tooFew), Error);
+}
+
+}  // namespace

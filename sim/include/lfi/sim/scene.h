@@ -171,17 +171,27 @@ public:
   Scene(const Scene&) = delete;
   Scene& operator=(const Scene&) = delete;
 
-  // Nearest hit with t in (tMin, tMax); invalid Hit when there is none.
-  Hit intersect(const Ray& ray, double tMin = 1e-6, double tMax = std::numeric_limits<double>::infinity()) const;
+  // Nearest hit with t in (tMin, tMax); invalid Hit when there is none. The
+  // default tMin keeps a ray leaving a surface from hitting it again at t ~ 0.
+  static constexpr double kTMin = 1e-6;
+  Hit intersect(const Ray& ray, double tMin = kTMin, double tMax = std::numeric_limits<double>::infinity()) const;
   // The same for up to kPacket rays at once, traced as one Embree packet: much
   // cheaper per ray when the rays are coherent (a pixel's samples). hits[k] is
-  // rays[k]'s nearest hit with t > tMin.
+  // rays[k]'s nearest hit with t > tMin. `inside`, empty or one per ray, hints
+  // the object each ray starts inside (-1: none): a solid whose bounds meet no
+  // other object's then answers its own rays without a traversal (the tracer's
+  // rays inside a lens). The hint saves time only: the hits are the same.
   static constexpr size_t kPacket = 16;
-  void intersect(std::span<const Ray> rays, std::span<Hit> hits, double tMin = 1e-6) const;
+  void intersect(std::span<const Ray> rays, std::span<Hit> hits, double tMin = kTMin,
+                 std::span<const int> inside = {}) const;
 
   const std::vector<Object>& objects() const { return objects_; }
   const Object& object(int index) const { return objects_[static_cast<size_t>(index)]; }
   const Rigid3& objectFromWorld(int index) const;
+  // Whether an object is a solid whose bounds meet no other object's: a ray
+  // starting inside it meets it before anything else, and the packet query
+  // answers such rays (hinted by `inside`) without a traversal.
+  bool isolated(int index) const;
   const Surface& surface(int index) const { return surfaces_[static_cast<size_t>(index)]; }
   // Replaces what an object emits (geometry and material stay). For the display's
   // changing panel; not while another thread renders this scene.
