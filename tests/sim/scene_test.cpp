@@ -90,21 +90,22 @@ TEST(Scene, IntersectReturnsTheNearestHitAmongSolidsAndRectangles) {
       continue;
     }
     ++hits;
-    // Rectangles are intersected in float by Embree; skip near-ties with them.
+    // Solids and rectangles are intersected exactly, in double precision; skip
+    // rays that meet two surfaces within rounding of each other.
     double second = kInf;
     for (size_t k = 0; k < objects.size(); ++k) {
       Vec3 n;
       const double t = bruteForce(objects[k], ray, 1e-6, n);
       if (static_cast<int>(k) != bestObject && t < second) second = t;
     }
-    if (second - best < 1e-3) continue;
-    if (!hit.valid() || hit.object != bestObject || std::abs(hit.t - best) > 1e-3) {
+    if (second - best < 1e-9) continue;
+    if (!hit.valid() || hit.object != bestObject || std::abs(hit.t - best) > 1e-9) {
       if (++mismatches <= 5)
         ADD_FAILURE() << "ray " << i << ": expected object " << bestObject << " at t=" << best << ", got " << hit.object
                       << " at t=" << hit.t;
       continue;
     }
-    EXPECT_LT((hit.normal - bestNormal).length(), 1e-5);
+    EXPECT_LT((hit.normal - bestNormal).length(), 1e-12);
   }
   EXPECT_EQ(mismatches, 0);
   EXPECT_GT(hits, 5000);
@@ -154,7 +155,7 @@ TEST(Scene, PacketIntersectEqualsOneRayIntersect) {
       ASSERT_EQ(packed[k].object, one.object) << "packet " << packet << " ray " << k;
       if (!one.valid()) continue;
       ++hits;
-      // Solids: the same double-precision kernel. The mesh and rectangles:
+      // Solids and rectangles: the same double-precision arithmetic. The mesh:
       // Embree's float packet and single-ray kernels may round differently.
       EXPECT_NEAR(packed[k].t, one.t, 1e-5);
       EXPECT_LT((packed[k].normal - one.normal).length(), 1e-5);
@@ -188,7 +189,7 @@ TEST(Scene, RectangleInsideASolidsBoundsInFrontOfItsSurface) {
     const Hit hit = scene.intersect({{3.9, 0, 20}, {0, 0, -1}});
     ASSERT_TRUE(hit.valid());
     EXPECT_EQ(hit.object, rectIndex) << "solid first: " << solidFirst;
-    EXPECT_NEAR(hit.t, 15.1, 1e-5);
+    EXPECT_NEAR(hit.t, 15.1, 1e-12);
     // And from below, the sphere comes first.
     const Hit below = scene.intersect({{3.9, 0, -20}, {0, 0, 1}});
     ASSERT_TRUE(below.valid());
@@ -251,14 +252,10 @@ TEST(Scene, IsolatedSolidsAnswerHintedRaysAsTheOneRayQuery) {
       ASSERT_EQ(plain[k].object, one.object) << "packet " << packet << " ray " << k;
       if (!one.valid()) continue;
       direct += inside[k] == 0 && one.object == 0;
-      // A solid's crossing is the same double-precision arithmetic however it was found.
-      if (std::holds_alternative<std::shared_ptr<const Solid>>(objects[static_cast<size_t>(one.object)].shape)) {
-        EXPECT_EQ(hinted[k].t, one.t);
-        EXPECT_EQ(hinted[k].normal, one.normal);
-        EXPECT_EQ(hinted[k].point, one.point);
-      } else {
-        EXPECT_NEAR(hinted[k].t, one.t, 1e-5);
-      }
+      // The same double-precision arithmetic however the crossing was found.
+      EXPECT_EQ(hinted[k].t, one.t);
+      EXPECT_EQ(hinted[k].normal, one.normal);
+      EXPECT_EQ(hinted[k].point, one.point);
     }
   }
   EXPECT_GT(direct, 3000);
@@ -266,6 +263,43 @@ TEST(Scene, IsolatedSolidsAnswerHintedRaysAsTheOneRayQuery) {
   std::vector<Hit> hits(2);
   const std::vector<int> tooFew{0};
   EXPECT_THROW(scene.intersect(rays, hits, Scene::kTMin, tooFew), Error);
+}
+
+}  // namespace
+
+namespace {
+
+// Rectangles are exact: a ray meets one wherever it crosses the closed
+// rectangle, on its diagonal too (where a two-triangle quad may leak), at the
+// plane's distance to double precision, and misses it just beyond an edge.
+TEST(Scene, RectanglesAreExactAndWatertight) {
+  const Rigid3 placed = Rigid3::translation({1, -2, -30}) * Rigid3::rotation({1, 1, 0}, 0.3);
+  const Scene scene({{.name = "plate", .shape = Rectangle{40, 20}, .worldFromObject = placed, .material = Absorber{}}});
+  const Rigid3 local = placed.inverse();
+  std::mt19937_64 rng(8);
+  std::uniform_real_distribution<double> u(-1, 1);
+  for (int i = 0; i < 2000; ++i) {
+    // A point on the diagonal from (-20, -10) to (20, 10), or just inside or outside an edge.
+    const double s = u(rng);
+    const int kind = i % 3;
+    const double eps = 1e-9;
+    const Vec3 q = kind == 0 ? Vec3(20 * s, 10 * s, 0)
+                 : kind == 1 ? Vec3(20 - eps, 10 * s, 0)
+                             : Vec3(20 * s, 10 + eps, 0);
+    const Vec3 target = placed.point(q);
+    const Vec3 dir = Vec3(0.2 * u(rng), 0.2 * u(rng), -1).normalized();
+    const double distance = 50;
+    const Ray ray{target - dir * distance, dir};
+    const Hit hit = scene.intersect(ray);
+    if (kind == 2) {
+      EXPECT_FALSE(hit.valid()) << "ray " << i << " passes 1e-9 mm beyond the edge";
+      continue;
+    }
+    ASSERT_TRUE(hit.valid()) << "ray " << i << " crosses the rectangle at (" << q.x << ", " << q.y << ")";
+    EXPECT_NEAR(hit.t, distance, 1e-11);
+    EXPECT_NEAR(local.point(hit.point).z, 0, 1e-11);
+    EXPECT_NEAR((hit.normal - placed.vector({0, 0, 1})).length(), 0, 1e-15);
+  }
 }
 
 }  // namespace

@@ -1,8 +1,9 @@
 #pragma once
 // A bench scene for the ray tracer: objects (a shape, where it is, what it is
-// made of, whether it emits) in the world frame, with Embree doing every ray
-// query. Analytic solids are Embree user geometry intersected exactly in double
-// precision; triangle meshes and rectangles are Embree's own geometry.
+// made of, whether it emits) in the world frame, with Embree doing the ray
+// queries (rays inside an isolated solid, which only it can meet, excepted).
+// Analytic solids and rectangles are Embree user geometry intersected exactly
+// in double precision; triangle meshes are Embree's own (float) geometry.
 //
 // Materials:
 //   material     parameters                    behaviour
@@ -149,7 +150,7 @@ struct Object {
 struct Surface {
   enum class Kind : std::uint8_t { Emitter, Absorber, Diffuse, Dielectric };
   Kind kind = Kind::Absorber;  // an emitting object is opaque: Emitter whatever its material
-  bool exact = true;           // an analytic solid (double precision); meshes and rectangles are float
+  bool exact = true;           // a solid or a rectangle (double precision); meshes are float
   double ior = 1;              // Dielectric
   double absorption_per_mm = 0;
   double albedo = 0;           // Diffuse
