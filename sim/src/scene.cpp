@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <array>
+#include <bit>
 #include <cmath>
 
 namespace lfi::sim {
@@ -60,16 +61,12 @@ void toObjectFrame(const AnalyticGeometry& g, const Ray& ray, Ray& local) {
   local = g.placed ? Ray{g.objectFromWorld.point(ray.origin), g.objectFromWorld.vector(ray.direction)} : ray;
 }
 
-// Embree finds which analytic objects each ray may hit (their bounds); the
-// exact crossings are then computed in double precision for all candidate rays
-// of an object at once, after the traversal: Embree's packet traversal hands
-// the callback only one or a few rays at a time, while the solids' convex
-// kernel is lane-parallel. Lanes are the rays' ids (their index in the packet).
-struct Candidate {
-  const AnalyticGeometry* object;
-  unsigned lane;
-};
-
+// Embree finds which analytic objects each ray may hit (their bounds). A
+// rectangle's crossing is cheap and computed at once; a solid's lanes are
+// noted and its crossings computed after the traversal for all of them at
+// once: Embree's packet traversal hands the callback only one or a few rays at
+// a time, while the solids' convex kernel is lane-parallel. Lanes are the
+// rays' ids (their index in the packet). Crossings are in double precision.
 struct HitContext {
   RTCIntersectContext embree;
   const Ray* rays;  // world frame
@@ -77,39 +74,40 @@ struct HitContext {
   double* bestT;
   Vec3* bestNormal;  // world frame
   int* bestObject;
-  int count;
-  std::array<Candidate, 4 * Solid::kBatch> pending;  // not initialised: count says what is valid
+  // The solids met so far, each with the lanes that may cross it.
+  static constexpr int kSolids = 8;
+  int solids;
+  std::array<const AnalyticGeometry*, kSolids> solid;  // not initialised: `solids` says what is valid
+  std::array<std::uint32_t, kSolids> lanes;
 };
+static_assert(Solid::kBatch >= static_cast<int>(Scene::kPacket) && Scene::kPacket <= 32);
 
-// Intersects the pending candidates exactly and keeps each lane's nearest.
-void resolveCandidates(HitContext& ctx) {
-  // Group by object (usually one or two), so that each gets full batches.
-  const auto byObject = [](const Candidate& a, const Candidate& b) { return a.object < b.object; };
-  if (!std::is_sorted(ctx.pending.begin(), ctx.pending.begin() + ctx.count, byObject))
-    std::sort(ctx.pending.begin(), ctx.pending.begin() + ctx.count, byObject);
+// Keeps crossing t (object frame normal n) of `lane` with object g if it is the nearest so far.
+void keepNearest(HitContext& ctx, const AnalyticGeometry& g, unsigned lane, double t, const Vec3& n) {
+  if (!(t < ctx.bestT[lane])) return;
+  ctx.bestT[lane] = t;
+  ctx.bestNormal[lane] = g.placed ? g.worldFromObject.vector(n) : n;
+  ctx.bestObject[lane] = g.object;
+}
+
+// Intersects the noted solids' lanes exactly and keeps each lane's nearest.
+void resolveSolids(HitContext& ctx) {
   Ray local[Solid::kBatch];
+  unsigned lane[Solid::kBatch];
   double t[Solid::kBatch];
   Vec3 normal[Solid::kBatch];
-  for (int begin = 0; begin < ctx.count;) {
-    const AnalyticGeometry* g = ctx.pending[static_cast<size_t>(begin)].object;
+  for (int s = 0; s < ctx.solids; ++s) {
+    const AnalyticGeometry& g = *ctx.solid[static_cast<size_t>(s)];
     int m = 0;
-    for (; begin + m < ctx.count && m < Solid::kBatch && ctx.pending[static_cast<size_t>(begin + m)].object == g; ++m) {
-      toObjectFrame(*g, ctx.rays[ctx.pending[static_cast<size_t>(begin + m)].lane], local[m]);
+    for (std::uint32_t bits = ctx.lanes[static_cast<size_t>(s)]; bits; bits &= bits - 1) {
+      lane[m] = static_cast<unsigned>(std::countr_zero(bits));
+      toObjectFrame(g, ctx.rays[lane[m]], local[m]);
+      ++m;
     }
-    if (g->solid)
-      g->solid->nearestCrossings(m, local, ctx.tMin, t, normal);
-    else
-      rectangleCrossings(g->rectangle, m, local, ctx.tMin, t, normal);
-    for (int i = 0; i < m; ++i) {
-      const unsigned lane = ctx.pending[static_cast<size_t>(begin + i)].lane;
-      if (!(t[i] < ctx.bestT[lane])) continue;
-      ctx.bestT[lane] = t[i];
-      ctx.bestNormal[lane] = g->placed ? g->worldFromObject.vector(normal[i]) : normal[i];
-      ctx.bestObject[lane] = g->object;
-    }
-    begin += m;
+    g.solid->nearestCrossings(m, local, ctx.tMin, t, normal);
+    for (int i = 0; i < m; ++i) keepNearest(ctx, g, lane[i], t[i], normal[i]);
   }
-  ctx.count = 0;
+  ctx.solids = 0;
 }
 
 void analyticBounds(const RTCBoundsFunctionArguments* args) {
@@ -127,14 +125,30 @@ void analyticIntersect(const RTCIntersectFunctionNArguments* args) {
   auto& ctx = *reinterpret_cast<HitContext*>(args->context);
   const auto* g = static_cast<const AnalyticGeometry*>(args->geometryUserPtr);
   RTCRayN* rays = RTCRayHitN_RayN(args->rayhit, args->N);
-  if (ctx.count + static_cast<int>(args->N) > static_cast<int>(ctx.pending.size())) resolveCandidates(ctx);
-  // Every lane is written and the valid ones kept: no branch on the (random) valid mask.
-  int count = ctx.count;
-  for (unsigned k = 0; k < args->N; ++k) {
-    ctx.pending[static_cast<size_t>(count)] = {g, RTCRayN_id(rays, args->N, k)};
-    count += args->valid[k] != 0;
+  if (!g->solid) {
+    for (unsigned k = 0; k < args->N; ++k) {
+      if (!args->valid[k]) continue;
+      const unsigned lane = RTCRayN_id(rays, args->N, k);
+      Ray local;
+      double t;
+      Vec3 n;
+      toObjectFrame(*g, ctx.rays[lane], local);
+      rectangleCrossings(g->rectangle, 1, &local, ctx.tMin, &t, &n);
+      keepNearest(ctx, *g, lane, t, n);
+    }
+    return;
   }
-  ctx.count = count;
+  int s = 0;
+  while (s < ctx.solids && ctx.solid[static_cast<size_t>(s)] != g) ++s;
+  if (s == ctx.solids) {
+    if (ctx.solids == HitContext::kSolids) resolveSolids(ctx), s = 0;
+    ctx.solid[static_cast<size_t>(s)] = g;
+    ctx.lanes[static_cast<size_t>(s)] = 0;
+    ++ctx.solids;
+  }
+  std::uint32_t bits = 0;
+  for (unsigned k = 0; k < args->N; ++k) bits |= (args->valid[k] != 0 ? 1u : 0u) << RTCRayN_id(rays, args->N, k);
+  ctx.lanes[static_cast<size_t>(s)] |= bits;
 }
 
 // Per object: its solid when no other object's bounds meet the solid's padded
@@ -286,7 +300,7 @@ Hit Scene::intersect(const Ray& ray, double tMin, double tMax) const {
   HitContext ctx;
   rtcInitIntersectContext(&ctx.embree);
   ctx.rays = &ray, ctx.tMin = tMin, ctx.bestT = &bestT, ctx.bestNormal = &bestNormal, ctx.bestObject = &bestObject;
-  ctx.count = 0;
+  ctx.solids = 0;
   RTCRayHit rh;
   rh.ray.org_x = static_cast<float>(ray.origin.x);
   rh.ray.org_y = static_cast<float>(ray.origin.y);
@@ -303,7 +317,7 @@ Hit Scene::intersect(const Ray& ray, double tMin, double tMax) const {
   rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
   rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
   rtcIntersect1(impl_->scene, &ctx.embree, &rh);
-  resolveCandidates(ctx);
+  resolveSolids(ctx);
   Hit hit;
   completeHit(ray, rh.hit.geomID, rh.hit.primID, rh.ray.tfar, {rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z}, rh.hit.u,
               rh.hit.v, bestObject, bestT, bestNormal, hit);
@@ -355,7 +369,7 @@ void Scene::intersect(std::span<const Ray> rays, std::span<Hit> hits, double tMi
   HitContext ctx;
   rtcInitIntersectContext(&ctx.embree);
   ctx.rays = rays.data(), ctx.tMin = tMin, ctx.bestT = bestT, ctx.bestNormal = bestNormal, ctx.bestObject = bestObject;
-  ctx.count = 0;
+  ctx.solids = 0;
   // Incoherent: with few objects, Embree's per-ray traversal of the packet beats
   // its packet traversal (measured: 17 % of a render of the reference scene).
   ctx.embree.flags = RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT;
@@ -382,7 +396,7 @@ void Scene::intersect(std::span<const Ray> rays, std::span<Hit> hits, double tMi
     bestObject[k] = -1;
   }
   rtcIntersect16(valid, impl_->scene, &ctx.embree, &rh);
-  resolveCandidates(ctx);
+  resolveSolids(ctx);
   for (int k = 0; k < n; ++k)
     if (!done[k])
       completeHit(rays[static_cast<size_t>(k)], rh.hit.geomID[k], rh.hit.primID[k], rh.ray.tfar[k],
