@@ -114,11 +114,13 @@ double transmittedCosine(double cosI, double eta) {
   return sin2T >= 1 ? -1 : std::sqrt(1 - sin2T);
 }
 
-// Unpolarised Fresnel reflectance from both angles' cosines.
+// Unpolarised Fresnel reflectance from both angles' cosines: the mean of
+// rs^2 and rp^2, rs = (a - b) / (a + b), rp = (c - d) / (c + d), over one
+// division (a path's latency is mostly its divisions and roots).
 double fresnelFromCosines(double cosI, double cosT, double n1, double n2) {
-  const double rs = (n1 * cosI - n2 * cosT) / (n1 * cosI + n2 * cosT);
-  const double rp = (n2 * cosI - n1 * cosT) / (n2 * cosI + n1 * cosT);
-  return 0.5 * (rs * rs + rp * rp);
+  const double a = n1 * cosI, b = n2 * cosT, c = n2 * cosI, d = n1 * cosT;
+  const double rs = (a - b) * (c + d), rp = (c - d) * (a + b), denominator = (a + b) * (c + d);
+  return 0.5 * (rs * rs + rp * rp) / (denominator * denominator);
 }
 
 Vec3 refractedDirection(const Vec3& d, const Vec3& n, double eta, double cosI, double cosT) {
@@ -247,12 +249,13 @@ constexpr int kStratifiedChoices = 4;
 struct StratifiedChoices {
   std::array<std::uint32_t, kStratifiedChoices> keys{};
   std::uint32_t sample = 0, samples = 1;
+  double stratumWidth = 1;  // 1 / samples
   int used = kStratifiedChoices;  // none left
   bool next(double& u) {
     if (used == kStratifiedChoices) return false;
     const std::uint32_t key = keys[static_cast<size_t>(used++)];
     const double jitter = Sampler::unitInterval(splitMix64((std::uint64_t{key} << 32) | sample));
-    u = (permutationElement(sample, samples, key) + jitter) / samples;
+    u = (permutationElement(sample, samples, key) + jitter) * stratumWidth;
     return true;
   }
 };
@@ -374,7 +377,7 @@ public:
           lane.walker.path = PathState{.ray = start.ray};
           lane.walker.sampler = start.sampler;
           lane.walker.choices = {px.choiceKeys, static_cast<std::uint32_t>(start.sample),
-                                 static_cast<std::uint32_t>(options_.samplesPerPixel), 0};
+                                 static_cast<std::uint32_t>(options_.samplesPerPixel), invSpp_, 0};
           lane.waiting = 0;
           lane.radiance = 0;
           lane.pixel = start.slot;

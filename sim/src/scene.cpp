@@ -14,10 +14,17 @@ namespace lfi::sim {
 
 namespace {
 
+// A rectangle in the world frame: centre, unit axes along its sides and normal
+// (the object's x, y, z), half sizes.
+struct WorldRectangle {
+  Vec3 centre{0}, axisX{0}, axisY{0}, normal{0};
+  double halfX = 0, halfY = 0;
+};
+
 // Our data for one analytic object (a solid or a rectangle), handed to Embree's callbacks.
 struct AnalyticGeometry {
-  const Solid* solid;   // null for a rectangle
-  Rectangle rectangle;  // in the object's xy plane, centred, normal +z
+  const Solid* solid;  // null for a rectangle
+  WorldRectangle rectangle;
   Rigid3 worldFromObject;
   Rigid3 objectFromWorld;
   int object;
@@ -44,20 +51,18 @@ bool overlap(const Bounds& a, const Bounds& b) {
          b.lo.z <= a.hi.z;
 }
 
-// Nearest crossings of rays (object frame) with a rectangle: as Solid::nearestCrossings.
-void rectangleCrossings(const Rectangle& r, int n, const Ray* rays, double tMin, double* t, Vec3* normal) {
-  for (int k = 0; k < n; ++k) {
-    const Ray& l = rays[k];
-    const double tk = -l.origin.z / l.direction.z;  // NaN or infinite parallel to the plane: no hit
-    const double x = l.origin.x + tk * l.direction.x, y = l.origin.y + tk * l.direction.y;
-    const bool hit = tk > tMin && std::isfinite(tk) && 2 * std::abs(x) <= r.sizeX && 2 * std::abs(y) <= r.sizeY;
-    t[k] = hit ? tk : std::numeric_limits<double>::infinity();
-    normal[k] = Vec3(0, 0, 1);
-  }
+// A ray's crossing of a (closed) rectangle beyond tMin; infinity when there is none.
+double rectangleCrossing(const WorldRectangle& r, const Ray& ray, double tMin) {
+  const Vec3 toCentre = r.centre - ray.origin;
+  const double t = toCentre.dot(r.normal) / ray.direction.dot(r.normal);  // NaN or infinite parallel to the plane
+  const Vec3 p = ray.direction * t - toCentre;                              // from the centre, in the plane
+  const bool hit = t > tMin && t < std::numeric_limits<double>::infinity() && std::abs(p.dot(r.axisX)) <= r.halfX &&
+                   std::abs(p.dot(r.axisY)) <= r.halfY;
+  return hit ? t : std::numeric_limits<double>::infinity();
 }
 
-// Rays of an object's batch in its object frame.
-void toObjectFrame(const AnalyticGeometry& g, const Ray& ray, Ray& local) {
+// A ray in a solid's object frame.
+inline void toObjectFrame(const AnalyticGeometry& g, const Ray& ray, Ray& local) {
   local = g.placed ? Ray{g.objectFromWorld.point(ray.origin), g.objectFromWorld.vector(ray.direction)} : ray;
 }
 
@@ -82,13 +87,6 @@ struct HitContext {
 };
 static_assert(Solid::kBatch >= static_cast<int>(Scene::kPacket) && Scene::kPacket <= 32);
 
-// Keeps crossing t (object frame normal n) of `lane` with object g if it is the nearest so far.
-void keepNearest(HitContext& ctx, const AnalyticGeometry& g, unsigned lane, double t, const Vec3& n) {
-  if (!(t < ctx.bestT[lane])) return;
-  ctx.bestT[lane] = t;
-  ctx.bestNormal[lane] = g.placed ? g.worldFromObject.vector(n) : n;
-  ctx.bestObject[lane] = g.object;
-}
 
 // Intersects the noted solids' lanes exactly and keeps each lane's nearest.
 void resolveSolids(HitContext& ctx) {
@@ -105,7 +103,12 @@ void resolveSolids(HitContext& ctx) {
       ++m;
     }
     g.solid->nearestCrossings(m, local, ctx.tMin, t, normal);
-    for (int i = 0; i < m; ++i) keepNearest(ctx, g, lane[i], t[i], normal[i]);
+    for (int i = 0; i < m; ++i) {
+      if (!(t[i] < ctx.bestT[lane[i]])) continue;
+      ctx.bestT[lane[i]] = t[i];
+      ctx.bestNormal[lane[i]] = g.placed ? g.worldFromObject.vector(normal[i]) : normal[i];
+      ctx.bestObject[lane[i]] = g.object;
+    }
   }
   ctx.solids = 0;
 }
@@ -129,12 +132,8 @@ void analyticIntersect(const RTCIntersectFunctionNArguments* args) {
     for (unsigned k = 0; k < args->N; ++k) {
       if (!args->valid[k]) continue;
       const unsigned lane = RTCRayN_id(rays, args->N, k);
-      Ray local;
-      double t;
-      Vec3 n;
-      toObjectFrame(*g, ctx.rays[lane], local);
-      rectangleCrossings(g->rectangle, 1, &local, ctx.tMin, &t, &n);
-      keepNearest(ctx, *g, lane, t, n);
+      const double t = rectangleCrossing(g->rectangle, ctx.rays[lane], ctx.tMin);
+      if (t < ctx.bestT[lane]) ctx.bestT[lane] = t, ctx.bestNormal[lane] = g->rectangle.normal, ctx.bestObject[lane] = g->object;
     }
     return;
   }
@@ -248,8 +247,12 @@ Scene::Scene(std::vector<Object> objects, double ambientIor)
           fail(Errc::InvalidArgument, "scene object '{}': rectangle size must be finite and > 0", obj.name);
         local = {{-rect->sizeX / 2, -rect->sizeY / 2, 0}, {rect->sizeX / 2, rect->sizeY / 2, 0}};
       }
+      WorldRectangle world;
+      if (rect)
+        world = {obj.worldFromObject.t, obj.worldFromObject.vector({1, 0, 0}), obj.worldFromObject.vector({0, 1, 0}),
+                 obj.worldFromObject.vector({0, 0, 1}), rect->sizeX / 2, rect->sizeY / 2};
       auto data = std::make_unique<AnalyticGeometry>(AnalyticGeometry{
-          solid ? solid->get() : nullptr, rect ? *rect : Rectangle{}, obj.worldFromObject,
+          solid ? solid->get() : nullptr, world, obj.worldFromObject,
           obj.worldFromObject.inverse(), static_cast<int>(i), !obj.worldFromObject.isIdentity(),
           paddedWorldBounds(local, obj.worldFromObject)});
       geom = rtcNewGeometry(impl_->device, RTC_GEOMETRY_TYPE_USER);
