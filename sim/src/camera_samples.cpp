@@ -13,6 +13,16 @@ LFI_SIMD_CLONES void makeCameraSamples(const TelecentricCamera::RayMap& camera, 
   constexpr std::uint64_t kGolden = 0x9e3779b97f4a7c15ull;  // Sampler's increment
   const std::uint64_t seedHash = splitMix64(seed);
   const double invSide = 1.0 / side;
+  // The stop strata: the permutation's first round for every sample at once,
+  // then the few that must walk on (none when side^2 is a power of two).
+  const auto strata = static_cast<std::uint32_t>(side * side), mask = permutationMask(strata);
+  std::uint32_t stop[CameraSampleBatch::kSize];
+  for (int k = 0; k < n; ++k)  // (unstratified samples permute 0, for a walk that ends)
+    stop[k] = permutationRound(b.sample[k] < strata ? b.sample[k] : 0, mask, b.stopKey[k]);
+  for (int k = 0; k < n; ++k) {
+    while (stop[k] >= strata) stop[k] = permutationRound(stop[k], mask, b.stopKey[k]);
+    stop[k] = permutationRotation(stop[k], strata, mask, b.stopKey[k]);
+  }
   for (int k = 0; k < n; ++k) {
     // Sampler(seed, stream) and its first four draws.
     const std::uint64_t state = splitMix64(b.stream[k] ^ seedHash);
@@ -28,8 +38,9 @@ LFI_SIMD_CLONES void makeCameraSamples(const TelecentricCamera::RayMap& camera, 
       y = stratum >= 0 ? (row + v) * invSide : v;
     };
     double jx, jy, su, sv, ax, ay;
-    stratify(b.areaStratum[k], u0, u1, jx, jy);
-    stratify(b.stopStratum[k], u2, u3, su, sv);
+    const bool stratified = b.sample[k] < strata;
+    stratify(stratified ? b.sample[k] : -1.0, u0, u1, jx, jy);
+    stratify(stratified ? stop[k] : -1.0, u2, u3, su, sv);
     concentricDisc(su, sv, ax, ay);
     camera.trace(b.pixelX[k] + jx, b.pixelY[k] + jy, ax, ay, b.ox[k], b.oy[k], b.oz[k], b.dx[k], b.dy[k], b.dz[k]);
   }

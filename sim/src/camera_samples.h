@@ -44,17 +44,20 @@ inline void concentricDisc(double u1, double u2, double& x, double& y) {
 // What the samples are (filled by the renderer) and what they give.
 struct CameraSampleBatch {
   static constexpr int kSize = 16;
-  // In: each sample's random stream (Sampler(seed, stream)), pixel, and the
-  // strata of its pixel-area and stop draws (-1: not stratified, plain draws).
+  // In: each sample's random stream (Sampler(seed, stream)), pixel, index in
+  // the pixel and the key of its pixel's stop permutation. The first side^2
+  // samples of a pixel are stratified: sample s's pixel-area draw falls in
+  // stratum s, its stop draw in stratum permutationElement(s, side^2, key);
+  // the rest draw plainly.
   std::uint64_t stream[kSize];
   double pixelX[kSize], pixelY[kSize];
-  double areaStratum[kSize], stopStratum[kSize];
+  std::uint32_t sample[kSize], stopKey[kSize];
   // Out: the ray of sight (world frame) and the stream's state after the four draws.
   double ox[kSize], oy[kSize], oz[kSize], dx[kSize], dy[kSize], dz[kSize];
   std::uint64_t state[kSize];
 };
 
-// Samples 0..n-1 of `batch`; `side` strata per axis (side^2 stratified samples).
+// Samples 0..n-1 of `batch`; `side` strata per axis.
 void makeCameraSamples(const TelecentricCamera::RayMap& camera, std::uint64_t seed, int side, int n,
                        CameraSampleBatch& batch);
 

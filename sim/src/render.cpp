@@ -84,24 +84,6 @@ private:
 
 }  // namespace
 
-std::uint32_t permutationElement(std::uint32_t i, std::uint32_t n, std::uint32_t key) {
-  // Kensler's hash (Correlated Multi-Jittered Sampling, Pixar 2013): every step
-  // (xor with the key, odd multiplies, xor-shifts of the bits under the mask)
-  // is invertible on the low k bits, so it permutes [0, 2^k); values >= n are
-  // hashed again (cycle walking), which permutes [0, n); a final rotation by
-  // the key (in 64 bits: i + key must not wrap).
-  std::uint32_t mask = n - 1;
-  mask |= mask >> 1, mask |= mask >> 2, mask |= mask >> 4, mask |= mask >> 8, mask |= mask >> 16;
-  do {
-    i ^= key, i *= 0xe170893du, i ^= key >> 16, i ^= (i & mask) >> 4;
-    i ^= key >> 8, i *= 0x0929eb3fu, i ^= key >> 23, i ^= (i & mask) >> 1;
-    i *= 1 | key >> 27, i *= 0x6935fa69u, i ^= (i & mask) >> 11, i *= 0x74dcb303u;
-    i ^= (i & mask) >> 2, i *= 0x9e501cc3u, i ^= (i & mask) >> 2, i *= 0xc860a3dfu;
-    i &= mask, i ^= i >> 5;
-  } while (i >= n);
-  return static_cast<std::uint32_t>((std::uint64_t{i} + key) % n);
-}
-
 namespace {
 
 // Unit vector along v (v != 0).
@@ -510,10 +492,8 @@ private:
         const int s = starts_[k].sample;
         batch_.stream[k] = sampleStream(px, s);
         batch_.pixelX[k] = px.i, batch_.pixelY[k] = px.j;
-        batch_.areaStratum[k] = s < strata_ ? s : -1.0;
-        const auto stratum = static_cast<std::uint32_t>(s);
-        batch_.stopStratum[k] =
-            s < strata_ ? permutationElement(stratum, static_cast<std::uint32_t>(strata_), px.stopKey) : -1.0;
+        batch_.sample[k] = static_cast<std::uint32_t>(s);
+        batch_.stopKey[k] = px.stopKey;
       }
       detail::makeCameraSamples(*cameraRays_, options_.seed, side_, static_cast<int>(m), batch_);
       for (size_t k = 0; k < m; ++k) {

@@ -372,21 +372,22 @@ TEST(CameraSamples, VectorisedPassEqualsOneSampleAtATime) {
   for (int k = 0; k < detail::CameraSampleBatch::kSize; ++k) {
     batch.stream[k] = 1000003ull * static_cast<std::uint64_t>(k) + 17;
     batch.pixelX[k] = 37 * k % cam.width, batch.pixelY[k] = 11 * k % cam.height;
-    batch.areaStratum[k] = k < 9 ? k : -1;
-    batch.stopStratum[k] = k < 9 ? (5 * k + 2) % 9 : -1;
+    batch.sample[k] = static_cast<std::uint32_t>((7 * k + 3) % 13);  // side^2 = 9: some stratified, some not
+    batch.stopKey[k] = 0x9e3779b9u * static_cast<std::uint32_t>(k + 1);
   }
   detail::makeCameraSamples(map, seed, side, detail::CameraSampleBatch::kSize, batch);
   for (int k = 0; k < detail::CameraSampleBatch::kSize; ++k) {
     Sampler sampler(seed, batch.stream[k]);
     const double u0 = sampler.next(), u1 = sampler.next(), u2 = sampler.next(), u3 = sampler.next();
-    auto stratified = [&](double stratum, double u, double v) {
-      if (stratum < 0) return Vec2(u, v);
-      const int s = static_cast<int>(stratum), row = s / side, col = s - row * side;
+    const bool plain = batch.sample[k] >= side * side;
+    auto stratified = [&](std::uint32_t s, double u, double v) {
+      if (plain) return Vec2(u, v);
+      const auto row = static_cast<int>(s) / side, col = static_cast<int>(s) - row * side;
       return Vec2((col + u) * (1.0 / side), (row + v) * (1.0 / side));  // the renderer's jittered stratum
     };
-    const Vec2 stop = stratified(batch.stopStratum[k], u2, u3);
+    const Vec2 stop = stratified(plain ? 0 : permutationElement(batch.sample[k], side * side, batch.stopKey[k]), u2, u3);
     const Ray ray = cam.ray(static_cast<int>(batch.pixelX[k]), static_cast<int>(batch.pixelY[k]),
-                            stratified(batch.areaStratum[k], u0, u1), concentricDisc(stop.x, stop.y));
+                            stratified(batch.sample[k], u0, u1), concentricDisc(stop.x, stop.y));
     EXPECT_EQ(batch.ox[k], ray.origin.x) << k;
     EXPECT_EQ(batch.oy[k], ray.origin.y) << k;
     EXPECT_EQ(batch.oz[k], ray.origin.z) << k;

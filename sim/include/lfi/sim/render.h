@@ -79,9 +79,37 @@ struct Sampler {
   }
 };
 
+// Kensler's hash (Correlated Multi-Jittered Sampling, Pixar 2013): every step
+// (xor with the key, odd multiplies, xor-shifts of the bits under the mask) is
+// invertible on the low k bits, so one round permutes [0, mask + 1) for
+// mask = 2^k - 1.
+inline std::uint32_t permutationRound(std::uint32_t i, std::uint32_t mask, std::uint32_t key) {
+  i ^= key, i *= 0xe170893du, i ^= key >> 16, i ^= (i & mask) >> 4;
+  i ^= key >> 8, i *= 0x0929eb3fu, i ^= key >> 23, i ^= (i & mask) >> 1;
+  i *= 1 | key >> 27, i *= 0x6935fa69u, i ^= (i & mask) >> 11, i *= 0x74dcb303u;
+  i ^= (i & mask) >> 2, i *= 0x9e501cc3u, i ^= (i & mask) >> 2, i *= 0xc860a3dfu;
+  i &= mask, i ^= i >> 5;
+  return i;
+}
+inline std::uint32_t permutationMask(std::uint32_t n) {  // 2^k - 1 >= n - 1
+  std::uint32_t mask = n - 1;
+  mask |= mask >> 1, mask |= mask >> 2, mask |= mask >> 4, mask |= mask >> 8, mask |= mask >> 16;
+  return mask;
+}
 // Element i of a pseudo-random permutation of [0, n) chosen by `key` (Kensler
-// 2013): computed on its own, without building the permutation. 0 <= i < n.
-std::uint32_t permutationElement(std::uint32_t i, std::uint32_t n, std::uint32_t key);
+// 2013), computed on its own, without building the permutation; 0 <= i < n.
+// Rounds are repeated while the value is >= n (cycle walking, which permutes
+// [0, n)); then a rotation by the key (in 64 bits: i + key must not wrap; a
+// mask when n is a power of two).
+inline std::uint32_t permutationRotation(std::uint32_t i, std::uint32_t n, std::uint32_t mask, std::uint32_t key) {
+  return (n & mask) == 0 ? (i + key) & mask : static_cast<std::uint32_t>((std::uint64_t{i} + key) % n);
+}
+inline std::uint32_t permutationElement(std::uint32_t i, std::uint32_t n, std::uint32_t key) {
+  const std::uint32_t mask = permutationMask(n);
+  do i = permutationRound(i, mask, key);
+  while (i >= n);
+  return permutationRotation(i, n, mask, key);
+}
 
 // Shirley and Chiu's concentric map of the unit square onto the unit disc:
 // area-preserving (uniform u gives a uniform point), keeps strata compact,
