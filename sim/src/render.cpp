@@ -86,8 +86,12 @@ private:
 
 namespace {
 
-// Unit vector along v (v != 0).
-Vec3 unit(const Vec3& v) { return v * (1 / std::sqrt(v.dot(v))); }
+// v, unit to within rounding, brought back to unit length: one Newton step for
+// 1/sqrt(v.v) at 1, exact to second order in |v.v - 1| (~1e-16). Refraction
+// and reflection of unit vectors give unit vectors but for rounding; this
+// keeps the rounding from adding up along a path, without a root and a
+// division on every bounce (they set a path's latency).
+Vec3 renormalised(const Vec3& v) { return v * (1.5 - 0.5 * v.dot(v)); }
 
 // Cosine of the transmitted angle (Snell) for incidence cosine cosI in [0, 1]
 // and eta = n1 / n2; -1 under total internal reflection.
@@ -106,7 +110,7 @@ double fresnelFromCosines(double cosI, double cosT, double n1, double n2) {
 }
 
 Vec3 refractedDirection(const Vec3& d, const Vec3& n, double eta, double cosI, double cosT) {
-  return unit(d * eta + n * (eta * cosI - cosT));
+  return renormalised(d * eta + n * (eta * cosI - cosT));
 }
 
 }  // namespace
@@ -125,7 +129,7 @@ bool refract(const Vec3& d, const Vec3& n, double eta, Vec3& out) {
   return true;
 }
 
-Vec3 reflect(const Vec3& d, const Vec3& n) { return unit(d - n * (2 * d.dot(n))); }
+Vec3 reflect(const Vec3& d, const Vec3& n) { return renormalised(d - n * (2 * d.dot(n))); }
 
 namespace {
 

@@ -10,6 +10,8 @@
 
 #include <gtest/gtest.h>
 
+#include <random>
+
 #include <cmath>
 #include <numbers>
 
@@ -104,6 +106,24 @@ TEST(Snell, RefractedRayObeysSnellAndStaysInThePlaneOfIncidence) {
       }
     }
   }
+}
+
+// A path refracts and reflects many times: its direction stays unit length to
+// rounding (no drift), whatever the interfaces.
+TEST(Snell, DirectionsStayUnitOverManyInterfaces) {
+  std::mt19937_64 rng(4);
+  std::uniform_real_distribution<double> u(-1, 1);
+  Vec3 d = Vec3(0.3, -0.2, -1).normalized();
+  double worst = 0;
+  for (int i = 0; i < 100000; ++i) {
+    Vec3 n = Vec3(u(rng), u(rng), u(rng)).normalized();
+    if (d.dot(n) > 0) n = -n;  // facing the incoming side
+    Vec3 out;
+    const double eta = u(rng) > 0 ? 1 / 1.5 : 1.5;
+    d = u(rng) > 0.5 || !refract(d, n, eta, out) ? reflect(d, n) : out;
+    worst = std::max(worst, std::abs(d.length() - 1));
+  }
+  EXPECT_LT(worst, 1e-15);
 }
 
 // Thick lens in air: 1/f = (n-1) [1/R1 - 1/R2 + (n-1) d / (n R1 R2)]; the back

@@ -121,6 +121,7 @@ Vec2 concentricDisc(double u1, double u2);
 double fresnelReflectance(double cosIncidence, double n1, double n2);
 // Refracts unit `d` at a surface with unit normal `n` facing the incoming side
 // (d . n < 0), eta = n1 / n2. Returns false under total internal reflection.
+// Both give unit vectors to rounding, for unit d and n.
 bool refract(const Vec3& d, const Vec3& n, double eta, Vec3& out);
 Vec3 reflect(const Vec3& d, const Vec3& n);
 
