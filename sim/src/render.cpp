@@ -138,6 +138,7 @@ struct PathState {
   MediumStack media;
   double throughput = 1;
   int depth = 0;
+  int on = -1;  // the dielectric whose surface the ray leaves from (-1: none)
 };
 
 // What one interaction did to a path.
@@ -176,8 +177,10 @@ Step interact(const Scene& scene, const Hit& hit, PathState& p, PathState& branc
     if (!policy.diffuse) return Step::Done;
     p.throughput *= surface.albedo;
     p.ray = leave(policy.bounce(facing));
+    p.on = -1;
     return Step::Continue;
   }
+  p.on = hit.object;
   // Entering: from the current medium into the glass. Leaving: from the
   // glass into whatever medium contains it (a bubble in glass exits to glass).
   const double n1 = entering ? p.media.ior(scene) : surface.ior;
@@ -399,9 +402,9 @@ private:
     for (size_t k = 0; k < n; ++k) {
       const PathState& path = lanes[k]->walker.path;
       rays_[k] = path.ray;
-      media_[k] = path.media.size() ? path.media.top() : -1;
+      rayStarts_[k] = {path.media.size() ? path.media.top() : -1, path.on};
     }
-    scene_.intersect(std::span(rays_.data(), n), std::span(hits_.data(), n), Scene::kTMin, std::span(media_.data(), n));
+    scene_.intersect(std::span(rays_.data(), n), std::span(hits_.data(), n), Scene::kTMin, std::span(rayStarts_.data(), n));
     size_t kept = 0;
     for (size_t k = 0; k < n; ++k) {
       Lane& lane = *lanes[k];
@@ -563,7 +566,7 @@ private:
   std::vector<int> freeLanes_;
   std::array<Ray, Scene::kPacket> rays_;
   std::array<Hit, Scene::kPacket> hits_;
-  std::array<int, Scene::kPacket> media_;  // the innermost medium each ray starts in (-1: the ambient one)
+  std::array<Scene::RayStart, Scene::kPacket> rayStarts_;
 };
 
 }  // namespace

@@ -79,6 +79,7 @@ struct HitContext {
   double* bestT;
   Vec3* bestNormal;  // world frame
   int* bestObject;
+  const AnalyticGeometry* const* skip;  // per lane: a solid the ray cannot cross, or null
   // The solids met so far, each with the lanes that may cross it.
   static constexpr int kSolids = 8;
   int solids;
@@ -146,7 +147,10 @@ void analyticIntersect(const RTCIntersectFunctionNArguments* args) {
     ++ctx.solids;
   }
   std::uint32_t bits = 0;
-  for (unsigned k = 0; k < args->N; ++k) bits |= (args->valid[k] != 0 ? 1u : 0u) << RTCRayN_id(rays, args->N, k);
+  for (unsigned k = 0; k < args->N; ++k) {
+    const unsigned lane = RTCRayN_id(rays, args->N, k);
+    bits |= (args->valid[k] != 0 && ctx.skip[lane] != g ? 1u : 0u) << lane;
+  }
   ctx.lanes[static_cast<size_t>(s)] |= bits;
 }
 
@@ -207,6 +211,7 @@ struct Scene::Impl {
   // bounds, else null. A ray starting in such a box that crosses the solid
   // crosses it before anything else (see intersect), so the solid alone answers.
   std::vector<const AnalyticGeometry*> isolated;
+  std::vector<const AnalyticGeometry*> convex;  // per object: its solid if convex, else null
   ~Impl() {
     if (scene) rtcReleaseScene(scene);
     if (device) rtcReleaseDevice(device);
@@ -292,6 +297,9 @@ Scene::Scene(std::vector<Object> objects, double ambientIor)
   }
   rtcCommitScene(impl_->scene);
   impl_->isolated = isolatedSolids(objects_, impl_->analytic);
+  impl_->convex.assign(objects_.size(), nullptr);
+  for (const auto& g : impl_->analytic)
+    if (g->solid && g->solid->convex()) impl_->convex[static_cast<size_t>(g->object)] = g.get();
 }
 
 Scene::~Scene() = default;
@@ -303,6 +311,8 @@ Hit Scene::intersect(const Ray& ray, double tMin, double tMax) const {
   HitContext ctx;
   rtcInitIntersectContext(&ctx.embree);
   ctx.rays = &ray, ctx.tMin = tMin, ctx.bestT = &bestT, ctx.bestNormal = &bestNormal, ctx.bestObject = &bestObject;
+  const AnalyticGeometry* skip[1] = {};
+  ctx.skip = skip;
   ctx.solids = 0;
   RTCRayHit rh;
   rh.ray.org_x = static_cast<float>(ray.origin.x);
@@ -327,10 +337,11 @@ Hit Scene::intersect(const Ray& ray, double tMin, double tMax) const {
   return hit;
 }
 
-void Scene::intersect(std::span<const Ray> rays, std::span<Hit> hits, double tMin, std::span<const int> inside) const {
-  if (rays.size() > kPacket || hits.size() < rays.size() || (!inside.empty() && inside.size() < rays.size()))
-    fail(Errc::InvalidArgument, "Scene::intersect: {} rays for {} hits and {} media (at most {} at once)", rays.size(),
-         hits.size(), inside.size(), kPacket);
+void Scene::intersect(std::span<const Ray> rays, std::span<Hit> hits, double tMin,
+                      std::span<const RayStart> starts) const {
+  if (rays.size() > kPacket || hits.size() < rays.size() || (!starts.empty() && starts.size() < rays.size()))
+    fail(Errc::InvalidArgument, "Scene::intersect: {} rays for {} hits and {} starts (at most {} at once)", rays.size(),
+         hits.size(), starts.size(), kPacket);
   const int n = static_cast<int>(rays.size());
   // Rays starting inside an isolated solid's box: the solid's nearest crossing,
   // if any, comes before every other object's surface (those lie outside the
@@ -339,12 +350,12 @@ void Scene::intersect(std::span<const Ray> rays, std::span<Hit> hits, double tMi
   // Embree. The hint only picks which rays to try: the answer is the same.
   bool done[kPacket] = {};
   int traced = n;
-  if (!inside.empty()) {
+  if (!starts.empty()) {
     const AnalyticGeometry* g = nullptr;  // one solid per packet: its rays are one batch
     int lanes[kPacket], m = 0;
     Ray local[kPacket];
     for (int k = 0; k < n; ++k) {
-      const int object = inside[static_cast<size_t>(k)];
+      const int object = starts[static_cast<size_t>(k)].inside;
       const AnalyticGeometry* s = object >= 0 ? impl_->isolated[static_cast<size_t>(object)] : nullptr;
       if (!s || (g && s != g) || !contains(s->box, rays[static_cast<size_t>(k)].origin)) continue;
       g = s;
@@ -373,6 +384,13 @@ void Scene::intersect(std::span<const Ray> rays, std::span<Hit> hits, double tMi
   rtcInitIntersectContext(&ctx.embree);
   ctx.rays = rays.data(), ctx.tMin = tMin, ctx.bestT = bestT, ctx.bestNormal = bestNormal, ctx.bestObject = bestObject;
   ctx.solids = 0;
+  // A ray leaving a convex solid (from its surface, outside it) cannot cross it
+  // again beyond tMin: its lane skips that solid.
+  const AnalyticGeometry* skip[kPacket] = {};
+  ctx.skip = skip;
+  for (int k = 0; k < n && !starts.empty(); ++k)
+    if (const RayStart& start = starts[static_cast<size_t>(k)]; start.on >= 0 && start.on != start.inside)
+      skip[k] = impl_->convex[static_cast<size_t>(start.on)];
   // Incoherent: with few objects, Embree's per-ray traversal of the packet beats
   // its packet traversal (measured: 17 % of a render of the reference scene).
   ctx.embree.flags = RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT;

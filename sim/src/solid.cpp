@@ -459,6 +459,8 @@ void Solid::localIntervals(const Ray& ray, IntervalList& out) const {
   }
 }
 
+bool Solid::convex() const { return isPrimitive(kind_) || !convex_.empty(); }
+
 Bounds Solid::bounds() const {
   Bounds local;
   switch (kind_) {

@@ -1,6 +1,7 @@
 // Scene::intersect against brute force: the nearest hit over every object,
 // computed from the solids' exact intervals and the rectangles' planes.
 #include "lfi/core/error.h"
+#include "lfi/sim/render.h"
 #include "lfi/sim/scene.h"
 
 #include <gtest/gtest.h>
@@ -232,7 +233,7 @@ TEST(Scene, IsolatedSolidsAnswerHintedRaysAsTheOneRayQuery) {
   for (int packet = 0; packet < 3000; ++packet) {
     const size_t n = 1 + static_cast<size_t>(packet % static_cast<int>(Scene::kPacket));
     std::vector<Ray> rays;
-    std::vector<int> inside;
+    std::vector<Scene::RayStart> starts;
     for (size_t k = 0; k < n; ++k) {
       // Around each solid's box (some rays start just outside), any direction,
       // hinted with the right solid, another one or none.
@@ -241,17 +242,17 @@ TEST(Scene, IsolatedSolidsAnswerHintedRaysAsTheOneRayQuery) {
       const Vec3 origin = centre + Vec3(5.5 * u(rng), 5.5 * u(rng), 3 * u(rng));
       rays.push_back({origin, Vec3(u(rng), u(rng), u(rng)).normalized()});
       const double pick = u(rng);
-      inside.push_back(pick < 0.5 ? around : pick < 0.75 ? -1 : static_cast<int>(rng() % 6));
+      starts.push_back({pick < 0.5 ? around : pick < 0.75 ? -1 : static_cast<int>(rng() % 6), -1});
     }
     std::vector<Hit> hinted(n), plain(n);
-    scene.intersect(rays, hinted, Scene::kTMin, inside);
+    scene.intersect(rays, hinted, Scene::kTMin, starts);
     scene.intersect(rays, plain);
     for (size_t k = 0; k < n; ++k) {
       const Hit one = scene.intersect(rays[k]);
       ASSERT_EQ(hinted[k].object, one.object) << "packet " << packet << " ray " << k;
       ASSERT_EQ(plain[k].object, one.object) << "packet " << packet << " ray " << k;
       if (!one.valid()) continue;
-      direct += inside[k] == 0 && one.object == 0;
+      direct += starts[k].inside == 0 && one.object == 0;
       // The same double-precision arithmetic however the crossing was found.
       EXPECT_EQ(hinted[k].t, one.t);
       EXPECT_EQ(hinted[k].normal, one.normal);
@@ -261,7 +262,7 @@ TEST(Scene, IsolatedSolidsAnswerHintedRaysAsTheOneRayQuery) {
   EXPECT_GT(direct, 3000);
   std::vector<Ray> rays(2, Ray{{0, 0, 2}, {0, 0, -1}});
   std::vector<Hit> hits(2);
-  const std::vector<int> tooFew{0};
+  const std::vector<Scene::RayStart> tooFew{{}};
   EXPECT_THROW(scene.intersect(rays, hits, Scene::kTMin, tooFew), Error);
 }
 
@@ -299,6 +300,62 @@ TEST(Scene, RectanglesAreExactAndWatertight) {
     EXPECT_NEAR(hit.t, distance, 1e-11);
     EXPECT_NEAR(local.point(hit.point).z, 0, 1e-11);
     EXPECT_NEAR((hit.normal - placed.vector({0, 0, 1})).length(), 0, 1e-15);
+  }
+}
+
+}  // namespace
+
+namespace {
+
+// Rays that leave a convex solid skip it in the packet query (a line meets a
+// convex solid once): the hits must still be the one-ray query's, for paths
+// that refract through lenses, reflect off them outside and inside, and a
+// sphere that is not isolated.
+TEST(Scene, RaysLeavingAConvexSolidGetTheOneRayQuerysHits) {
+  const Scene scene(std::vector<Object>{
+      {.name = "lens", .shape = std::shared_ptr<const Solid>(Solid::sphericalLens(20, -30, 3, 10)),
+       .worldFromObject = Rigid3::rotation({1, 0, 0}, 0.2), .material = Dielectric{}},
+      {.name = "ball", .shape = std::shared_ptr<const Solid>(Solid::sphere(3)),
+       .worldFromObject = Rigid3::translation({2, 0, -6}), .material = Dielectric{1.7}},
+      {.name = "slab", .shape = Rectangle{20, 20}, .worldFromObject = Rigid3::translation({0, 0, -8}),
+       .material = Absorber{}},
+      {.name = "back", .shape = Rectangle{60, 60}, .worldFromObject = Rigid3::translation({0, 0, -20}),
+       .emission = LambertianEmission{1}}});
+  std::mt19937_64 rng(9);
+  std::uniform_real_distribution<double> u(-1, 1);
+  std::vector<Ray> rays;
+  std::vector<Scene::RayStart> starts;
+  int leaving = 0;
+  for (int path = 0; path < 3000; ++path) {
+    Ray ray{{6 * u(rng), 6 * u(rng), 20}, Vec3(0.2 * u(rng), 0.2 * u(rng), -1).normalized()};
+    Scene::RayStart start;
+    for (int bounce = 0; bounce < 6; ++bounce) {
+      rays.push_back(ray), starts.push_back(start);
+      const Hit hit = scene.intersect(ray);
+      if (!hit.valid() || scene.surface(hit.object).kind != Surface::Kind::Dielectric) break;
+      const bool entering = ray.direction.dot(hit.normal) < 0;
+      const Vec3 facing = entering ? hit.normal : -hit.normal;
+      const double ior = scene.surface(hit.object).ior;
+      Vec3 out;
+      const bool refracted = u(rng) > -0.6 && refract(ray.direction, facing, entering ? 1 / ior : ior, out);
+      if (!refracted) out = reflect(ray.direction, facing);
+      start = {refracted == entering ? hit.object : -1, hit.object};  // (the two solids do not nest)
+      leaving += start.on >= 0 && start.inside != start.on;
+      ray = {hit.point, out};
+    }
+  }
+  EXPECT_GT(leaving, 1000);
+  for (size_t begin = 0; begin < rays.size(); begin += Scene::kPacket) {
+    const size_t n = std::min(Scene::kPacket, rays.size() - begin);
+    std::vector<Hit> hits(n);
+    scene.intersect(std::span(rays).subspan(begin, n), hits, Scene::kTMin, std::span(starts).subspan(begin, n));
+    for (size_t k = 0; k < n; ++k) {
+      const Hit one = scene.intersect(rays[begin + k]);
+      ASSERT_EQ(hits[k].object, one.object) << "ray " << begin + k;
+      if (!one.valid()) continue;
+      EXPECT_EQ(hits[k].t, one.t);
+      EXPECT_EQ(hits[k].normal, one.normal);
+    }
   }
 }
 

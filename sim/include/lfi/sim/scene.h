@@ -178,20 +178,25 @@ public:
   Hit intersect(const Ray& ray, double tMin = kTMin, double tMax = std::numeric_limits<double>::infinity()) const;
   // The same for up to kPacket rays at once, traced as one Embree packet: much
   // cheaper per ray when the rays are coherent (a pixel's samples). hits[k] is
-  // rays[k]'s nearest hit with t > tMin. `inside`, empty or one per ray, hints
-  // the object each ray starts inside (-1: none): a solid whose bounds meet no
-  // other object's then answers its own rays without a traversal (the tracer's
-  // rays inside a lens). The hint saves time only: the hits are the same.
+  // rays[k]'s nearest hit with t > tMin. `starts`, empty or one per ray, says
+  // where each ray starts as the tracer knows it (RayStart), which lets the
+  // query skip work: a solid whose bounds meet no other object's answers the
+  // rays inside it without a traversal (the tracer's rays inside a lens), and
+  // a convex solid is not tested against the rays leaving it.
   static constexpr size_t kPacket = 16;
+  struct RayStart {
+    int inside = -1;  // the innermost object the ray starts inside (-1: the ambient medium); a hint
+    int on = -1;      // the object whose surface the ray leaves from (-1: none); must be true
+  };
   void intersect(std::span<const Ray> rays, std::span<Hit> hits, double tMin = kTMin,
-                 std::span<const int> inside = {}) const;
+                 std::span<const RayStart> starts = {}) const;
 
   const std::vector<Object>& objects() const { return objects_; }
   const Object& object(int index) const { return objects_[static_cast<size_t>(index)]; }
   const Rigid3& objectFromWorld(int index) const;
   // Whether an object is a solid whose bounds meet no other object's: a ray
   // starting inside it meets it before anything else, and the packet query
-  // answers such rays (hinted by `inside`) without a traversal.
+  // answers such rays (RayStart::inside) without a traversal.
   bool isolated(int index) const;
   const Surface& surface(int index) const { return surfaces_[static_cast<size_t>(index)]; }
   // Replaces what an object emits (geometry and material stay). For the display's

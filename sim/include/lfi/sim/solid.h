@@ -92,6 +92,9 @@ public:
   Bounds bounds() const;  // in the parent frame
   bool contains(const Vec3& point) const;  // in the parent frame
   Kind kind() const { return kind_; }
+  // Convex (a sphere, a cylinder, a half space or an intersection of them): a
+  // line meets it in one interval, so a ray leaving it does not meet it again.
+  bool convex() const;
 
 private:
   Solid(Kind kind, double radius, const Rigid3& parentFromLocal);
