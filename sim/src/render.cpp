@@ -404,7 +404,8 @@ private:
       rays_[k] = path.ray;
       rayStarts_[k] = {path.media.size() ? path.media.top() : -1, path.on};
     }
-    scene_.intersect(std::span(rays_.data(), n), std::span(hits_.data(), n), Scene::kTMin, std::span(rayStarts_.data(), n));
+    scene_.intersect(std::span(rays_.data(), n), std::span(hits_.data(), n), Scene::kTMin,
+                     std::span(rayStarts_.data(), n));
     size_t kept = 0;
     for (size_t k = 0; k < n; ++k) {
       Lane& lane = *lanes[k];
