@@ -317,9 +317,7 @@ struct Walker {
 // for any tile size and thread count.
 struct Lane {
   Walker walker;
-  // At most one waiting branch per split depth.
-  std::array<Walker, RenderOptions::kMaxSplitDepth> branches;
-  int waiting = 0;
+  int waiting = 0;  // branches waiting on the lane's stack (TileRenderer::branches_)
   double radiance = 0;
   int pixel = 0;  // index into the tile's PixelWork slots
   int sample = 0;
@@ -344,6 +342,7 @@ public:
     issuing_ = -1;
     std::array<Lane*, Scene::kPacket> active{};
     lanes_.assign(Scene::kPacket, Lane{});
+    branches_.resize(Scene::kPacket);
     freeLanes_.clear();
     for (int k = static_cast<int>(Scene::kPacket) - 1; k >= 0; --k) freeLanes_.push_back(k);
     size_t n = 0;
@@ -414,7 +413,7 @@ private:
       double radiance;
       const Step step = interact(scene_, hits_[k], w.path, branch_, radiance, policy);
       if (step == Step::Split)  // the branch gets its own stream, keyed by the parent's state and depth
-        lane.branches[static_cast<size_t>(lane.waiting++)] = {
+        branches_[laneIndex(lane)][static_cast<size_t>(lane.waiting++)] = {
             branch_, Sampler(w.sampler.state, static_cast<std::uint64_t>(branch_.depth)), w.choices};
       if (step != Step::Done && w.path.depth < options_.maxDepth) {
         lanes[kept++] = &lane;
@@ -424,7 +423,7 @@ private:
       // The path ended: go on with the sample's latest waiting branch, if any.
       bool resumed = false;
       while (!resumed && lane.waiting > 0) {
-        w = lane.branches[static_cast<size_t>(--lane.waiting)];
+        w = branches_[laneIndex(lane)][static_cast<size_t>(--lane.waiting)];
         resumed = w.path.depth < options_.maxDepth;
       }
       if (resumed) {
@@ -434,7 +433,7 @@ private:
       PixelWork& px = pixels_[static_cast<size_t>(lane.pixel)];
       px.values[static_cast<size_t>(lane.sample)] = lane.radiance;
       --px.inFlight;
-      freeLanes_.push_back(static_cast<int>(&lane - lanes_.data()));
+      freeLanes_.push_back(static_cast<int>(laneIndex(lane)));
       if (lane.pixel != issuing_) finishIfDone(lane.pixel);
     }
     return kept;
@@ -564,6 +563,10 @@ private:
   static_assert(detail::CameraSampleBatch::kSize >= static_cast<int>(Scene::kPacket));
   PathState branch_;  // written by a split
   std::vector<Lane> lanes_;
+  // Per lane, its waiting split branches, at most one per split depth. Apart
+  // from the lanes, which stay small and close together in the cache.
+  std::vector<std::array<Walker, RenderOptions::kMaxSplitDepth>> branches_;
+  size_t laneIndex(const Lane& lane) const { return static_cast<size_t>(&lane - lanes_.data()); }
   std::vector<int> freeLanes_;
   std::array<Ray, Scene::kPacket> rays_;
   std::array<Hit, Scene::kPacket> hits_;
