@@ -364,8 +364,14 @@ public:
           const PixelWork& px = pixels_[static_cast<size_t>(start.slot)];
           lane.walker.path = PathState{.ray = start.ray};
           lane.walker.sampler = start.sampler;
-          lane.walker.choices = {px.choiceKeys, static_cast<std::uint32_t>(start.sample),
-                                 static_cast<std::uint32_t>(options_.samplesPerPixel), invSpp_, 0};
+          // Field by field: a braced temporary here made GCC store it in two
+          // halves and load it whole, a store-forwarding stall (5 % of a render).
+          StratifiedChoices& choices = lane.walker.choices;
+          choices.keys = px.choiceKeys;
+          choices.sample = static_cast<std::uint32_t>(start.sample);
+          choices.samples = static_cast<std::uint32_t>(options_.samplesPerPixel);
+          choices.stratumWidth = invSpp_;
+          choices.used = 0;
           lane.waiting = 0;
           lane.radiance = 0;
           lane.pixel = start.slot;
