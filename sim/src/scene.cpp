@@ -103,6 +103,7 @@ void resolveSolids(HitContext& ctx) {
       toObjectFrame(g, ctx.rays[lane[m]], local[m]);
       ++m;
     }
+    if (m == 0) continue;  // every lane skipped the solid
     g.solid->nearestCrossings(m, local, ctx.tMin, t, normal);
     for (int i = 0; i < m; ++i) {
       if (!(t[i] < ctx.bestT[lane[i]])) continue;
