@@ -46,4 +46,23 @@ LFI_SIMD_CLONES void makeCameraSamples(const TelecentricCamera::RayMap& camera, 
   }
 }
 
+LFI_SIMD_CLONES void makeStratifiedChoices(std::uint32_t spp, int n, ChoiceBatch& b) {
+  // As permutationElement: the first round for every lane at once, then the
+  // lanes that must walk on (none when spp is a power of two).
+  const std::uint32_t mask = permutationMask(spp);
+  const double stratumWidth = 1.0 / spp;
+  for (int d = 0; d < kStratifiedChoices; ++d) {
+    std::uint32_t stratum[ChoiceBatch::kSize];
+    for (int k = 0; k < n; ++k) stratum[k] = permutationRound(b.sample[k], mask, b.key[d][k]);
+    for (int k = 0; k < n; ++k) {
+      while (stratum[k] >= spp) stratum[k] = permutationRound(stratum[k], mask, b.key[d][k]);
+      stratum[k] = permutationRotation(stratum[k], spp, mask, b.key[d][k]);
+    }
+    for (int k = 0; k < n; ++k) {
+      const double jitter = Sampler::unitInterval(splitMix64((std::uint64_t{b.key[d][k]} << 32) | b.sample[k]));
+      b.u[d][k] = (stratum[k] + jitter) * stratumWidth;
+    }
+  }
+}
+
 }  // namespace lfi::sim::detail

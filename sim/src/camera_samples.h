@@ -1,8 +1,9 @@
 #pragma once
-// Internal to lfi_sim: the telecentric camera's samples for many pixel
-// samples at once (structure of arrays), for the renderer's packets. One
-// sample is: its random stream, four draws (pixel area, stop), the jittered
-// strata, Shirley's concentric map of the stop draw and the ray of sight of
+// Internal to lfi_sim: what the renderer's new samples start with, for many
+// samples at once (structure of arrays, vectorised): the telecentric camera's
+// samples and every sample's stratified Fresnel choices. A camera sample is:
+// its random stream, four draws (pixel area, stop), the jittered strata,
+// Shirley's concentric map of the stop draw and the ray of sight of
 // TelecentricCamera::RayMap. render.cpp's concentricDisc() and this batch
 // share the disc arithmetic below, so both give the same bits.
 
@@ -60,5 +61,22 @@ struct CameraSampleBatch {
 // Samples 0..n-1 of `batch`; `side` strata per axis.
 void makeCameraSamples(const TelecentricCamera::RayMap& camera, std::uint64_t seed, int side, int n,
                        CameraSampleBatch& batch);
+
+// The first kStratifiedChoices Fresnel choices of a pixel's samples are drawn
+// from a Latin hypercube rather than at random: choice d of sample s falls in
+// stratum permutationElement(s, spp, key[d]) of [0, 1) cut into spp, jittered
+// by unitInterval(splitMix64(key[d] << 32 | s)). Across the pixel's samples
+// each choice then covers [0, 1) evenly, so the few reflect/refract branches of
+// a lens are taken in proportion.
+constexpr int kStratifiedChoices = 4;
+struct ChoiceBatch {
+  static constexpr int kSize = 16;
+  std::uint32_t sample[kSize];                  // in: index in the pixel, < spp
+  std::uint32_t key[kStratifiedChoices][kSize];  // in: the pixel's key of each choice
+  double u[kStratifiedChoices][kSize];           // out: the choices' values in [0, 1)
+};
+
+// Choices of samples 0..n-1 of `batch`, spp samples per pixel.
+void makeStratifiedChoices(std::uint32_t spp, int n, ChoiceBatch& batch);
 
 }  // namespace lfi::sim::detail

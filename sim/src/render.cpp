@@ -227,24 +227,14 @@ double walk(const Scene& scene, PathState p, Policy& policy) {
   return sum;
 }
 
-// Fresnel choices per sample drawn from a Latin hypercube rather than at random.
-constexpr int kStratifiedChoices = 4;
-
-// The first kStratifiedChoices Fresnel choices of a pixel's samples: choice d
-// of sample s falls in stratum permutationElement(s, spp, keys[d]) of [0, 1)
-// cut into spp, jittered. Across the pixel's samples each choice's value then
-// covers [0, 1) evenly, so the few reflect/refract branches of a lens are
-// taken in proportion.
+// A sample's first detail::kStratifiedChoices Fresnel choices, from a Latin
+// hypercube over its pixel's samples (camera_samples.h).
 struct StratifiedChoices {
-  std::array<std::uint32_t, kStratifiedChoices> keys{};
-  std::uint32_t sample = 0, samples = 1;
-  double stratumWidth = 1;  // 1 / samples
-  int used = kStratifiedChoices;  // none left
-  bool next(double& u) {
-    if (used == kStratifiedChoices) return false;
-    const std::uint32_t key = keys[static_cast<size_t>(used++)];
-    const double jitter = Sampler::unitInterval(splitMix64((std::uint64_t{key} << 32) | sample));
-    u = (permutationElement(sample, samples, key) + jitter) * stratumWidth;
+  std::array<double, detail::kStratifiedChoices> u;
+  int used = detail::kStratifiedChoices;  // none left
+  bool next(double& value) {
+    if (used == detail::kStratifiedChoices) return false;
+    value = u[static_cast<size_t>(used++)];
     return true;
   }
 };
@@ -301,7 +291,7 @@ struct PixelWork {
   int inFlight = 0;  // samples started and not yet ended
   std::vector<double> values;  // each sample's radiance, summed in sample order at the end
   std::uint32_t stopKey = 0;   // permutes the stop strata against the pixel-area strata
-  std::array<std::uint32_t, kStratifiedChoices> choiceKeys{};
+  std::array<std::uint32_t, detail::kStratifiedChoices> choiceKeys{};
 };
 
 // Where a path goes on: its state, random stream and stratified choices.
@@ -361,17 +351,10 @@ public:
           }
           Lane& lane = lanes_[static_cast<size_t>(freeLanes_.back())];
           freeLanes_.pop_back();
-          const PixelWork& px = pixels_[static_cast<size_t>(start.slot)];
           lane.walker.path = PathState{.ray = start.ray};
           lane.walker.sampler = start.sampler;
-          // Field by field: a braced temporary here made GCC store it in two
-          // halves and load it whole, a store-forwarding stall (5 % of a render).
-          StratifiedChoices& choices = lane.walker.choices;
-          choices.keys = px.choiceKeys;
-          choices.sample = static_cast<std::uint32_t>(start.sample);
-          choices.samples = static_cast<std::uint32_t>(options_.samplesPerPixel);
-          choices.stratumWidth = invSpp_;
-          choices.used = 0;
+          for (size_t d = 0; d < detail::kStratifiedChoices; ++d) lane.walker.choices.u[d] = choices_.u[d][k];
+          lane.walker.choices.used = 0;
           lane.waiting = 0;
           lane.radiance = 0;
           lane.pixel = start.slot;
@@ -499,6 +482,12 @@ private:
   // area and, independently permuted, for the stop: the first m^2 samples
   // cover both evenly; the rest are random.
   void startSamples(size_t m) {
+    for (size_t k = 0; k < m; ++k) {
+      const PixelWork& px = pixels_[static_cast<size_t>(starts_[k].slot)];
+      choices_.sample[k] = static_cast<std::uint32_t>(starts_[k].sample);
+      for (size_t d = 0; d < detail::kStratifiedChoices; ++d) choices_.key[d][k] = px.choiceKeys[d];
+    }
+    detail::makeStratifiedChoices(static_cast<std::uint32_t>(options_.samplesPerPixel), static_cast<int>(m), choices_);
     if (cameraRays_) {
       for (size_t k = 0; k < m; ++k) {
         const PixelWork& px = pixels_[static_cast<size_t>(starts_[k].slot)];
@@ -566,7 +555,9 @@ private:
   std::vector<int> freeSlots_;
   std::array<Start, Scene::kPacket> starts_;
   detail::CameraSampleBatch batch_;
+  detail::ChoiceBatch choices_;
   static_assert(detail::CameraSampleBatch::kSize >= static_cast<int>(Scene::kPacket));
+  static_assert(detail::ChoiceBatch::kSize >= static_cast<int>(Scene::kPacket));
   PathState branch_;  // written by a split
   std::vector<Lane> lanes_;
   // Per lane, its waiting split branches, at most one per split depth. Apart

@@ -398,6 +398,37 @@ TEST(CameraSamples, VectorisedPassEqualsOneSampleAtATime) {
   }
 }
 
+// The vectorised stratified Fresnel choices equal the one-choice formula of
+// camera_samples.h, to the bit, for sample counts with and without cycle
+// walking; and each choice's values over a pixel's samples form a Latin
+// hypercube (one value in each of the spp strata).
+TEST(CameraSamples, StratifiedChoicesAreALatinHypercube) {
+  for (const std::uint32_t spp : {1u, 9u, 16u, 13u}) {
+    std::vector<std::vector<int>> perStratum(detail::kStratifiedChoices, std::vector<int>(spp, 0));
+    for (std::uint32_t first = 0; first < spp; first += detail::ChoiceBatch::kSize) {
+      detail::ChoiceBatch batch;
+      const int n = static_cast<int>(std::min<std::uint32_t>(detail::ChoiceBatch::kSize, spp - first));
+      for (int k = 0; k < n; ++k) {
+        batch.sample[k] = first + static_cast<std::uint32_t>(k);
+        for (int d = 0; d < detail::kStratifiedChoices; ++d)
+          batch.key[d][k] = 0x2545f491u * static_cast<std::uint32_t>(d + 3);
+      }
+      detail::makeStratifiedChoices(spp, n, batch);
+      for (int k = 0; k < n; ++k)
+        for (int d = 0; d < detail::kStratifiedChoices; ++d) {
+          const std::uint32_t key = batch.key[d][k], s = batch.sample[k];
+          const double jitter = Sampler::unitInterval(splitMix64((std::uint64_t{key} << 32) | s));
+          EXPECT_EQ(batch.u[d][k], (permutationElement(s, spp, key) + jitter) * (1.0 / spp)) << spp << " " << s;
+          ASSERT_GE(batch.u[d][k], 0);
+          ASSERT_LT(batch.u[d][k], 1);
+          ++perStratum[static_cast<size_t>(d)][static_cast<size_t>(batch.u[d][k] * spp)];
+        }
+    }
+    for (const auto& counts : perStratum)
+      for (const int c : counts) EXPECT_EQ(c, 1) << "spp " << spp;
+  }
+}
+
 TEST(Render, CancelFlagSetBeforehandThrowsCancelled) {
   SmallLensScene s;
   std::atomic<bool> cancel{true};
