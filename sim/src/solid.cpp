@@ -178,14 +178,11 @@ std::shared_ptr<Solid> Solid::combine(Kind op, std::shared_ptr<const Solid> a, s
   // Both operands convex: flatten their primitives into this node's frame.
   auto convexParts = [](const Solid& x, std::vector<ConvexPart>& parts) {
     if (isPrimitive(x.kind_)) {
-      parts.push_back({x.kind_, x.radius_, x.parentFromLocal_, x.localFromParent_, x.identity_});
+      parts.push_back(ConvexPart::make(x.kind_, x.radius_, x.parentFromLocal_));
       return true;
     }
     if (x.convex_.empty()) return false;
-    for (const ConvexPart& p : x.convex_) {
-      const Rigid3 localFromPart = x.parentFromLocal_ * p.localFromPart;
-      parts.push_back({p.kind, p.radius, localFromPart, localFromPart.inverse(), localFromPart.isIdentity()});
-    }
+    for (const ConvexPart& p : x.convex_) parts.push_back(ConvexPart::make(p.kind, p.radius, x.parentFromLocal_ * p.localFromPart));
     return true;
   };
   std::vector<ConvexPart> parts;
@@ -244,24 +241,37 @@ void Solid::intervals(const Ray& ray, IntervalList& out) const {
   }
 }
 
+Solid::ConvexPart Solid::ConvexPart::make(Kind kind, double radius, const Rigid3& localFromPart) {
+  return {kind,     radius, localFromPart, localFromPart.inverse(), localFromPart.isIdentity(), localFromPart.t,
+          localFromPart.vector({0, 0, 1}), kind == Kind::HalfSpace ? 0.0 : 1 / radius};
+}
+
+Vec3 Solid::ConvexPart::normal(const Ray& ray, double t, bool entering) const {
+  // (As primitiveNormal in the part's frame, turned into this node's.)
+  if (!std::isfinite(t)) return axis * (entering ? -1.0 : 1.0);
+  const Vec3 p = ray.at(t) - origin;
+  switch (kind) {
+    case Kind::Sphere: return p * invRadius;
+    case Kind::Cylinder: return (p - axis * p.dot(axis)) * invRadius;
+    default: return axis;
+  }
+}
+
 void Solid::convexIntervals(const Ray& ray, IntervalList& out) const {
   double enter = -kInf, exit = kInf;
   int enterPart = -1, exitPart = -1;
-  Ray enterRay = ray, exitRay = ray;
   for (int i = 0; i < static_cast<int>(convex_.size()); ++i) {
     const ConvexPart& part = convex_[static_cast<size_t>(i)];
     const Ray local =
         part.identity ? ray : Ray{part.partFromLocal.point(ray.origin), part.partFromLocal.vector(ray.direction)};
     double t0, t1;
     if (!primitiveSpan(part.kind, part.radius, local, t0, t1)) return;
-    if (t0 > enter || enterPart < 0) enter = t0, enterPart = i, enterRay = local;
-    if (t1 < exit || exitPart < 0) exit = t1, exitPart = i, exitRay = local;
+    if (t0 > enter || enterPart < 0) enter = t0, enterPart = i;
+    if (t1 < exit || exitPart < 0) exit = t1, exitPart = i;
     if (exit <= enter) return;
   }
-  const ConvexPart& a = convex_[static_cast<size_t>(enterPart)];
-  const ConvexPart& b = convex_[static_cast<size_t>(exitPart)];
-  out.push({{enter, a.localFromPart.vector(primitiveNormal(a.kind, a.radius, enterRay, enter, true))},
-            {exit, b.localFromPart.vector(primitiveNormal(b.kind, b.radius, exitRay, exit, false))}});
+  out.push({{enter, convex_[static_cast<size_t>(enterPart)].normal(ray, enter, true)},
+            {exit, convex_[static_cast<size_t>(exitPart)].normal(ray, exit, false)}});
 }
 
 namespace {
@@ -387,9 +397,7 @@ void Solid::nearestCrossings(int n, const Ray* rays, double tMin, double* t, Vec
     int which = 0;
     while (which + 1 < parts && (front ? t0[which][k] : t1[which][k]) != hit) ++which;
     const Ray l{{local.ox[k], local.oy[k], local.oz[k]}, {local.dx[k], local.dy[k], local.dz[k]}};
-    const ConvexPart& c = convex_[static_cast<size_t>(which)];
-    const Ray inPart = c.identity ? l : Ray{c.partFromLocal.point(l.origin), c.partFromLocal.vector(l.direction)};
-    const Vec3 n1 = c.localFromPart.vector(primitiveNormal(c.kind, c.radius, inPart, hit, front));
+    const Vec3 n1 = convex_[static_cast<size_t>(which)].normal(l, hit, front);
     t[k] = hit;
     normal[k] = identity_ ? n1 : parentFromLocal_.vector(n1);
   }

@@ -110,6 +110,15 @@ private:
     Rigid3 localFromPart;
     Rigid3 partFromLocal;
     bool identity;
+    // The part in this node's frame, for its normals: its origin (a sphere's
+    // centre, a point of a cylinder's axis or a plane), its z axis (the
+    // cylinder's axis, the plane's outward normal), 1 / radius.
+    Vec3 origin;
+    Vec3 axis;
+    double invRadius;
+    static ConvexPart make(Kind kind, double radius, const Rigid3& localFromPart);
+    // Outward normal where a ray (this node's frame) meets the part at t.
+    Vec3 normal(const Ray& ray, double t, bool entering) const;
   };
   static constexpr size_t kMaxConvexParts = 8;  // longer chains take the general path
   void convexIntervals(const Ray& local, IntervalList& out) const;
