@@ -246,7 +246,7 @@ Solid::ConvexPart Solid::ConvexPart::make(Kind kind, double radius, const Rigid3
           localFromPart.vector({0, 0, 1}), kind == Kind::HalfSpace ? 0.0 : 1 / radius};
 }
 
-Vec3 Solid::ConvexPart::normal(const Ray& ray, double t, bool entering) const {
+[[gnu::always_inline]] inline Vec3 Solid::ConvexPart::normal(const Ray& ray, double t, bool entering) const {
   // (As primitiveNormal in the part's frame, turned into this node's.)
   if (!std::isfinite(t)) return axis * (entering ? -1.0 : 1.0);
   const Vec3 p = ray.at(t) - origin;
