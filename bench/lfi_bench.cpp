@@ -298,15 +298,18 @@ int main(int argc, char** argv) {
   // that only the traversal and the callback dispatch are timed; packets
   // traced coherently and incoherently (the tracer's mode).
   RTCScene hull = rtcNewScene(device);
-  std::array<RTCBounds, 2> hullBounds = {RTCBounds{-25.001f, -25.001f, -3.501f, 0, 25.001f, 25.001f, 3.501f, 0},
-                                         RTCBounds{-200.001f, -200.001f, -100.001f, 0, 200.001f, 200.001f, -99.999f, 0}};
+  std::array<RTCBounds, 2> hullBounds = {
+      RTCBounds{-25.001f, -25.001f, -3.501f, 0, 25.001f, 25.001f, 3.501f, 0},             // the lens
+      RTCBounds{-200.001f, -200.001f, -100.001f, 0, 200.001f, 200.001f, -99.999f, 0}};  // the back light
   for (RTCBounds& bounds : hullBounds) {
     RTCGeometry g = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_USER);
     rtcSetGeometryUserPrimitiveCount(g, 1);
     rtcSetGeometryUserData(g, &bounds);
     rtcSetGeometryBoundsFunction(
         g,
-        [](const RTCBoundsFunctionArguments* args) { *args->bounds_o = *static_cast<RTCBounds*>(args->geometryUserPtr); },
+        [](const RTCBoundsFunctionArguments* args) {
+          *args->bounds_o = *static_cast<const RTCBounds*>(args->geometryUserPtr);
+        },
         nullptr);
     rtcSetGeometryIntersectFunction(g, [](const RTCIntersectFunctionNArguments*) {});
     rtcCommitGeometry(g);
@@ -321,7 +324,8 @@ int main(int argc, char** argv) {
   rtcReleaseScene(hull);
   fmt::print("  bound    1 thread:  {:8.3f} M rays/s  (bare Embree rtcIntersect16, lens and back light as no-op user "
              "primitives, coherent)\n", hullCoherent / 1e6);
-  fmt::print("  bound    1 thread:  {:8.3f} M rays/s  (the same, incoherent: the tracer's mode)\n", hullIncoherent / 1e6);
+  fmt::print("  bound    1 thread:  {:8.3f} M rays/s  (the same, incoherent: the tracer's mode)\n",
+             hullIncoherent / 1e6);
   const double hullPackets = std::max(hullCoherent, hullIncoherent);
   const double tracerRays1 = samplesPerSecond[0] * raysPerSample;
   fmt::print("  tracer   1 thread:  {:8.3f} M rays/s  ({:.2f} rays per sample)\n", tracerRays1 / 1e6, raysPerSample);

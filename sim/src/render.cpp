@@ -428,7 +428,6 @@ private:
     return kept;
   }
 
-
   // A sample about to start: which, and (from startSamples) its ray and stream.
   struct Start {
     int slot = 0, sample = 0;

@@ -88,7 +88,6 @@ struct HitContext {
 };
 static_assert(Solid::kBatch >= static_cast<int>(Scene::kPacket) && Scene::kPacket <= 32);
 
-
 // Intersects the noted solids' lanes exactly and keeps each lane's nearest.
 void resolveSolids(HitContext& ctx) {
   Ray local[Solid::kBatch];
@@ -135,7 +134,10 @@ void analyticIntersect(const RTCIntersectFunctionNArguments* args) {
       if (!args->valid[k]) continue;
       const unsigned lane = RTCRayN_id(rays, args->N, k);
       const double t = rectangleCrossing(g->rectangle, ctx.rays[lane], ctx.tMin);
-      if (t < ctx.bestT[lane]) ctx.bestT[lane] = t, ctx.bestNormal[lane] = g->rectangle.normal, ctx.bestObject[lane] = g->object;
+      if (!(t < ctx.bestT[lane])) continue;
+      ctx.bestT[lane] = t;
+      ctx.bestNormal[lane] = g->rectangle.normal;
+      ctx.bestObject[lane] = g->object;
     }
     return;
   }

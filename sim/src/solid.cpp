@@ -182,7 +182,8 @@ std::shared_ptr<Solid> Solid::combine(Kind op, std::shared_ptr<const Solid> a, s
       return true;
     }
     if (x.convex_.empty()) return false;
-    for (const ConvexPart& p : x.convex_) parts.push_back(ConvexPart::make(p.kind, p.radius, x.parentFromLocal_ * p.localFromPart));
+    for (const ConvexPart& p : x.convex_)
+      parts.push_back(ConvexPart::make(p.kind, p.radius, x.parentFromLocal_ * p.localFromPart));
     return true;
   };
   std::vector<ConvexPart> parts;
@@ -242,8 +243,9 @@ void Solid::intervals(const Ray& ray, IntervalList& out) const {
 }
 
 Solid::ConvexPart Solid::ConvexPart::make(Kind kind, double radius, const Rigid3& localFromPart) {
-  return {kind,     radius, localFromPart, localFromPart.inverse(), localFromPart.isIdentity(), localFromPart.t,
-          localFromPart.vector({0, 0, 1}), kind == Kind::HalfSpace ? 0.0 : 1 / radius};
+  const double invRadius = kind == Kind::HalfSpace ? 0.0 : 1 / radius;
+  return {kind, radius, localFromPart, localFromPart.inverse(), localFromPart.isIdentity(),
+          localFromPart.t, localFromPart.vector({0, 0, 1}), invRadius};
 }
 
 [[gnu::always_inline]] inline Vec3 Solid::ConvexPart::normal(const Ray& ray, double t, bool entering) const {

@@ -385,7 +385,8 @@ TEST(CameraSamples, VectorisedPassEqualsOneSampleAtATime) {
       const auto row = static_cast<int>(s) / side, col = static_cast<int>(s) - row * side;
       return Vec2((col + u) * (1.0 / side), (row + v) * (1.0 / side));  // the renderer's jittered stratum
     };
-    const Vec2 stop = stratified(plain ? 0 : permutationElement(batch.sample[k], side * side, batch.stopKey[k]), u2, u3);
+    const std::uint32_t stopStratum = plain ? 0 : permutationElement(batch.sample[k], side * side, batch.stopKey[k]);
+    const Vec2 stop = stratified(stopStratum, u2, u3);
     const Ray ray = cam.ray(static_cast<int>(batch.pixelX[k]), static_cast<int>(batch.pixelY[k]),
                             stratified(batch.sample[k], u0, u1), concentricDisc(stop.x, stop.y));
     EXPECT_EQ(batch.ox[k], ray.origin.x) << k;
