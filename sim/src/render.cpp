@@ -34,7 +34,7 @@ double emittedRadiance(const Scene& scene, const Hit& hit, const Emission& emiss
       [&](const auto& e) -> double {
         using T = std::decay_t<decltype(e)>;
         if constexpr (std::is_same_v<T, ParallelEmission>) {
-          return cosTheta >= std::cos(e.halfAngle_rad) ? e.radiance : 0.0;
+          return cosTheta >= scene.surface(hit.object).cosHalfAngle ? e.radiance : 0.0;
         } else if constexpr (std::is_same_v<T, LambertianEmission>) {
           return cosTheta > 0 ? e.radiance : 0.0;
         } else if constexpr (std::is_same_v<T, LightFieldEmission>) {

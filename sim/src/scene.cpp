@@ -188,6 +188,8 @@ Surface surfaceOf(const Object& obj) {
   s.exact = !std::holds_alternative<TriangleMesh>(obj.shape);
   if (obj.emission) {
     s.kind = Surface::Kind::Emitter;
+    if (const auto* parallel = std::get_if<ParallelEmission>(&*obj.emission))
+      s.cosHalfAngle = std::cos(parallel->halfAngle_rad);
   } else if (const auto* glass = std::get_if<Dielectric>(&obj.material)) {
     s.kind = Surface::Kind::Dielectric;
     s.ior = glass->ior;

@@ -154,6 +154,7 @@ struct Surface {
   double ior = 1;              // Dielectric
   double absorption_per_mm = 0;
   double albedo = 0;           // Diffuse
+  double cosHalfAngle = 1;     // ParallelEmission: cos θmax, worked out once
 };
 
 // What a ray hit: the object, the distance and the surface there.
