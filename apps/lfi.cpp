@@ -138,7 +138,8 @@ int main(int argc, char** argv) {
   study->add_option("--seed", seed, "Random seed (renders and sensor noise)")->capture_default_str();
   study->add_flag("--force", force, "Replace the results of an earlier study in --out");
   bool sweepOn = false, sweepOff = false;
-  auto* sweepFlag = study->add_flag("--sweep", sweepOn, "Run the display-quality sweep (default: on, except with --quality quick)");
+  auto* sweepFlag =
+      study->add_flag("--sweep", sweepOn, "Run the display-quality sweep (default: on, except with --quality quick)");
   study->add_flag("--no-sweep", sweepOff, "Skip the display-quality sweep")->excludes(sweepFlag);
 
   // lfi render
@@ -147,7 +148,9 @@ int main(int argc, char** argv) {
   int spp = 0;
   bool renderForce = false;
   int renderThreads = 0;
-  render->add_option("scene", sceneFile, "Scene file (TOML, docs/scene-files.md)")->required()->check(CLI::ExistingFile);
+  render->add_option("scene", sceneFile, "Scene file (TOML, docs/scene-files.md)")
+      ->required()
+      ->check(CLI::ExistingFile);
   render->add_option("--out", renderOut, "Output folder")->required();
   render->add_option("--spp", spp, "Samples per pixel (overrides the scene file)")->check(CLI::PositiveNumber);
   render->add_option("--threads", renderThreads, "Worker threads (0 = all cores)")->check(CLI::NonNegativeNumber);
@@ -156,8 +159,8 @@ int main(int argc, char** argv) {
   render->add_flag("--force", renderForce, "Replace existing output files");
 
   // lfi serve-camera
-  auto* serve = app.add_subcommand("serve-camera",
-                                   "Serve the ray-traced camera of a scene file as a GigE Vision device (Ctrl-C stops)");
+  auto* serve = app.add_subcommand(
+      "serve-camera", "Serve the ray-traced camera of a scene file as a GigE Vision device (Ctrl-C stops)");
   fs::path serveScene;
   lfi::GvCameraServerOptions serveOptions;
   int serveThreads = 0;
@@ -180,7 +183,8 @@ int main(int argc, char** argv) {
   std::string pixelFormat = "Mono12";
   bool inspectForce = false;
   inspect->add_option("--camera", cameraUri, "Camera URI (aravis:<id>, sim:<scene-file>)")->required();
-  inspect->add_option("--display", displayUri, "Display URI (usb:<vid>:<pid>[/<serial>], sim:<scene-file>)")->required();
+  inspect->add_option("--display", displayUri, "Display URI (usb:<vid>:<pid>[/<serial>], sim:<scene-file>)")
+      ->required();
   auto* captureOption =
       inspect->add_option("--capture", captureUri, "Light field capture URI (sim:<scene-file>[?...])");
   inspect->add_option("--light-field", referenceFile, "Use this reference light field (EXR) instead of capturing")

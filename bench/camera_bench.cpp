@@ -232,8 +232,9 @@ int main(int argc, char** argv) {
                ours.fps / plain.fps, ours.megabytesPerSecond / plain.megabytesPerSecond, ours.lost, plain.lost);
     // Meaningful only when frames were waiting, i.e. the device kept up with the rate.
     if (ours.readyGrab_us < 1000 && plain.readyGrab_us < 1000)
-      fmt::print("per-frame overhead of our grab path over a bare pop/push (copy into the cv::Mat included): {:.1f} us\n",
-                 ours.readyGrab_us - plain.readyGrab_us);
+      fmt::print(
+          "per-frame overhead of our grab path over a bare pop/push (copy into the cv::Mat included): {:.1f} us\n",
+          ours.readyGrab_us - plain.readyGrab_us);
     else
       fmt::print("per-frame overhead: not measured (the device did not keep up with {} Hz, no frames were waiting)\n",
                  rate);

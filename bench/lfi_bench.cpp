@@ -74,7 +74,8 @@ TriangleMesh tessellateLens(double r1, double r2, double tc, double diameter, in
   };
   const unsigned frontRim = cap(r1, -tc / 2, true), backRim = cap(r2, tc / 2, false);
   for (int k = 0; k < sectors; ++k) {
-    const unsigned f0 = frontRim + k, f1 = frontRim + (k + 1) % sectors, b0 = backRim + k, b1 = backRim + (k + 1) % sectors;
+    const unsigned f0 = frontRim + k, f1 = frontRim + (k + 1) % sectors, b0 = backRim + k,
+                   b1 = backRim + (k + 1) % sectors;
     m.triangles.push_back({f0, f1, b1});
     m.triangles.push_back({f0, b1, b0});
   }
@@ -140,7 +141,8 @@ std::vector<double> readLuminance(const char* path, int& width, int& height) {
   file.readPixels(dw.min.y, dw.max.y);
   std::vector<double> y;
   y.reserve(pixels.size());
-  for (const auto& p : pixels) y.push_back((static_cast<float>(p.r) + static_cast<float>(p.g) + static_cast<float>(p.b)) / 3.0);
+  for (const auto& p : pixels)
+    y.push_back((static_cast<float>(p.r) + static_cast<float>(p.g) + static_cast<float>(p.b)) / 3.0);
   return y;
 }
 
@@ -206,10 +208,12 @@ int main(int argc, char** argv) {
     auto lightField = std::make_shared<LightField>(
         g, render(Scene(std::move(captureObjects)), LightFieldSensor{g, Rigid3::translation({0, 0, -60})}, capture));
     const std::vector<std::pair<std::string, Object>> lights = {
-        {"parallel", {"light", Rectangle{400, 400}, Rigid3::translation({0, 0, -100}), Absorber{}, ParallelEmission{1, 0.0087}}},
+        {"parallel",
+         {"light", Rectangle{400, 400}, Rigid3::translation({0, 0, -100}), Absorber{}, ParallelEmission{1, 0.0087}}},
         {"area", d.objects[1]},
-        {"inverse_schlieren", {"display", Rectangle{g.extentX_mm(), g.extentY_mm()}, Rigid3::translation({0, 0, -60}),
-                               Absorber{}, LightFieldEmission{lightField, LightFieldLookup::Nearest}}}};
+        {"inverse_schlieren",
+         {"display", Rectangle{g.extentX_mm(), g.extentY_mm()}, Rigid3::translation({0, 0, -60}), Absorber{},
+          LightFieldEmission{lightField, LightFieldLookup::Nearest}}}};
     for (const auto& [name, light] : lights) {
       const Scene lit(std::vector<Object>{lensObject, light});
       for (int t : {1, threads}) {
@@ -243,10 +247,12 @@ int main(int argc, char** argv) {
     rtcAttachGeometry(raw, g);
     rtcReleaseGeometry(g);
     RTCGeometry q = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_QUAD);
-    auto* qv = static_cast<float*>(rtcSetNewGeometryBuffer(q, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), 4));
+    auto* qv = static_cast<float*>(
+        rtcSetNewGeometryBuffer(q, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), 4));
     const float corners[12] = {-200, -200, -100, 200, -200, -100, 200, 200, -100, -200, 200, -100};
     std::memcpy(qv, corners, sizeof(corners));
-    auto* qi = static_cast<unsigned*>(rtcSetNewGeometryBuffer(q, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT4, 4 * sizeof(unsigned), 1));
+    auto* qi = static_cast<unsigned*>(
+        rtcSetNewGeometryBuffer(q, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT4, 4 * sizeof(unsigned), 1));
     qi[0] = 0, qi[1] = 1, qi[2] = 2, qi[3] = 3;
     rtcCommitGeometry(q);
     rtcAttachGeometry(raw, q);

@@ -91,7 +91,8 @@ std::vector<double> ConfigTable::numbers(const std::string& key, size_t count,
   for (const toml::node& e : *a) {
     std::optional<double> v = e.is_integer() ? std::optional<double>(static_cast<double>(*e.value<int64_t>()))
                                              : e.value<double>();
-    if (!e.is_number() || !v || !std::isfinite(*v)) fail(Errc::Config, "{} must be an array of {} numbers", where(key), count);
+    if (!e.is_number() || !v || !std::isfinite(*v))
+      fail(Errc::Config, "{} must be an array of {} numbers", where(key), count);
     out.push_back(*v);
   }
   return out;
@@ -120,7 +121,8 @@ void ConfigTable::finish() const {
   for (const auto& [k, v] : *table_) {
     const std::string key(k.str());
     if (!used_.count(key))
-      fail(Errc::Config, "{}:{}: unknown key '{}'", file_, v.source().begin.line, path_.empty() ? key : path_ + "." + key);
+      fail(Errc::Config, "{}:{}: unknown key '{}'", file_, v.source().begin.line,
+           path_.empty() ? key : path_ + "." + key);
   }
 }
 

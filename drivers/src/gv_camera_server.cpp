@@ -110,7 +110,8 @@ GvCameraServer::GvCameraServer(const GvCameraServerOptions& options, ServedFrame
   std::memset(name, 0, kNameSize);
   std::strncpy(name, options.model.c_str(), kNameSize - 1);
   arv_fake_camera_write_memory(camera, kModelNameOffset, kNameSize, name);
-  const auto width = static_cast<guint32>(options.sensorWidth_px), height = static_cast<guint32>(options.sensorHeight_px);
+  const auto width = static_cast<guint32>(options.sensorWidth_px),
+             height = static_cast<guint32>(options.sensorHeight_px);
   arv_fake_camera_write_register(camera, ARV_FAKE_CAMERA_REGISTER_SENSOR_WIDTH, width);
   arv_fake_camera_write_register(camera, ARV_FAKE_CAMERA_REGISTER_SENSOR_HEIGHT, height);
   arv_fake_camera_write_register(camera, ARV_FAKE_CAMERA_REGISTER_WIDTH, width);

@@ -164,7 +164,8 @@ public:
 
   DisplayStatus status() override {
     requireDisplayState(state_, {State::Open, State::Showing}, "status", name_);
-    const proto::StatusBlock s = proto::decodeStatus(controlIn(proto::Request::GetStatus, 0, proto::kStatusSize), name_);
+    const proto::StatusBlock s =
+        proto::decodeStatus(controlIn(proto::Request::GetStatus, 0, proto::kStatusSize), name_);
     DisplayStatus out;
     out.showing = s.showing == 1;
     out.presentedSequence = s.presentedSequence;
@@ -398,7 +399,8 @@ private:
       if (outcome == BulkOutcome::Ok || o == BulkOutcome::NoDevice) outcome = o;
     };
     while (true) {
-      while (outcome == BulkOutcome::Ok && next < count && inFlight < static_cast<std::size_t>(options_.transfersInFlight)) {
+      while (outcome == BulkOutcome::Ok && next < count &&
+             inFlight < static_cast<std::size_t>(options_.transfersInFlight)) {
         Chunk& c = chunks[next];
         c.length = static_cast<int>(std::min(size, frame_.size() - next * size));
         c.transfer = libusb_alloc_transfer(0);

@@ -13,7 +13,8 @@ namespace lfi::sim {
 void CameraSensorModel::validate() const {
   if (!(fullWell_e > 0)) fail(Errc::InvalidArgument, "camera sensor: fullWell_e = {} must be > 0", fullWell_e);
   if (!(readNoise_e >= 0)) fail(Errc::InvalidArgument, "camera sensor: readNoise_e = {} must be >= 0", readNoise_e);
-  if (bitDepth < 8 || bitDepth > 16) fail(Errc::InvalidArgument, "camera sensor: bitDepth = {} is outside [8, 16]", bitDepth);
+  if (bitDepth < 8 || bitDepth > 16)
+    fail(Errc::InvalidArgument, "camera sensor: bitDepth = {} is outside [8, 16]", bitDepth);
   if (!(electronsPerUnit > 0)) fail(Errc::InvalidArgument, "camera sensor: electronsPerUnit must be > 0");
   if (!(gain > 0)) fail(Errc::InvalidArgument, "camera sensor: gain = {} must be > 0", gain);
 }

@@ -226,7 +226,8 @@ struct Scene::Impl {
 Scene::Scene(std::vector<Object> objects, double ambientIor)
     : impl_(std::make_unique<Impl>()), objects_(std::move(objects)), ambientIor_(ambientIor) {
   impl_->device = rtcNewDevice(nullptr);
-  if (!impl_->device) fail(Errc::Device, "embree: cannot create a device (error {})", static_cast<int>(rtcGetDeviceError(nullptr)));
+  if (!impl_->device)
+    fail(Errc::Device, "embree: cannot create a device (error {})", static_cast<int>(rtcGetDeviceError(nullptr)));
   rtcSetDeviceErrorFunction(impl_->device, embreeError, nullptr);
   impl_->scene = rtcNewScene(impl_->device);
   // Robust (watertight, conservative) traversal matters for meshes only: rays

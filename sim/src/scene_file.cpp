@@ -123,7 +123,8 @@ Object readObject(ConfigTable& t) {
   if (t.has("emitter")) {
     const std::string e = t.string("emitter", std::nullopt, {"parallel", "lambertian", "light_field"});
     if (e == "parallel") {
-      obj.emission = ParallelEmission{t.number("radiance", 1.0, 0, 1e12), t.number("half_angle_rad", std::nullopt, 1e-9, 1.5708)};
+      obj.emission =
+          ParallelEmission{t.number("radiance", 1.0, 0, 1e12), t.number("half_angle_rad", std::nullopt, 1e-9, 1.5708)};
     } else if (e == "lambertian") {
       obj.emission = LambertianEmission{t.number("radiance", 1.0, 0, 1e12)};
     } else {

@@ -374,7 +374,8 @@ class SimCamera final : public Camera {
     if (due <= produced_) return;
     const std::uint64_t count = due - produced_;
     const std::uint64_t room = bufferCount_ - queue_.size();
-    for (std::uint64_t k = 0; k < std::min(count, room); ++k) queue_.push_back({nextFrameId_ + k, dueTime(produced_ + k)});
+    for (std::uint64_t k = 0; k < std::min(count, room); ++k)
+      queue_.push_back({nextFrameId_ + k, dueTime(produced_ + k)});
     if (count > room) statistics_.underruns += count - room;
     nextFrameId_ += count;
     produced_ = due;

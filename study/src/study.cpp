@@ -307,7 +307,8 @@ private:
 };
 
 struct Evaluation {
-  nlohmann::ordered_json scenes;  // scene -> {defects: {defect: {verdict, cnr, pixels}}, false_positives, secondary_regions}
+  // scene -> {defects: {defect: {verdict, cnr, pixels}}, false_positives, secondary_regions}
+  nlohmann::ordered_json scenes;
   nlohmann::ordered_json noise;
   double intactLitFraction = 0;   // lens pixels of the intact frame above a quarter of the brightest
 };
@@ -316,9 +317,9 @@ struct Evaluation {
 // and judges it against the intact lens by the declared criterion. Writes the
 // frames and difference images to imagesDir when it is given.
 Evaluation evaluate(const Bench& bench, const Illumination& light, const std::vector<SceneSpec>& specs,
-                    const GroundTruth& truth, const sim::TelecentricCamera& camera, sim::CameraSensorModel sensor, sim::RenderOptions ro,
-                    std::uint64_t seed, Progress& progress, double renderUnits, const fs::path* imagesDir,
-                    Overwrite overwrite) {
+                    const GroundTruth& truth, const sim::TelecentricCamera& camera, sim::CameraSensorModel sensor,
+                    sim::RenderOptions ro, std::uint64_t seed, Progress& progress, double renderUnits,
+                    const fs::path* imagesDir, Overwrite overwrite) {
   auto renderScene = [&](const SceneSpec& spec, std::uint64_t mcSeed, const std::string& label) {
     std::vector<Object> objects = partObjects(bench, spec);
     objects.push_back(backlight(bench, light));
@@ -486,7 +487,9 @@ nlohmann::ordered_json runStudy(const Bench& bench, const fs::path& outDir, cons
 
   nlohmann::ordered_json study;
   study["setups"] = kSetups;
-  study["quality"] = options.quality == Quality::Quick ? "quick" : options.quality == Quality::High ? "high" : "default";
+  study["quality"] = options.quality == Quality::Quick  ? "quick"
+                     : options.quality == Quality::High ? "high"
+                                                        : "default";
   study["camera"] = {{"width", camera.width}, {"height", camera.height}, {"object_pixel_mm", camera.objectPixel_mm()},
                      {"acceptance_half_angle_rad", camera.acceptanceHalfAngle_rad()},
                      {"samples_per_pixel", q.samplesPerPixel}};
@@ -513,8 +516,8 @@ nlohmann::ordered_json runStudy(const Bench& bench, const fs::path& outDir, cons
   const GroundTruth truth = traceGroundTruth(bench, specs, camera);
   for (size_t si = 0; si < kSetups.size(); ++si) {
     const Illumination light{kSetups[si], lightField, bench.inverseSchlieren.lookup, 0};
-    const Evaluation e = evaluate(bench, light, specs, truth, camera, bench.sensorModel(), ro, options.seed * 1000 + si * 100,
-                                  progress, 1.0, &imagesDir, overwrite);
+    const Evaluation e = evaluate(bench, light, specs, truth, camera, bench.sensorModel(), ro,
+                                  options.seed * 1000 + si * 100, progress, 1.0, &imagesDir, overwrite);
     study["noise"][kSetups[si]] = e.noise;
     for (const auto& [scene, result] : e.scenes.items()) {
       auto& out = study["scenes"][scene];
@@ -531,7 +534,8 @@ nlohmann::ordered_json runStudy(const Bench& bench, const fs::path& outDir, cons
     // renders the inverse schlieren setup with both lookups.
     const sim::TelecentricCamera sweepCamera = binned(sweepQuality.binning);
     // The quick quality's camera is the sweep's: its ground truth is traced already.
-    const GroundTruth sweepTruth = sweepQuality.binning == q.binning ? truth : traceGroundTruth(bench, specs, sweepCamera);
+    const GroundTruth sweepTruth =
+        sweepQuality.binning == q.binning ? truth : traceGroundTruth(bench, specs, sweepCamera);
     sim::RenderOptions sro;
     sro.samplesPerPixel = sweepQuality.samplesPerPixel;
     sro.threads = options.threads;
@@ -571,9 +575,9 @@ nlohmann::ordered_json runStudy(const Bench& bench, const fs::path& outDir, cons
       const std::vector<std::pair<std::string, LightFieldLookup>> lookups = {
           {"nearest", LightFieldLookup::Nearest}, {"interpolated", LightFieldLookup::Interpolated}};
       for (const auto& [name, lookup] : lookups) {
-        const Evaluation e = evaluate(bench, Illumination{"inverse_schlieren", lf, lookup, displayError}, specs,
-                                      sweepTruth, sweepCamera, bench.sensorModel(), sro, options.seed * 1000 + 777, progress,
-                                      kSweepRender, nullptr, overwrite);
+        const Evaluation e =
+            evaluate(bench, Illumination{"inverse_schlieren", lf, lookup, displayError}, specs, sweepTruth, sweepCamera,
+                     bench.sensorModel(), sro, options.seed * 1000 + 777, progress, kSweepRender, nullptr, overwrite);
         for (const auto& [scene, result] : e.scenes.items())
           for (const auto& [defect, cell] : result["defects"].items())
             entry["cnr"][name][scene + "/" + defect] = cell["cnr"];
@@ -623,7 +627,8 @@ nlohmann::ordered_json sweepAnswers(const nlohmann::ordered_json& sweep) {
       }
     for (const auto& [defect, unused] : sweep["points"][0]["cnr"][lookup].items()) {
       auto& a = answers[defect][lookup];
-      a["coarsest_element_mm"] = coarsestElement.count(defect) ? nlohmann::ordered_json(coarsestElement[defect]) : nullptr;
+      a["coarsest_element_mm"] =
+          coarsestElement.count(defect) ? nlohmann::ordered_json(coarsestElement[defect]) : nullptr;
       a["fewest_angular"] = fewestAngular.count(defect) ? nlohmann::ordered_json(fewestAngular[defect]) : nullptr;
       a["delta_tolerance_mm"] = deltaTolerance.count(defect) ? nlohmann::ordered_json(deltaTolerance[defect]) : nullptr;
     }
@@ -651,7 +656,8 @@ std::string verdictTable(const nlohmann::ordered_json& study) {
       out += fmt::format("{:<14} {:<8}", scene, defect);
       for (const auto& s : study["setups"]) {
         const auto& r = bySetup[s.get<std::string>()];
-        out += fmt::format(" {:>22}", fmt::format("{} ({:.1f})", r["verdict"].get<std::string>(), r["cnr"].get<double>()));
+        out +=
+            fmt::format(" {:>22}", fmt::format("{} ({:.1f})", r["verdict"].get<std::string>(), r["cnr"].get<double>()));
       }
       out += "\n";
     }
@@ -677,8 +683,9 @@ std::string svgPlot(const nlohmann::ordered_json& sweep, const std::string& seri
   for (const auto& p : sweep["points"])
     if (p["series"] == series) points.push_back(&p);
   if (points.empty()) return "";
-  std::sort(points.begin(), points.end(),
-            [](auto* a, auto* b) { return (*a)["value"].template get<double>() < (*b)["value"].template get<double>(); });
+  std::sort(points.begin(), points.end(), [](auto* a, auto* b) {
+    return (*a)["value"].template get<double>() < (*b)["value"].template get<double>();
+  });
   const double w = 560, h = 260, left = 50, right = 140, top = 20, bottom = 40;
   const double x0 = points.front()->at("value").get<double>(), x1 = points.back()->at("value").get<double>();
   auto fx = [&](double x) {

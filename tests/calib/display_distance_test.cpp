@@ -111,8 +111,9 @@ struct Bench {
   cv::Mat inspect(const LightField& shown, double trueError) const {
     std::vector<Object> objects;
     objects.push_back({"lens", lens, {}, Dielectric{1.5168, 0}, std::nullopt});
-    objects.push_back({"display", Rectangle{g.extentX_mm(), g.extentY_mm()}, Rigid3::translation({0, 0, -30 - trueError}),
-                       Absorber{}, LightFieldEmission{std::make_shared<LightField>(shown), LightFieldLookup::Interpolated}});
+    objects.push_back({"display", Rectangle{g.extentX_mm(), g.extentY_mm()},
+                       Rigid3::translation({0, 0, -30 - trueError}), Absorber{},
+                       LightFieldEmission{std::make_shared<LightField>(shown), LightFieldLookup::Interpolated}});
     RenderOptions ro;
     ro.samplesPerPixel = 16;
     return render(Scene(std::move(objects)), camera, ro);
@@ -151,8 +152,11 @@ TEST(DisplayDistance, RejectsBadCandidatesAndImages) {
                           {"at least 3"}));
   EXPECT_TRUE(throwsError([&] { calib::calibrateDisplayDistance(lf, black, {0, 2, 1}); }, Errc::InvalidArgument,
                           {"increasing"}));
-  EXPECT_TRUE(throwsError([&] { calib::calibrateDisplayDistance(lf, [](const LightField&) { return cv::Mat(); }, {0, 1, 2}); },
-                          Errc::Device, {"no image"}));
+  EXPECT_TRUE(throwsError(
+      [&] {
+        calib::calibrateDisplayDistance(lf, [](const LightField&) { return cv::Mat(); }, {0, 1, 2});
+      },
+      Errc::Device, {"no image"}));
   EXPECT_TRUE(throwsError([&] { calib::calibrateDisplayDistance(lf, black, {0, 1, 2}, cv::Mat::ones(4, 4, CV_8UC1)); },
                           Errc::InvalidArgument, {"ROI"}));
 }

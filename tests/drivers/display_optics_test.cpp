@@ -91,7 +91,8 @@ TEST(DisplayOptics, SlantedLenticularSpreadsAPixelColumnOverTheViewCone) {
   }
   // Steps are sin(slant)·pitch ≈ 0.18 px across a 7.1 px lens: the column reaches within
   // one step of both cone edges.
-  const double step = 2 * halfCone * std::sin(info.optics.slant_rad) / (info.optics.lensPitch_px * std::cos(info.optics.slant_rad));
+  const double step =
+      2 * halfCone * std::sin(info.optics.slant_rad) / (info.optics.lensPitch_px * std::cos(info.optics.slant_rad));
   EXPECT_LT(lo, -halfCone + 1.5 * step);
   EXPECT_GT(hi, halfCone - 1.5 * step);
 
@@ -99,7 +100,8 @@ TEST(DisplayOptics, SlantedLenticularSpreadsAPixelColumnOverTheViewCone) {
   straight.optics.slant_rad = 0;
   const DisplayOptics unslanted(straight);
   const Vec3 first = unslanted.rayFromPixel(1000, 0, 1).direction;
-  for (int row = 1; row < 200; ++row) testing_support::expectNear(unslanted.rayFromPixel(1000, row, 1).direction, first, 1e-12);
+  for (int row = 1; row < 200; ++row)
+    testing_support::expectNear(unslanted.rayFromPixel(1000, row, 1).direction, first, 1e-12);
 }
 
 TEST(DisplayOptics, RaysOutsideTheConeOrPanelMapToNothing) {
@@ -124,7 +126,8 @@ TEST(DisplayOptics, EncodingADirectionOnlyLightFieldGivesTheAnalyticDirectionOfE
   for (int ey = 0; ey < g.spatialY; ++ey)
     for (int ex = 0; ex < g.spatialX; ++ex)
       for (int v = 0; v < g.angular; ++v)
-        for (int u = 0; u < g.angular; ++u) lf.at(ex, ey, u, v) = static_cast<float>(0.5 + 0.4 * lf.angularCentre(u, v).x);
+        for (int u = 0; u < g.angular; ++u)
+          lf.at(ex, ey, u, v) = static_cast<float>(0.5 + 0.4 * lf.angularCentre(u, v).x);
   const cv::Mat panel = encodeLightField(lf, optics);
   ASSERT_EQ(panel.type(), CV_8UC3);
   int maxError = 0;

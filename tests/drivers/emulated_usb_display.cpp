@@ -494,8 +494,9 @@ struct EmulatedUsbDisplay::Impl {
           const std::size_t offset = static_cast<std::size_t>(value) * proto::kCalibrationChunk;
           if (offset >= blob.size()) stall = true;
           else
-            reply.assign(blob.begin() + static_cast<std::ptrdiff_t>(offset),
-                         blob.begin() + static_cast<std::ptrdiff_t>(std::min(blob.size(), offset + proto::kCalibrationChunk)));
+            reply.assign(
+                blob.begin() + static_cast<std::ptrdiff_t>(offset),
+                blob.begin() + static_cast<std::ptrdiff_t>(std::min(blob.size(), offset + proto::kCalibrationChunk)));
           break;
         }
         case proto::Request::GetStatus: {
@@ -555,7 +556,8 @@ struct EmulatedUsbDisplay::Impl {
     info.brightnessMax = config.brightnessMax;
     info.brightness = state.brightness;
     info.viewCount = config.viewCount;
-    info.calibrationSize = absurdInfo ? 0xffffffffu : static_cast<std::uint32_t>(proto::encodeCalibration(config.calibration).size());
+    info.calibrationSize =
+        absurdInfo ? 0xffffffffu : static_cast<std::uint32_t>(proto::encodeCalibration(config.calibration).size());
     info.maxPayloadSize = static_cast<std::uint32_t>(config.panelWidth_px * config.panelHeight_px *
                                                       (config.subpixels == proto::SubpixelCode::Mono ? 1 : 3));
     return proto::encodeDeviceInfo(info);

@@ -184,7 +184,8 @@ TEST_P(UsbDisplayFrames, ArriveByteExact) {
     RecordProperty(fmt::format("show_{}x{}x{}_ms", info.panelWidth_px, info.panelHeight_px, panel.channels()),
                    static_cast<int>(seconds * 1000));
   }
-  const std::size_t bytes = static_cast<std::size_t>(info.panelWidth_px) * info.panelHeight_px * info.subpixelsPerPixel();
+  const std::size_t bytes =
+      static_cast<std::size_t>(info.panelWidth_px) * info.panelHeight_px * info.subpixelsPerPixel();
   if (bytes > 2 * options.transferSize_bytes) {
     EXPECT_GE(device.state().maxUrbsInFlight, 2u);
   }

@@ -40,7 +40,8 @@ TEST(Imaging, DefocusedEdgeBlursByTheStopCone) {
   const double delta = 40, rho = delta * (cam.stopDiameter_mm / 2) / cam.focalLength_mm;
   std::vector<Object> objects;
   objects.push_back({"edge", Rectangle{100, 100}, Rigid3::translation({-50, 0, -delta}), Absorber{}, std::nullopt});
-  objects.push_back({"light", Rectangle{400, 400}, Rigid3::translation({0, 0, -100}), Absorber{}, LambertianEmission{1}});
+  objects.push_back(
+      {"light", Rectangle{400, 400}, Rigid3::translation({0, 0, -100}), Absorber{}, LambertianEmission{1}});
   const Scene scene(std::move(objects));
   RenderOptions options;
   options.samplesPerPixel = 1024;
@@ -49,7 +50,8 @@ TEST(Imaging, DefocusedEdgeBlursByTheStopCone) {
   for (int i = 0; i < cam.width; ++i) {
     // Pixel i covers object x in [(i - W/2) p, (i + 1 - W/2) p]; average the ESF over it.
     double expected = 0;
-    for (int k = 0; k < 16; ++k) expected += discEdgeSpread((i + (k + 0.5) / 16 - cam.width / 2.0) * cam.pixelPitch_mm, rho);
+    for (int k = 0; k < 16; ++k)
+      expected += discEdgeSpread((i + (k + 0.5) / 16 - cam.width / 2.0) * cam.pixelPitch_mm, rho);
     expected /= 16;
     double measured = 0;
     for (int j = 0; j < cam.height; ++j) measured += image.at<float>(j, i) / cam.height;
@@ -60,7 +62,8 @@ TEST(Imaging, DefocusedEdgeBlursByTheStopCone) {
   // In focus, the same edge is sharp: one transition pixel.
   std::vector<Object> focused;
   focused.push_back({"edge", Rectangle{100, 100}, Rigid3::translation({-50, 0, 0}), Absorber{}, std::nullopt});
-  focused.push_back({"light", Rectangle{400, 400}, Rigid3::translation({0, 0, -100}), Absorber{}, LambertianEmission{1}});
+  focused.push_back(
+      {"light", Rectangle{400, 400}, Rigid3::translation({0, 0, -100}), Absorber{}, LambertianEmission{1}});
   const cv::Mat sharp = render(Scene(std::move(focused)), cam, options);
   EXPECT_LT(sharp.at<float>(0, cam.width / 2 - 2), 1e-6);
   EXPECT_GT(sharp.at<float>(0, cam.width / 2 + 1), 1 - 1e-6);
@@ -92,7 +95,8 @@ RoundTrip roundTrip(LightFieldLookup lookup, bool parallelInstead, cv::Mat* imag
     objects.push_back({"beam", Rectangle{100, 100}, down, Absorber{}, ParallelEmission{1, captureTheta}});
     RenderOptions ro;
     ro.samplesPerPixel = 64;
-    *lightField = LightField(g, render(Scene(std::move(objects)), LightFieldSensor{g, Rigid3::translation({0, 0, -delta})}, ro));
+    *lightField =
+        LightField(g, render(Scene(std::move(objects)), LightFieldSensor{g, Rigid3::translation({0, 0, -delta})}, ro));
   }
   std::vector<Object> objects;
   objects.push_back({"lens", lens, {}, Dielectric{1.5168, 0}, std::nullopt});
@@ -142,8 +146,10 @@ TEST(Imaging, InverseSchlierenLightsTheWholeIntactLens) {
   RecordProperty("nearest_cv", std::to_string(nearest.cv));
   RecordProperty("interpolated_fraction_lit", std::to_string(interpolated.fractionLit));
   RecordProperty("interpolated_cv", std::to_string(interpolated.cv));
-  std::printf("lit fraction of the inner lens: parallel %.3f, light field nearest %.3f (cv %.3f), interpolated %.3f (cv %.3f)\n",
-              parallel.fractionLit, nearest.fractionLit, nearest.cv, interpolated.fractionLit, interpolated.cv);
+  std::printf(
+      "lit fraction of the inner lens: parallel %.3f, light field nearest %.3f (cv %.3f), interpolated %.3f (cv "
+      "%.3f)\n",
+      parallel.fractionLit, nearest.fractionLit, nearest.cv, interpolated.fractionLit, interpolated.cv);
   EXPECT_LT(parallel.fractionLit, 0.05);
   EXPECT_GT(nearest.fractionLit, 0.5);
   EXPECT_GT(interpolated.fractionLit, 0.5);

@@ -102,14 +102,19 @@ TEST_F(SceneFile, BadValuesAreErrors) {
       [&] { loadSceneFile(write("b.toml", head + "[[object]]\nname='x'\nshape='sphere'\nradius_mm=-1\n")); },
       Errc::Config, {"object[0].radius_mm"}));
   EXPECT_TRUE(throwsError(
-      [&] { loadSceneFile(write("c.toml", head + "[[object]]\nname='x'\nshape='sphere'\nradius_mm=1\nposition_mm=[1,2]\n")); },
+      [&] {
+        loadSceneFile(write("c.toml", head + "[[object]]\nname='x'\nshape='sphere'\nradius_mm=1\nposition_mm=[1,2]\n"));
+      },
       Errc::Config, {"object[0].position_mm", "3 numbers"}));
   EXPECT_TRUE(throwsError([&] { loadSceneFile(write("d.toml", head)); }, Errc::Config, {"no [[object]]"}));
   EXPECT_TRUE(throwsError(
-      [&] { loadSceneFile(write("e.toml", "format = \"lfi-scene\"\nversion = 1\n[[object]]\nname='x'\nshape='sphere'\nradius_mm=1\n")); },
+      [&] {
+        loadSceneFile(write(
+            "e.toml", "format = \"lfi-scene\"\nversion = 1\n[[object]]\nname='x'\nshape='sphere'\nradius_mm=1\n"));
+      },
       Errc::Config, {"exactly one sensor"}));
-  EXPECT_TRUE(throwsError([&] { loadSceneFile(write("f.toml", "format = \"lfi-scene\"\nversion = [\n")); }, Errc::Config,
-                          {"f.toml:"}));
+  EXPECT_TRUE(throwsError([&] { loadSceneFile(write("f.toml", "format = \"lfi-scene\"\nversion = [\n")); },
+                          Errc::Config, {"f.toml:"}));
   EXPECT_TRUE(throwsError([&] { loadSceneFile(dir_ / "missing.toml"); }, Errc::NotFound, {"missing.toml"}));
   // A light field emitter whose file is corrupt: the EXR error names that file.
   write("lf.exr", "not an exr");
@@ -160,7 +165,8 @@ TEST_F(SceneFile, MeshAndAnalyticSphereRefractAlike) {
   for (int j = 0; j <= nv; ++j)
     for (int i = 0; i < nu; ++i) {
       const double th = std::numbers::pi * j / nv, ph = 2 * std::numbers::pi * i / nu;
-      obj += fmt::format("v {} {} {}\n", 5 * std::sin(th) * std::cos(ph), 5 * std::sin(th) * std::sin(ph), 5 * std::cos(th));
+      obj += fmt::format("v {} {} {}\n", 5 * std::sin(th) * std::cos(ph), 5 * std::sin(th) * std::sin(ph),
+                         5 * std::cos(th));
     }
   for (int j = 0; j < nv; ++j)
     for (int i = 0; i < nu; ++i) {

@@ -27,7 +27,8 @@ public:
   std::string string(const std::string& key, std::optional<std::string> fallback = std::nullopt,
                      const std::vector<std::string>& allowed = {});
   // An array of numbers of fixed length (e.g. a position [x, y, z]).
-  std::vector<double> numbers(const std::string& key, size_t count, std::optional<std::vector<double>> fallback = std::nullopt);
+  std::vector<double> numbers(const std::string& key, size_t count,
+                              std::optional<std::vector<double>> fallback = std::nullopt);
   bool has(const std::string& key) const;
   ConfigTable table(const std::string& key);
   // An array of tables ([[key]] in TOML); empty when the key is absent.

@@ -65,8 +65,12 @@ public:
   const cv::Mat& lensletImage() const { return lenslet_; }
   cv::Mat& lensletImage() { return lenslet_; }
 
-  float& at(int ex, int ey, int u, int v) { return lenslet_.at<float>(ey * geometry_.angular + v, ex * geometry_.angular + u); }
-  float at(int ex, int ey, int u, int v) const { return lenslet_.at<float>(ey * geometry_.angular + v, ex * geometry_.angular + u); }
+  float& at(int ex, int ey, int u, int v) {
+    return lenslet_.at<float>(ey * geometry_.angular + v, ex * geometry_.angular + u);
+  }
+  float at(int ex, int ey, int u, int v) const {
+    return lenslet_.at<float>(ey * geometry_.angular + v, ex * geometry_.angular + u);
+  }
 
   // Centre of spatial element (ex, ey) in the plane frame, mm.
   Vec2 elementCentre(int ex, int ey) const;

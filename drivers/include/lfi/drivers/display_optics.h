@@ -78,7 +78,9 @@ public:
 
   // The chief ray of a subpixel. Requires a sample inside the panel.
   DisplayRay rayFromPixel(int col, int row, int subpixel = 0) const;
-  DisplayRay rayFromPixel(const PanelSample& sample) const { return rayFromPixel(sample.col, sample.row, sample.subpixel); }
+  DisplayRay rayFromPixel(const PanelSample& sample) const {
+    return rayFromPixel(sample.col, sample.row, sample.subpixel);
+  }
 
   // The subpixel whose chief ray passes through `origin_mm` (z ignored) with
   // `direction`: the lens containing the origin and the place under it that the
