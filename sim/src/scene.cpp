@@ -114,6 +114,19 @@ void resolveSolids(HitContext& ctx) {
   ctx.solids = 0;
 }
 
+// Notes that the lanes in `bits` may cross solid g (resolved by resolveSolids).
+void noteLanes(HitContext& ctx, const AnalyticGeometry* g, std::uint32_t bits) {
+  int s = 0;
+  while (s < ctx.solids && ctx.solid[static_cast<size_t>(s)] != g) ++s;
+  if (s == ctx.solids) {
+    if (ctx.solids == HitContext::kSolids) resolveSolids(ctx), s = 0;
+    ctx.solid[static_cast<size_t>(s)] = g;
+    ctx.lanes[static_cast<size_t>(s)] = 0;
+    ++ctx.solids;
+  }
+  ctx.lanes[static_cast<size_t>(s)] |= bits;
+}
+
 void analyticBounds(const RTCBoundsFunctionArguments* args) {
   const Bounds& b = static_cast<const AnalyticGeometry*>(args->geometryUserPtr)->box;
   RTCBounds* o = args->bounds_o;
@@ -141,20 +154,12 @@ void analyticIntersect(const RTCIntersectFunctionNArguments* args) {
     }
     return;
   }
-  int s = 0;
-  while (s < ctx.solids && ctx.solid[static_cast<size_t>(s)] != g) ++s;
-  if (s == ctx.solids) {
-    if (ctx.solids == HitContext::kSolids) resolveSolids(ctx), s = 0;
-    ctx.solid[static_cast<size_t>(s)] = g;
-    ctx.lanes[static_cast<size_t>(s)] = 0;
-    ++ctx.solids;
-  }
   std::uint32_t bits = 0;
   for (unsigned k = 0; k < args->N; ++k) {
     const unsigned lane = RTCRayN_id(rays, args->N, k);
     bits |= (args->valid[k] != 0 && ctx.skip[lane] != g ? 1u : 0u) << lane;
   }
-  ctx.lanes[static_cast<size_t>(s)] |= bits;
+  noteLanes(ctx, g, bits);
 }
 
 // Per object: its solid when no other object's bounds meet the solid's padded
@@ -349,6 +354,15 @@ void Scene::intersect(std::span<const Ray> rays, std::span<Hit> hits, double tMi
     fail(Errc::InvalidArgument, "Scene::intersect: {} rays for {} hits and {} starts (at most {} at once)", rays.size(),
          hits.size(), starts.size(), kPacket);
   const int n = static_cast<int>(rays.size());
+  double bestT[kPacket];
+  Vec3 bestNormal[kPacket];
+  int bestObject[kPacket];
+  std::fill_n(bestT, kPacket, std::numeric_limits<double>::infinity());
+  std::fill_n(bestObject, kPacket, -1);
+  HitContext ctx;
+  rtcInitIntersectContext(&ctx.embree);
+  ctx.rays = rays.data(), ctx.tMin = tMin, ctx.bestT = bestT, ctx.bestNormal = bestNormal, ctx.bestObject = bestObject;
+  ctx.solids = 0;
   // Rays starting inside an isolated solid's box: the solid's nearest crossing,
   // if any, comes before every other object's surface (those lie outside the
   // box, and the ray stays in the box up to the crossing, which is in it), so
@@ -357,39 +371,21 @@ void Scene::intersect(std::span<const Ray> rays, std::span<Hit> hits, double tMi
   bool done[kPacket] = {};
   int traced = n;
   if (!starts.empty()) {
-    const AnalyticGeometry* g = nullptr;  // one solid per packet: its rays are one batch
-    int lanes[kPacket], m = 0;
-    Ray local[kPacket];
     for (int k = 0; k < n; ++k) {
       const int object = starts[static_cast<size_t>(k)].inside;
-      const AnalyticGeometry* s = object >= 0 ? impl_->isolated[static_cast<size_t>(object)] : nullptr;
-      if (!s || (g && s != g) || !contains(s->box, rays[static_cast<size_t>(k)].origin)) continue;
-      g = s;
-      toObjectFrame(*g, rays[static_cast<size_t>(k)], local[m]);
-      lanes[m++] = k;
+      const AnalyticGeometry* g = object >= 0 ? impl_->isolated[static_cast<size_t>(object)] : nullptr;
+      if (g && contains(g->box, rays[static_cast<size_t>(k)].origin)) noteLanes(ctx, g, 1u << k);
     }
-    if (m > 0) {
-      double t[kPacket];
-      Vec3 normal[kPacket];
-      g->solid->nearestCrossings(m, local, tMin, t, normal);
-      for (int i = 0; i < m; ++i) {
-        if (!std::isfinite(t[i])) continue;
-        const auto k = static_cast<size_t>(lanes[i]);
-        completeHit(rays[k], RTC_INVALID_GEOMETRY_ID, 0, 0, {}, 0, 0, g->object, t[i],
-                    g->placed ? g->worldFromObject.vector(normal[i]) : normal[i], hits[k]);
-        done[k] = true;
-        --traced;
-      }
+    resolveSolids(ctx);
+    for (int k = 0; k < n; ++k) {
+      if (bestObject[k] < 0) continue;
+      completeHit(rays[static_cast<size_t>(k)], RTC_INVALID_GEOMETRY_ID, 0, 0, {}, 0, 0, bestObject[k], bestT[k],
+                  bestNormal[k], hits[static_cast<size_t>(k)]);
+      done[k] = true;
+      --traced;
     }
   }
   if (traced == 0) return;
-  double bestT[kPacket];
-  Vec3 bestNormal[kPacket];
-  int bestObject[kPacket];
-  HitContext ctx;
-  rtcInitIntersectContext(&ctx.embree);
-  ctx.rays = rays.data(), ctx.tMin = tMin, ctx.bestT = bestT, ctx.bestNormal = bestNormal, ctx.bestObject = bestObject;
-  ctx.solids = 0;
   // A ray leaving a convex solid (from its surface, outside it) cannot cross it
   // again beyond tMin: its lane skips that solid.
   const AnalyticGeometry* skip[kPacket] = {};
@@ -419,8 +415,6 @@ void Scene::intersect(std::span<const Ray> rays, std::span<Hit> hits, double tMi
     rh.ray.flags[k] = 0;
     rh.hit.geomID[k] = RTC_INVALID_GEOMETRY_ID;
     rh.hit.instID[0][k] = RTC_INVALID_GEOMETRY_ID;
-    bestT[k] = std::numeric_limits<double>::infinity();
-    bestObject[k] = -1;
   }
   rtcIntersect16(valid, impl_->scene, &ctx.embree, &rh);
   resolveSolids(ctx);
