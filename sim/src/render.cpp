@@ -3,6 +3,7 @@
 #include "lfi/core/error.h"
 
 #include "camera_samples.h"
+#include "fresnel_step.h"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -84,52 +85,21 @@ private:
 
 }  // namespace
 
-namespace {
-
-// v, unit to within rounding, brought back to unit length: one Newton step for
-// 1/sqrt(v.v) at 1, exact to second order in |v.v - 1| (~1e-16). Refraction
-// and reflection of unit vectors give unit vectors but for rounding; this
-// keeps the rounding from adding up along a path, without a root and a
-// division on every bounce (they set a path's latency).
-Vec3 renormalised(const Vec3& v) { return v * (1.5 - 0.5 * v.dot(v)); }
-
-// Cosine of the transmitted angle (Snell) for incidence cosine cosI in [0, 1]
-// and eta = n1 / n2; -1 under total internal reflection.
-double transmittedCosine(double cosI, double eta) {
-  const double sin2T = eta * eta * (1 - cosI * cosI);
-  return sin2T >= 1 ? -1 : std::sqrt(1 - sin2T);
-}
-
-// Unpolarised Fresnel reflectance from both angles' cosines: the mean of
-// rs^2 and rp^2, rs = (a - b) / (a + b), rp = (c - d) / (c + d), over one
-// division (a path's latency is mostly its divisions and roots).
-double fresnelFromCosines(double cosI, double cosT, double n1, double n2) {
-  const double a = n1 * cosI, b = n2 * cosT, c = n2 * cosI, d = n1 * cosT;
-  const double rs = (a - b) * (c + d), rp = (c - d) * (a + b), denominator = (a + b) * (c + d);
-  return 0.5 * (rs * rs + rp * rp) / (denominator * denominator);
-}
-
-Vec3 refractedDirection(const Vec3& d, const Vec3& n, double eta, double cosI, double cosT) {
-  return renormalised(d * eta + n * (eta * cosI - cosT));
-}
-
-}  // namespace
-
 double fresnelReflectance(double cosI, double n1, double n2) {
   cosI = std::clamp(cosI, 0.0, 1.0);
-  const double cosT = transmittedCosine(cosI, n1 / n2);
-  return cosT < 0 ? 1.0 : fresnelFromCosines(cosI, cosT, n1, n2);
+  const double cosT = detail::transmittedCosine(cosI, n1 / n2);
+  return cosT < 0 ? 1.0 : detail::fresnelFromCosines(cosI, cosT, n1, n2);
 }
 
 bool refract(const Vec3& d, const Vec3& n, double eta, Vec3& out) {
   const double cosI = std::clamp(-d.dot(n), 0.0, 1.0);
-  const double cosT = transmittedCosine(cosI, eta);
+  const double cosT = detail::transmittedCosine(cosI, eta);
   if (cosT < 0) return false;
-  out = refractedDirection(d, n, eta, cosI, cosT);
+  out = detail::renormalised(d * eta + n * (eta * cosI - cosT));
   return true;
 }
 
-Vec3 reflect(const Vec3& d, const Vec3& n) { return renormalised(d - n * (2 * d.dot(n))); }
+Vec3 reflect(const Vec3& d, const Vec3& n) { return detail::renormalised(d - n * (2 * d.dot(n))); }
 
 namespace {
 
@@ -183,27 +153,27 @@ Step interact(const Scene& scene, const Hit& hit, PathState& p, PathState& branc
   p.on = hit.object;
   // Entering: from the current medium into the glass. Leaving: from the
   // glass into whatever medium contains it (a bubble in glass exits to glass).
+  // The packet renderer takes the same steps for its exact dielectrics.
   const double n1 = entering ? p.media.ior(scene) : surface.ior;
   const double n2 = entering ? surface.ior : p.media.ior(scene, hit.object);
-  const double cosI = std::clamp(-d.dot(facing), 0.0, 1.0);
-  const double cosT = transmittedCosine(cosI, n1 / n2);
-  if (cosT < 0) {  // total internal reflection
-    p.ray = leave(reflect(d, facing));
+  const detail::FresnelEvent e = detail::fresnelEvent(d, hit.normal, n1, n2);
+  const Vec3 reflected(e.rx, e.ry, e.rz);
+  if (e.cosT < 0) {  // total internal reflection
+    p.ray = leave(reflected);
     return Step::Continue;
   }
-  const double reflectance = fresnelFromCosines(cosI, cosT, n1, n2);
   const bool split = depth < policy.splitDepth;
   if (split) {
     // Splitting: both branches, weighted, instead of a random choice.
     branch = p;
-    branch.ray = leave(reflect(d, facing));
-    branch.throughput *= reflectance;
-    p.throughput *= 1 - reflectance;
-  } else if (policy.chooseReflection(reflectance)) {
-    p.ray = leave(reflect(d, facing));
+    branch.ray = leave(reflected);
+    branch.throughput *= e.reflectance;
+    p.throughput *= 1 - e.reflectance;
+  } else if (policy.chooseReflection(e.reflectance)) {
+    p.ray = leave(reflected);
     return Step::Continue;
   }
-  p.ray = leave(refractedDirection(d, facing, n1 / n2, cosI, cosT));
+  p.ray = leave({e.tx, e.ty, e.tz});
   if (entering)
     p.media.push(hit.object);
   else
@@ -294,28 +264,38 @@ struct PixelWork {
   std::array<std::uint32_t, detail::kStratifiedChoices> choiceKeys{};
 };
 
-// Where a path goes on: its state, random stream and stratified choices.
+// Where a path goes on: its state, random stream and stratified choices (a
+// split branch waiting for its lane).
 struct Walker {
   PathState path;
   Sampler sampler{0, 0};
   StratifiedChoices choices;
 };
 
-// One sample in the packet. Its split branches wait on its own stack and are
+constexpr int kLanes = static_cast<int>(Scene::kPacket);
+using LaneMask = std::uint32_t;  // bit k: lane k
+
+// The packet's paths as structures of arrays, lane k in slot k of each. A
+// lane traces one sample; its split branches wait on its own stack and are
 // traced depth first in the same lane, so each sample's radiance is summed in
 // the same order however samples share packets: the image is bit-identical
 // for any tile size and thread count.
-struct Lane {
-  Walker walker;
-  int waiting = 0;  // branches waiting on the lane's stack (TileRenderer::branches_)
-  double radiance = 0;
-  int pixel = 0;  // index into the tile's PixelWork slots
-  int sample = 0;
+struct Lanes {
+  Scene::RayPacket ray;  // each path's ray; inside = its media stack's top, on = PathState::on
+  alignas(64) double throughput[kLanes];
+  double radiance[kLanes];        // the sample's sum so far
+  std::uint64_t sampler[kLanes];  // Sampler::state
+  int depth[kLanes];
+  int pixel[kLanes];   // index into the tile's PixelWork slots
+  int sample[kLanes];  // index in the pixel
+  int waiting[kLanes];  // branches waiting on the lane's stack (TileRenderer::branches_)
+  std::array<StratifiedChoices, kLanes> choices;
+  std::array<MediumStack, kLanes> media;
 };
 
-// Renders one tile: the pixels' samples are traced as packets of up to
-// Scene::kPacket paths through Embree, refilled as samples end, so that a
-// packet stays full and coherent (neighbouring samples of one or two pixels).
+// Renders one tile: the pixels' samples are traced in a packet of kLanes
+// paths through Embree, refilled as samples end, so that the packet stays
+// full and coherent (neighbouring samples of one or two pixels).
 class TileRenderer {
 public:
   TileRenderer(const Scene& scene, const Sensor& sensor, const RenderOptions& options)
@@ -324,108 +304,196 @@ public:
                         ? std::optional(TelecentricCamera::RayMap(std::get<TelecentricCamera>(sensor)))
                         : std::nullopt),
         side_(static_cast<int>(std::sqrt(static_cast<double>(options.samplesPerPixel)))), strata_(side_ * side_),
-        invSide_(1.0 / side_), invSpp_(1.0 / options.samplesPerPixel) {}
+        invSide_(1.0 / side_), invSpp_(1.0 / options.samplesPerPixel) {
+    // Lanes without a path still take part in the lane-parallel arithmetic:
+    // give them a harmless ray and interface.
+    for (int k = 0; k < kLanes; ++k) {
+      lanes_.ray.rays.set(k, Ray{{0, 0, 0}, {0, 0, 1}});
+      lanes_.ray.inside[k] = lanes_.ray.on[k] = -1;
+      fresnel_.n1[k] = fresnel_.n2[k] = 1;
+    }
+    branches_.resize(Scene::kPacket);
+  }
 
   void render(int x0, int y0, int x1, int y1, cv::Mat& image) {
     nextI_ = x0, nextJ_ = y0, x0_ = x0, x1_ = x1, y1_ = y1;
     image_ = &image;
     issuing_ = -1;
-    std::array<Lane*, Scene::kPacket> active{};
-    lanes_.assign(Scene::kPacket, Lane{});
-    branches_.resize(Scene::kPacket);
-    freeLanes_.clear();
-    for (int k = static_cast<int>(Scene::kPacket) - 1; k >= 0; --k) freeLanes_.push_back(k);
-    size_t n = 0;
+    LaneMask active = 0, free = (1u << kLanes) - 1;
     for (;;) {
-      // Fill the packet with new samples: plan them, then make their rays in one pass.
-      for (size_t planned; n < Scene::kPacket && (planned = planSamples(Scene::kPacket - n)) > 0;) {
-        startSamples(planned);
-        for (size_t k = 0; k < planned; ++k) {
-          const Start& start = starts_[k];
-          if (!start.hasRay) {  // no ray (outside a light field sensor's disc): the sample is 0
-            PixelWork& px = pixels_[static_cast<size_t>(start.slot)];
-            px.values[static_cast<size_t>(start.sample)] = 0;
-            --px.inFlight;
-            if (start.slot != issuing_) finishIfDone(start.slot);
-            continue;
-          }
-          Lane& lane = lanes_[static_cast<size_t>(freeLanes_.back())];
-          freeLanes_.pop_back();
-          lane.walker.path = PathState{.ray = start.ray};
-          lane.walker.sampler = start.sampler;
-          for (size_t d = 0; d < detail::kStratifiedChoices; ++d) lane.walker.choices.u[d] = choices_.u[d][k];
-          lane.walker.choices.used = 0;
-          lane.waiting = 0;
-          lane.radiance = 0;
-          lane.pixel = start.slot;
-          lane.sample = start.sample;
-          active[n++] = &lane;
-        }
-      }
-      if (n == 0) break;
-      n = advance(active, n);
+      // Fill the free lanes with new samples: plan them, then make their rays in one pass.
+      for (size_t planned; free && (planned = planSamples(static_cast<size_t>(std::popcount(free)))) > 0;)
+        active |= startSamples(planned, free);
+      if (active == 0) break;
+      active = step(active, free);
       // Paths that went into an isolated solid (a lens) meet only its surface
       // next: the solid answers them without a traversal, so step them at once
       // and keep the Embree packets for the rays that need one.
-      for (;;) {
-        std::array<Lane*, Scene::kPacket> inner;
-        size_t m = 0, outer = 0;
-        for (size_t k = 0; k < n; ++k) {
-          const MediumStack& media = active[k]->walker.path.media;
-          (media.size() && scene_.isolated(media.top()) ? inner[m++] : active[outer++]) = active[k];
-        }
-        if (m == 0) break;
-        m = advance(inner, m);
-        std::copy_n(inner.begin(), m, active.begin() + static_cast<std::ptrdiff_t>(outer));
-        n = outer + m;
-      }
+      for (LaneMask inner; (inner = insideIsolated(active)) != 0;) active = (active & ~inner) | step(inner, free);
     }
   }
 
 private:
-  // Traces one step of paths lanes[0, n): their next hits, in one packet, and
-  // what they do there. Keeps the paths that go on in lanes[0, kept) and
-  // returns kept; writes the samples that end.
-  size_t advance(std::array<Lane*, Scene::kPacket>& lanes, size_t n) {
-    for (size_t k = 0; k < n; ++k) {
-      const PathState& path = lanes[k]->walker.path;
-      rays_[k] = path.ray;
-      rayStarts_[k] = {path.media.size() ? path.media.top() : -1, path.on};
+  LaneMask insideIsolated(LaneMask lanes) const {
+    LaneMask inner = 0;
+    for (; lanes; lanes &= lanes - 1) {
+      const int k = std::countr_zero(lanes);
+      if (lanes_.ray.inside[k] >= 0 && scene_.isolated(lanes_.ray.inside[k])) inner |= 1u << k;
     }
-    scene_.intersect(std::span(rays_.data(), n), std::span(hits_.data(), n), Scene::kTMin,
-                     std::span(rayStarts_.data(), n));
-    size_t kept = 0;
-    for (size_t k = 0; k < n; ++k) {
-      Lane& lane = *lanes[k];
-      Walker& w = lane.walker;
+    return inner;
+  }
+
+  // Traces one step of the paths in `lanes`: their next hits, in one packet
+  // query, and what they do there. Returns the lanes that go on; the lanes
+  // whose samples end are written and set in `free`.
+  LaneMask step(LaneMask lanes, LaneMask& free) {
+    scene_.intersect(lanes_.ray, lanes, hits_);
+    LaneMask kept = 0, fresnel = 0;
+    for (LaneMask bits = lanes; bits; bits &= bits - 1) {
+      const int k = std::countr_zero(bits);
+      const LaneMask bit = 1u << k;
+      const int object = hits_.object[k];
+      if (object < 0) {  // left the scene
+        if (endPath(k, 0, free)) kept |= bit;
+        continue;
+      }
+      const Surface& surface = scene_.surface(object);
+      if (surface.kind == Surface::Kind::Dielectric && surface.exact) {
+        // Taken below, all lanes at once: as interact() does.
+        MediumStack& media = lanes_.media[k];
+        if (media.size())
+          if (const double a = media.absorption(scene_); a > 0) lanes_.throughput[k] *= std::exp(-a * hits_.t[k]);
+        const bool entering = direction(k).dot(hits_.normal(k)) < 0;
+        fresnel_.n1[k] = entering ? media.ior(scene_) : surface.ior;
+        fresnel_.n2[k] = entering ? surface.ior : media.ior(scene_, object);
+        fresnel |= bit;
+        continue;
+      }
+      if (surface.kind == Surface::Kind::Emitter) {  // the end of most paths: as interact()
+        const Ray ray = lanes_.ray.rays.ray(k);
+        const Hit hit{object, hits_.t[k], ray.at(hits_.t[k]), hits_.normal(k)};
+        double throughput = lanes_.throughput[k];
+        if (const MediumStack& media = lanes_.media[k]; media.size())
+          if (const double a = media.absorption(scene_); a > 0) throughput *= std::exp(-a * hit.t);
+        if (endPath(k, throughput * emittedRadiance(scene_, hit, *scene_.object(object).emission, -ray.direction),
+                    free))
+          kept |= bit;
+        continue;
+      }
+      // Anything else (absorbers, diffuse surfaces, meshes), one lane at a time.
+      Walker w = walker(k);
       SampledPolicy policy{w.sampler, options_.maxDepth, options_.splitDepth, &w.choices};
+      const Ray ray = lanes_.ray.rays.ray(k);
+      const Hit hit{object, hits_.t[k], ray.at(hits_.t[k]), hits_.normal(k)};
       double radiance;
-      const Step step = interact(scene_, hits_[k], w.path, branch_, radiance, policy);
-      if (step == Step::Split)  // the branch gets its own stream, keyed by the parent's state and depth
-        branches_[laneIndex(lane)][static_cast<size_t>(lane.waiting++)] = {
-            branch_, Sampler(w.sampler.state, static_cast<std::uint64_t>(branch_.depth)), w.choices};
-      if (step != Step::Done && w.path.depth < options_.maxDepth) {
-        lanes[kept++] = &lane;
-        continue;
+      PathState branch;
+      const Step s = interact(scene_, hit, w.path, branch, radiance, policy);
+      if (s == Step::Split) wait(k, branch, w.sampler, w.choices);
+      if (s != Step::Done && w.path.depth < options_.maxDepth) {
+        load(k, w);
+        kept |= bit;
+      } else if (endPath(k, radiance, free)) {
+        kept |= bit;
       }
-      lane.radiance += radiance;
-      // The path ended: go on with the sample's latest waiting branch, if any.
-      bool resumed = false;
-      while (!resumed && lane.waiting > 0) {
-        w = branches_[laneIndex(lane)][static_cast<size_t>(--lane.waiting)];
-        resumed = w.path.depth < options_.maxDepth;
+    }
+    if (fresnel) kept |= takeFresnelEvents(fresnel, free);
+    return kept;
+  }
+
+  // The Fresnel events of the lanes in `lanes` (fresnel_.n1, n2 set), as
+  // interact() takes them: total internal reflection, a split into both
+  // branches, or a choice of one. Returns the lanes that go on.
+  LaneMask takeFresnelEvents(LaneMask lanes, LaneMask& free) {
+    detail::fresnelLanes(lanes_.ray.rays, hits_, fresnel_);
+    const detail::FresnelLanes& f = fresnel_;
+    LaneMask kept = 0;
+    for (; lanes; lanes &= lanes - 1) {
+      const int k = std::countr_zero(lanes);
+      const int object = hits_.object[k], depth = lanes_.depth[k]++;
+      const bool entering = direction(k).dot(hits_.normal(k)) < 0;
+      lanes_.ray.on[k] = object;
+      const Vec3 point(f.px[k], f.py[k], f.pz[k]), reflected(f.rx[k], f.ry[k], f.rz[k]);
+      bool refract = f.cosT[k] >= 0;  // else total internal reflection
+      if (refract && depth < options_.splitDepth) {
+        // Splitting: both branches, weighted, instead of a random choice.
+        Walker branch = walker(k);
+        branch.path.ray = {point, reflected};
+        branch.path.throughput *= f.reflectance[k];
+        wait(k, branch.path, branch.sampler, branch.choices);
+        lanes_.throughput[k] *= 1 - f.reflectance[k];
+      } else if (refract) {
+        double u;
+        if (!lanes_.choices[k].next(u)) {
+          Sampler sampler(0, 0);
+          sampler.state = lanes_.sampler[k];
+          u = sampler.next();
+          lanes_.sampler[k] = sampler.state;
+        }
+        refract = !(u < f.reflectance[k]);
       }
-      if (resumed) {
-        lanes[kept++] = &lane;
-        continue;
+      if (refract) {
+        lanes_.ray.rays.set(k, {point, {f.tx[k], f.ty[k], f.tz[k]}});
+        MediumStack& media = lanes_.media[k];
+        if (entering)
+          media.push(object);
+        else
+          media.remove(object);
+        lanes_.ray.inside[k] = media.size() ? media.top() : -1;
+      } else {
+        lanes_.ray.rays.set(k, {point, reflected});
       }
-      PixelWork& px = pixels_[static_cast<size_t>(lane.pixel)];
-      px.values[static_cast<size_t>(lane.sample)] = lane.radiance;
-      --px.inFlight;
-      freeLanes_.push_back(static_cast<int>(laneIndex(lane)));
-      if (lane.pixel != issuing_) finishIfDone(lane.pixel);
+      if (lanes_.depth[k] < options_.maxDepth || endPath(k, 0, free)) kept |= 1u << k;
     }
     return kept;
+  }
+
+  // Ends lane k's current path, which brought `radiance`, and goes on with the
+  // sample's latest waiting branch, if any (true). Otherwise the sample is
+  // written and the lane set free (false).
+  bool endPath(int k, double radiance, LaneMask& free) {
+    lanes_.radiance[k] += radiance;
+    auto& stack = branches_[static_cast<size_t>(k)];
+    while (lanes_.waiting[k] > 0) {
+      const Walker& w = stack[static_cast<size_t>(--lanes_.waiting[k])];
+      if (w.path.depth < options_.maxDepth) {
+        load(k, w);
+        return true;
+      }
+    }
+    PixelWork& px = pixels_[static_cast<size_t>(lanes_.pixel[k])];
+    px.values[static_cast<size_t>(lanes_.sample[k])] = lanes_.radiance[k];
+    --px.inFlight;
+    free |= 1u << k;
+    if (lanes_.pixel[k] != issuing_) finishIfDone(lanes_.pixel[k]);
+    return false;
+  }
+
+  // Puts a split branch on lane k's stack; it gets its own stream, keyed by
+  // the parent's state and the branch's depth.
+  void wait(int k, const PathState& branch, const Sampler& parent, const StratifiedChoices& choices) {
+    branches_[static_cast<size_t>(k)][static_cast<size_t>(lanes_.waiting[k]++)] = {
+        branch, Sampler(parent.state, static_cast<std::uint64_t>(branch.depth)), choices};
+  }
+
+  Vec3 direction(int k) const { return {lanes_.ray.rays.dx[k], lanes_.ray.rays.dy[k], lanes_.ray.rays.dz[k]}; }
+
+  // Lane k's path as one walker, and back.
+  Walker walker(int k) const {
+    Walker w;
+    w.path = {lanes_.ray.rays.ray(k), lanes_.media[k], lanes_.throughput[k], lanes_.depth[k], lanes_.ray.on[k]};
+    w.sampler.state = lanes_.sampler[k];
+    w.choices = lanes_.choices[k];
+    return w;
+  }
+  void load(int k, const Walker& w) {
+    lanes_.ray.rays.set(k, w.path.ray);
+    lanes_.ray.inside[k] = w.path.media.size() ? w.path.media.top() : -1;
+    lanes_.ray.on[k] = w.path.on;
+    lanes_.media[k] = w.path.media;
+    lanes_.throughput[k] = w.path.throughput;
+    lanes_.depth[k] = w.path.depth;
+    lanes_.sampler[k] = w.sampler.state;
+    lanes_.choices[k] = w.choices;
   }
 
   // A sample about to start: which, and (from startSamples) its ray and stream.
@@ -475,12 +543,14 @@ private:
     return slot;
   }
 
-  // Each planned sample's random stream and ray of sight. One random stream
-  // per sample: two scenes that differ only where a path can reach (a defect)
-  // give identical samples everywhere else. Jittered strata for the pixel
-  // area and, independently permuted, for the stop: the first m^2 samples
-  // cover both evenly; the rest are random.
-  void startSamples(size_t m) {
+  // Starts the m planned samples in free lanes (taken from `free`); returns
+  // the lanes they took. Each sample gets its random stream, its stratified
+  // choices and its ray of sight. One random stream per sample: two scenes
+  // that differ only where a path can reach (a defect) give identical samples
+  // everywhere else. Jittered strata for the pixel area and, independently
+  // permuted, for the stop: the first m^2 samples cover both evenly; the rest
+  // are random.
+  LaneMask startSamples(size_t m, LaneMask& free) {
     for (size_t k = 0; k < m; ++k) {
       const PixelWork& px = pixels_[static_cast<size_t>(starts_[k].slot)];
       choices_.sample[k] = static_cast<std::uint32_t>(starts_[k].sample);
@@ -503,22 +573,50 @@ private:
         start.sampler.state = batch_.state[k];
         start.hasRay = true;
       }
-      return;
-    }
-    for (size_t k = 0; k < m; ++k) {
-      Start& start = starts_[k];
-      const PixelWork& px = pixels_[static_cast<size_t>(start.slot)];
-      const int s = start.sample;
-      start.sampler = Sampler(options_.seed, sampleStream(px, s));
-      Vec2 offset(start.sampler.next(), start.sampler.next());
-      if (s < strata_) {
-        const int row = s / side_;
-        offset = Vec2((s - row * side_ + offset.x) * invSide_, (row + offset.y) * invSide_);
+    } else {
+      for (size_t k = 0; k < m; ++k) {
+        Start& start = starts_[k];
+        const PixelWork& px = pixels_[static_cast<size_t>(start.slot)];
+        const int s = start.sample;
+        start.sampler = Sampler(options_.seed, sampleStream(px, s));
+        Vec2 offset(start.sampler.next(), start.sampler.next());
+        if (s < strata_) {
+          const int row = s / side_;
+          offset = Vec2((s - row * side_ + offset.x) * invSide_, (row + offset.y) * invSide_);
+        }
+        const auto ray = std::get<LightFieldSensor>(sensor_).ray(px.i, px.j, offset);
+        start.hasRay = ray.has_value();
+        if (ray) start.ray = *ray;
       }
-      const auto ray = std::get<LightFieldSensor>(sensor_).ray(px.i, px.j, offset);
-      start.hasRay = ray.has_value();
-      if (ray) start.ray = *ray;
     }
+    LaneMask started = 0;
+    for (size_t k = 0; k < m; ++k) {
+      const Start& start = starts_[k];
+      if (!start.hasRay) {  // no ray (outside a light field sensor's disc): the sample is 0
+        PixelWork& px = pixels_[static_cast<size_t>(start.slot)];
+        px.values[static_cast<size_t>(start.sample)] = 0;
+        --px.inFlight;
+        if (start.slot != issuing_) finishIfDone(start.slot);
+        continue;
+      }
+      const int lane = std::countr_zero(free);
+      free &= free - 1;
+      started |= 1u << lane;
+      lanes_.ray.rays.set(lane, start.ray);
+      lanes_.ray.inside[lane] = lanes_.ray.on[lane] = -1;
+      lanes_.throughput[lane] = 1;
+      lanes_.radiance[lane] = 0;
+      lanes_.sampler[lane] = start.sampler.state;
+      lanes_.depth[lane] = 0;
+      lanes_.pixel[lane] = start.slot;
+      lanes_.sample[lane] = start.sample;
+      lanes_.waiting[lane] = 0;
+      StratifiedChoices& choices = lanes_.choices[static_cast<size_t>(lane)];
+      for (size_t d = 0; d < detail::kStratifiedChoices; ++d) choices.u[d] = choices_.u[d][k];
+      choices.used = 0;
+      lanes_.media[static_cast<size_t>(lane)] = MediumStack();
+    }
+    return started;
   }
 
   std::uint64_t sampleStream(const PixelWork& px, int s) const {
@@ -555,18 +653,12 @@ private:
   std::array<Start, Scene::kPacket> starts_;
   detail::CameraSampleBatch batch_;
   detail::ChoiceBatch choices_;
-  static_assert(detail::CameraSampleBatch::kSize >= static_cast<int>(Scene::kPacket));
-  static_assert(detail::ChoiceBatch::kSize >= static_cast<int>(Scene::kPacket));
-  PathState branch_;  // written by a split
-  std::vector<Lane> lanes_;
-  // Per lane, its waiting split branches, at most one per split depth. Apart
-  // from the lanes, which stay small and close together in the cache.
+  static_assert(detail::CameraSampleBatch::kSize >= kLanes && detail::ChoiceBatch::kSize >= kLanes);
+  Lanes lanes_;
+  Scene::HitPacket hits_;
+  detail::FresnelLanes fresnel_;
+  // Per lane, its waiting split branches, at most one per split depth.
   std::vector<std::array<Walker, RenderOptions::kMaxSplitDepth>> branches_;
-  size_t laneIndex(const Lane& lane) const { return static_cast<size_t>(&lane - lanes_.data()); }
-  std::vector<int> freeLanes_;
-  std::array<Ray, Scene::kPacket> rays_;
-  std::array<Hit, Scene::kPacket> hits_;
-  std::array<Scene::RayStart, Scene::kPacket> rayStarts_;
 };
 
 }  // namespace

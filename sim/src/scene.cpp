@@ -51,19 +51,15 @@ bool overlap(const Bounds& a, const Bounds& b) {
          b.lo.z <= a.hi.z;
 }
 
-// A ray's crossing of a (closed) rectangle beyond tMin; infinity when there is none.
-double rectangleCrossing(const WorldRectangle& r, const Ray& ray, double tMin) {
-  const Vec3 toCentre = r.centre - ray.origin;
-  const double t = toCentre.dot(r.normal) / ray.direction.dot(r.normal);  // NaN or infinite parallel to the plane
-  const Vec3 p = ray.direction * t - toCentre;                              // from the centre, in the plane
+// Lane k's crossing of a (closed) rectangle beyond tMin; infinity when there is none.
+double rectangleCrossing(const WorldRectangle& r, const RayLanes& rays, int k, double tMin) {
+  const Vec3 origin(rays.ox[k], rays.oy[k], rays.oz[k]), direction(rays.dx[k], rays.dy[k], rays.dz[k]);
+  const Vec3 toCentre = r.centre - origin;
+  const double t = toCentre.dot(r.normal) / direction.dot(r.normal);  // NaN or infinite parallel to the plane
+  const Vec3 p = direction * t - toCentre;                              // from the centre, in the plane
   const bool hit = t > tMin && t < std::numeric_limits<double>::infinity() && std::abs(p.dot(r.axisX)) <= r.halfX &&
                    std::abs(p.dot(r.axisY)) <= r.halfY;
   return hit ? t : std::numeric_limits<double>::infinity();
-}
-
-// A ray in a solid's object frame.
-inline void toObjectFrame(const AnalyticGeometry& g, const Ray& ray, Ray& local) {
-  local = g.placed ? Ray{g.objectFromWorld.point(ray.origin), g.objectFromWorld.vector(ray.direction)} : ray;
 }
 
 // Embree finds which analytic objects each ray may hit (their bounds). A
@@ -74,11 +70,9 @@ inline void toObjectFrame(const AnalyticGeometry& g, const Ray& ray, Ray& local)
 // rays' ids (their index in the packet). Crossings are in double precision.
 struct HitContext {
   RTCIntersectContext embree;
-  const Ray* rays;  // world frame
+  const RayLanes* rays;  // world frame
   double tMin;
-  double* bestT;
-  Vec3* bestNormal;  // world frame
-  int* bestObject;
+  Scene::HitPacket* best;  // the nearest analytic crossing so far, per lane
   const AnalyticGeometry* const* skip;  // per lane: a solid the ray cannot cross, or null
   // The solids met so far, each with the lanes that may cross it.
   static constexpr int kSolids = 8;
@@ -86,29 +80,30 @@ struct HitContext {
   std::array<const AnalyticGeometry*, kSolids> solid;  // not initialised: `solids` says what is valid
   std::array<std::uint32_t, kSolids> lanes;
 };
-static_assert(Solid::kBatch >= static_cast<int>(Scene::kPacket) && Scene::kPacket <= 32);
+static_assert(RayLanes::kSize == static_cast<int>(Scene::kPacket) && Scene::kPacket <= 32);
+
+// Keeps a crossing of lane k if it is the nearest so far.
+inline void keepNearest(Scene::HitPacket& best, int k, double t, const Vec3& normal, int object) {
+  if (!(t < best.t[k])) return;
+  best.t[k] = t;
+  best.nx[k] = normal.x, best.ny[k] = normal.y, best.nz[k] = normal.z;
+  best.object[k] = object;
+}
 
 // Intersects the noted solids' lanes exactly and keeps each lane's nearest.
 void resolveSolids(HitContext& ctx) {
-  Ray local[Solid::kBatch];
-  unsigned lane[Solid::kBatch];
-  double t[Solid::kBatch];
-  Vec3 normal[Solid::kBatch];
+  RayLanes local;
+  double t[RayLanes::kSize];
+  Vec3 normal[RayLanes::kSize];
   for (int s = 0; s < ctx.solids; ++s) {
     const AnalyticGeometry& g = *ctx.solid[static_cast<size_t>(s)];
-    int m = 0;
-    for (std::uint32_t bits = ctx.lanes[static_cast<size_t>(s)]; bits; bits &= bits - 1) {
-      lane[m] = static_cast<unsigned>(std::countr_zero(bits));
-      toObjectFrame(g, ctx.rays[lane[m]], local[m]);
-      ++m;
-    }
-    if (m == 0) continue;  // every lane skipped the solid
-    g.solid->nearestCrossings(m, local, ctx.tMin, t, normal);
-    for (int i = 0; i < m; ++i) {
-      if (!(t[i] < ctx.bestT[lane[i]])) continue;
-      ctx.bestT[lane[i]] = t[i];
-      ctx.bestNormal[lane[i]] = g.placed ? g.worldFromObject.vector(normal[i]) : normal[i];
-      ctx.bestObject[lane[i]] = g.object;
+    const std::uint32_t lanes = ctx.lanes[static_cast<size_t>(s)];
+    if (lanes == 0) continue;  // every lane skipped the solid
+    if (g.placed) transformRays(g.objectFromWorld, *ctx.rays, local);
+    g.solid->nearestCrossings(g.placed ? local : *ctx.rays, lanes, ctx.tMin, t, normal);
+    for (std::uint32_t bits = lanes; bits; bits &= bits - 1) {
+      const int k = std::countr_zero(bits);
+      keepNearest(*ctx.best, k, t[k], g.placed ? g.worldFromObject.vector(normal[k]) : normal[k], g.object);
     }
   }
   ctx.solids = 0;
@@ -145,12 +140,9 @@ void analyticIntersect(const RTCIntersectFunctionNArguments* args) {
   if (!g->solid) {
     for (unsigned k = 0; k < args->N; ++k) {
       if (!args->valid[k]) continue;
-      const unsigned lane = RTCRayN_id(rays, args->N, k);
-      const double t = rectangleCrossing(g->rectangle, ctx.rays[lane], ctx.tMin);
-      if (!(t < ctx.bestT[lane])) continue;
-      ctx.bestT[lane] = t;
-      ctx.bestNormal[lane] = g->rectangle.normal;
-      ctx.bestObject[lane] = g->object;
+      const auto lane = static_cast<int>(RTCRayN_id(rays, args->N, k));
+      keepNearest(*ctx.best, lane, rectangleCrossing(g->rectangle, *ctx.rays, lane, ctx.tMin), g->rectangle.normal,
+                  g->object);
     }
     return;
   }
@@ -222,6 +214,7 @@ struct Scene::Impl {
   // crosses it before anything else (see intersect), so the solid alone answers.
   std::vector<const AnalyticGeometry*> isolated;
   std::vector<const AnalyticGeometry*> convex;  // per object: its solid if convex, else null
+  bool meshes = false;                          // whether any object is a triangle mesh
   ~Impl() {
     if (scene) rtcReleaseScene(scene);
     if (device) rtcReleaseDevice(device);
@@ -242,6 +235,7 @@ Scene::Scene(std::vector<Object> objects, double ambientIor)
     return std::holds_alternative<TriangleMesh>(o.shape);
   });
   rtcSetSceneFlags(impl_->scene, meshes ? RTC_SCENE_FLAG_ROBUST : RTC_SCENE_FLAG_NONE);
+  impl_->meshes = meshes;
   rtcSetSceneBuildQuality(impl_->scene, RTC_BUILD_QUALITY_HIGH);
 
   for (size_t i = 0; i < objects_.size(); ++i) {
@@ -316,12 +310,13 @@ Scene::Scene(std::vector<Object> objects, double ambientIor)
 Scene::~Scene() = default;
 
 Hit Scene::intersect(const Ray& ray, double tMin, double tMax) const {
-  double bestT = tMax;
-  Vec3 bestNormal;
-  int bestObject = -1;
+  RayLanes lane0;
+  lane0.set(0, ray);
+  HitPacket best;
+  best.t[0] = tMax, best.object[0] = -1;
   HitContext ctx;
   rtcInitIntersectContext(&ctx.embree);
-  ctx.rays = &ray, ctx.tMin = tMin, ctx.bestT = &bestT, ctx.bestNormal = &bestNormal, ctx.bestObject = &bestObject;
+  ctx.rays = &lane0, ctx.tMin = tMin, ctx.best = &best;
   const AnalyticGeometry* skip[1] = {};
   ctx.skip = skip;
   ctx.solids = 0;
@@ -342,9 +337,15 @@ Hit Scene::intersect(const Ray& ray, double tMin, double tMax) const {
   rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
   rtcIntersect1(impl_->scene, &ctx.embree, &rh);
   resolveSolids(ctx);
+  if (rh.hit.geomID != RTC_INVALID_GEOMETRY_ID)
+    meshHit(0, rh.hit.geomID, rh.hit.primID, rh.ray.tfar, {rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z}, rh.hit.u, rh.hit.v,
+            best);
   Hit hit;
-  completeHit(ray, rh.hit.geomID, rh.hit.primID, rh.ray.tfar, {rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z}, rh.hit.u,
-              rh.hit.v, bestObject, bestT, bestNormal, hit);
+  if (best.object[0] < 0) return hit;
+  hit.object = best.object[0];
+  hit.t = best.t[0];
+  hit.normal = best.normal(0);
+  hit.point = ray.at(hit.t);
   return hit;
 }
 
@@ -354,59 +355,71 @@ void Scene::intersect(std::span<const Ray> rays, std::span<Hit> hits, double tMi
     fail(Errc::InvalidArgument, "Scene::intersect: {} rays for {} hits and {} starts (at most {} at once)", rays.size(),
          hits.size(), starts.size(), kPacket);
   const int n = static_cast<int>(rays.size());
-  double bestT[kPacket];
-  Vec3 bestNormal[kPacket];
-  int bestObject[kPacket];
-  std::fill_n(bestT, kPacket, std::numeric_limits<double>::infinity());
-  std::fill_n(bestObject, kPacket, -1);
+  RayPacket packet;
+  for (int k = 0; k < static_cast<int>(kPacket); ++k) {  // lanes past n: a harmless copy
+    packet.rays.set(k, rays[static_cast<size_t>(k < n ? k : 0)]);
+    const RayStart start = starts.empty() || k >= n ? RayStart{} : starts[static_cast<size_t>(k)];
+    packet.inside[k] = start.inside, packet.on[k] = start.on;
+  }
+  HitPacket out;
+  intersect(packet, (1u << n) - 1, out, tMin);
+  for (int k = 0; k < n; ++k) {
+    Hit& hit = hits[static_cast<size_t>(k)];
+    hit.object = out.object[k];
+    if (hit.object < 0) continue;
+    hit.t = out.t[k];
+    hit.normal = out.normal(k);
+    hit.point = rays[static_cast<size_t>(k)].at(hit.t);
+  }
+}
+
+void Scene::intersect(const RayPacket& packet, std::uint32_t lanes, HitPacket& hits, double tMin) const {
+  constexpr int kLanes = static_cast<int>(kPacket);
+  lanes &= (1u << kLanes) - 1;
+  for (int k = 0; k < kLanes; ++k) hits.t[k] = std::numeric_limits<double>::infinity(), hits.object[k] = -1;
   HitContext ctx;
   rtcInitIntersectContext(&ctx.embree);
-  ctx.rays = rays.data(), ctx.tMin = tMin, ctx.bestT = bestT, ctx.bestNormal = bestNormal, ctx.bestObject = bestObject;
+  ctx.rays = &packet.rays, ctx.tMin = tMin, ctx.best = &hits;
   ctx.solids = 0;
   // Rays starting inside an isolated solid's box: the solid's nearest crossing,
   // if any, comes before every other object's surface (those lie outside the
   // box, and the ray stays in the box up to the crossing, which is in it), so
   // the solid answers without a traversal. Rays that do not cross it go on to
   // Embree. The hint only picks which rays to try: the answer is the same.
-  bool done[kPacket] = {};
-  int traced = n;
-  if (!starts.empty()) {
-    for (int k = 0; k < n; ++k) {
-      const int object = starts[static_cast<size_t>(k)].inside;
-      const AnalyticGeometry* g = object >= 0 ? impl_->isolated[static_cast<size_t>(object)] : nullptr;
-      if (g && contains(g->box, rays[static_cast<size_t>(k)].origin)) noteLanes(ctx, g, 1u << k);
-    }
-    resolveSolids(ctx);
-    for (int k = 0; k < n; ++k) {
-      if (bestObject[k] < 0) continue;
-      completeHit(rays[static_cast<size_t>(k)], RTC_INVALID_GEOMETRY_ID, 0, 0, {}, 0, 0, bestObject[k], bestT[k],
-                  bestNormal[k], hits[static_cast<size_t>(k)]);
-      done[k] = true;
-      --traced;
-    }
+  std::uint32_t tried = 0;
+  for (std::uint32_t bits = lanes; bits; bits &= bits - 1) {
+    const int k = std::countr_zero(bits);
+    const int object = packet.inside[k];
+    const AnalyticGeometry* g = object >= 0 ? impl_->isolated[static_cast<size_t>(object)] : nullptr;
+    if (g && contains(g->box, packet.rays.ray(k).origin)) noteLanes(ctx, g, 1u << k), tried |= 1u << k;
   }
+  resolveSolids(ctx);
+  std::uint32_t traced = lanes;
+  for (std::uint32_t bits = tried; bits; bits &= bits - 1)
+    if (const int k = std::countr_zero(bits); hits.object[k] >= 0) traced &= ~(1u << k);
   if (traced == 0) return;
   // A ray leaving a convex solid (from its surface, outside it) cannot cross it
   // again beyond tMin: its lane skips that solid.
-  const AnalyticGeometry* skip[kPacket] = {};
+  const AnalyticGeometry* skip[kPacket];
+  for (int k = 0; k < kLanes; ++k) {
+    const int on = packet.on[k];
+    skip[k] = (traced >> k & 1) && on >= 0 && on != packet.inside[k] ? impl_->convex[static_cast<size_t>(on)] : nullptr;
+  }
   ctx.skip = skip;
-  for (int k = 0; k < n && !starts.empty(); ++k)
-    if (const RayStart& start = starts[static_cast<size_t>(k)]; start.on >= 0 && start.on != start.inside)
-      skip[k] = impl_->convex[static_cast<size_t>(start.on)];
   // Incoherent: with few objects, Embree's per-ray traversal of the packet beats
   // its packet traversal (measured: 17 % of a render of the reference scene).
   ctx.embree.flags = RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT;
   alignas(64) int valid[kPacket];
   alignas(64) RTCRayHit16 rh;
-  for (int k = 0; k < static_cast<int>(kPacket); ++k) {
-    valid[k] = k < n && !done[k] ? -1 : 0;
-    const Ray& ray = rays[static_cast<size_t>(k < n ? k : 0)];
-    rh.ray.org_x[k] = static_cast<float>(ray.origin.x);
-    rh.ray.org_y[k] = static_cast<float>(ray.origin.y);
-    rh.ray.org_z[k] = static_cast<float>(ray.origin.z);
-    rh.ray.dir_x[k] = static_cast<float>(ray.direction.x);
-    rh.ray.dir_y[k] = static_cast<float>(ray.direction.y);
-    rh.ray.dir_z[k] = static_cast<float>(ray.direction.z);
+  const RayLanes& r = packet.rays;
+  for (int k = 0; k < kLanes; ++k) {
+    valid[k] = traced >> k & 1 ? -1 : 0;
+    rh.ray.org_x[k] = static_cast<float>(r.ox[k]);
+    rh.ray.org_y[k] = static_cast<float>(r.oy[k]);
+    rh.ray.org_z[k] = static_cast<float>(r.oz[k]);
+    rh.ray.dir_x[k] = static_cast<float>(r.dx[k]);
+    rh.ray.dir_y[k] = static_cast<float>(r.dy[k]);
+    rh.ray.dir_z[k] = static_cast<float>(r.dz[k]);
     rh.ray.tnear[k] = static_cast<float>(tMin);
     rh.ray.tfar[k] = std::numeric_limits<float>::infinity();
     rh.ray.time[k] = 0;
@@ -418,38 +431,29 @@ void Scene::intersect(std::span<const Ray> rays, std::span<Hit> hits, double tMi
   }
   rtcIntersect16(valid, impl_->scene, &ctx.embree, &rh);
   resolveSolids(ctx);
-  for (int k = 0; k < n; ++k)
-    if (!done[k])
-      completeHit(rays[static_cast<size_t>(k)], rh.hit.geomID[k], rh.hit.primID[k], rh.ray.tfar[k],
-                  {rh.hit.Ng_x[k], rh.hit.Ng_y[k], rh.hit.Ng_z[k]}, rh.hit.u[k], rh.hit.v[k], bestObject[k], bestT[k],
-                  bestNormal[k], hits[static_cast<size_t>(k)]);
+  if (!impl_->meshes) return;
+  for (std::uint32_t bits = traced; bits; bits &= bits - 1)
+    if (const int k = std::countr_zero(bits); rh.hit.geomID[k] != RTC_INVALID_GEOMETRY_ID)
+      meshHit(k, rh.hit.geomID[k], rh.hit.primID[k], rh.ray.tfar[k], {rh.hit.Ng_x[k], rh.hit.Ng_y[k], rh.hit.Ng_z[k]},
+              rh.hit.u[k], rh.hit.v[k], hits);
 }
 
-void Scene::completeHit(const Ray& ray, unsigned geomID, unsigned primID, float tfar, const Vec3& ng, float u, float v,
-                        int bestObject, double bestT, const Vec3& bestNormal, Hit& hit) const {
-  const bool native = geomID != RTC_INVALID_GEOMETRY_ID;
-  if (bestObject >= 0 && (!native || bestT <= tfar)) {  // an analytic object is nearest; its normal is unit
-    hit.object = bestObject;
-    hit.t = bestT;
-    hit.normal = bestNormal;
-  } else if (!native) {
-    hit.object = -1;
-    return;
-  } else {  // a mesh
-    hit.object = static_cast<int>(geomID);
-    hit.t = tfar;
-    hit.normal = ng.normalized();
-    const Object& obj = objects_[geomID];
-    const auto& mesh = std::get<TriangleMesh>(obj.shape);
-    if (!mesh.normals.empty()) {
-      const auto& tri = mesh.triangles[primID];
-      const Vec3 n = mesh.normals[tri[0]] * (1.0 - u - v) + mesh.normals[tri[1]] * u + mesh.normals[tri[2]] * v;
-      const Vec3 shading = obj.worldFromObject.vector(n).normalized();
-      // Keep the interpolated normal on the geometric normal's side.
-      hit.normal = shading.dot(hit.normal) > 0 ? shading : hit.normal;
-    }
+void Scene::meshHit(int k, unsigned geomID, unsigned primID, float tfar, const Vec3& ng, float u, float v,
+                    HitPacket& hits) const {
+  if (hits.object[k] >= 0 && hits.t[k] <= tfar) return;  // an analytic object is nearer
+  Vec3 normal = ng.normalized();
+  const Object& obj = objects_[geomID];
+  const auto& mesh = std::get<TriangleMesh>(obj.shape);
+  if (!mesh.normals.empty()) {
+    const auto& tri = mesh.triangles[primID];
+    const Vec3 n = mesh.normals[tri[0]] * (1.0 - u - v) + mesh.normals[tri[1]] * u + mesh.normals[tri[2]] * v;
+    const Vec3 shading = obj.worldFromObject.vector(n).normalized();
+    // Keep the interpolated normal on the geometric normal's side.
+    if (shading.dot(normal) > 0) normal = shading;
   }
-  hit.point = ray.at(hit.t);
+  hits.t[k] = tfar;
+  hits.nx[k] = normal.x, hits.ny[k] = normal.y, hits.nz[k] = normal.z;
+  hits.object[k] = static_cast<int>(geomID);
 }
 
 bool Scene::isolated(int index) const { return impl_->isolated[static_cast<size_t>(index)] != nullptr; }

@@ -191,6 +191,21 @@ public:
   };
   void intersect(std::span<const Ray> rays, std::span<Hit> hits, double tMin = kTMin,
                  std::span<const RayStart> starts = {}) const;
+  // The same packet query in structures of arrays, the tracer's form: the
+  // rays of the lanes set in `lanes` (bit k: lane k), each with its RayStart,
+  // and their hits in the same lanes (a hit's point is rays.ray(k).at(t)).
+  // Lanes not set are neither read (but for harmless arithmetic) nor written.
+  struct RayPacket {
+    RayLanes rays;  // world frame
+    int inside[kPacket], on[kPacket];
+  };
+  struct HitPacket {
+    alignas(64) double t[kPacket];
+    alignas(64) double nx[kPacket], ny[kPacket], nz[kPacket];  // as Hit::normal
+    int object[kPacket];  // -1: no hit
+    Vec3 normal(int k) const { return {nx[k], ny[k], nz[k]}; }
+  };
+  void intersect(const RayPacket& rays, std::uint32_t lanes, HitPacket& hits, double tMin = kTMin) const;
 
   const std::vector<Object>& objects() const { return objects_; }
   const Object& object(int index) const { return objects_[static_cast<size_t>(index)]; }
@@ -208,8 +223,9 @@ public:
   double ambientIor() const { return ambientIor_; }
 
 private:
-  void completeHit(const Ray& ray, unsigned geomID, unsigned primID, float tfar, const Vec3& ng, float u, float v,
-                   int bestObject, double bestT, const Vec3& bestNormal, Hit& hit) const;
+  // A mesh's hit (Embree's, in float) where it is nearer than the analytic objects' in `hits`.
+  void meshHit(int k, unsigned geomID, unsigned primID, float tfar, const Vec3& ng, float u, float v,
+               HitPacket& hits) const;
 
   struct Impl;
   std::unique_ptr<Impl> impl_;

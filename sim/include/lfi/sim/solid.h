@@ -15,6 +15,7 @@
 #include "lfi/core/geometry.h"
 
 #include <array>
+#include <cstdint>
 #include <limits>
 #include <memory>
 #include <vector>
@@ -26,6 +27,20 @@ struct Ray {
   Vec3 direction;  // unit length
   Vec3 at(double t) const { return origin + direction * t; }
 };
+
+// Up to kSize rays as a structure of arrays, one lane per ray: the form the
+// lane-parallel queries (packets of the tracer, a solid's convex kernel) read.
+struct RayLanes {
+  static constexpr int kSize = 16;
+  alignas(64) double ox[kSize], oy[kSize], oz[kSize], dx[kSize], dy[kSize], dz[kSize];
+  Ray ray(int k) const { return {{ox[k], oy[k], oz[k]}, {dx[k], dy[k], dz[k]}}; }
+  void set(int k, const Ray& r) {
+    ox[k] = r.origin.x, oy[k] = r.origin.y, oz[k] = r.origin.z;
+    dx[k] = r.direction.x, dy[k] = r.direction.y, dz[k] = r.direction.z;
+  }
+};
+// Every lane of `in` in another frame: out = x applied to in (points and directions).
+void transformRays(const Rigid3& x, const RayLanes& in, RayLanes& out);
 
 // No default member initialisers: interval lists live on the hot path and
 // must cost nothing to create.
@@ -87,8 +102,11 @@ public:
   // normal[k]; t[k] = infinity when there is none. The same crossings as
   // intervals(), many rays at once: an intersection of convex primitives (a
   // lens) is computed lane-parallel, in SIMD where the CPU has it.
-  static constexpr int kBatch = 16;
+  static constexpr int kBatch = RayLanes::kSize;
   void nearestCrossings(int n, const Ray* rays, double tMin, double* t, Vec3* normal) const;
+  // The same for the lanes of `rays` whose bits are set in `lanes`: t[k] and
+  // normal[k] for lane k; other lanes' results are not written.
+  void nearestCrossings(const RayLanes& rays, std::uint32_t lanes, double tMin, double* t, Vec3* normal) const;
   Bounds bounds() const;  // in the parent frame
   bool contains(const Vec3& point) const;  // in the parent frame
   Kind kind() const { return kind_; }
