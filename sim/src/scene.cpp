@@ -3,6 +3,8 @@
 #include "lfi/core/error.h"
 #include "lfi/core/log.h"
 
+#include "simd.h"
+
 #include <embree3/rtcore.h>
 
 #include <algorithm>
@@ -51,34 +53,51 @@ bool overlap(const Bounds& a, const Bounds& b) {
          b.lo.z <= a.hi.z;
 }
 
-// Lane k's crossing of a (closed) rectangle beyond tMin; infinity when there is none.
-double rectangleCrossing(const WorldRectangle& r, const RayLanes& rays, int k, double tMin) {
-  const Vec3 origin(rays.ox[k], rays.oy[k], rays.oz[k]), direction(rays.dx[k], rays.dy[k], rays.dz[k]);
-  const Vec3 toCentre = r.centre - origin;
-  const double t = toCentre.dot(r.normal) / direction.dot(r.normal);  // NaN or infinite parallel to the plane
-  const Vec3 p = direction * t - toCentre;                              // from the centre, in the plane
-  const bool hit = t > tMin && t < std::numeric_limits<double>::infinity() && std::abs(p.dot(r.axisX)) <= r.halfX &&
-                   std::abs(p.dot(r.axisY)) <= r.halfY;
-  return hit ? t : std::numeric_limits<double>::infinity();
+// The crossings beyond tMin of the lanes in `lanes` with a (closed)
+// rectangle, kept where they are the nearest so far; every lane is computed
+// at once (vectorised; a lane's crossing does not depend on the others').
+LFI_SIMD_CLONES void rectangleLanes(const WorldRectangle& r, const RayLanes& __restrict rays, std::uint32_t lanes,
+                                    double tMin, int object, Scene::HitPacket& __restrict best) {
+  constexpr double kInf = std::numeric_limits<double>::infinity();
+  const Vec3 n = r.normal, ax = r.axisX, ay = r.axisY, c = r.centre;
+  const double halfX = r.halfX, halfY = r.halfY;
+  double crossing[RayLanes::kSize];
+  for (int k = 0; k < RayLanes::kSize; ++k) {
+    const double cx = c.x - rays.ox[k], cy = c.y - rays.oy[k], cz = c.z - rays.oz[k];
+    const double dx = rays.dx[k], dy = rays.dy[k], dz = rays.dz[k];
+    const double t = (cx * n.x + cy * n.y + cz * n.z) / (dx * n.x + dy * n.y + dz * n.z);  // NaN or inf: parallel
+    const double px = dx * t - cx, py = dy * t - cy, pz = dz * t - cz;  // from the centre, in the plane
+    const double u = px * ax.x + py * ax.y + pz * ax.z, v = px * ay.x + py * ay.y + pz * ay.z;
+    const bool hit = (t > tMin) & (t < kInf) & (std::abs(u) <= halfX) & (std::abs(v) <= halfY);  // no branches
+    crossing[k] = hit ? t : kInf;
+  }
+  for (int k = 0; k < RayLanes::kSize; ++k) {
+    const bool nearer = (lanes >> k & 1) != 0 && crossing[k] < best.t[k];
+    best.t[k] = nearer ? crossing[k] : best.t[k];
+    best.nx[k] = nearer ? r.normal.x : best.nx[k];
+    best.ny[k] = nearer ? r.normal.y : best.ny[k];
+    best.nz[k] = nearer ? r.normal.z : best.nz[k];
+    best.object[k] = nearer ? object : best.object[k];
+  }
 }
 
-// Embree finds which analytic objects each ray may hit (their bounds). A
-// rectangle's crossing is cheap and computed at once; a solid's lanes are
-// noted and its crossings computed after the traversal for all of them at
-// once: Embree's packet traversal hands the callback only one or a few rays at
-// a time, while the solids' convex kernel is lane-parallel. Lanes are the
-// rays' ids (their index in the packet). Crossings are in double precision.
+// Embree finds which analytic objects each ray may hit (their bounds). The
+// callback only notes the lanes; their crossings are computed after the
+// traversal for all of them at once: Embree's packet traversal hands the
+// callback only one or a few rays at a time, while a rectangle's crossing and
+// the solids' convex kernel are lane-parallel. Lanes are the rays' ids (their
+// index in the packet). Crossings are in double precision.
 struct HitContext {
   RTCIntersectContext embree;
   const RayLanes* rays;  // world frame
   double tMin;
   Scene::HitPacket* best;  // the nearest analytic crossing so far, per lane
   const AnalyticGeometry* const* skip;  // per lane: a solid the ray cannot cross, or null
-  // The solids met so far, each with the lanes that may cross it.
-  static constexpr int kSolids = 8;
-  int solids;
-  std::array<const AnalyticGeometry*, kSolids> solid;  // not initialised: `solids` says what is valid
-  std::array<std::uint32_t, kSolids> lanes;
+  // The objects met so far, each with the lanes that may cross it.
+  static constexpr int kObjects = 8;
+  int objects;
+  std::array<const AnalyticGeometry*, kObjects> object;  // not initialised: `objects` says what is valid
+  std::array<std::uint32_t, kObjects> lanes;
 };
 static_assert(RayLanes::kSize == static_cast<int>(Scene::kPacket) && Scene::kPacket <= 32);
 
@@ -90,15 +109,19 @@ inline void keepNearest(Scene::HitPacket& best, int k, double t, const Vec3& nor
   best.object[k] = object;
 }
 
-// Intersects the noted solids' lanes exactly and keeps each lane's nearest.
-void resolveSolids(HitContext& ctx) {
+// Intersects the noted objects' lanes exactly and keeps each lane's nearest.
+void resolveLanes(HitContext& ctx) {
   RayLanes local;
   double t[RayLanes::kSize];
   Vec3 normal[RayLanes::kSize];
-  for (int s = 0; s < ctx.solids; ++s) {
-    const AnalyticGeometry& g = *ctx.solid[static_cast<size_t>(s)];
+  for (int s = 0; s < ctx.objects; ++s) {
+    const AnalyticGeometry& g = *ctx.object[static_cast<size_t>(s)];
     const std::uint32_t lanes = ctx.lanes[static_cast<size_t>(s)];
     if (lanes == 0) continue;  // every lane skipped the solid
+    if (!g.solid) {
+      rectangleLanes(g.rectangle, *ctx.rays, lanes, ctx.tMin, g.object, *ctx.best);
+      continue;
+    }
     if (g.placed) transformRays(g.objectFromWorld, *ctx.rays, local);
     g.solid->nearestCrossings(g.placed ? local : *ctx.rays, lanes, ctx.tMin, t, normal);
     for (std::uint32_t bits = lanes; bits; bits &= bits - 1) {
@@ -106,18 +129,18 @@ void resolveSolids(HitContext& ctx) {
       keepNearest(*ctx.best, k, t[k], g.placed ? g.worldFromObject.vector(normal[k]) : normal[k], g.object);
     }
   }
-  ctx.solids = 0;
+  ctx.objects = 0;
 }
 
-// Notes that the lanes in `bits` may cross solid g (resolved by resolveSolids).
+// Notes that the lanes in `bits` may cross object g (resolved by resolveLanes).
 void noteLanes(HitContext& ctx, const AnalyticGeometry* g, std::uint32_t bits) {
   int s = 0;
-  while (s < ctx.solids && ctx.solid[static_cast<size_t>(s)] != g) ++s;
-  if (s == ctx.solids) {
-    if (ctx.solids == HitContext::kSolids) resolveSolids(ctx), s = 0;
-    ctx.solid[static_cast<size_t>(s)] = g;
+  while (s < ctx.objects && ctx.object[static_cast<size_t>(s)] != g) ++s;
+  if (s == ctx.objects) {
+    if (ctx.objects == HitContext::kObjects) resolveLanes(ctx), s = 0;
+    ctx.object[static_cast<size_t>(s)] = g;
     ctx.lanes[static_cast<size_t>(s)] = 0;
-    ++ctx.solids;
+    ++ctx.objects;
   }
   ctx.lanes[static_cast<size_t>(s)] |= bits;
 }
@@ -137,15 +160,6 @@ void analyticIntersect(const RTCIntersectFunctionNArguments* args) {
   auto& ctx = *reinterpret_cast<HitContext*>(args->context);
   const auto* g = static_cast<const AnalyticGeometry*>(args->geometryUserPtr);
   RTCRayN* rays = RTCRayHitN_RayN(args->rayhit, args->N);
-  if (!g->solid) {
-    for (unsigned k = 0; k < args->N; ++k) {
-      if (!args->valid[k]) continue;
-      const auto lane = static_cast<int>(RTCRayN_id(rays, args->N, k));
-      keepNearest(*ctx.best, lane, rectangleCrossing(g->rectangle, *ctx.rays, lane, ctx.tMin), g->rectangle.normal,
-                  g->object);
-    }
-    return;
-  }
   std::uint32_t bits = 0;
   for (unsigned k = 0; k < args->N; ++k) {
     const unsigned lane = RTCRayN_id(rays, args->N, k);
@@ -310,16 +324,15 @@ Scene::Scene(std::vector<Object> objects, double ambientIor)
 Scene::~Scene() = default;
 
 Hit Scene::intersect(const Ray& ray, double tMin, double tMax) const {
-  RayLanes lane0;
-  lane0.set(0, ray);
+  RayLanes lane0;  // every lane the ray, for the lane-parallel kernels
   HitPacket best;
-  best.t[0] = tMax, best.object[0] = -1;
+  for (int k = 0; k < RayLanes::kSize; ++k) lane0.set(k, ray), best.t[k] = tMax, best.object[k] = -1;
   HitContext ctx;
   rtcInitIntersectContext(&ctx.embree);
   ctx.rays = &lane0, ctx.tMin = tMin, ctx.best = &best;
   const AnalyticGeometry* skip[1] = {};
   ctx.skip = skip;
-  ctx.solids = 0;
+  ctx.objects = 0;
   RTCRayHit rh;
   rh.ray.org_x = static_cast<float>(ray.origin.x);
   rh.ray.org_y = static_cast<float>(ray.origin.y);
@@ -336,7 +349,7 @@ Hit Scene::intersect(const Ray& ray, double tMin, double tMax) const {
   rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
   rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
   rtcIntersect1(impl_->scene, &ctx.embree, &rh);
-  resolveSolids(ctx);
+  resolveLanes(ctx);
   if (rh.hit.geomID != RTC_INVALID_GEOMETRY_ID)
     meshHit(0, rh.hit.geomID, rh.hit.primID, rh.ray.tfar, {rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z}, rh.hit.u, rh.hit.v,
             best);
@@ -380,7 +393,7 @@ void Scene::intersect(const RayPacket& packet, std::uint32_t lanes, HitPacket& h
   HitContext ctx;
   rtcInitIntersectContext(&ctx.embree);
   ctx.rays = &packet.rays, ctx.tMin = tMin, ctx.best = &hits;
-  ctx.solids = 0;
+  ctx.objects = 0;
   // Rays starting inside an isolated solid's box: the solid's nearest crossing,
   // if any, comes before every other object's surface (those lie outside the
   // box, and the ray stays in the box up to the crossing, which is in it), so
@@ -393,7 +406,7 @@ void Scene::intersect(const RayPacket& packet, std::uint32_t lanes, HitPacket& h
     const AnalyticGeometry* g = object >= 0 ? impl_->isolated[static_cast<size_t>(object)] : nullptr;
     if (g && contains(g->box, packet.rays.ray(k).origin)) noteLanes(ctx, g, 1u << k), tried |= 1u << k;
   }
-  resolveSolids(ctx);
+  resolveLanes(ctx);
   std::uint32_t traced = lanes;
   for (std::uint32_t bits = tried; bits; bits &= bits - 1)
     if (const int k = std::countr_zero(bits); hits.object[k] >= 0) traced &= ~(1u << k);
@@ -430,7 +443,7 @@ void Scene::intersect(const RayPacket& packet, std::uint32_t lanes, HitPacket& h
     rh.hit.instID[0][k] = RTC_INVALID_GEOMETRY_ID;
   }
   rtcIntersect16(valid, impl_->scene, &ctx.embree, &rh);
-  resolveSolids(ctx);
+  resolveLanes(ctx);
   if (!impl_->meshes) return;
   for (std::uint32_t bits = traced; bits; bits &= bits - 1)
     if (const int k = std::countr_zero(bits); rh.hit.geomID[k] != RTC_INVALID_GEOMETRY_ID)
