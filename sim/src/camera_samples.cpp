@@ -8,6 +8,22 @@
 
 namespace lfi::sim::detail {
 
+namespace {
+
+// The rest of permutationElement for lanes whose first round gave i[k]: the
+// cycle walk of the few lanes at or past n (none when n is a power of two),
+// then the rotation, for all lanes at once.
+inline void walkAndRotate(int lanes, std::uint32_t n, std::uint32_t mask, const std::uint32_t* key, std::uint32_t* i) {
+  unsigned walk = 0;
+  for (int k = 0; k < lanes; ++k) walk |= i[k] >= n ? 1u : 0u;
+  if (walk)
+    for (int k = 0; k < lanes; ++k)
+      while (i[k] >= n) i[k] = permutationRound(i[k], mask, key[k]);
+  for (int k = 0; k < lanes; ++k) i[k] = permutationRotation(i[k], n, mask, key[k]);
+}
+
+}  // namespace
+
 LFI_SIMD_CLONES void makeCameraSamples(const TelecentricCamera::RayMap& camera, std::uint64_t seed, int side, int n,
                                        CameraSampleBatch& b) {
   constexpr std::uint64_t kGolden = 0x9e3779b97f4a7c15ull;  // Sampler's increment
@@ -19,10 +35,7 @@ LFI_SIMD_CLONES void makeCameraSamples(const TelecentricCamera::RayMap& camera, 
   std::uint32_t stop[CameraSampleBatch::kSize];
   for (int k = 0; k < n; ++k)  // (unstratified samples permute 0, for a walk that ends)
     stop[k] = permutationRound(b.sample[k] < strata ? b.sample[k] : 0, mask, b.stopKey[k]);
-  for (int k = 0; k < n; ++k) {
-    while (stop[k] >= strata) stop[k] = permutationRound(stop[k], mask, b.stopKey[k]);
-    stop[k] = permutationRotation(stop[k], strata, mask, b.stopKey[k]);
-  }
+  walkAndRotate(n, strata, mask, b.stopKey, stop);
   for (int k = 0; k < n; ++k) {
     // Sampler(seed, stream) and its first four draws.
     const std::uint64_t state = splitMix64(b.stream[k] ^ seedHash);
@@ -51,13 +64,10 @@ LFI_SIMD_CLONES void makeStratifiedChoices(std::uint32_t spp, int n, ChoiceBatch
   // lanes that must walk on (none when spp is a power of two).
   const std::uint32_t mask = permutationMask(spp);
   const double stratumWidth = 1.0 / spp;
-  for (int d = 0; d < kStratifiedChoices; ++d) {
+  for (int d = 0; d < kBatchedChoices; ++d) {
     std::uint32_t stratum[ChoiceBatch::kSize];
     for (int k = 0; k < n; ++k) stratum[k] = permutationRound(b.sample[k], mask, b.key[d][k]);
-    for (int k = 0; k < n; ++k) {
-      while (stratum[k] >= spp) stratum[k] = permutationRound(stratum[k], mask, b.key[d][k]);
-      stratum[k] = permutationRotation(stratum[k], spp, mask, b.key[d][k]);
-    }
+    walkAndRotate(n, spp, mask, b.key[d], stratum);
     for (int k = 0; k < n; ++k) {
       const double jitter = Sampler::unitInterval(splitMix64((std::uint64_t{b.key[d][k]} << 32) | b.sample[k]));
       b.u[d][k] = (stratum[k] + jitter) * stratumWidth;

@@ -7,6 +7,7 @@
 // TelecentricCamera::RayMap. render.cpp's concentricDisc() and this batch
 // share the disc arithmetic below, so both give the same bits.
 
+#include "lfi/sim/render.h"
 #include "lfi/sim/sensors.h"
 
 #include <cstdint>
@@ -69,11 +70,19 @@ void makeCameraSamples(const TelecentricCamera::RayMap& camera, std::uint64_t se
 // each choice then covers [0, 1) evenly, so the few reflect/refract branches of
 // a lens are taken in proportion.
 constexpr int kStratifiedChoices = 4;
+inline double stratifiedChoice(std::uint32_t spp, std::uint32_t sample, std::uint32_t key) {
+  const double jitter = Sampler::unitInterval(splitMix64((std::uint64_t{key} << 32) | sample));
+  return (permutationElement(sample, spp, key) + jitter) * (1.0 / spp);
+}
+
+// The first kBatchedChoices of them (a lens's two faces), for many samples at
+// once; the rest, which few paths reach, one at a time when they are needed.
+constexpr int kBatchedChoices = 2;
 struct ChoiceBatch {
   static constexpr int kSize = 16;
-  std::uint32_t sample[kSize];                  // in: index in the pixel, < spp
-  std::uint32_t key[kStratifiedChoices][kSize];  // in: the pixel's key of each choice
-  double u[kStratifiedChoices][kSize];           // out: the choices' values in [0, 1)
+  std::uint32_t sample[kSize];                // in: index in the pixel, < spp
+  std::uint32_t key[kBatchedChoices][kSize];  // in: the pixel's key of each choice
+  double u[kBatchedChoices][kSize];           // out: stratifiedChoice(spp, sample, key)
 };
 
 // Choices of samples 0..n-1 of `batch`, spp samples per pixel.

@@ -198,13 +198,20 @@ double walk(const Scene& scene, PathState p, Policy& policy) {
 }
 
 // A sample's first detail::kStratifiedChoices Fresnel choices, from a Latin
-// hypercube over its pixel's samples (camera_samples.h).
+// hypercube over its pixel's samples (camera_samples.h): the first
+// kBatchedChoices made with the sample, the rest when they are needed.
 struct StratifiedChoices {
-  std::array<double, detail::kStratifiedChoices> u;
+  static constexpr int kLater = detail::kStratifiedChoices - detail::kBatchedChoices;
+  std::array<double, detail::kBatchedChoices> u;
+  std::array<std::uint32_t, kLater> key;  // the pixel's keys of the later choices
+  std::uint32_t spp = 0, sample = 0;
   int used = detail::kStratifiedChoices;  // none left
   bool next(double& value) {
     if (used == detail::kStratifiedChoices) return false;
-    value = u[static_cast<size_t>(used++)];
+    const int d = used++;
+    value = d < detail::kBatchedChoices
+                ? u[static_cast<size_t>(d)]
+                : detail::stratifiedChoice(spp, sample, key[static_cast<size_t>(d - detail::kBatchedChoices)]);
     return true;
   }
 };
@@ -554,7 +561,7 @@ private:
     for (size_t k = 0; k < m; ++k) {
       const PixelWork& px = pixels_[static_cast<size_t>(starts_[k].slot)];
       choices_.sample[k] = static_cast<std::uint32_t>(starts_[k].sample);
-      for (size_t d = 0; d < detail::kStratifiedChoices; ++d) choices_.key[d][k] = px.choiceKeys[d];
+      for (size_t d = 0; d < detail::kBatchedChoices; ++d) choices_.key[d][k] = px.choiceKeys[d];
     }
     detail::makeStratifiedChoices(static_cast<std::uint32_t>(options_.samplesPerPixel), static_cast<int>(m), choices_);
     if (cameraRays_) {
@@ -612,7 +619,11 @@ private:
       lanes_.sample[lane] = start.sample;
       lanes_.waiting[lane] = 0;
       StratifiedChoices& choices = lanes_.choices[static_cast<size_t>(lane)];
-      for (size_t d = 0; d < detail::kStratifiedChoices; ++d) choices.u[d] = choices_.u[d][k];
+      for (size_t d = 0; d < detail::kBatchedChoices; ++d) choices.u[d] = choices_.u[d][k];
+      const PixelWork& px = pixels_[static_cast<size_t>(start.slot)];
+      for (size_t d = 0; d < StratifiedChoices::kLater; ++d) choices.key[d] = px.choiceKeys[detail::kBatchedChoices + d];
+      choices.spp = static_cast<std::uint32_t>(options_.samplesPerPixel);
+      choices.sample = static_cast<std::uint32_t>(start.sample);
       choices.used = 0;
       lanes_.media[static_cast<size_t>(lane)] = MediumStack();
     }

@@ -399,9 +399,10 @@ TEST(CameraSamples, VectorisedPassEqualsOneSampleAtATime) {
   }
 }
 
-// The vectorised stratified Fresnel choices equal the one-choice formula of
-// camera_samples.h, to the bit, for sample counts with and without cycle
-// walking; and each choice's values over a pixel's samples form a Latin
+// The stratified Fresnel choices, made in the vectorised pass (the first
+// kBatchedChoices) or one at a time (stratifiedChoice, all of them), equal the
+// formula of camera_samples.h to the bit, for sample counts with and without
+// cycle walking; and each choice's values over a pixel's samples form a Latin
 // hypercube (one value in each of the spp strata).
 TEST(CameraSamples, StratifiedChoicesAreALatinHypercube) {
   for (const std::uint32_t spp : {1u, 9u, 16u, 13u}) {
@@ -409,20 +410,24 @@ TEST(CameraSamples, StratifiedChoicesAreALatinHypercube) {
     for (std::uint32_t first = 0; first < spp; first += detail::ChoiceBatch::kSize) {
       detail::ChoiceBatch batch;
       const int n = static_cast<int>(std::min<std::uint32_t>(detail::ChoiceBatch::kSize, spp - first));
+      auto key = [](int d) { return 0x2545f491u * static_cast<std::uint32_t>(d + 3); };
       for (int k = 0; k < n; ++k) {
         batch.sample[k] = first + static_cast<std::uint32_t>(k);
-        for (int d = 0; d < detail::kStratifiedChoices; ++d)
-          batch.key[d][k] = 0x2545f491u * static_cast<std::uint32_t>(d + 3);
+        for (int d = 0; d < detail::kBatchedChoices; ++d) batch.key[d][k] = key(d);
       }
       detail::makeStratifiedChoices(spp, n, batch);
       for (int k = 0; k < n; ++k)
         for (int d = 0; d < detail::kStratifiedChoices; ++d) {
-          const std::uint32_t key = batch.key[d][k], s = batch.sample[k];
-          const double jitter = Sampler::unitInterval(splitMix64((std::uint64_t{key} << 32) | s));
-          EXPECT_EQ(batch.u[d][k], (permutationElement(s, spp, key) + jitter) * (1.0 / spp)) << spp << " " << s;
-          ASSERT_GE(batch.u[d][k], 0);
-          ASSERT_LT(batch.u[d][k], 1);
-          ++perStratum[static_cast<size_t>(d)][static_cast<size_t>(batch.u[d][k] * spp)];
+          const std::uint32_t s = batch.sample[k];
+          const double jitter = Sampler::unitInterval(splitMix64((std::uint64_t{key(d)} << 32) | s));
+          const double u = (permutationElement(s, spp, key(d)) + jitter) * (1.0 / spp);
+          EXPECT_EQ(detail::stratifiedChoice(spp, s, key(d)), u) << spp << " " << s;
+          if (d < detail::kBatchedChoices) {
+            EXPECT_EQ(batch.u[d][k], u) << spp << " " << s;
+          }
+          ASSERT_GE(u, 0);
+          ASSERT_LT(u, 1);
+          ++perStratum[static_cast<size_t>(d)][static_cast<size_t>(u * spp)];
         }
     }
     for (const auto& counts : perStratum)
