@@ -168,6 +168,29 @@ void analyticIntersect(const RTCIntersectFunctionNArguments* args) {
   noteLanes(ctx, g, bits);
 }
 
+// Embree's packet for the lanes in `traced` (the others invalid), every lane
+// at once (vectorised).
+LFI_SIMD_CLONES void embreePacket(const RayLanes& __restrict r, std::uint32_t traced, double tMin, int* __restrict valid,
+                                  RTCRayHit16& __restrict rh) {
+  for (int k = 0; k < RayLanes::kSize; ++k) {
+    valid[k] = (traced >> k & 1) != 0 ? -1 : 0;
+    rh.ray.org_x[k] = static_cast<float>(r.ox[k]);
+    rh.ray.org_y[k] = static_cast<float>(r.oy[k]);
+    rh.ray.org_z[k] = static_cast<float>(r.oz[k]);
+    rh.ray.dir_x[k] = static_cast<float>(r.dx[k]);
+    rh.ray.dir_y[k] = static_cast<float>(r.dy[k]);
+    rh.ray.dir_z[k] = static_cast<float>(r.dz[k]);
+    rh.ray.tnear[k] = static_cast<float>(tMin);
+    rh.ray.tfar[k] = std::numeric_limits<float>::infinity();
+    rh.ray.time[k] = 0;
+    rh.ray.mask[k] = 0xffffffffu;
+    rh.ray.id[k] = static_cast<unsigned>(k);
+    rh.ray.flags[k] = 0;
+    rh.hit.geomID[k] = RTC_INVALID_GEOMETRY_ID;
+    rh.hit.instID[0][k] = RTC_INVALID_GEOMETRY_ID;
+  }
+}
+
 // Per object: its solid when no other object's bounds meet the solid's padded
 // bounds, else null.
 std::vector<const AnalyticGeometry*> isolatedSolids(const std::vector<Object>& objects,
@@ -424,24 +447,7 @@ void Scene::intersect(const RayPacket& packet, std::uint32_t lanes, HitPacket& h
   ctx.embree.flags = RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT;
   alignas(64) int valid[kPacket];
   alignas(64) RTCRayHit16 rh;
-  const RayLanes& r = packet.rays;
-  for (int k = 0; k < kLanes; ++k) {
-    valid[k] = traced >> k & 1 ? -1 : 0;
-    rh.ray.org_x[k] = static_cast<float>(r.ox[k]);
-    rh.ray.org_y[k] = static_cast<float>(r.oy[k]);
-    rh.ray.org_z[k] = static_cast<float>(r.oz[k]);
-    rh.ray.dir_x[k] = static_cast<float>(r.dx[k]);
-    rh.ray.dir_y[k] = static_cast<float>(r.dy[k]);
-    rh.ray.dir_z[k] = static_cast<float>(r.dz[k]);
-    rh.ray.tnear[k] = static_cast<float>(tMin);
-    rh.ray.tfar[k] = std::numeric_limits<float>::infinity();
-    rh.ray.time[k] = 0;
-    rh.ray.mask[k] = 0xffffffffu;
-    rh.ray.id[k] = static_cast<unsigned>(k);
-    rh.ray.flags[k] = 0;
-    rh.hit.geomID[k] = RTC_INVALID_GEOMETRY_ID;
-    rh.hit.instID[0][k] = RTC_INVALID_GEOMETRY_ID;
-  }
+  embreePacket(packet.rays, traced, tMin, valid, rh);
   rtcIntersect16(valid, impl_->scene, &ctx.embree, &rh);
   resolveLanes(ctx);
   if (!impl_->meshes) return;
