@@ -30,27 +30,14 @@ Vec3 cosineHemisphere(const Vec3& n, double u1, double u2) {
 }
 
 double emittedRadiance(const Scene& scene, const Hit& hit, const Emission& emission, const Vec3& towardsSensor) {
-  const double cosTheta = towardsSensor.dot(hit.normal);
-  return std::visit(
-      [&](const auto& e) -> double {
-        using T = std::decay_t<decltype(e)>;
-        if constexpr (std::is_same_v<T, ParallelEmission>) {
-          return cosTheta >= scene.surface(hit.object).cosHalfAngle ? e.radiance : 0.0;
-        } else if constexpr (std::is_same_v<T, LambertianEmission>) {
-          return cosTheta > 0 ? e.radiance : 0.0;
-        } else if constexpr (std::is_same_v<T, LightFieldEmission>) {
-          if (!e.lightField) return 0.0;
-          const Rigid3& local = scene.objectFromWorld(hit.object);
-          const Vec3 q = local.point(hit.point);
-          return e.lightField->radiance({q.x, q.y}, local.vector(towardsSensor), e.lookup);
-        } else {
-          static_assert(std::is_same_v<T, PanelEmission>);
-          const Rigid3& local = scene.objectFromWorld(hit.object);
-          const Vec3 q = local.point(hit.point);
-          return e.radiance({q.x, q.y}, local.vector(towardsSensor));
-        }
-      },
-      emission);
+  const Surface& surface = scene.surface(hit.object);
+  if (surface.uniformEmission)  // parallel or Lambertian
+    return towardsSensor.dot(hit.normal) >= surface.cosHalfAngle ? surface.radiance : 0.0;
+  const Rigid3& local = scene.objectFromWorld(hit.object);
+  const Vec3 q = local.point(hit.point);
+  if (const auto* e = std::get_if<LightFieldEmission>(&emission))
+    return e->lightField ? e->lightField->radiance({q.x, q.y}, local.vector(towardsSensor), e->lookup) : 0.0;
+  return std::get<PanelEmission>(emission).radiance({q.x, q.y}, local.vector(towardsSensor));
 }
 
 // The dielectric objects a path is inside, innermost last.

@@ -222,8 +222,15 @@ Surface surfaceOf(const Object& obj) {
   s.exact = !std::holds_alternative<TriangleMesh>(obj.shape);
   if (obj.emission) {
     s.kind = Surface::Kind::Emitter;
-    if (const auto* parallel = std::get_if<ParallelEmission>(&*obj.emission))
+    if (const auto* parallel = std::get_if<ParallelEmission>(&*obj.emission)) {
+      s.uniformEmission = true;
+      s.radiance = parallel->radiance;
       s.cosHalfAngle = std::cos(parallel->halfAngle_rad);
+    } else if (const auto* lambertian = std::get_if<LambertianEmission>(&*obj.emission)) {
+      s.uniformEmission = true;
+      s.radiance = lambertian->radiance;
+      s.cosHalfAngle = std::numeric_limits<double>::denorm_min();  // cos θ >= it: cos θ > 0
+    }
   } else if (const auto* glass = std::get_if<Dielectric>(&obj.material)) {
     s.kind = Surface::Kind::Dielectric;
     s.ior = glass->ior;

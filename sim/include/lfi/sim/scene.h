@@ -154,7 +154,12 @@ struct Surface {
   double ior = 1;              // Dielectric
   double absorption_per_mm = 0;
   double albedo = 0;           // Diffuse
-  double cosHalfAngle = 1;     // ParallelEmission: cos θmax, worked out once
+  // Parallel and Lambertian emission, worked out once: `radiance` into the
+  // directions with cos θ >= cosHalfAngle (θ from the normal; Lambertian: the
+  // open hemisphere, cosHalfAngle the least double above 0).
+  bool uniformEmission = false;
+  double radiance = 0;
+  double cosHalfAngle = 1;
 };
 
 // What a ray hit: the object, the distance and the surface there.
