@@ -323,18 +323,19 @@ public:
       // Paths that went into an isolated solid (a lens) meet only its surface
       // next: the solid answers them without a traversal, so step them at once
       // and keep the Embree packets for the rays that need one.
-      for (LaneMask inner; (inner = insideIsolated(active)) != 0;) active = (active & ~inner) | step(inner, free);
+      for (LaneMask inner; (inner = active & insideIsolated_) != 0;) active = (active & ~inner) | step(inner, free);
     }
   }
 
 private:
-  LaneMask insideIsolated(LaneMask lanes) const {
-    LaneMask inner = 0;
-    for (; lanes; lanes &= lanes - 1) {
-      const int k = std::countr_zero(lanes);
-      if (lanes_.ray.inside[k] >= 0 && scene_.isolated(lanes_.ray.inside[k])) inner |= 1u << k;
-    }
-    return inner;
+  // Sets lane k's innermost medium from its media stack: the packet query's
+  // hint, and whether the lane is inside an isolated solid.
+  void setInside(int k) {
+    const MediumStack& media = lanes_.media[k];
+    const int inside = media.size() ? media.top() : -1;
+    lanes_.ray.inside[k] = inside;
+    const LaneMask bit = 1u << k;
+    insideIsolated_ = inside >= 0 && scene_.isolated(inside) ? insideIsolated_ | bit : insideIsolated_ & ~bit;
   }
 
   // Traces one step of the paths in `lanes`: their next hits, in one packet
@@ -432,7 +433,7 @@ private:
           media.push(object);
         else
           media.remove(object);
-        lanes_.ray.inside[k] = media.size() ? media.top() : -1;
+        setInside(k);
       } else {
         lanes_.ray.rays.set(k, {point, reflected});
       }
@@ -481,9 +482,9 @@ private:
   }
   void load(int k, const Walker& w) {
     lanes_.ray.rays.set(k, w.path.ray);
-    lanes_.ray.inside[k] = w.path.media.size() ? w.path.media.top() : -1;
     lanes_.ray.on[k] = w.path.on;
     lanes_.media[k] = w.path.media;
+    setInside(k);
     lanes_.throughput[k] = w.path.throughput;
     lanes_.depth[k] = w.path.depth;
     lanes_.sampler[k] = w.sampler.state;
@@ -597,7 +598,7 @@ private:
       free &= free - 1;
       started |= 1u << lane;
       lanes_.ray.rays.set(lane, start.ray);
-      lanes_.ray.inside[lane] = lanes_.ray.on[lane] = -1;
+      lanes_.ray.on[lane] = -1;
       lanes_.throughput[lane] = 1;
       lanes_.radiance[lane] = 0;
       lanes_.sampler[lane] = start.sampler.state;
@@ -613,6 +614,7 @@ private:
       choices.sample = static_cast<std::uint32_t>(start.sample);
       choices.used = 0;
       lanes_.media[static_cast<size_t>(lane)] = MediumStack();
+      setInside(lane);
     }
     return started;
   }
@@ -653,6 +655,7 @@ private:
   detail::ChoiceBatch choices_;
   static_assert(detail::CameraSampleBatch::kSize >= kLanes && detail::ChoiceBatch::kSize >= kLanes);
   Lanes lanes_;
+  LaneMask insideIsolated_ = 0;  // lanes whose innermost medium is an isolated solid (Scene::isolated)
   Scene::HitPacket hits_;
   detail::FresnelLanes fresnel_;
   // Per lane, its waiting split branches, at most one per split depth.
