@@ -37,12 +37,14 @@ LFI_SIMD_CLONES void makeCameraSamples(const TelecentricCamera::RayMap& camera, 
     stop[k] = permutationRound(b.sample[k] < strata ? b.sample[k] : 0, mask, b.stopKey[k]);
   walkAndRotate(n, strata, mask, b.stopKey, stop);
   for (int k = 0; k < n; ++k) {
-    // Sampler(seed, stream) and its first four draws.
+    // Sampler(seed, stream) and its first two draws, as pairs (Sampler::nextPair).
     const std::uint64_t state = splitMix64(b.stream[k] ^ seedHash);
-    const double u0 = Sampler::unitInterval(splitMix64(state)), u1 = Sampler::unitInterval(splitMix64(state + kGolden));
-    const double u2 = Sampler::unitInterval(splitMix64(state + 2 * kGolden));
-    const double u3 = Sampler::unitInterval(splitMix64(state + 3 * kGolden));
-    b.state[k] = state + 4 * kGolden;
+    const std::uint64_t pixelDraw = splitMix64(state), stopDraw = splitMix64(state + kGolden);
+    const double u0 = Sampler::unitInterval32(static_cast<std::uint32_t>(pixelDraw >> 32));
+    const double u1 = Sampler::unitInterval32(static_cast<std::uint32_t>(pixelDraw));
+    const double u2 = Sampler::unitInterval32(static_cast<std::uint32_t>(stopDraw >> 32));
+    const double u3 = Sampler::unitInterval32(static_cast<std::uint32_t>(stopDraw));
+    b.state[k] = state + 2 * kGolden;
     // Jittered stratum (row = stratum div side, exactly: the quotient is at
     // least 0.5 / side away from an integer) or the plain draws.
     auto stratify = [&](double stratum, double u, double v, double& x, double& y) {

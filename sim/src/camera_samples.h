@@ -2,7 +2,7 @@
 // Internal to lfi_sim: what the renderer's new samples start with, for many
 // samples at once (structure of arrays, vectorised): the telecentric camera's
 // samples and every sample's stratified Fresnel choices. A camera sample is:
-// its random stream, four draws (pixel area, stop), the jittered strata,
+// its random stream, two draws as pairs (pixel area, stop), the jittered strata,
 // Shirley's concentric map of the stop draw and the ray of sight of
 // TelecentricCamera::RayMap. render.cpp's concentricDisc() and this batch
 // share the disc arithmetic below, so both give the same bits.
@@ -54,7 +54,7 @@ struct CameraSampleBatch {
   std::uint64_t stream[kSize];
   double pixelX[kSize], pixelY[kSize];
   std::uint32_t sample[kSize], stopKey[kSize];
-  // Out: the ray of sight (world frame) and the stream's state after the four draws.
+  // Out: the ray of sight (world frame) and the stream's state after the two draws.
   double ox[kSize], oy[kSize], oz[kSize], dx[kSize], dy[kSize], dz[kSize];
   std::uint64_t state[kSize];
 };

@@ -308,17 +308,31 @@ TEST(Sampler, PermutationElementsPermuteAndAreUniform) {
     for (int c : row) EXPECT_NEAR(c, 500, 5 * sigma);
 }
 
-// Uniform doubles in [0, 1) with mean 1/2.
+// Uniform doubles in [0, 1) with mean 1/2, one per draw or two (whose
+// product then has mean 1/4: the halves are uncorrelated); the ends of the
+// 32-bit map.
 TEST(Sampler, UniformDoublesAreInRange) {
   Sampler sampler(3, 9);
-  double sum = 0;
-  for (int k = 0; k < 100000; ++k) {
+  constexpr int kDraws = 100000;
+  double sum = 0, sumA = 0, sumB = 0, sumAB = 0;
+  for (int k = 0; k < kDraws; ++k) {
     const double u = sampler.next();
-    ASSERT_GE(u, 0.0);
-    ASSERT_LT(u, 1.0);
-    sum += u;
+    double a, b;
+    sampler.nextPair(a, b);
+    for (const double v : {u, a, b}) {
+      ASSERT_GE(v, 0.0);
+      ASSERT_LT(v, 1.0);
+    }
+    sum += u, sumA += a, sumB += b, sumAB += a * b;
   }
-  EXPECT_NEAR(sum / 100000, 0.5, 5 * std::sqrt(1.0 / 12 / 100000));
+  const double sigma = std::sqrt(1.0 / 12 / kDraws);
+  EXPECT_NEAR(sum / kDraws, 0.5, 5 * sigma);
+  EXPECT_NEAR(sumA / kDraws, 0.5, 5 * sigma);
+  EXPECT_NEAR(sumB / kDraws, 0.5, 5 * sigma);
+  EXPECT_NEAR(sumAB / kDraws, 0.25, 5 * std::sqrt(7.0 / 144 / kDraws));  // var(ab) = 1/9 - 1/16
+  EXPECT_EQ(Sampler::unitInterval32(0), 0.0);
+  EXPECT_EQ(Sampler::unitInterval32(0xffffffffu), 1.0 - 0x1p-32);
+  EXPECT_EQ(Sampler::unitInterval32(0x80000000u), 0.5);
 }
 
 // The concentric map (Shirley and Chiu 1997): square (u1, u2) -> 2u - 1 =
@@ -378,7 +392,9 @@ TEST(CameraSamples, VectorisedPassEqualsOneSampleAtATime) {
   detail::makeCameraSamples(map, seed, side, detail::CameraSampleBatch::kSize, batch);
   for (int k = 0; k < detail::CameraSampleBatch::kSize; ++k) {
     Sampler sampler(seed, batch.stream[k]);
-    const double u0 = sampler.next(), u1 = sampler.next(), u2 = sampler.next(), u3 = sampler.next();
+    double u0, u1, u2, u3;
+    sampler.nextPair(u0, u1);
+    sampler.nextPair(u2, u3);
     const bool plain = batch.sample[k] >= side * side;
     auto stratified = [&](std::uint32_t s, double u, double v) {
       if (plain) return Vec2(u, v);

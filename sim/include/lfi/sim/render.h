@@ -72,10 +72,20 @@ struct Sampler {
   }
   std::uint32_t nextU32() { return static_cast<std::uint32_t>(nextU64() >> 32); }
   double next() { return unitInterval(nextU64()); }  // uniform in [0, 1)
+  // Two uniform doubles from one draw, one from each half: in [0, 1) in steps
+  // of 2^-32, fine enough for a position within a pixel or on the stop.
+  void nextPair(double& a, double& b) {
+    const std::uint64_t x = nextU64();
+    a = unitInterval32(static_cast<std::uint32_t>(x >> 32)), b = unitInterval32(static_cast<std::uint32_t>(x));
+  }
   // The top 52 bits as the mantissa of a double in [1, 2), minus 1: uniform
   // in [0, 1) in steps of 2^-52, with integer operations only.
   static double unitInterval(std::uint64_t bits) {
     return std::bit_cast<double>((bits >> 12) | 0x3ff0000000000000ull) - 1.0;
+  }
+  // The same for 32 bits: uniform in [0, 1) in steps of 2^-32.
+  static double unitInterval32(std::uint32_t bits) {
+    return std::bit_cast<double>((std::uint64_t{bits} << 20) | 0x3ff0000000000000ull) - 1.0;
   }
 };
 
