@@ -29,10 +29,14 @@ Vec3 cosineHemisphere(const Vec3& n, double u1, double u2) {
   return (t * d.x + bt * d.y + n * z).normalized();
 }
 
+// A parallel or Lambertian emitter's radiance at cos θ from its normal.
+double uniformRadiance(const Surface& surface, double cosTheta) {
+  return cosTheta >= surface.cosHalfAngle ? surface.radiance : 0.0;
+}
+
 double emittedRadiance(const Scene& scene, const Hit& hit, const Emission& emission, const Vec3& towardsSensor) {
   const Surface& surface = scene.surface(hit.object);
-  if (surface.uniformEmission)  // parallel or Lambertian
-    return towardsSensor.dot(hit.normal) >= surface.cosHalfAngle ? surface.radiance : 0.0;
+  if (surface.uniformEmission) return uniformRadiance(surface, towardsSensor.dot(hit.normal));
   const Rigid3& local = scene.objectFromWorld(hit.object);
   const Vec3 q = local.point(hit.point);
   if (const auto* e = std::get_if<LightFieldEmission>(&emission))
@@ -365,14 +369,18 @@ private:
         continue;
       }
       if (surface.kind == Surface::Kind::Emitter) {  // the end of most paths: as interact()
-        const Ray ray = lanes_.ray.rays.ray(k);
-        const Hit hit{object, hits_.t[k], ray.at(hits_.t[k]), hits_.normal(k)};
         double throughput = lanes_.throughput[k];
         if (const MediumStack& media = lanes_.media[k]; media.size())
-          if (const double a = media.absorption(scene_); a > 0) throughput *= std::exp(-a * hit.t);
-        if (endPath(k, throughput * emittedRadiance(scene_, hit, *scene_.object(object).emission, -ray.direction),
-                    free))
-          kept |= bit;
+          if (const double a = media.absorption(scene_); a > 0) throughput *= std::exp(-a * hits_.t[k]);
+        double radiance;
+        if (surface.uniformEmission) {  // no need of the hit point
+          radiance = uniformRadiance(surface, (-direction(k)).dot(hits_.normal(k)));
+        } else {
+          const Ray ray = lanes_.ray.rays.ray(k);
+          const Hit hit{object, hits_.t[k], ray.at(hits_.t[k]), hits_.normal(k)};
+          radiance = emittedRadiance(scene_, hit, *scene_.object(object).emission, -ray.direction);
+        }
+        if (endPath(k, throughput * radiance, free)) kept |= bit;
         continue;
       }
       // Anything else (absorbers, diffuse surfaces, meshes), one lane at a time.
