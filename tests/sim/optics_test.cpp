@@ -5,6 +5,8 @@
 #include "lfi/sim/scene.h"
 #include "lfi/sim/sensors.h"
 
+#include "fresnel_step.h"  // internal to lfi_sim: the vectorised Fresnel events
+
 #include <fmt/format.h>
 #include "lfi_test_support.h"
 
@@ -124,6 +126,65 @@ TEST(Snell, DirectionsStayUnitOverManyInterfaces) {
     worst = std::max(worst, std::abs(d.length() - 1));
   }
   EXPECT_LT(worst, 1e-15);
+}
+
+// The packet renderer's Fresnel events, all lanes at once (vectorised),
+// equal the one-ray event to the bit, and the event is the interface optics
+// above: its reflectance is fresnelReflectance, its directions those of
+// reflect() and refract() with the normal turned to the incoming side (Snell:
+// n1 sin i = n2 sin t), total internal reflection past the critical angle;
+// the lanes' hit points are the rays' points at t.
+TEST(FresnelLanes, EqualTheOneRayEventAndTheInterfaceOptics) {
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> u(-1, 1);
+  constexpr int kLanes = detail::FresnelLanes::kSize;
+  const double indices[][2] = {{1.0, 1.5}, {1.5, 1.0}, {1.5, 1.33}};
+  RayLanes rays;
+  Scene::HitPacket hits;
+  detail::FresnelLanes lanes;
+  int refracted = 0, reflectedTotally = 0;
+  for (int round = 0; round < 200; ++round) {
+    for (int k = 0; k < kLanes; ++k) {
+      rays.set(k, {{10 * u(rng), 10 * u(rng), 10 * u(rng)}, Vec3(u(rng), u(rng), u(rng)).normalized()});
+      const Vec3 n = Vec3(u(rng), u(rng), u(rng)).normalized();
+      hits.t[k] = 50 * (u(rng) + 1), hits.nx[k] = n.x, hits.ny[k] = n.y, hits.nz[k] = n.z;
+      lanes.n1[k] = indices[k % 3][0], lanes.n2[k] = indices[k % 3][1];
+    }
+    detail::fresnelLanes(rays, hits, lanes);
+    for (int k = 0; k < kLanes; ++k) {
+      const Ray ray = rays.ray(k);
+      const Vec3 d = ray.direction, n = hits.normal(k);
+      const double n1 = lanes.n1[k], n2 = lanes.n2[k];
+      const detail::FresnelEvent e = detail::fresnelEvent(d, n, n1, n2);
+      EXPECT_EQ(lanes.cosT[k], e.cosT);
+      EXPECT_EQ(lanes.reflectance[k], e.reflectance);
+      EXPECT_EQ(Vec3(lanes.rx[k], lanes.ry[k], lanes.rz[k]), Vec3(e.rx, e.ry, e.rz));
+      EXPECT_EQ(Vec3(lanes.px[k], lanes.py[k], lanes.pz[k]), ray.at(hits.t[k]));
+      if (e.cosT >= 0) {
+        EXPECT_EQ(Vec3(lanes.tx[k], lanes.ty[k], lanes.tz[k]), Vec3(e.tx, e.ty, e.tz));
+      }
+
+      const Vec3 facing = d.dot(n) < 0 ? n : -n;
+      const double cosI = -d.dot(facing);
+      EXPECT_EQ(e.reflectance, fresnelReflectance(cosI, n1, n2));
+      EXPECT_EQ(Vec3(e.rx, e.ry, e.rz), reflect(d, facing));
+      Vec3 out;
+      const bool transmits = refract(d, facing, n1 / n2, out);
+      ASSERT_EQ(transmits, e.cosT >= 0) << "cos i " << cosI << ", " << n1 << " -> " << n2;
+      if (!transmits) {
+        ++reflectedTotally;
+        EXPECT_EQ(e.reflectance, 1.0);
+        EXPECT_GT(n1 * std::sqrt(1 - cosI * cosI), n2 * (1 - 1e-12));  // past the critical angle
+        continue;
+      }
+      ++refracted;
+      EXPECT_EQ(Vec3(e.tx, e.ty, e.tz), out);
+      EXPECT_NEAR(n1 * std::sqrt(1 - cosI * cosI), n2 * std::sqrt(1 - e.cosT * e.cosT), 1e-12);
+      EXPECT_NEAR(-out.dot(facing), e.cosT, 1e-12);
+    }
+  }
+  EXPECT_GT(refracted, 1000);
+  EXPECT_GT(reflectedTotally, 100);
 }
 
 // Thick lens in air: 1/f = (n-1) [1/R1 - 1/R2 + (n-1) d / (n R1 R2)]; the back

@@ -229,7 +229,10 @@ TEST(Solid, ConvexIntersectionFastPathMatchesTheGeneralMerge) {
 }
 
 // nearestCrossings (many rays at once; lane-parallel for convex intersections)
-// finds the same first crossing beyond tMin as the intervals do.
+// finds the same first crossing beyond tMin as the intervals do, for the
+// first n rays of an array or for any set of lanes of a RayLanes (sparse or
+// dense, so both the one-ray and the lane-parallel path); lanes not asked for
+// are not written.
 TEST(Solid, NearestCrossingsAgreeWithIntervals) {
   const std::vector<std::shared_ptr<const Solid>> solids = {
       Solid::sphericalLens(100, -100, 7, 50),                   // convex kernel
@@ -240,19 +243,35 @@ TEST(Solid, NearestCrossingsAgreeWithIntervals) {
   std::mt19937_64 rng(3);
   std::uniform_real_distribution<double> u(-1, 1);
   int found = 0;
+  constexpr double kUnwritten = -12345;
   for (const auto& solid : solids)
     for (int batch = 0; batch < 300; ++batch) {
-      const int n = 1 + batch % Solid::kBatch;
       const double tMin = batch % 3 == 0 ? 1e-6 : 30 * (u(rng) + 1);  // also from inside
       Ray rays[Solid::kBatch];
+      RayLanes lanes;
       double t[Solid::kBatch];
       Vec3 normal[Solid::kBatch];
-      for (int k = 0; k < n; ++k) {
+      for (int k = 0; k < Solid::kBatch; ++k) {
         const Vec3 origin(40 * u(rng), 40 * u(rng), 40 * u(rng));
         rays[k] = {origin, (Vec3(20 * u(rng), 20 * u(rng), 4 * u(rng)) - origin).normalized()};
+        lanes.set(k, rays[k]);
+        t[k] = kUnwritten;
       }
-      solid->nearestCrossings(n, rays, tMin, t, normal);
-      for (int k = 0; k < n; ++k) {
+      std::uint32_t asked;
+      if (batch % 2 == 0) {  // the first n rays
+        const int n = 1 + batch / 2 % Solid::kBatch;
+        solid->nearestCrossings(n, rays, tMin, t, normal);
+        asked = (1u << n) - 1;
+      } else {  // random lanes, from one to all
+        asked = std::uniform_int_distribution<std::uint32_t>(1, (1u << Solid::kBatch) - 1)(rng);
+        if (batch % 4 == 1) asked &= asked >> 3 | 1;  // sparser
+        solid->nearestCrossings(lanes, asked, tMin, t, normal);
+      }
+      for (int k = 0; k < Solid::kBatch; ++k) {
+        if (!(asked >> k & 1)) {
+          EXPECT_EQ(t[k], kUnwritten) << "batch " << batch << " lane " << k;
+          continue;
+        }
         IntervalList list;
         solid->intervals(rays[k], list);
         double expected = std::numeric_limits<double>::infinity();

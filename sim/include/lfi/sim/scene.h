@@ -199,7 +199,8 @@ public:
   // The same packet query in structures of arrays, the tracer's form: the
   // rays of the lanes set in `lanes` (bit k: lane k), each with its RayStart,
   // and their hits in the same lanes (a hit's point is rays.ray(k).at(t)).
-  // Lanes not set are neither read (but for harmless arithmetic) nor written.
+  // Lanes not set get no hit; their rays only take part in lane-parallel
+  // arithmetic whose results are dropped (any finite values will do).
   struct RayPacket {
     RayLanes rays;  // world frame
     int inside[kPacket], on[kPacket];
