@@ -311,6 +311,8 @@ public:
       fresnel_.n1[k] = fresnel_.n2[k] = 1;
     }
     branches_.resize(Scene::kPacket);
+    isolated_.assign(scene.objects().size() + 1, 0);
+    for (size_t i = 0; i < scene.objects().size(); ++i) isolated_[i + 1] = scene.isolated(static_cast<int>(i));
   }
 
   void render(int x0, int y0, int x1, int y1, cv::Mat& image) {
@@ -339,7 +341,7 @@ private:
     const int inside = media.size() ? media.top() : -1;
     lanes_.ray.inside[k] = inside;
     const LaneMask bit = 1u << k;
-    insideIsolated_ = inside >= 0 && scene_.isolated(inside) ? insideIsolated_ | bit : insideIsolated_ & ~bit;
+    insideIsolated_ = isolated_[static_cast<size_t>(inside + 1)] ? insideIsolated_ | bit : insideIsolated_ & ~bit;
   }
 
   // Traces one step of the paths in `lanes`: their next hits, in one packet
@@ -664,6 +666,7 @@ private:
   static_assert(detail::CameraSampleBatch::kSize >= kLanes && detail::ChoiceBatch::kSize >= kLanes);
   Lanes lanes_;
   LaneMask insideIsolated_ = 0;  // lanes whose innermost medium is an isolated solid (Scene::isolated)
+  std::vector<char> isolated_;   // Scene::isolated of object i at i + 1 (0: the ambient medium, false)
   Scene::HitPacket hits_;
   detail::FresnelLanes fresnel_;
   // Per lane, its waiting split branches, at most one per split depth.
