@@ -344,6 +344,14 @@ private:
     insideIsolated_ = isolated_[static_cast<size_t>(inside + 1)] ? insideIsolated_ | bit : insideIsolated_ & ~bit;
   }
 
+  // Beer-Lambert transmittance of lane k's medium up to its hit (1 when it
+  // does not absorb), as interact() applies it.
+  double transmittance(int k) const {
+    const MediumStack& media = lanes_.media[k];
+    const double a = media.size() ? media.absorption(scene_) : 0.0;
+    return a > 0 ? std::exp(-a * hits_.t[k]) : 1.0;
+  }
+
   // Traces one step of the paths in `lanes`: their next hits, in one packet
   // query, and what they do there. Returns the lanes that go on; the lanes
   // whose samples end are written and set in `free`.
@@ -361,9 +369,8 @@ private:
       const Surface& surface = scene_.surface(object);
       if (surface.kind == Surface::Kind::Dielectric && surface.exact) {
         // Taken below, all lanes at once: as interact() does.
-        MediumStack& media = lanes_.media[k];
-        if (media.size())
-          if (const double a = media.absorption(scene_); a > 0) lanes_.throughput[k] *= std::exp(-a * hits_.t[k]);
+        lanes_.throughput[k] *= transmittance(k);
+        const MediumStack& media = lanes_.media[k];
         const bool entering = direction(k).dot(hits_.normal(k)) < 0;
         fresnel_.n1[k] = entering ? media.ior(scene_) : surface.ior;
         fresnel_.n2[k] = entering ? surface.ior : media.ior(scene_, object);
@@ -371,9 +378,7 @@ private:
         continue;
       }
       if (surface.kind == Surface::Kind::Emitter) {  // the end of most paths: as interact()
-        double throughput = lanes_.throughput[k];
-        if (const MediumStack& media = lanes_.media[k]; media.size())
-          if (const double a = media.absorption(scene_); a > 0) throughput *= std::exp(-a * hits_.t[k]);
+        const double throughput = lanes_.throughput[k] * transmittance(k);
         double radiance;
         if (surface.uniformEmission) {  // no need of the hit point
           radiance = uniformRadiance(surface, (-direction(k)).dot(hits_.normal(k)));
@@ -619,7 +624,8 @@ private:
       StratifiedChoices& choices = lanes_.choices[static_cast<size_t>(lane)];
       for (size_t d = 0; d < detail::kBatchedChoices; ++d) choices.u[d] = choices_.u[d][k];
       const PixelWork& px = pixels_[static_cast<size_t>(start.slot)];
-      for (size_t d = 0; d < StratifiedChoices::kLater; ++d) choices.key[d] = px.choiceKeys[detail::kBatchedChoices + d];
+      for (size_t d = 0; d < StratifiedChoices::kLater; ++d)
+        choices.key[d] = px.choiceKeys[detail::kBatchedChoices + d];
       choices.spp = static_cast<std::uint32_t>(options_.samplesPerPixel);
       choices.sample = static_cast<std::uint32_t>(start.sample);
       choices.used = 0;

@@ -74,9 +74,9 @@ LFI_SIMD_CLONES void rectangleLanes(const WorldRectangle& r, const RayLanes& __r
   for (int k = 0; k < RayLanes::kSize; ++k) {
     const bool nearer = (lanes >> k & 1) != 0 && crossing[k] < best.t[k];
     best.t[k] = nearer ? crossing[k] : best.t[k];
-    best.nx[k] = nearer ? r.normal.x : best.nx[k];
-    best.ny[k] = nearer ? r.normal.y : best.ny[k];
-    best.nz[k] = nearer ? r.normal.z : best.nz[k];
+    best.nx[k] = nearer ? n.x : best.nx[k];
+    best.ny[k] = nearer ? n.y : best.ny[k];
+    best.nz[k] = nearer ? n.z : best.nz[k];
     best.object[k] = nearer ? object : best.object[k];
   }
 }
@@ -117,7 +117,7 @@ void resolveLanes(HitContext& ctx) {
   for (int s = 0; s < ctx.objects; ++s) {
     const AnalyticGeometry& g = *ctx.object[static_cast<size_t>(s)];
     const std::uint32_t lanes = ctx.lanes[static_cast<size_t>(s)];
-    if (lanes == 0) continue;  // every lane skipped the solid
+    if (lanes == 0) continue;  // every lane skipped it
     if (!g.solid) {
       rectangleLanes(g.rectangle, *ctx.rays, lanes, ctx.tMin, g.object, *ctx.best);
       continue;
@@ -170,8 +170,8 @@ void analyticIntersect(const RTCIntersectFunctionNArguments* args) {
 
 // Embree's packet for the lanes in `traced` (the others invalid), every lane
 // at once (vectorised).
-LFI_SIMD_CLONES void embreePacket(const RayLanes& __restrict r, std::uint32_t traced, double tMin, int* __restrict valid,
-                                  RTCRayHit16& __restrict rh) {
+LFI_SIMD_CLONES void embreePacket(const RayLanes& __restrict r, std::uint32_t traced, double tMin,
+                                  int* __restrict valid, RTCRayHit16& __restrict rh) {
   for (int k = 0; k < RayLanes::kSize; ++k) {
     valid[k] = (traced >> k & 1) != 0 ? -1 : 0;
     rh.ray.org_x[k] = static_cast<float>(r.ox[k]);
@@ -356,7 +356,11 @@ Scene::~Scene() = default;
 Hit Scene::intersect(const Ray& ray, double tMin, double tMax) const {
   RayLanes lane0;  // every lane the ray, for the lane-parallel kernels
   HitPacket best;
-  for (int k = 0; k < RayLanes::kSize; ++k) lane0.set(k, ray), best.t[k] = tMax, best.object[k] = -1;
+  for (int k = 0; k < RayLanes::kSize; ++k) {
+    lane0.set(k, ray);
+    best.t[k] = tMax;
+    best.object[k] = -1;
+  }
   HitContext ctx;
   rtcInitIntersectContext(&ctx.embree);
   ctx.rays = &lane0, ctx.tMin = tMin, ctx.best = &best;
@@ -419,7 +423,8 @@ void Scene::intersect(std::span<const Ray> rays, std::span<Hit> hits, double tMi
 void Scene::intersect(const RayPacket& packet, std::uint32_t lanes, HitPacket& hits, double tMin) const {
   constexpr int kLanes = static_cast<int>(kPacket);
   lanes &= (1u << kLanes) - 1;
-  for (int k = 0; k < kLanes; ++k) hits.t[k] = std::numeric_limits<double>::infinity(), hits.object[k] = -1;
+  std::fill_n(hits.t, kLanes, std::numeric_limits<double>::infinity());
+  std::fill_n(hits.object, kLanes, -1);
   HitContext ctx;
   rtcInitIntersectContext(&ctx.embree);
   ctx.rays = &packet.rays, ctx.tMin = tMin, ctx.best = &hits;
@@ -434,7 +439,10 @@ void Scene::intersect(const RayPacket& packet, std::uint32_t lanes, HitPacket& h
     const int k = std::countr_zero(bits);
     const int object = packet.inside[k];
     const AnalyticGeometry* g = object >= 0 ? impl_->isolated[static_cast<size_t>(object)] : nullptr;
-    if (g && contains(g->box, packet.rays.ray(k).origin)) noteLanes(ctx, g, 1u << k), tried |= 1u << k;
+    if (g && contains(g->box, packet.rays.ray(k).origin)) {
+      noteLanes(ctx, g, 1u << k);
+      tried |= 1u << k;
+    }
   }
   resolveLanes(ctx);
   std::uint32_t traced = lanes;

@@ -280,10 +280,9 @@ void Solid::convexIntervals(const Ray& ray, IntervalList& out) const {
 namespace {
 
 constexpr int kLanes = RayLanes::kSize;
-using LaneRays = RayLanes;
 
 // Rays into a part's frame: p' = R p + t, d' = R d.
-LFI_SIMD_CLONES void transformLanes(const Rigid3& x, const LaneRays& __restrict in, LaneRays& __restrict out) {
+LFI_SIMD_CLONES void transformLanes(const Rigid3& x, const RayLanes& __restrict in, RayLanes& __restrict out) {
   const double* r = x.r.data();
   for (int k = 0; k < kLanes; ++k) {
     out.ox[k] = r[0] * in.ox[k] + r[1] * in.oy[k] + r[2] * in.oz[k] + x.t.x;
@@ -298,7 +297,7 @@ LFI_SIMD_CLONES void transformLanes(const Rigid3& x, const LaneRays& __restrict 
 // One primitive's span [t0, t1] on every lane (primitiveSpan's arithmetic,
 // branch-free; a miss is the empty span [inf, -inf]), folded into the running
 // intersection [enter, exit].
-LFI_SIMD_CLONES void foldSpan(Solid::Kind kind, double radius, const LaneRays& __restrict l, double* __restrict t0,
+LFI_SIMD_CLONES void foldSpan(Solid::Kind kind, double radius, const RayLanes& __restrict l, double* __restrict t0,
                               double* __restrict t1,
                               double* __restrict enter, double* __restrict exit) {
   switch (kind) {
@@ -383,9 +382,9 @@ void Solid::nearestCrossings(const RayLanes& rays, std::uint32_t lanes, double t
     return;
   }
   // Every lane is computed; only the lanes asked for are read.
-  LaneRays transformed, part;
+  RayLanes transformed, part;
   if (!identity_) transformLanes(localFromParent_, rays, transformed);
-  const LaneRays& local = identity_ ? rays : transformed;
+  const RayLanes& local = identity_ ? rays : transformed;
   double enter[kLanes], exit[kLanes], t0[kMaxConvexParts][kLanes], t1[kMaxConvexParts][kLanes];
   for (int k = 0; k < kLanes; ++k) enter[k] = -kInf, exit[k] = kInf;
   const int parts = static_cast<int>(convex_.size());

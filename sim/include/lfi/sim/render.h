@@ -76,7 +76,8 @@ struct Sampler {
   // of 2^-32, fine enough for a position within a pixel or on the stop.
   void nextPair(double& a, double& b) {
     const std::uint64_t x = nextU64();
-    a = unitInterval32(static_cast<std::uint32_t>(x >> 32)), b = unitInterval32(static_cast<std::uint32_t>(x));
+    a = unitInterval32(static_cast<std::uint32_t>(x >> 32));
+    b = unitInterval32(static_cast<std::uint32_t>(x));
   }
   // The top 52 bits as the mantissa of a double in [1, 2), minus 1: uniform
   // in [0, 1) in steps of 2^-52, with integer operations only.
