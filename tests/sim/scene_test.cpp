@@ -290,6 +290,19 @@ TEST(Scene, IsolatedSolidsAnswerHintedRaysAsTheOneRayQuery) {
   std::vector<Hit> hits(2);
   const std::vector<Scene::RayStart> tooFew{{}};
   EXPECT_THROW(scene.intersect(rays, hits, Scene::kTMin, tooFew), Error);
+  // A start naming no object is an error that names the lane, not a read out of bounds.
+  const int objectCount = static_cast<int>(objects.size());
+  for (const Scene::RayStart bad : {Scene::RayStart{objectCount, -1}, Scene::RayStart{-1, objectCount},
+                                    Scene::RayStart{-2, -1}, Scene::RayStart{0, 1000}}) {
+    const std::vector<Scene::RayStart> starts{{}, bad};
+    try {
+      scene.intersect(rays, hits, Scene::kTMin, starts);
+      ADD_FAILURE() << "no error for inside " << bad.inside << ", on " << bad.on;
+    } catch (const Error& e) {
+      EXPECT_EQ(e.code(), Errc::InvalidArgument);
+      EXPECT_NE(std::string(e.what()).find("lane 1"), std::string::npos) << e.what();
+    }
+  }
 }
 
 }  // namespace

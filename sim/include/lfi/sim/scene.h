@@ -200,7 +200,9 @@ public:
   // rays of the lanes set in `lanes` (bit k: lane k), each with its RayStart,
   // and their hits in the same lanes (a hit's point is rays.ray(k).at(t)).
   // Lanes not set get no hit; their rays only take part in lane-parallel
-  // arithmetic whose results are dropped (any finite values will do).
+  // arithmetic whose results are dropped (any finite values will do). A
+  // RayStart naming no object (outside -1 .. objects - 1) is
+  // Errc::InvalidArgument.
   struct RayPacket {
     RayLanes rays;  // world frame
     int inside[kPacket], on[kPacket];
