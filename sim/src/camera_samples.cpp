@@ -70,10 +70,7 @@ LFI_SIMD_CLONES void makeStratifiedChoices(std::uint32_t spp, int n, ChoiceBatch
     std::uint32_t stratum[ChoiceBatch::kSize];
     for (int k = 0; k < n; ++k) stratum[k] = permutationRound(b.sample[k], mask, b.key[d][k]);
     walkAndRotate(n, spp, mask, b.key[d], stratum);
-    for (int k = 0; k < n; ++k) {
-      const double jitter = Sampler::unitInterval(splitMix64((std::uint64_t{b.key[d][k]} << 32) | b.sample[k]));
-      b.u[d][k] = (stratum[k] + jitter) * stratumWidth;
-    }
+    for (int k = 0; k < n; ++k) b.u[d][k] = jitteredChoice(stratum[k], stratumWidth, b.sample[k], b.key[d][k]);
   }
 }
 

@@ -70,9 +70,13 @@ void makeCameraSamples(const TelecentricCamera::RayMap& camera, std::uint64_t se
 // each choice then covers [0, 1) evenly, so the few reflect/refract branches of
 // a lens are taken in proportion.
 constexpr int kStratifiedChoices = 4;
-inline double stratifiedChoice(std::uint32_t spp, std::uint32_t sample, std::uint32_t key) {
+// The choice in a given stratum (of width 1/spp), jittered.
+inline double jitteredChoice(std::uint32_t stratum, double stratumWidth, std::uint32_t sample, std::uint32_t key) {
   const double jitter = Sampler::unitInterval(splitMix64((std::uint64_t{key} << 32) | sample));
-  return (permutationElement(sample, spp, key) + jitter) * (1.0 / spp);
+  return (stratum + jitter) * stratumWidth;
+}
+inline double stratifiedChoice(std::uint32_t spp, std::uint32_t sample, std::uint32_t key) {
+  return jitteredChoice(permutationElement(sample, spp, key), 1.0 / spp, sample, key);
 }
 
 // The first kBatchedChoices of them (a lens's two faces), for many samples at

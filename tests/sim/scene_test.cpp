@@ -369,7 +369,8 @@ TEST(Scene, RaysLeavingAConvexSolidGetTheOneRayQuerysHits) {
     Ray ray{{6 * u(rng), 6 * u(rng), 20}, Vec3(0.2 * u(rng), 0.2 * u(rng), -1).normalized()};
     Scene::RayStart start;
     for (int bounce = 0; bounce < 6; ++bounce) {
-      rays.push_back(ray), starts.push_back(start);
+      rays.push_back(ray);
+      starts.push_back(start);
       const Hit hit = scene.intersect(ray);
       if (!hit.valid() || scene.surface(hit.object).kind != Surface::Kind::Dielectric) break;
       const bool entering = ray.direction.dot(hit.normal) < 0;
