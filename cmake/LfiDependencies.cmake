@@ -7,6 +7,7 @@ find_package(OpenCV 4 REQUIRED COMPONENTS core imgproc imgcodecs calib3d structu
 find_package(OpenEXR 3 REQUIRED CONFIG)
 find_package(Imath 3 REQUIRED CONFIG)
 find_package(ZLIB REQUIRED)
+find_package(PNG REQUIRED)
 find_package(assimp REQUIRED CONFIG)
 find_package(CLI11 REQUIRED CONFIG)
 find_package(nlohmann_json 3 REQUIRED CONFIG)

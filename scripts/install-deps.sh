@@ -14,7 +14,7 @@ PACKAGES=(
   # display: USB
   libusb-1.0-0-dev
   # images, light fields, analysis
-  libopencv-dev libopencv-contrib-dev libopenexr-dev libimath-dev zlib1g-dev
+  libopencv-dev libopencv-contrib-dev libopenexr-dev libimath-dev zlib1g-dev libpng-dev
   # meshes (OBJ, PLY, STL, ...)
   libassimp-dev
   # small libraries instead of hand-written code

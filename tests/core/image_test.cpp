@@ -37,6 +37,19 @@ TEST(WritePngAtomically, RoundTripsAndRefusesToOverwrite) {
   EXPECT_EQ(cv::norm(cv::imread(path.string(), cv::IMREAD_UNCHANGED), image, cv::NORM_INF), 0);
   EXPECT_TRUE(throwsError([&] { lfi::writePngAtomically(path, image, lfi::Overwrite::Refuse); }, Errc::Exists,
                           {path.string()}));
+
+  // Colour images are BGR, as OpenCV's; a region of interest is not continuous.
+  cv::Mat colour(9, 11, CV_8UC3);
+  cv::randu(colour, 0, 256);
+  const cv::Mat roi = colour(cv::Rect(2, 1, 6, 7));
+  ASSERT_FALSE(roi.isContinuous());
+  lfi::writePngAtomically(path, roi, lfi::Overwrite::Allow);
+  EXPECT_EQ(cv::norm(cv::imread(path.string(), cv::IMREAD_UNCHANGED), roi, cv::NORM_INF), 0);
+
+  EXPECT_TRUE(throwsError([&] { lfi::writePngAtomically(path, cv::Mat(3, 3, CV_32FC1), lfi::Overwrite::Allow); },
+                          Errc::InvalidArgument, {path.string(), "32FC1"}));
+  EXPECT_TRUE(throwsError([&] { lfi::writePngAtomically(path, cv::Mat(), lfi::Overwrite::Allow); },
+                          Errc::InvalidArgument, {path.string(), "empty"}));
   std::filesystem::remove(path);
 }
 
