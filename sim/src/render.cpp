@@ -414,7 +414,11 @@ private:
   // interact() takes them: total internal reflection, a split into both
   // branches, or a choice of one. Returns the lanes that go on.
   LaneMask takeFresnelEvents(LaneMask lanes, LaneMask& free) {
-    detail::fresnelLanes(lanes_.ray.rays, hits_, fresnel_);
+    if (const LaneMask rest = lanes & (lanes - 1); (rest & (rest - 1)) != 0)  // more than two lanes
+      detail::fresnelLanes(lanes_.ray.rays, hits_, fresnel_);
+    else  // a path reflected inside a lens, or two: cheaper one by one
+      for (LaneMask bits = lanes; bits; bits &= bits - 1)
+        detail::fresnelLane(lanes_.ray.rays, hits_, fresnel_, std::countr_zero(bits));
     const detail::FresnelLanes& f = fresnel_;
     LaneMask kept = 0;
     for (; lanes; lanes &= lanes - 1) {

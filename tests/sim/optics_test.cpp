@@ -12,6 +12,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <random>
 
 #include <cmath>
@@ -151,7 +152,16 @@ TEST(FresnelLanes, EqualTheOneRayEventAndTheInterfaceOptics) {
       lanes.n1[k] = indices[k % 3][0], lanes.n2[k] = indices[k % 3][1];
     }
     detail::fresnelLanes(rays, hits, lanes);
+    detail::FresnelLanes one{};  // the same events, one lane at a time (the renderer's small steps)
+    std::copy_n(lanes.n1, kLanes, one.n1);
+    std::copy_n(lanes.n2, kLanes, one.n2);
+    for (int k = kLanes - 1; k >= 0; --k) detail::fresnelLane(rays, hits, one, k);
     for (int k = 0; k < kLanes; ++k) {
+      for (const auto field : {&detail::FresnelLanes::px, &detail::FresnelLanes::py, &detail::FresnelLanes::pz,
+                               &detail::FresnelLanes::cosT, &detail::FresnelLanes::reflectance,
+                               &detail::FresnelLanes::rx, &detail::FresnelLanes::ry, &detail::FresnelLanes::rz,
+                               &detail::FresnelLanes::tx, &detail::FresnelLanes::ty, &detail::FresnelLanes::tz})
+        EXPECT_EQ((one.*field)[k], (lanes.*field)[k]) << "lane " << k;
       const Ray ray = rays.ray(k);
       const Vec3 d = ray.direction, n = hits.normal(k);
       const double n1 = lanes.n1[k], n2 = lanes.n2[k];
