@@ -237,7 +237,13 @@ int main(int argc, char** argv) {
       std::signal(SIGINT, onInterrupt);
       const lfi::sim::Scene scene(std::move(d.objects), d.ambientIor);
       const auto start = std::chrono::steady_clock::now();
-      const cv::Mat image = lfi::sim::render(scene, d.sensor, d.render);
+      cv::Mat image;
+      try {
+        image = lfi::sim::render(scene, d.sensor, d.render);
+      } catch (const lfi::Error& e) {  // the scene cannot be traced (e.g. too deeply nested): name its file
+        if (e.code() != lfi::Errc::Config) throw;
+        throw lfi::Error(e.code(), fmt::format("{}: {}", sceneFile.string(), e.what()));
+      }
       const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
       bar.finish();
       fs::create_directories(renderOut);

@@ -10,6 +10,7 @@
 #include <tbb/task_arena.h>
 
 #include <cmath>
+#include <string>
 
 namespace lfi::sim {
 
@@ -50,8 +51,11 @@ public:
   static constexpr int kDepth = 8;
   int size() const { return size_; }
   int top() const { return items_[size_ - 1]; }
-  void push(int object) {
-    if (size_ < kDepth) items_[size_++] = object;
+  // Throws Errc::Config, naming the objects, when the path would be inside
+  // more than kDepth dielectrics at once (rather than lose one of them).
+  void push(const Scene& scene, int object) {
+    if (size_ == kDepth) tooDeep(scene, object);
+    items_[size_++] = object;
   }
   void remove(int object) {
     for (int i = size_ - 1; i >= 0; --i)
@@ -70,6 +74,13 @@ public:
   double absorption(const Scene& scene) const { return size_ ? scene.surface(top()).absorption_per_mm : 0.0; }
 
 private:
+  [[noreturn, gnu::cold, gnu::noinline]] void tooDeep(const Scene& scene, int object) const {
+    std::string inside;
+    for (int i = 0; i < size_; ++i) inside += fmt::format("{}'{}'", i ? ", " : "", scene.object(items_[i]).name);
+    fail(Errc::Config, "a path entering dielectric '{}' is already inside {} nested dielectrics ({}); the tracer "
+         "follows at most {}: nest fewer, or make the overlapping objects one solid",
+         scene.object(object).name, size_, inside, kDepth);
+  }
   std::array<int, kDepth> items_{};
   int size_ = 0;
 };
@@ -166,7 +177,7 @@ Step interact(const Scene& scene, const Hit& hit, PathState& p, PathState& branc
   }
   p.ray = leave({e.tx, e.ty, e.tz});
   if (entering)
-    p.media.push(hit.object);
+    p.media.push(scene, hit.object);
   else
     p.media.remove(hit.object);
   return split ? Step::Split : Step::Continue;
@@ -449,7 +460,7 @@ private:
         lanes_.ray.rays.set(k, {point, {f.tx[k], f.ty[k], f.tz[k]}});
         MediumStack& media = lanes_.media[k];
         if (entering)
-          media.push(object);
+          media.push(scene_, object);
         else
           media.remove(object);
         setInside(k);

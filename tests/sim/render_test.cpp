@@ -7,6 +7,7 @@
 #include "lfi/sim/sensors.h"
 
 #include "camera_samples.h"  // sim/src: the renderer's vectorised sample pass
+#include "lfi_test_support.h"
 
 #include <fmt/format.h>
 #include <gtest/gtest.h>
@@ -23,6 +24,7 @@ namespace {
 
 using namespace lfi;
 using namespace lfi::sim;
+using lfi::testing_support::throwsError;
 
 // Thick-lens focal length (lensmaker): 1/f = (n-1) [1/R1 - 1/R2 + (n-1) d / (n R1 R2)].
 double lensmakerFocalLength(double r1, double r2, double d, double n) {
@@ -135,6 +137,53 @@ TEST(SlabTransmission, OneSidedEmitterSeenFromBehindIsDark) {
   double lo = -1;
   EXPECT_EQ(slabRadiance(Solid::sphericalLens(0, 0, 5, 200), 1.5, 0, false, &lo), 0.0);
   EXPECT_EQ(lo, 0.0);
+}
+
+// ---- Nested dielectrics ---------------------------------------------------
+//
+// `count` slabs of one index n, slab k (1-based) 2k mm thick, all centred on
+// z = 0: optically one slab 2 count mm thick, since the inner faces separate
+// equal indices. An oblique ray refracts at the outer faces only (Snell, from
+// 1 to n and back) and goes straight through the inner ones, which it does only
+// if the tracer tracks every nesting level (a lost or misordered level bends it
+// there).
+constexpr int kNesting = 8;  // the documented limit (docs/scene-files.md)
+
+Scene nestedSlabs(int count, double n) {
+  std::vector<Object> objects;
+  objects.push_back(emitterBelow(-30, LambertianEmission{1.0}));
+  for (int k = 1; k <= count; ++k)
+    objects.push_back({.name = fmt::format("slab {}", k),
+                       .shape = Solid::sphericalLens(0, 0, 2 * k, 200),
+                       .material = Dielectric{n, 0}});
+  return Scene(std::move(objects));
+}
+
+TEST(NestedDielectrics, EightLevelsRefractAsTheOuterSlabAlone) {
+  const int count = kNesting;
+  const double n = 1.5, theta = 0.3, top = 50;
+  const Vec3 d0(std::sin(theta), 0, -std::cos(theta));
+  // refractionPath always refracts: origin, 2 count crossings, and the escape point.
+  const std::vector<Vec3> path = refractionPath(nestedSlabs(count, n), {{0, 0, top}, d0});
+  ASSERT_EQ(path.size(), static_cast<size_t>(2 * count + 2));
+  const double xEnter = (top - count) * std::tan(theta), tanT = std::tan(std::asin(std::sin(theta) / n));
+  for (size_t i = 1; i + 1 < path.size(); ++i) {  // every crossing lies on the one refracted line
+    const double z = path[i].z;
+    EXPECT_NEAR(std::abs(z), static_cast<double>(i <= static_cast<size_t>(count) ? count + 1 - i : i - count), 1e-9);
+    EXPECT_NEAR(path[i].x, xEnter + (count - z) * tanT, 1e-9) << "crossing " << i << " at z = " << z;
+  }
+  const Vec3 out = (path.back() - path[path.size() - 2]).normalized();
+  EXPECT_NEAR((out - d0).length(), 0, 1e-12);  // leaves parallel to how it came
+}
+
+TEST(NestedDielectrics, ANinthLevelIsAConfigErrorNamingTheObjects) {
+  const Scene scene = nestedSlabs(kNesting + 1, 1.5);
+  const std::vector<std::string> named{"slab 1", "slab 9", "at most 8"};
+  EXPECT_TRUE(throwsError([&] { refractionPath(scene, {{0, 0, 50}, {0, 0, -1}}); }, Errc::Config, named));
+  RenderOptions opt;
+  opt.samplesPerPixel = 1;
+  opt.threads = 2;
+  EXPECT_TRUE(throwsError([&] { render(scene, cameraAbove(0, 4, 2.0, 0.01), opt); }, Errc::Config, named));
 }
 
 // ---- Parallel illumination of an intact lens ------------------------------
