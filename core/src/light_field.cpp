@@ -98,12 +98,14 @@ double LightField::angularSample(int ex, int ey, const Vec2& disc, LightFieldLoo
 }
 
 double LightField::radiance(const Vec2& q, const Vec3& d, LightFieldLookup mode) const {
-  if (lenslet_.empty()) return 0;
   Vec2 disc;
   if (!discFromDirection(d, disc) || disc.x * disc.x + disc.y * disc.y >= 1) return 0;
   const double e = geometry_.elementPitch_mm();
-  const double sx = q.x / e + 0.5 * geometry_.spatialX;  // 0..Sx across the plane
-  const double sy = q.y / e + 0.5 * geometry_.spatialY;
+  return radianceAt(q.x / e + 0.5 * geometry_.spatialX, q.y / e + 0.5 * geometry_.spatialY, disc, mode);
+}
+
+double LightField::radianceAt(double sx, double sy, const Vec2& disc, LightFieldLookup mode) const {
+  if (lenslet_.empty()) return 0;
   if (!(sx >= 0 && sx < geometry_.spatialX && sy >= 0 && sy < geometry_.spatialY)) return 0;
   if (mode == LightFieldLookup::Nearest)
     return angularSample(static_cast<int>(sx), static_cast<int>(sy), disc, mode);

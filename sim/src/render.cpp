@@ -4,6 +4,7 @@
 
 #include "camera_samples.h"
 #include "fresnel_step.h"
+#include "light_field_lanes.h"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -368,7 +369,7 @@ private:
   // whose samples end are written and set in `free`.
   LaneMask step(LaneMask lanes, LaneMask& free) {
     scene_.intersect(lanes_.ray, lanes, hits_);
-    LaneMask kept = 0, fresnel = 0;
+    LaneMask kept = 0, fresnel = 0, lightFields = 0;
     for (LaneMask bits = lanes; bits; bits &= bits - 1) {
       const int k = std::countr_zero(bits);
       const LaneMask bit = 1u << k;
@@ -390,6 +391,11 @@ private:
       }
       if (surface.kind == Surface::Kind::Emitter) {  // the end of most paths: as interact()
         const double throughput = lanes_.throughput[k] * transmittance(k);
+        if (std::holds_alternative<LightFieldEmission>(*scene_.object(object).emission)) {
+          lanes_.throughput[k] = throughput;  // taken below, all lanes at once
+          lightFields |= bit;
+          continue;
+        }
         double radiance;
         if (surface.uniformEmission) {  // no need of the hit point
           radiance = uniformRadiance(surface, (-direction(k)).dot(hits_.normal(k)));
@@ -418,6 +424,40 @@ private:
       }
     }
     if (fresnel) kept |= takeFresnelEvents(fresnel, free);
+    if (lightFields) kept |= endOnLightFields(lightFields, free);
+    return kept;
+  }
+
+  // Ends the paths of `lanes`, which met light field emitters (their
+  // throughputs set), as emittedRadiance() does. Returns the lanes that go on.
+  LaneMask endOnLightFields(LaneMask lanes, LaneMask& free) {
+    LaneMask kept = 0;
+    while (lanes) {  // one emitter object at a time
+      const int object = hits_.object[std::countr_zero(lanes)];
+      LaneMask these = 0;
+      for (LaneMask bits = lanes; bits; bits &= bits - 1)
+        if (hits_.object[std::countr_zero(bits)] == object) these |= 1u << std::countr_zero(bits);
+      lanes &= ~these;
+      const Emission& emission = *scene_.object(object).emission;
+      const LightField* lightField = std::get<LightFieldEmission>(emission).lightField.get();
+      const LightFieldLookup lookup = std::get<LightFieldEmission>(emission).lookup;
+      if (lightField)
+        detail::mapToLightField(lanes_.ray.rays, hits_.t, scene_.objectFromWorld(object), lightField->geometry(),
+                                lightFieldMapping_);
+      const detail::LightFieldMapping& m = lightFieldMapping_;
+      for (; these; these &= these - 1) {
+        const int k = std::countr_zero(these);
+        double radiance = 0;
+        if (lightField && m.oneByOne[k]) {
+          const Ray ray = lanes_.ray.rays.ray(k);
+          radiance = emittedRadiance(scene_, {object, hits_.t[k], ray.at(hits_.t[k]), hits_.normal(k)}, emission,
+                                     -ray.direction);
+        } else if (lightField && m.seen[k]) {
+          radiance = lightField->radianceAt(m.sx[k], m.sy[k], {m.discX[k], m.discY[k]}, lookup);
+        }
+        if (endPath(k, lanes_.throughput[k] * radiance, free)) kept |= 1u << k;
+      }
+    }
     return kept;
   }
 
@@ -690,6 +730,7 @@ private:
   std::vector<char> isolated_;   // Scene::isolated of object i at i + 1 (0: the ambient medium, false)
   Scene::HitPacket hits_;
   detail::FresnelLanes fresnel_;
+  detail::LightFieldMapping lightFieldMapping_;
   // Per lane, its waiting split branches, at most one per split depth.
   std::vector<std::array<Walker, RenderOptions::kMaxSplitDepth>> branches_;
 };

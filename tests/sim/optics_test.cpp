@@ -5,7 +5,8 @@
 #include "lfi/sim/scene.h"
 #include "lfi/sim/sensors.h"
 
-#include "fresnel_step.h"  // internal to lfi_sim: the vectorised Fresnel events
+#include "fresnel_step.h"       // internal to lfi_sim: the vectorised Fresnel events
+#include "light_field_lanes.h"  // and light field emitters
 
 #include <fmt/format.h>
 #include "lfi_test_support.h"
@@ -389,6 +390,53 @@ TEST(LightFieldSensor, RaysFollowTheHemisphereMapping) {
   // Corner samples of an element are outside the disc.
   EXPECT_FALSE(sensor.ray(0, 0, {0, 0}).has_value());
   EXPECT_FALSE(sensor.ray(4, 4, {0.99, 0.99}).has_value());
+}
+
+// ---- Light field emitter ------------------------------------------------
+
+// The packet renderer maps all lanes' rays into the emitter's plane at once
+// and then looks each up (light_field_lanes.h); that must equal the one-ray
+// emitter, LightField::radiance of the hit point and the reversed direction in
+// the plane frame, to the bit, on and off the plane and for directions away
+// from it, with either lookup.
+TEST(LightFieldEmitter, PacketMappingGivesTheOneRayRadiance) {
+  const LightFieldGeometry g{.spatialX = 6, .spatialY = 5, .angular = 8, .pixelPitch_mm = 0.05, .distance_mm = 0};
+  LightField lf(g);
+  cv::randu(lf.lensletImage(), 0.1, 1.0);
+  const Rigid3 worldFromPlane = Rigid3::translation({3, -2, -40}) * Rigid3::rotation({0.3, 1, -0.2}, 0.7);
+  const Rigid3 planeFromWorld = worldFromPlane.inverse();
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> u(-1, 1);
+  RayLanes rays;
+  double t[RayLanes::kSize];
+  detail::LightFieldMapping mapping;
+  int lit = 0, dark = 0;
+  for (int round = 0; round < 300; ++round) {
+    for (int k = 0; k < RayLanes::kSize; ++k) {
+      // A point up to 1.3 x the plane's half extent from its centre, a direction
+      // back towards the sensor over the whole sphere (a quarter away from the plane).
+      const Vec3 q(1.3 * u(rng) * g.extentX_mm() / 2, 1.3 * u(rng) * g.extentY_mm() / 2, 0);
+      const Vec3 back = Vec3(0.8 * u(rng), 0.8 * u(rng), u(rng) + 0.5).normalized();
+      const Vec3 d = -worldFromPlane.vector(back);
+      t[k] = 10 + 40 * (u(rng) + 1);
+      rays.set(k, {worldFromPlane.point(q) - d * t[k], d});
+    }
+    detail::mapToLightField(rays, t, planeFromWorld, g, mapping);
+    for (const LightFieldLookup lookup : {LightFieldLookup::Nearest, LightFieldLookup::Interpolated})
+      for (int k = 0; k < RayLanes::kSize; ++k) {
+        const Ray ray = rays.ray(k);
+        const Vec3 q = planeFromWorld.point(ray.at(t[k]));  // as emittedRadiance
+        const double expected = lf.radiance({q.x, q.y}, planeFromWorld.vector(-ray.direction), lookup);
+        ASSERT_EQ(mapping.oneByOne[k], 0);
+        const double mapped =
+            mapping.seen[k] ? lf.radianceAt(mapping.sx[k], mapping.sy[k], {mapping.discX[k], mapping.discY[k]}, lookup)
+                            : 0.0;
+        EXPECT_EQ(mapped, expected) << "lane " << k << ", round " << round;
+        (expected > 0 ? lit : dark) += 1;
+      }
+  }
+  EXPECT_GT(lit, 2000);
+  EXPECT_GT(dark, 2000);
 }
 
 }  // namespace

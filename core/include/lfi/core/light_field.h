@@ -87,6 +87,10 @@ public:
   // frame) with direction d (unit, plane frame). 0 outside the plane and for
   // directions that point away from the +z half space.
   double radiance(const Vec2& q, const Vec3& d, LightFieldLookup mode) const;
+  // radiance()'s lookup once q and d are mapped: (sx, sy) = q / elementPitch_mm
+  // + (spatialX, spatialY) / 2, in elements; disc = discFromDirection(d), inside
+  // the unit disc. 0 outside the plane. For callers that map many rays at once.
+  double radianceAt(double sx, double sy, const Vec2& disc, LightFieldLookup mode) const;
 
 private:
   double angularSample(int ex, int ey, const Vec2& disc, LightFieldLookup mode) const;
