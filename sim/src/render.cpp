@@ -270,6 +270,7 @@ struct PixelWork {
   int issued = 0;    // samples started
   int inFlight = 0;  // samples started and not yet ended
   std::vector<double> values;  // each sample's radiance, summed in sample order at the end
+  std::uint64_t streams = 0;   // sample s's random stream is streams ^ s
   std::uint32_t stopKey = 0;   // permutes the stop strata against the pixel-area strata
   std::array<std::uint32_t, detail::kStratifiedChoices> choiceKeys{};
 };
@@ -561,12 +562,9 @@ private:
     lanes_.choices[k] = w.choices;
   }
 
-  // A sample about to start: which, and (from startSamples) its ray and stream.
+  // A sample about to start: its pixel's slot and its index in the pixel.
   struct Start {
     int slot = 0, sample = 0;
-    bool hasRay = false;
-    Ray ray;
-    Sampler sampler{0, 0};
   };
 
   // Plans up to `room` new samples in starts_ (the tile's pixels in order,
@@ -602,6 +600,7 @@ private:
     px.i = nextI_, px.j = nextJ_, px.issued = 0, px.inFlight = 0;
     px.values.resize(static_cast<size_t>(options_.samplesPerPixel));
     if (++nextI_ == x1_) nextI_ = x0_, ++nextJ_;
+    px.streams = (pixelIndex(px) << 24) ^ 0x5bd1e995ull;
     Sampler keys(options_.seed, pixelIndex(px));
     px.stopKey = keys.nextU32();
     for (auto& key : px.choiceKeys) key = keys.nextU32();
@@ -618,47 +617,42 @@ private:
   LaneMask startSamples(size_t m, LaneMask& free) {
     for (size_t k = 0; k < m; ++k) {
       const PixelWork& px = pixels_[static_cast<size_t>(starts_[k].slot)];
-      choices_.sample[k] = static_cast<std::uint32_t>(starts_[k].sample);
+      const auto s = static_cast<std::uint32_t>(starts_[k].sample);
+      choices_.sample[k] = s;
       for (size_t d = 0; d < detail::kBatchedChoices; ++d) choices_.key[d][k] = px.choiceKeys[d];
+      batch_.stream[k] = px.streams ^ s;
+      batch_.pixelX[k] = px.i, batch_.pixelY[k] = px.j;
+      batch_.sample[k] = s;
+      batch_.stopKey[k] = px.stopKey;
     }
     detail::makeStratifiedChoices(static_cast<std::uint32_t>(options_.samplesPerPixel), static_cast<int>(m), choices_);
+    LaneMask hasRay = (1u << m) - 1;
     if (cameraRays_) {
-      for (size_t k = 0; k < m; ++k) {
-        const PixelWork& px = pixels_[static_cast<size_t>(starts_[k].slot)];
-        const int s = starts_[k].sample;
-        batch_.stream[k] = sampleStream(px, s);
-        batch_.pixelX[k] = px.i, batch_.pixelY[k] = px.j;
-        batch_.sample[k] = static_cast<std::uint32_t>(s);
-        batch_.stopKey[k] = px.stopKey;
-      }
       detail::makeCameraSamples(*cameraRays_, options_.seed, side_, static_cast<int>(m), batch_);
-      for (size_t k = 0; k < m; ++k) {
-        Start& start = starts_[k];
-        start.ray = {{batch_.ox[k], batch_.oy[k], batch_.oz[k]}, {batch_.dx[k], batch_.dy[k], batch_.dz[k]}};
-        start.sampler.state = batch_.state[k];
-        start.hasRay = true;
-      }
     } else {
       for (size_t k = 0; k < m; ++k) {
-        Start& start = starts_[k];
-        const PixelWork& px = pixels_[static_cast<size_t>(start.slot)];
-        const int s = start.sample;
-        start.sampler = Sampler(options_.seed, sampleStream(px, s));
-        Vec2 offset(start.sampler.next(), start.sampler.next());
-        if (s < strata_) {
+        Sampler sampler(options_.seed, batch_.stream[k]);
+        Vec2 offset(sampler.next(), sampler.next());
+        if (const int s = starts_[k].sample; s < strata_) {
           const int row = s / side_;
           offset = Vec2((s - row * side_ + offset.x) * invSide_, (row + offset.y) * invSide_);
         }
+        const PixelWork& px = pixels_[static_cast<size_t>(starts_[k].slot)];
         const auto ray = std::get<LightFieldSensor>(sensor_).ray(px.i, px.j, offset);
-        start.hasRay = ray.has_value();
-        if (ray) start.ray = *ray;
+        batch_.state[k] = sampler.state;
+        if (!ray) {
+          hasRay &= ~(1u << k);
+          continue;
+        }
+        batch_.ox[k] = ray->origin.x, batch_.oy[k] = ray->origin.y, batch_.oz[k] = ray->origin.z;
+        batch_.dx[k] = ray->direction.x, batch_.dy[k] = ray->direction.y, batch_.dz[k] = ray->direction.z;
       }
     }
     LaneMask started = 0;
     for (size_t k = 0; k < m; ++k) {
       const Start& start = starts_[k];
-      if (!start.hasRay) {  // no ray (outside a light field sensor's disc): the sample is 0
-        PixelWork& px = pixels_[static_cast<size_t>(start.slot)];
+      PixelWork& px = pixels_[static_cast<size_t>(start.slot)];
+      if (!(hasRay >> k & 1)) {  // no ray (outside a light field sensor's disc): the sample is 0
         px.values[static_cast<size_t>(start.sample)] = 0;
         --px.inFlight;
         if (start.slot != issuing_) finishIfDone(start.slot);
@@ -667,18 +661,19 @@ private:
       const int lane = std::countr_zero(free);
       free &= free - 1;
       started |= 1u << lane;
-      lanes_.ray.rays.set(lane, start.ray);
+      RayLanes& rays = lanes_.ray.rays;
+      rays.ox[lane] = batch_.ox[k], rays.oy[lane] = batch_.oy[k], rays.oz[lane] = batch_.oz[k];
+      rays.dx[lane] = batch_.dx[k], rays.dy[lane] = batch_.dy[k], rays.dz[lane] = batch_.dz[k];
       lanes_.ray.on[lane] = -1;
       lanes_.throughput[lane] = 1;
       lanes_.radiance[lane] = 0;
-      lanes_.sampler[lane] = start.sampler.state;
+      lanes_.sampler[lane] = batch_.state[k];
       lanes_.depth[lane] = 0;
       lanes_.pixel[lane] = start.slot;
       lanes_.sample[lane] = start.sample;
       lanes_.waiting[lane] = 0;
       StratifiedChoices& choices = lanes_.choices[static_cast<size_t>(lane)];
       for (size_t d = 0; d < detail::kBatchedChoices; ++d) choices.u[d] = choices_.u[d][k];
-      const PixelWork& px = pixels_[static_cast<size_t>(start.slot)];
       for (size_t d = 0; d < StratifiedChoices::kLater; ++d)
         choices.key[d] = px.choiceKeys[detail::kBatchedChoices + d];
       choices.spp = static_cast<std::uint32_t>(options_.samplesPerPixel);
@@ -688,10 +683,6 @@ private:
       setInside(lane);
     }
     return started;
-  }
-
-  std::uint64_t sampleStream(const PixelWork& px, int s) const {
-    return (pixelIndex(px) << 24) ^ static_cast<std::uint64_t>(s) ^ 0x5bd1e995ull;
   }
 
   // Writes a pixel whose samples have all been started and ended, and frees its slot.
