@@ -48,6 +48,7 @@ using namespace lfi;
 using namespace lfi::sim;
 
 using lfi::bench::bestSeconds;
+using lfi::bench::bestSecondsInTurns;
 
 namespace {
 
@@ -204,12 +205,19 @@ int main(int argc, char** argv) {
   fmt::print("lfi-bench: reference scene {}x{}, {} spp, Fresnel split depth {}, {} hardware threads\n", cam.width,
              cam.height, ro.samplesPerPixel, ro.splitDepth, threads);
   const double samples = static_cast<double>(cam.width) * cam.height * ro.samplesPerPixel;
-  std::vector<double> samplesPerSecond;
-  for (int t : {1, threads}) {
-    ro.threads = t;
-    const double sec = bestSeconds(repeats + 2, [&] { render(scene, cam, ro); });  // as many runs as the bounds'
-    samplesPerSecond.push_back(samples / sec);
-    fmt::print("  tracer   {} thread(s): {:8.3f} M samples/s\n", t, samples / sec / 1e6);
+  // 1 thread and all threads in turns, so that the machine's load weighs on the scaling's both ends alike.
+  auto renderWith = [&](const Scene& s, int t) {
+    return [&s, &cam, ro, t]() mutable {
+      ro.threads = t;
+      render(s, cam, ro);
+    };
+  };
+  std::vector<double> samplesPerSecond =
+      bestSecondsInTurns(repeats + 2, {renderWith(scene, 1), renderWith(scene, threads)});  // the bounds' run count
+  for (int i = 0; i < 2; ++i) {
+    samplesPerSecond[static_cast<size_t>(i)] = samples / samplesPerSecond[static_cast<size_t>(i)];
+    fmt::print("  tracer   {} thread(s): {:8.3f} M samples/s\n", i ? threads : 1,
+               samplesPerSecond[static_cast<size_t>(i)] / 1e6);
   }
   fmt::print("  scaling  1 -> {} threads: {:.2f}x\n", threads, samplesPerSecond[1] / samplesPerSecond[0]);
 
@@ -240,11 +248,10 @@ int main(int argc, char** argv) {
           LightFieldEmission{lightField, LightFieldLookup::Nearest}}}};
     for (const auto& [name, light] : lights) {
       const Scene lit(std::vector<Object>{lensObject, light});
-      for (int t : {1, threads}) {
-        ro.threads = t;
-        const double sec = bestSeconds(repeats, [&] { render(lit, cam, ro); });
-        fmt::print("  study    {:<18} {} thread(s): {:8.3f} M samples/s\n", name, t, samples / sec / 1e6);
-      }
+      const std::vector<double> sec = bestSecondsInTurns(repeats, {renderWith(lit, 1), renderWith(lit, threads)});
+      for (int i = 0; i < 2; ++i)
+        fmt::print("  study    {:<18} {} thread(s): {:8.3f} M samples/s\n", name, i ? threads : 1,
+                   samples / sec[static_cast<size_t>(i)] / 1e6);
     }
   }
 
@@ -316,13 +323,6 @@ int main(int argc, char** argv) {
     }
   };
   const double n = static_cast<double>(batch.rays.size());
-  const double raw1 = n / bestSeconds(repeats + 2, [&] { intersectAll(raw); });
-  const double rawPackets =
-      n / bestSeconds(repeats + 2, [&] { intersectPackets(raw, RTC_INTERSECT_CONTEXT_FLAG_COHERENT); });
-  fmt::print("  bound    1 thread:  {:8.3f} M rays/s  (bare Embree rtcIntersect1, lens as {} triangles)\n", raw1 / 1e6,
-             lens.triangles.size());
-  fmt::print("  bound    1 thread:  {:8.3f} M rays/s  (bare Embree rtcIntersect16, same rays and triangles)\n",
-             rawPackets / 1e6);
   // Embree's own share of the tracer's query: the lens and the back light as
   // user primitives (as the tracer has them) whose callbacks do nothing, so
   // that only the traversal and the callback dispatch are timed; packets
@@ -347,11 +347,6 @@ int main(int argc, char** argv) {
     rtcReleaseGeometry(g);
   }
   rtcCommitScene(hull);
-  const double hullCoherent =
-      n / bestSeconds(repeats + 2, [&] { intersectPackets(hull, RTC_INTERSECT_CONTEXT_FLAG_COHERENT); });
-  const double hullIncoherent =
-      n / bestSeconds(repeats + 2, [&] { intersectPackets(hull, RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT); });
-  rtcReleaseScene(hull);
   // The tracer's own ray queries on the same rays, with where each starts:
   // Embree's traversal, the exact crossings of the lens and the back light,
   // and the lens answering the rays inside it (Scene::intersect).
@@ -378,14 +373,26 @@ int main(int argc, char** argv) {
       hitCount += one.valid();
     }
   });
-  const double queries = n / bestSeconds(repeats + 2, [&] { queryAll(nullptr); });
+  // The bounds and the tracer on 1 thread in turns, so that their ratios see the same machine.
+  const std::vector<double> sec = bestSecondsInTurns(
+      repeats + 2, {renderWith(scene, 1), [&] { intersectAll(raw); },
+                    [&] { intersectPackets(raw, RTC_INTERSECT_CONTEXT_FLAG_COHERENT); },
+                    [&] { intersectPackets(hull, RTC_INTERSECT_CONTEXT_FLAG_COHERENT); },
+                    [&] { intersectPackets(hull, RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT); }, [&] { queryAll(nullptr); }});
+  rtcReleaseScene(hull);
+  const double tracerRays1 = samples / sec[0] * raysPerSample, raw1 = n / sec[1], rawPackets = n / sec[2];
+  const double hullCoherent = n / sec[3], hullIncoherent = n / sec[4], queries = n / sec[5];
+  fmt::print("  bound    1 thread:  {:8.3f} M rays/s  (bare Embree rtcIntersect1, lens as {} triangles)\n", raw1 / 1e6,
+             lens.triangles.size());
+  fmt::print("  bound    1 thread:  {:8.3f} M rays/s  (bare Embree rtcIntersect16, same rays and triangles)\n",
+             rawPackets / 1e6);
   fmt::print("  bound    1 thread:  {:8.3f} M rays/s  (bare Embree rtcIntersect16, lens and back light as no-op user "
              "primitives, coherent)\n", hullCoherent / 1e6);
   fmt::print("  bound    1 thread:  {:8.3f} M rays/s  (the same, incoherent: the tracer's mode)\n",
              hullIncoherent / 1e6);
   const double hullPackets = std::max(hullCoherent, hullIncoherent);
-  const double tracerRays1 = samplesPerSecond[0] * raysPerSample;
-  fmt::print("  tracer   1 thread:  {:8.3f} M rays/s  ({:.2f} rays per sample)\n", tracerRays1 / 1e6, raysPerSample);
+  fmt::print("  tracer   1 thread:  {:8.3f} M rays/s  ({:.2f} rays per sample; timed in turns with the bounds)\n",
+             tracerRays1 / 1e6, raysPerSample);
   fmt::print("  ratio    bound / tracer per ray, 1 thread: {:.2f} (target <= 2; bound: the fastest of the above)\n",
              std::max({raw1, rawPackets, hullPackets}) / tracerRays1);
   fmt::print("  queries  1 thread:  {:8.3f} M rays/s  (the tracer's own ray queries, Scene::intersect, same rays and "
