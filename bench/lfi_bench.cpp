@@ -378,7 +378,8 @@ int main(int argc, char** argv) {
       repeats + 2, {renderWith(scene, 1), [&] { intersectAll(raw); },
                     [&] { intersectPackets(raw, RTC_INTERSECT_CONTEXT_FLAG_COHERENT); },
                     [&] { intersectPackets(hull, RTC_INTERSECT_CONTEXT_FLAG_COHERENT); },
-                    [&] { intersectPackets(hull, RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT); }, [&] { queryAll(nullptr); }});
+                    [&] { intersectPackets(hull, RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT); },
+                    [&] { queryAll(nullptr); }});
   rtcReleaseScene(hull);
   const double tracerRays1 = samples / sec[0] * raysPerSample, raw1 = n / sec[1], rawPackets = n / sec[2];
   const double hullCoherent = n / sec[3], hullIncoherent = n / sec[4], queries = n / sec[5];
