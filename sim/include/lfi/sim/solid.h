@@ -100,8 +100,9 @@ public:
   // For each of n <= kBatch rays (parent frame): the nearest crossing of the
   // solid's boundary with tMin < t < infinity, as t[k] and the outward unit
   // normal[k]; t[k] = infinity when there is none. The same crossings as
-  // intervals(), many rays at once: an intersection of convex primitives (a
-  // lens) is computed lane-parallel, in SIMD where the CPU has it.
+  // intervals(), to the bit, many rays at once: an intersection of convex
+  // primitives (a lens) and a difference of two convex solids (a part with a
+  // cut-out) are computed lane-parallel, in SIMD where the CPU has it.
   static constexpr int kBatch = RayLanes::kSize;
   void nearestCrossings(int n, const Ray* rays, double tMin, double* t, Vec3* normal) const;
   // The same for the lanes of `rays` whose bits are set in `lanes`: t[k] and
@@ -141,6 +142,24 @@ private:
   static constexpr size_t kMaxConvexParts = 8;  // longer chains take the general path
   void convexIntervals(const Ray& local, IntervalList& out) const;
 
+  // A convex solid's (convex()) interval on every lane of rays given in its
+  // parent's frame, lane-parallel: [enter, exit], empty unless present(k), and
+  // each part's own span, to tell which part a crossing lies on.
+  struct LaneSpans {
+    const RayLanes* local;  // the rays in the solid's frame: the parent's, or `transformed`
+    RayLanes transformed;
+    double enter[RayLanes::kSize], exit[RayLanes::kSize];
+    double t0[kMaxConvexParts][RayLanes::kSize], t1[kMaxConvexParts][RayLanes::kSize];
+    bool primitive;
+    bool present(int k) const { return primitive ? t0[0][k] <= t1[0][k] : exit[k] > enter[k]; }
+  };
+  void laneSpans(const RayLanes& rays, LaneSpans& out) const;
+  // The outward normal (parent frame) where lane k crosses the solid at t, an
+  // end of its span (entering: the start).
+  Vec3 spanNormal(const LaneSpans& spans, int k, double t, bool entering) const;
+  // A difference of two convex solids (a part with a cut-out), lane-parallel.
+  void differenceCrossings(const RayLanes& rays, std::uint32_t lanes, double tMin, double* t, Vec3* normal) const;
+
   Kind kind_;
   double radius_ = 0;
   Rigid3 parentFromLocal_;
@@ -148,6 +167,7 @@ private:
   bool identity_ = true;
   std::shared_ptr<const Solid> a_, b_;
   std::vector<ConvexPart> convex_;  // empty unless the node is such an intersection
+  bool convexDifference_ = false;    // a difference of two convex solids
 };
 
 }  // namespace lfi::sim
