@@ -4,6 +4,7 @@
 
 #include "simd.h"
 
+#include <algorithm>
 #include <cmath>
 
 namespace lfi::sim::detail {
@@ -59,6 +60,48 @@ LFI_SIMD_CLONES void makeCameraSamples(const TelecentricCamera::RayMap& camera, 
     concentricDisc(su, sv, ax, ay);
     camera.trace(b.pixelX[k] + jx, b.pixelY[k] + jy, ax, ay, b.ox[k], b.oy[k], b.oz[k], b.dx[k], b.dy[k], b.dz[k]);
   }
+}
+
+LFI_SIMD_CLONES std::uint32_t makeLightFieldSamples(const LightFieldSensor& sensor, std::uint64_t seed, int side, int n,
+                                                   CameraSampleBatch& b) {
+  constexpr std::uint64_t kGolden = 0x9e3779b97f4a7c15ull;  // Sampler's increment
+  const std::uint64_t seedHash = splitMix64(seed);
+  const auto strata = static_cast<std::uint32_t>(side * side);
+  const double invSide = 1.0 / side, angular = sensor.geometry.angular, invAngular = 1.0 / angular;
+  const double e = sensor.geometry.elementPitch_mm();
+  const double halfX = 0.5 * sensor.geometry.spatialX, halfY = 0.5 * sensor.geometry.spatialY;
+  const auto& r = sensor.worldFromSensor.r;
+  const Vec3 shift = sensor.worldFromSensor.t;
+  std::uint32_t seen[CameraSampleBatch::kSize];
+  for (int k = 0; k < n; ++k) {
+    const std::uint64_t state = splitMix64(b.stream[k] ^ seedHash);
+    double ox = Sampler::unitInterval(splitMix64(state)), oy = Sampler::unitInterval(splitMix64(state + kGolden));
+    b.state[k] = state + 2 * kGolden;
+    // The jittered stratum (row = sample div side, exactly: the quotient is at
+    // least 0.5 / side away from an integer).
+    const double s = b.sample[k], row = std::floor((s + 0.5) * invSide), col = s - row * side;
+    const bool stratified = b.sample[k] < strata;
+    ox = stratified ? (col + ox) * invSide : ox;
+    oy = stratified ? (row + oy) * invSide : oy;
+    // LightFieldSensor::ray: element (ex, ey) and angular pixel (u, v) of the
+    // lenslet pixel, as integer division and remainder would give them.
+    const double ex = std::floor((b.pixelX[k] + 0.5) * invAngular), ey = std::floor((b.pixelY[k] + 0.5) * invAngular);
+    const double u = b.pixelX[k] - ex * angular, v = b.pixelY[k] - ey * angular;
+    const double px = (2.0 * (u + ox)) / angular - 1, py = (2.0 * (v + oy)) / angular - 1;
+    const double r2 = px * px + py * py;
+    seen[k] = r2 < 1 ? 1u : 0u;
+    const double qx = (ex + 0.5 - halfX) * e, qy = (ey + 0.5 - halfY) * e, qz = 0;
+    b.ox[k] = r[0] * qx + r[1] * qy + r[2] * qz + shift.x;  // Rigid3::point
+    b.oy[k] = r[3] * qx + r[4] * qy + r[5] * qz + shift.y;
+    b.oz[k] = r[6] * qx + r[7] * qy + r[8] * qz + shift.z;
+    const double dx = -px, dy = -py, dz = std::sqrt(std::max(0.0, 1 - r2));  // LightField::directionFromDisc
+    b.dx[k] = r[0] * dx + r[1] * dy + r[2] * dz;                                // Rigid3::vector
+    b.dy[k] = r[3] * dx + r[4] * dy + r[5] * dz;
+    b.dz[k] = r[6] * dx + r[7] * dy + r[8] * dz;
+  }
+  std::uint32_t withRay = 0;
+  for (int k = 0; k < n; ++k) withRay |= seen[k] << k;
+  return withRay;
 }
 
 LFI_SIMD_CLONES void makeStratifiedChoices(std::uint32_t spp, int n, ChoiceBatch& b) {

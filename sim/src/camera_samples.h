@@ -63,6 +63,15 @@ struct CameraSampleBatch {
 void makeCameraSamples(const TelecentricCamera::RayMap& camera, std::uint64_t seed, int side, int n,
                        CameraSampleBatch& batch);
 
+// The same for a light field sensor (stopKey unused; pixelX, pixelY the
+// lenslet image's column and row), to the bit as one sample at a time:
+// Sampler(seed, stream), its first two draws (Sampler::next) as the offset in
+// the pixel, jittered in stratum `sample` of side x side when sample < side^2,
+// and LightFieldSensor::ray. Returns the samples that have a ray (bit k);
+// the others fall outside the hemisphere mapping.
+std::uint32_t makeLightFieldSamples(const LightFieldSensor& sensor, std::uint64_t seed, int side, int n,
+                                    CameraSampleBatch& batch);
+
 // The first kStratifiedChoices Fresnel choices of a pixel's samples are drawn
 // from a Latin hypercube rather than at random: choice d of sample s falls in
 // stratum permutationElement(s, spp, key[d]) of [0, 1) cut into spp, jittered

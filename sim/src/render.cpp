@@ -314,8 +314,8 @@ public:
         cameraRays_(std::holds_alternative<TelecentricCamera>(sensor)
                         ? std::optional(TelecentricCamera::RayMap(std::get<TelecentricCamera>(sensor)))
                         : std::nullopt),
-        side_(static_cast<int>(std::sqrt(static_cast<double>(options.samplesPerPixel)))), strata_(side_ * side_),
-        invSide_(1.0 / side_), invSpp_(1.0 / options.samplesPerPixel) {
+        side_(static_cast<int>(std::sqrt(static_cast<double>(options.samplesPerPixel)))),
+        invSpp_(1.0 / options.samplesPerPixel) {
     // Lanes without a path still take part in the lane-parallel arithmetic:
     // give them a harmless ray and interface.
     for (int k = 0; k < kLanes; ++k) {
@@ -626,28 +626,12 @@ private:
       batch_.stopKey[k] = px.stopKey;
     }
     detail::makeStratifiedChoices(static_cast<std::uint32_t>(options_.samplesPerPixel), static_cast<int>(m), choices_);
-    LaneMask hasRay = (1u << m) - 1;
-    if (cameraRays_) {
+    LaneMask hasRay = (1u << m) - 1;  // all but a light field sensor's samples outside its disc
+    if (cameraRays_)
       detail::makeCameraSamples(*cameraRays_, options_.seed, side_, static_cast<int>(m), batch_);
-    } else {
-      for (size_t k = 0; k < m; ++k) {
-        Sampler sampler(options_.seed, batch_.stream[k]);
-        Vec2 offset(sampler.next(), sampler.next());
-        if (const int s = starts_[k].sample; s < strata_) {
-          const int row = s / side_;
-          offset = Vec2((s - row * side_ + offset.x) * invSide_, (row + offset.y) * invSide_);
-        }
-        const PixelWork& px = pixels_[static_cast<size_t>(starts_[k].slot)];
-        const auto ray = std::get<LightFieldSensor>(sensor_).ray(px.i, px.j, offset);
-        batch_.state[k] = sampler.state;
-        if (!ray) {
-          hasRay &= ~(1u << k);
-          continue;
-        }
-        batch_.ox[k] = ray->origin.x, batch_.oy[k] = ray->origin.y, batch_.oz[k] = ray->origin.z;
-        batch_.dx[k] = ray->direction.x, batch_.dy[k] = ray->direction.y, batch_.dz[k] = ray->direction.z;
-      }
-    }
+    else
+      hasRay = detail::makeLightFieldSamples(std::get<LightFieldSensor>(sensor_), options_.seed, side_,
+                                             static_cast<int>(m), batch_);
     LaneMask started = 0;
     for (size_t k = 0; k < m; ++k) {
       const Start& start = starts_[k];
@@ -705,8 +689,8 @@ private:
   const RenderOptions& options_;
   int width_;
   std::optional<TelecentricCamera::RayMap> cameraRays_;
-  int side_, strata_;
-  double invSide_, invSpp_;
+  int side_;  // strata per axis of the pixel area (and of the stop)
+  double invSpp_;
   int nextI_ = 0, nextJ_ = 0, x0_ = 0, x1_ = 0, y1_ = 0;
   int issuing_ = -1;  // the pixel whose samples are being planned
   cv::Mat* image_ = nullptr;

@@ -18,6 +18,7 @@
 #include <cstring>
 #include <mutex>
 #include <numbers>
+#include <random>
 #include <vector>
 
 namespace {
@@ -480,6 +481,52 @@ TEST(CameraSamples, VectorisedPassEqualsOneSampleAtATime) {
     EXPECT_EQ(batch.dz[k], ray.direction.z) << k;
     EXPECT_EQ(batch.state[k], sampler.state) << k;
   }
+}
+
+// The light field sensor's samples, made in one vectorised pass, equal to the
+// bit the sample stream's first two draws (Sampler::next), the jittered pixel
+// stratum and LightFieldSensor::ray, or have no ray where that has none.
+TEST(CameraSamples, LightFieldPassEqualsOneSampleAtATime) {
+  LightFieldSensor sensor;
+  sensor.geometry = {.spatialX = 7, .spatialY = 5, .angular = 9, .pixelPitch_mm = 0.03, .distance_mm = 0};
+  sensor.worldFromSensor = Rigid3::translation({1, -2, -30}) * Rigid3::rotation({1, -0.5, 0.2}, 0.4);
+  const std::uint64_t seed = 17;
+  int withRay = 0, without = 0;
+  for (const int side : {1, 3, 4}) {
+    std::mt19937 rng(static_cast<unsigned>(side));
+    for (int round = 0; round < 40; ++round) {
+      detail::CameraSampleBatch batch;
+      const int n = 1 + round % detail::CameraSampleBatch::kSize;
+      for (int k = 0; k < n; ++k) {
+        batch.stream[k] = rng() * 0x9e3779b97f4a7c15ull + static_cast<std::uint64_t>(k);
+        batch.pixelX[k] = rng() % static_cast<unsigned>(sensor.geometry.width());
+        batch.pixelY[k] = rng() % static_cast<unsigned>(sensor.geometry.height());
+        batch.sample[k] = rng() % static_cast<unsigned>(side * side + 3);  // also past the strata
+      }
+      const std::uint32_t hasRay = detail::makeLightFieldSamples(sensor, seed, side, n, batch);
+      for (int k = 0; k < n; ++k) {
+        Sampler sampler(seed, batch.stream[k]);
+        const double first = sampler.next();
+        Vec2 offset(first, sampler.next());
+        if (const auto s = static_cast<int>(batch.sample[k]); s < side * side) {
+          const int row = s / side;
+          offset = Vec2((s - row * side + offset.x) * (1.0 / side), (row + offset.y) * (1.0 / side));
+        }
+        const auto ray = sensor.ray(static_cast<int>(batch.pixelX[k]), static_cast<int>(batch.pixelY[k]), offset);
+        ASSERT_EQ(hasRay >> k & 1, ray.has_value() ? 1u : 0u) << k;
+        EXPECT_EQ(batch.state[k], sampler.state) << k;
+        if (!ray) {
+          ++without;
+          continue;
+        }
+        ++withRay;
+        EXPECT_EQ(Vec3(batch.ox[k], batch.oy[k], batch.oz[k]), ray->origin) << k;
+        EXPECT_EQ(Vec3(batch.dx[k], batch.dy[k], batch.dz[k]), ray->direction) << k;
+      }
+    }
+  }
+  EXPECT_GT(withRay, 500);
+  EXPECT_GT(without, 50);
 }
 
 // The stratified Fresnel choices, made in the vectorised pass (the first
