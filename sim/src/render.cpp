@@ -436,8 +436,10 @@ private:
     while (lanes) {  // one emitter object at a time
       const int object = hits_.object[std::countr_zero(lanes)];
       LaneMask these = 0;
-      for (LaneMask bits = lanes; bits; bits &= bits - 1)
-        if (hits_.object[std::countr_zero(bits)] == object) these |= 1u << std::countr_zero(bits);
+      for (LaneMask bits = lanes; bits; bits &= bits - 1) {
+        const int k = std::countr_zero(bits);
+        if (hits_.object[k] == object) these |= 1u << k;
+      }
       lanes &= ~these;
       const Emission& emission = *scene_.object(object).emission;
       const LightField* lightField = std::get<LightFieldEmission>(emission).lightField.get();
