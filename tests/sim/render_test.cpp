@@ -164,7 +164,7 @@ TEST(NestedDielectrics, EightLevelsRefractAsTheOuterSlabAlone) {
   const int count = kNesting;
   const double n = 1.5, theta = 0.3, top = 50;
   const Vec3 d0(std::sin(theta), 0, -std::cos(theta));
-  // refractionPath always refracts: origin, 2 count crossings, and the escape point.
+  // refractionPath always refracts: the origin, 2 count crossings and the back light.
   const std::vector<Vec3> path = refractionPath(nestedSlabs(count, n), {{0, 0, top}, d0});
   ASSERT_EQ(path.size(), static_cast<size_t>(2 * count + 2));
   const double xEnter = (top - count) * std::tan(theta), tanT = std::tan(std::asin(std::sin(theta) / n));
