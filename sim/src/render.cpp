@@ -392,14 +392,13 @@ private:
       }
       if (surface.kind == Surface::Kind::Emitter) {  // the end of most paths: as interact()
         const double throughput = lanes_.throughput[k] * transmittance(k);
-        if (std::holds_alternative<LightFieldEmission>(*scene_.object(object).emission)) {
-          lanes_.throughput[k] = throughput;  // taken below, all lanes at once
-          lightFields |= bit;
-          continue;
-        }
         double radiance;
         if (surface.uniformEmission) {  // no need of the hit point
           radiance = uniformRadiance(surface, (-direction(k)).dot(hits_.normal(k)));
+        } else if (std::holds_alternative<LightFieldEmission>(*scene_.object(object).emission)) {
+          lanes_.throughput[k] = throughput;  // taken below, all lanes at once
+          lightFields |= bit;
+          continue;
         } else {
           const Ray ray = lanes_.ray.rays.ray(k);
           const Hit hit{object, hits_.t[k], ray.at(hits_.t[k]), hits_.normal(k)};
