@@ -201,20 +201,20 @@ double walk(const Scene& scene, PathState p, Policy& policy) {
 }
 
 // A sample's first detail::kStratifiedChoices Fresnel choices, from a Latin
-// hypercube over its pixel's samples (camera_samples.h): the first
-// kBatchedChoices made with the sample, the rest when they are needed.
+// hypercube over its pixel's samples (camera_samples.h). The packet renderer
+// makes the first kBatchedChoices for many lanes at once when their paths
+// first need one (`batched`); otherwise each is made when it is needed. Both
+// give the same values.
 struct StratifiedChoices {
-  static constexpr int kLater = detail::kStratifiedChoices - detail::kBatchedChoices;
-  std::array<double, detail::kBatchedChoices> u;
-  std::array<std::uint32_t, kLater> key;  // the pixel's keys of the later choices
+  std::array<double, detail::kBatchedChoices> u;                // when batched
+  std::array<std::uint32_t, detail::kStratifiedChoices> key;  // the pixel's key of each choice
   std::uint32_t spp = 0, sample = 0;
   int used = detail::kStratifiedChoices;  // none left
+  bool batched = false;
   bool next(double& value) {
     if (used == detail::kStratifiedChoices) return false;
-    const int d = used++;
-    value = d < detail::kBatchedChoices
-                ? u[static_cast<size_t>(d)]
-                : detail::stratifiedChoice(spp, sample, key[static_cast<size_t>(d - detail::kBatchedChoices)]);
+    const auto d = static_cast<size_t>(used++);
+    value = batched && d < detail::kBatchedChoices ? u[d] : detail::stratifiedChoice(spp, sample, key[d]);
     return true;
   }
 };
@@ -285,6 +285,7 @@ struct Walker {
 
 constexpr int kLanes = static_cast<int>(Scene::kPacket);
 using LaneMask = std::uint32_t;  // bit k: lane k
+constexpr int kFewChoices = 2;   // as many lanes' first choices are made one by one rather than in a batch
 
 // The packet's paths as structures of arrays, lane k in slot k of each. A
 // lane traces one sample; its split branches wait on its own stack and are
@@ -473,6 +474,7 @@ private:
       for (LaneMask bits = lanes; bits; bits &= bits - 1)
         detail::fresnelLane(lanes_.ray.rays, hits_, fresnel_, std::countr_zero(bits));
     const detail::FresnelLanes& f = fresnel_;
+    batchChoices(lanes);
     LaneMask kept = 0;
     for (; lanes; lanes &= lanes - 1) {
       const int k = std::countr_zero(lanes);
@@ -512,6 +514,31 @@ private:
       if (lanes_.depth[k] < options_.maxDepth || endPath(k, 0, free)) kept |= 1u << k;
     }
     return kept;
+  }
+
+  // Makes the batched stratified choices, in one vectorised pass, for the
+  // lanes among `lanes` (at a Fresnel event, fresnel_ set) that are about to
+  // make their first choice. Paths that never choose (they miss the lens, or
+  // split instead) cost nothing; a few lanes choose one by one instead.
+  void batchChoices(LaneMask lanes) {
+    int n = 0;
+    LaneMask batch = 0;
+    for (; lanes; lanes &= lanes - 1) {
+      const int k = std::countr_zero(lanes);
+      const StratifiedChoices& c = lanes_.choices[static_cast<size_t>(k)];
+      if (c.used != 0 || c.batched || fresnel_.cosT[k] < 0 || lanes_.depth[k] < options_.splitDepth) continue;
+      choices_.sample[n] = c.sample;
+      for (size_t d = 0; d < detail::kBatchedChoices; ++d) choices_.key[d][n] = c.key[d];
+      batch |= 1u << k;
+      ++n;
+    }
+    if (n <= kFewChoices) return;
+    detail::makeStratifiedChoices(static_cast<std::uint32_t>(options_.samplesPerPixel), n, choices_);
+    for (int i = 0; batch; batch &= batch - 1, ++i) {
+      StratifiedChoices& c = lanes_.choices[static_cast<size_t>(std::countr_zero(batch))];
+      for (size_t d = 0; d < detail::kBatchedChoices; ++d) c.u[d] = choices_.u[d][i];
+      c.batched = true;
+    }
   }
 
   // Ends lane k's current path, which brought `radiance`, and goes on with the
@@ -619,14 +646,11 @@ private:
     for (size_t k = 0; k < m; ++k) {
       const PixelWork& px = pixels_[static_cast<size_t>(starts_[k].slot)];
       const auto s = static_cast<std::uint32_t>(starts_[k].sample);
-      choices_.sample[k] = s;
-      for (size_t d = 0; d < detail::kBatchedChoices; ++d) choices_.key[d][k] = px.choiceKeys[d];
       batch_.stream[k] = px.streams ^ s;
       batch_.pixelX[k] = px.i, batch_.pixelY[k] = px.j;
       batch_.sample[k] = s;
       batch_.stopKey[k] = px.stopKey;
     }
-    detail::makeStratifiedChoices(static_cast<std::uint32_t>(options_.samplesPerPixel), static_cast<int>(m), choices_);
     LaneMask hasRay = (1u << m) - 1;  // all but a light field sensor's samples outside its disc
     if (cameraRays_)
       detail::makeCameraSamples(*cameraRays_, options_.seed, side_, static_cast<int>(m), batch_);
@@ -658,12 +682,11 @@ private:
       lanes_.sample[lane] = start.sample;
       lanes_.waiting[lane] = 0;
       StratifiedChoices& choices = lanes_.choices[static_cast<size_t>(lane)];
-      for (size_t d = 0; d < detail::kBatchedChoices; ++d) choices.u[d] = choices_.u[d][k];
-      for (size_t d = 0; d < StratifiedChoices::kLater; ++d)
-        choices.key[d] = px.choiceKeys[detail::kBatchedChoices + d];
+      choices.key = px.choiceKeys;
       choices.spp = static_cast<std::uint32_t>(options_.samplesPerPixel);
       choices.sample = static_cast<std::uint32_t>(start.sample);
       choices.used = 0;
+      choices.batched = false;
       lanes_.media[static_cast<size_t>(lane)] = MediumStack();
       setInside(lane);
     }
