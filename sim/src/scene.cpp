@@ -477,7 +477,7 @@ void Scene::intersect(const RayPacket& packet, std::uint32_t lanes, HitPacket& h
 
 void Scene::meshHit(int k, unsigned geomID, unsigned primID, float tfar, const Vec3& ng, float u, float v,
                     HitPacket& hits) const {
-  if (hits.object[k] >= 0 && hits.t[k] <= tfar) return;  // an analytic object is nearer
+  if (!(tfar < hits.t[k])) return;  // an analytic object is as near (or tMax is nearer)
   Vec3 normal = ng.normalized();
   const Object& obj = objects_[geomID];
   const auto& mesh = std::get<TriangleMesh>(obj.shape);
@@ -488,9 +488,7 @@ void Scene::meshHit(int k, unsigned geomID, unsigned primID, float tfar, const V
     // Keep the interpolated normal on the geometric normal's side.
     if (shading.dot(normal) > 0) normal = shading;
   }
-  hits.t[k] = tfar;
-  hits.nx[k] = normal.x, hits.ny[k] = normal.y, hits.nz[k] = normal.z;
-  hits.object[k] = static_cast<int>(geomID);
+  keepNearest(hits, k, tfar, normal, static_cast<int>(geomID));
 }
 
 bool Scene::isolated(int index) const { return impl_->isolated[static_cast<size_t>(index)] != nullptr; }
