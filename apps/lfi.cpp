@@ -20,6 +20,7 @@
 
 
 #include <atomic>
+#include <charconv>
 #include <chrono>
 #include <csignal>
 #include <functional>
@@ -61,6 +62,21 @@ private:
 // Ctrl-C asks long work to stop cleanly (renders check it between tiles).
 std::atomic<bool> gCancel{false};
 extern "C" void onInterrupt(int) { gCancel = true; }
+
+// A whole-number option of at least `lowest`. (CLI11 2.1's PositiveNumber
+// would answer "--spp 0" with "Value 0 not in range 0.000000 to 1.797...e308".)
+CLI::Validator wholeNumberFrom(long long lowest) {
+  return CLI::Validator(
+      [lowest](std::string& input) -> std::string {
+        long long value = 0;
+        const char* end = input.data() + input.size();
+        const auto [at, ec] = std::from_chars(input.data(), end, value);
+        if (ec != std::errc() || at != end || value < lowest)
+          return fmt::format("'{}' is not a whole number >= {}", input, lowest);
+        return {};
+      },
+      fmt::format("INT>={}", lowest));
+}
 
 fs::path defaultBench() {
   const fs::path installed = fs::path(LFI_DATA_DIR) / "benches" / "reference.toml";
@@ -134,7 +150,7 @@ int main(int argc, char** argv) {
   study->add_option("--quality", quality, "quick | default | high")
       ->check(CLI::IsMember({"quick", "default", "high"}))
       ->capture_default_str();
-  study->add_option("--threads", threads, "Worker threads (0 = all cores)")->check(CLI::NonNegativeNumber);
+  study->add_option("--threads", threads, "Worker threads (0 = all cores)")->check(wholeNumberFrom(0));
   study->add_option("--seed", seed, "Random seed (renders and sensor noise)")->capture_default_str();
   study->add_flag("--force", force, "Replace the results of an earlier study in --out");
   bool sweepOn = false, sweepOff = false;
@@ -152,8 +168,8 @@ int main(int argc, char** argv) {
       ->required()
       ->check(CLI::ExistingFile);
   render->add_option("--out", renderOut, "Output folder")->required();
-  render->add_option("--spp", spp, "Samples per pixel (overrides the scene file)")->check(CLI::PositiveNumber);
-  render->add_option("--threads", renderThreads, "Worker threads (0 = all cores)")->check(CLI::NonNegativeNumber);
+  render->add_option("--spp", spp, "Samples per pixel (overrides the scene file)")->check(wholeNumberFrom(1));
+  render->add_option("--threads", renderThreads, "Worker threads (0 = all cores)")->check(wholeNumberFrom(0));
   std::optional<std::uint64_t> renderSeed;
   render->add_option("--seed", renderSeed, "Random seed (overrides the scene file)");
   render->add_flag("--force", renderForce, "Replace existing output files");
@@ -171,7 +187,7 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   serve->add_option("--serial", serveOptions.serial, "Serial number (device id: lfi-SimCamera-<serial>)")
       ->capture_default_str();
-  serve->add_option("--threads", serveThreads, "Render threads (0 = all cores)")->check(CLI::NonNegativeNumber);
+  serve->add_option("--threads", serveThreads, "Render threads (0 = all cores)")->check(wholeNumberFrom(0));
 
   // lfi inspect
   auto* inspect = app.add_subcommand(
@@ -191,7 +207,7 @@ int main(int argc, char** argv) {
       ->check(CLI::ExistingFile)
       ->excludes(captureOption);
   inspect->add_option("--out", inspectOut, "Output folder (inspection.exr/.png, lightfield.exr)")->required();
-  inspect->add_option("--frames", frames, "Frames averaged")->check(CLI::PositiveNumber)->capture_default_str();
+  inspect->add_option("--frames", frames, "Frames averaged")->check(wholeNumberFrom(1))->capture_default_str();
   inspect->add_option("--exposure-us", exposure_us, "Exposure time (µs)")->capture_default_str();
   inspect->add_option("--gain", gain, "Gain (device unit, dB for SFNC cameras)")->capture_default_str();
   inspect->add_option("--pixel-format", pixelFormat, "Mono8 | Mono12 | Mono16")
