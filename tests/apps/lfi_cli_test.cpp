@@ -62,9 +62,9 @@ protected:
   // The reference scene at 64 x 64 pixels over the same 60 mm field.
   fs::path smallScene() const {
     std::string text = readBytes(fs::path(LFI_SOURCE_DIR) / "data" / "scenes" / "reference.toml");
-    for (const auto& [from, to] : {std::pair<std::string, std::string>{"pixel_pitch_mm = 0.1171875", "pixel_pitch_mm = 0.9375"},
-                                   {"width = 512", "width = 64"},
-                                   {"height = 512", "height = 64"}}) {
+    using Edit = std::pair<std::string, std::string>;
+    for (const auto& [from, to] : {Edit{"pixel_pitch_mm = 0.1171875", "pixel_pitch_mm = 0.9375"},
+                                   Edit{"width = 512", "width = 64"}, Edit{"height = 512", "height = 64"}}) {
       const size_t at = text.find(from);
       EXPECT_NE(at, std::string::npos) << from;
       if (at != std::string::npos) text.replace(at, from.size(), to);

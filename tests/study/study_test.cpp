@@ -65,8 +65,8 @@ void checkOutputs(const nlohmann::ordered_json& r, const fs::path& dir) {
         const auto& cell = s["defects"][d][setup];
         const double cnr = cell["cnr"].get<double>();
         ASSERT_TRUE(std::isfinite(cnr) && cnr >= 0) << scene << "/" << d << "/" << setup << ": cnr " << cnr;
-        EXPECT_EQ(cell["verdict"].get<std::string>(), cnr >= detectedAt ? "detected" : cnr >= weakAt ? "weak" : "missed")
-            << scene << "/" << d << "/" << setup << ": cnr " << cnr;
+        const char* expected = cnr >= detectedAt ? "detected" : cnr >= weakAt ? "weak" : "missed";
+        EXPECT_EQ(cell["verdict"].get<std::string>(), expected) << scene << "/" << d << "/" << setup << ": cnr " << cnr;
         // The ground-truth mask is never empty: sub-pixel defects get their pixel.
         EXPECT_GT(cell["pixels"].get<int>(), 0) << scene << "/" << d;
       }
