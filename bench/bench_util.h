@@ -1,6 +1,7 @@
 #pragma once
 // Timing for the benchmarks: the best of several runs (the least disturbed by
-// whatever else the machine does).
+// whatever else the machine does) for speeds, and the median of ratios taken
+// turn by turn for ratios between two runs.
 
 #include <algorithm>
 #include <chrono>
@@ -19,13 +20,42 @@ inline double bestSeconds(int repeats, const std::function<void()>& f) {
   return best;
 }
 
-// The best of `repeats` runs of each of `fs`, run in turns (f0, f1, ..., f0,
-// f1, ...), so that a change in the machine's load falls on all of them
-// alike: for ratios between them, such as a speed-up over threads.
+// Seconds of every run of each of `fs`, run in turns (f0, f1, ..., f0, f1,
+// ...): seconds[turn][i].
+using TurnSeconds = std::vector<std::vector<double>>;
+inline TurnSeconds secondsInTurns(int turns, const std::vector<std::function<void()>>& fs) {
+  TurnSeconds seconds(static_cast<size_t>(turns), std::vector<double>(fs.size()));
+  for (auto& turn : seconds)
+    for (size_t i = 0; i < fs.size(); ++i) turn[i] = bestSeconds(1, fs[i]);
+  return seconds;
+}
+
+// The best run of function i over the turns (its speed on the quietest machine).
+inline double bestOf(const TurnSeconds& seconds, size_t i) {
+  double best = 1e300;
+  for (const auto& turn : seconds) best = std::min(best, turn[i]);
+  return best;
+}
+
+// The ratio seconds[a] / seconds[b] of every turn: its two ends ran next to
+// each other in time, so the machine's load, which drifts over seconds (a
+// shared host), weighs on both alike. Sorted: the median is in the middle.
+inline std::vector<double> ratiosByTurn(const TurnSeconds& seconds, size_t a, size_t b) {
+  std::vector<double> r;
+  for (const auto& turn : seconds) r.push_back(turn[a] / turn[b]);
+  std::sort(r.begin(), r.end());
+  return r;
+}
+inline double median(const std::vector<double>& sorted) {
+  const size_t n = sorted.size();
+  return n == 0 ? 0.0 : n % 2 ? sorted[n / 2] : 0.5 * (sorted[n / 2 - 1] + sorted[n / 2]);
+}
+
+// The best of `repeats` runs of each of `fs`, run in turns.
 inline std::vector<double> bestSecondsInTurns(int repeats, const std::vector<std::function<void()>>& fs) {
-  std::vector<double> best(fs.size(), 1e300);
-  for (int r = 0; r < repeats; ++r)
-    for (size_t i = 0; i < fs.size(); ++i) best[i] = std::min(best[i], bestSeconds(1, fs[i]));
+  const TurnSeconds seconds = secondsInTurns(repeats, fs);
+  std::vector<double> best;
+  for (size_t i = 0; i < fs.size(); ++i) best.push_back(bestOf(seconds, i));
   return best;
 }
 

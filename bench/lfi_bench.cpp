@@ -47,8 +47,12 @@
 using namespace lfi;
 using namespace lfi::sim;
 
+using lfi::bench::bestOf;
 using lfi::bench::bestSeconds;
 using lfi::bench::bestSecondsInTurns;
+using lfi::bench::median;
+using lfi::bench::ratiosByTurn;
+using lfi::bench::secondsInTurns;
 
 namespace {
 
@@ -212,14 +216,16 @@ int main(int argc, char** argv) {
       render(s, cam, ro);
     };
   };
-  std::vector<double> samplesPerSecond =
-      bestSecondsInTurns(repeats + 2, {renderWith(scene, 1), renderWith(scene, threads)});  // the bounds' run count
-  for (int i = 0; i < 2; ++i) {
-    samplesPerSecond[static_cast<size_t>(i)] = samples / samplesPerSecond[static_cast<size_t>(i)];
+  // Speeds are the best run's; ratios the median of the turns' ratios (a
+  // ratio's two ends ran one after the other: lfi::bench::ratiosByTurn).
+  const int turns = quick ? 3 : 7;
+  const auto scalingRuns = secondsInTurns(turns, {renderWith(scene, 1), renderWith(scene, threads)});
+  for (size_t i = 0; i < 2; ++i)
     fmt::print("  tracer   {} thread(s): {:8.3f} M samples/s\n", i ? threads : 1,
-               samplesPerSecond[static_cast<size_t>(i)] / 1e6);
-  }
-  fmt::print("  scaling  1 -> {} threads: {:.2f}x\n", threads, samplesPerSecond[1] / samplesPerSecond[0]);
+               samples / bestOf(scalingRuns, i) / 1e6);
+  const std::vector<double> scaling = ratiosByTurn(scalingRuns, 0, 1);
+  fmt::print("  scaling  1 -> {} threads: {:.2f}x (median of {} turns; {:.2f}-{:.2f})\n", threads, median(scaling),
+             turns, scaling.front(), scaling.back());
 
   // The study's three illuminations behind the same lens and camera: a
   // collimated back light (0.0087 rad), the Lambertian one above, and a light
@@ -373,35 +379,59 @@ int main(int argc, char** argv) {
       hitCount += one.valid();
     }
   });
-  // The bounds and the tracer on 1 thread in turns, so that their ratios see the same machine.
-  const std::vector<double> sec = bestSecondsInTurns(
-      repeats + 2, {renderWith(scene, 1), [&] { intersectAll(raw); },
-                    [&] { intersectPackets(raw, RTC_INTERSECT_CONTEXT_FLAG_COHERENT); },
-                    [&] { intersectPackets(hull, RTC_INTERSECT_CONTEXT_FLAG_COHERENT); },
-                    [&] { intersectPackets(hull, RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT); },
-                    [&] { queryAll(nullptr); }});
+  // The bounds and the tracer on 1 thread in turns, so that their ratios see
+  // the same machine. A bound's pass over the rays is short: it is repeated to
+  // last about a quarter of a render, so that both ends of a ratio span a
+  // similar stretch of the host's load.
+  const double renderSeconds = bestSeconds(1, renderWith(scene, 1));
+  std::vector<double> passes;  // each bound's passes per timed run
+  auto repeated = [&](std::function<void()> pass) {
+    const double once = bestSeconds(1, pass);
+    const double count = std::clamp(std::round(0.25 * renderSeconds / once), 1.0, 1000.0);
+    passes.push_back(count);
+    return [pass, count] {
+      for (double i = 0; i < count; ++i) pass();
+    };
+  };
+  const auto runs = secondsInTurns(
+      turns, {renderWith(scene, 1), repeated([&] { intersectAll(raw); }),
+              repeated([&] { intersectPackets(raw, RTC_INTERSECT_CONTEXT_FLAG_COHERENT); }),
+              repeated([&] { intersectPackets(hull, RTC_INTERSECT_CONTEXT_FLAG_COHERENT); }),
+              repeated([&] { intersectPackets(hull, RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT); }),
+              repeated([&] { queryAll(nullptr); })});
   rtcReleaseScene(hull);
-  const double tracerRays1 = samples / sec[0] * raysPerSample, raw1 = n / sec[1], rawPackets = n / sec[2];
-  const double hullCoherent = n / sec[3], hullIncoherent = n / sec[4], queries = n / sec[5];
-  fmt::print("  bound    1 thread:  {:8.3f} M rays/s  (bare Embree rtcIntersect1, lens as {} triangles)\n", raw1 / 1e6,
-             lens.triangles.size());
+  const double tracerRays = samples * raysPerSample;  // rays per render
+  // Rays per second of run i in one turn, and at its best.
+  auto raysOf = [&](size_t i) { return i ? n * passes[i - 1] : tracerRays; };
+  auto speed = [&](const std::vector<double>& turn, size_t i) { return raysOf(i) / turn[i]; };
+  auto best = [&](size_t i) { return raysOf(i) / bestOf(runs, i); };
+  fmt::print("  bound    1 thread:  {:8.3f} M rays/s  (bare Embree rtcIntersect1, lens as {} triangles)\n",
+             best(1) / 1e6, lens.triangles.size());
   fmt::print("  bound    1 thread:  {:8.3f} M rays/s  (bare Embree rtcIntersect16, same rays and triangles)\n",
-             rawPackets / 1e6);
+             best(2) / 1e6);
   fmt::print("  bound    1 thread:  {:8.3f} M rays/s  (bare Embree rtcIntersect16, lens and back light as no-op user "
-             "primitives, coherent)\n", hullCoherent / 1e6);
-  fmt::print("  bound    1 thread:  {:8.3f} M rays/s  (the same, incoherent: the tracer's mode)\n",
-             hullIncoherent / 1e6);
-  const double hullPackets = std::max(hullCoherent, hullIncoherent);
+             "primitives, coherent)\n", best(3) / 1e6);
+  fmt::print("  bound    1 thread:  {:8.3f} M rays/s  (the same, incoherent: the tracer's mode)\n", best(4) / 1e6);
   fmt::print("  tracer   1 thread:  {:8.3f} M rays/s  ({:.2f} rays per sample; timed in turns with the bounds)\n",
-             tracerRays1 / 1e6, raysPerSample);
-  fmt::print("  ratio    bound / tracer per ray, 1 thread: {:.2f} (target <= 2; bound: the fastest of the above)\n",
-             std::max({raw1, rawPackets, hullPackets}) / tracerRays1);
+             best(0) / 1e6, raysPerSample);
+  // Per turn: the fastest bound, and the tracer's own queries, over the tracer.
+  std::vector<double> boundRatio, queryRatio;
+  for (const auto& turn : runs) {
+    boundRatio.push_back(std::max({speed(turn, 1), speed(turn, 2), speed(turn, 3), speed(turn, 4)}) / speed(turn, 0));
+    queryRatio.push_back(speed(turn, 5) / speed(turn, 0));
+  }
+  std::sort(boundRatio.begin(), boundRatio.end());
+  std::sort(queryRatio.begin(), queryRatio.end());
+  fmt::print("  ratio    bound / tracer per ray, 1 thread: {:.2f} (median of {} turns; {:.2f}-{:.2f}; target <= 2; "
+             "bound: the fastest of the above in each turn)\n", median(boundRatio), turns, boundRatio.front(),
+             boundRatio.back());
   fmt::print("  queries  1 thread:  {:8.3f} M rays/s  (the tracer's own ray queries, Scene::intersect, same rays and "
-             "packets; {:.0f} % hit)\n", queries / 1e6, 100.0 * static_cast<double>(hitCount) / n);
-  fmt::print("  ratio    queries / tracer per ray, 1 thread: {:.2f} (what sampling, shading and bookkeeping add)\n",
-             queries / tracerRays1);
+             "packets; {:.0f} % hit)\n", best(5) / 1e6, 100.0 * static_cast<double>(hitCount) / n);
+  fmt::print("  ratio    queries / tracer per ray, 1 thread: {:.2f} (median of {} turns; {:.2f}-{:.2f}; what "
+             "sampling, shading and bookkeeping add)\n", median(queryRatio), turns, queryRatio.front(),
+             queryRatio.back());
   fmt::print("  ceiling  {} threads at the fastest bound: {:.1f} M samples/s (Embree alone, zero shading)\n", threads,
-             std::max({raw1, rawPackets, hullPackets}) * threads / raysPerSample / 1e6);
+             std::max({best(1), best(2), best(3), best(4)}) * threads / raysPerSample / 1e6);
   rtcReleaseScene(raw);
   rtcReleaseDevice(device);
   return 0;
