@@ -20,6 +20,11 @@
 //            sampling, the shading and the bookkeeping cost on top.
 //   ceiling  samples/s on all threads if the fastest bound were all the work.
 //
+// Everything runs in turns (one run of each per turn). Speeds are the best
+// run's; ratios (scaling, bound, queries) are the median of the turns' ratios,
+// with their range: a turn's two ends ran one after the other on the same
+// machine load (bench_util.h).
+//
 // Usage: lfi-bench [--quick]   (quick: smaller images, for a smoke run)
 //        lfi-bench --rmse A.exr B.exr
 //            relative RMS difference of two EXR images of any origin (luminance,
