@@ -5,6 +5,8 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cstdio>
+#include <exception>
 #include <functional>
 #include <vector>
 
@@ -57,6 +59,17 @@ inline std::vector<double> bestSecondsInTurns(int repeats, const std::vector<std
   std::vector<double> best;
   for (size_t i = 0; i < fs.size(); ++i) best.push_back(bestOf(seconds, i));
   return best;
+}
+
+// A benchmark's main: an error (a device that is missing, a self-check that
+// fails) is printed with the benchmark's name and exits 1, rather than abort.
+inline int runGuarded(const char* name, const std::function<int()>& body) {
+  try {
+    return body();
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "%s: %s\n", name, e.what());
+    return 1;
+  }
 }
 
 }  // namespace lfi::bench

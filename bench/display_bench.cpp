@@ -40,7 +40,7 @@ namespace {
 
 }  // namespace
 
-int main(int argc, char** argv) {
+static int run(int argc, char** argv) {
   int repeats = 5;
   bool mono = false;
   for (int i = 1; i < argc; ++i) {
@@ -98,4 +98,8 @@ int main(int argc, char** argv) {
              encode1 / copyTime);
   fmt::print("sim panel levels     {:8.2f} ms  (panel → emitter drive levels, SimDisplay::show)\n", 1e3 * levels);
   return 0;
+}
+
+int main(int argc, char** argv) {
+  return lfi::bench::runGuarded("lfi-display-bench", [&] { return run(argc, argv); });
 }

@@ -197,7 +197,7 @@ int rmse(const char* a, const char* b) {
   return 0;
 }
 
-int main(int argc, char** argv) {
+static int run(int argc, char** argv) {
   if (argc == 4 && std::strcmp(argv[1], "--rmse") == 0) return rmse(argv[2], argv[3]);
   const bool quick = argc > 1 && std::strcmp(argv[1], "--quick") == 0;
   const int threads = tbb::info::default_concurrency();
@@ -440,4 +440,8 @@ int main(int argc, char** argv) {
   rtcReleaseScene(raw);
   rtcReleaseDevice(device);
   return 0;
+}
+
+int main(int argc, char** argv) {
+  return lfi::bench::runGuarded("lfi-bench", [&] { return run(argc, argv); });
 }

@@ -24,7 +24,7 @@
 
 using lfi::bench::bestSeconds;
 
-int main(int argc, char** argv) {
+static int run(int argc, char** argv) {
   const int frames = argc > 1 ? std::max(1, std::atoi(argv[1])) : 5;
   lfi::testing_support::usePrivateTmpDir();
   if (!lfi::testing_support::umockdevPreloadActive()) {
@@ -58,4 +58,8 @@ int main(int argc, char** argv) {
                seconds * 1e3, megabytes / seconds, seconds / copySeconds);
   }
   return 0;
+}
+
+int main(int argc, char** argv) {
+  return lfi::bench::runGuarded("lfi-usb-display-bench", [&] { return run(argc, argv); });
 }
