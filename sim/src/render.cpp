@@ -526,7 +526,8 @@ private:
     for (; lanes; lanes &= lanes - 1) {
       const int k = std::countr_zero(lanes);
       const StratifiedChoices& c = lanes_.choices[static_cast<size_t>(k)];
-      if (c.used != 0 || c.batched || fresnel_.cosT[k] < 0 || lanes_.depth[k] < options_.splitDepth) continue;
+      // (A batched lane has made its first choice in the same event: used > 0.)
+      if (c.used != 0 || fresnel_.cosT[k] < 0 || lanes_.depth[k] < options_.splitDepth) continue;
       choices_.sample[n] = c.sample;
       for (size_t d = 0; d < detail::kBatchedChoices; ++d) choices_.key[d][n] = c.key[d];
       batch |= 1u << k;

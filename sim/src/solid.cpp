@@ -441,7 +441,6 @@ void Solid::nearestCrossings(const RayLanes& rays, std::uint32_t lanes, double t
   }
 }
 
-
 void Solid::differenceCrossings(const RayLanes& rays, std::uint32_t lanes, double tMin, double* t,
                                 Vec3* normal) const {
   RayLanes transformed;
