@@ -435,12 +435,13 @@ void Scene::intersect(const RayPacket& packet, std::uint32_t lanes, HitPacket& h
   // the solid answers without a traversal. Rays that do not cross it go on to
   // Embree. The hint only picks which rays to try: the answer is the same.
   std::uint32_t tried = 0;
+  const size_t objects = objects_.size();
   for (std::uint32_t bits = lanes; bits; bits &= bits - 1) {
     const int k = std::countr_zero(bits);
     const int object = packet.inside[k];
-    if (static_cast<size_t>(object + 1) > objects_.size() || static_cast<size_t>(packet.on[k] + 1) > objects_.size())
+    if (static_cast<size_t>(object + 1) > objects || static_cast<size_t>(packet.on[k] + 1) > objects)
       fail(Errc::InvalidArgument, "Scene::intersect: lane {} starts inside object {} on object {}, of {} objects", k,
-           object, packet.on[k], objects_.size());
+           object, packet.on[k], objects);
     const AnalyticGeometry* g = object >= 0 ? impl_->isolated[static_cast<size_t>(object)] : nullptr;
     if (g && contains(g->box, packet.rays.ray(k).origin)) {
       noteLanes(ctx, g, 1u << k);
