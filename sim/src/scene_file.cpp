@@ -5,11 +5,16 @@
 #include "lfi/core/exr_io.h"
 #include "lfi/drivers/display_optics.h"
 
-#include <assimp/Importer.hpp>
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
+#include <assimp/Importer.hpp>
 
+#include "ply_mesh.h"
+
+#include <algorithm>
+#include <cctype>
 #include <cmath>
+#include <fstream>
 #include <numbers>
 
 namespace lfi::sim {
@@ -24,14 +29,16 @@ Rigid3 placement(const std::vector<double>& p, const std::vector<double>& r) {
   return x;
 }
 
-TriangleMesh loadMesh(const fs::path& path) {
-  if (!fs::exists(path)) fail(Errc::NotFound, "'{}': no such mesh file", path.string());
+namespace {
+
+// Any format Assimp reads but PLY (detail::readPly reads those).
+TriangleMesh importMesh(const fs::path& path) {
   Assimp::Importer importer;
   // Triangles with shared vertices; the data structure is checked (indices in
   // range, no empty meshes) before anything reads it.
-  const aiScene* scene = importer.ReadFile(
-      path.string(), aiProcess_Triangulate | aiProcess_JoinIdenticalVertices | aiProcess_ValidateDataStructure |
-                         aiProcess_FindDegenerates | aiProcess_SortByPType);
+  const aiScene* scene = importer.ReadFile(path.string(), aiProcess_Triangulate | aiProcess_JoinIdenticalVertices |
+                                                              aiProcess_ValidateDataStructure |
+                                                              aiProcess_FindDegenerates | aiProcess_SortByPType);
   if (!scene || (scene->mFlags & AI_SCENE_FLAGS_INCOMPLETE) || !scene->HasMeshes())
     fail(Errc::InvalidFile, "'{}': not a readable mesh: {}", path.string(), importer.GetErrorString());
   TriangleMesh mesh;
@@ -41,8 +48,6 @@ TriangleMesh loadMesh(const fs::path& path) {
     const auto base = static_cast<unsigned>(mesh.vertices.size());
     for (unsigned v = 0; v < in->mNumVertices; ++v) {
       const aiVector3D& p = in->mVertices[v];
-      if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
-        fail(Errc::InvalidFile, "'{}': vertex {} is not finite", path.string(), mesh.vertices.size() + 1);
       mesh.vertices.push_back({p.x, p.y, p.z});
     }
     for (unsigned f = 0; f < in->mNumFaces; ++f) {
@@ -50,6 +55,31 @@ TriangleMesh loadMesh(const fs::path& path) {
       if (face.mNumIndices != 3) continue;
       mesh.triangles.push_back({base + face.mIndices[0], base + face.mIndices[1], base + face.mIndices[2]});
     }
+  }
+  return mesh;
+}
+
+// The file's first bytes (fewer if it is shorter).
+std::string head(const fs::path& path, size_t n) {
+  std::ifstream in(path, std::ios::binary);
+  std::string bytes(n, '\0');
+  in.read(bytes.data(), static_cast<std::streamsize>(n));
+  bytes.resize(static_cast<size_t>(std::max<std::streamsize>(in.gcount(), 0)));
+  return bytes;
+}
+
+}  // namespace
+
+TriangleMesh loadMesh(const fs::path& path) {
+  if (!fs::exists(path)) fail(Errc::NotFound, "'{}': no such mesh file", path.string());
+  // PLY by its content, whatever the name; a .ply that is not PLY is not handed to Assimp either.
+  std::string extension = path.extension().string();
+  for (char& c : extension) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  TriangleMesh mesh = detail::isPly(head(path, 5)) || extension == ".ply" ? detail::readPly(path) : importMesh(path);
+  for (size_t v = 0; v < mesh.vertices.size(); ++v) {
+    const Vec3& p = mesh.vertices[v];
+    if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
+      fail(Errc::InvalidFile, "'{}': vertex {} (counting from 0) is not finite", path.string(), v);
   }
   if (mesh.triangles.empty()) fail(Errc::InvalidFile, "'{}': the mesh has no faces", path.string());
   // Smooth normals: the cross product's length weights each face by its area.
@@ -72,10 +102,9 @@ Rigid3 readPlacement(ConfigTable& t) {
 std::shared_ptr<const Solid> readSolid(ConfigTable& t, const std::string& kind) {
   if (kind == "sphere") return Solid::sphere(t.number("radius_mm", std::nullopt, 1e-6, 1e6));
   if (kind == "lens")
-    return Solid::sphericalLens(t.number("front_radius_mm", std::nullopt, -1e6, 1e6),
-                                t.number("back_radius_mm", std::nullopt, -1e6, 1e6),
-                                t.number("centre_thickness_mm", std::nullopt, 1e-6, 1e6),
-                                t.number("diameter_mm", std::nullopt, 1e-6, 1e6));
+    return Solid::sphericalLens(
+        t.number("front_radius_mm", std::nullopt, -1e6, 1e6), t.number("back_radius_mm", std::nullopt, -1e6, 1e6),
+        t.number("centre_thickness_mm", std::nullopt, 1e-6, 1e6), t.number("diameter_mm", std::nullopt, 1e-6, 1e6));
   if (kind == "cylinder") {
     // A finite cylinder along z, centred: the infinite one cut by two planes.
     const double r = t.number("radius_mm", std::nullopt, 1e-6, 1e6), h = t.number("length_mm", std::nullopt, 1e-6, 1e6);
@@ -106,9 +135,9 @@ Object readObject(ConfigTable& t) {
     // Cut-outs: spheres subtracted from the solid (object frame).
     for (ConfigTable& cut : t.tables("cut")) {
       const auto c = cut.numbers("position_mm", 3);
-      solid = Solid::combine(Solid::Kind::Difference, solid,
-                             Solid::sphere(cut.number("radius_mm", std::nullopt, 1e-9, 1e6),
-                                           Rigid3::translation({c[0], c[1], c[2]})));
+      solid = Solid::combine(
+          Solid::Kind::Difference, solid,
+          Solid::sphere(cut.number("radius_mm", std::nullopt, 1e-9, 1e6), Rigid3::translation({c[0], c[1], c[2]})));
       cut.finish();
     }
     obj.shape = solid;
@@ -150,8 +179,9 @@ DisplayParameters readDisplay(ConfigTable& t) {
   info.panelHeight_px = t.integer("panel_height_px", defaults.panelHeight_px, 1, 16384);
   info.pixelPitch_mm = t.number("pixel_pitch_mm", defaults.pixelPitch_mm, 1e-4, 10);
   const std::string sub = t.string("subpixels", "rgb", {"mono", "rgb", "bgr"});
-  info.subpixels = sub == "mono" ? SubpixelLayout::Mono : sub == "rgb" ? SubpixelLayout::RgbStripe
-                                                                        : SubpixelLayout::BgrStripe;
+  info.subpixels = sub == "mono"  ? SubpixelLayout::Mono
+                   : sub == "rgb" ? SubpixelLayout::RgbStripe
+                                  : SubpixelLayout::BgrStripe;
   DisplayOpticsParams& o = info.optics;
   const bool barrier = t.string("optics", "lenslet", {"lenslet", "barrier"}) == "barrier";
   o.type = barrier ? OpticsType::Barrier : OpticsType::Lenslet;

@@ -1,14 +1,16 @@
 // Scene files: the documented keys load into the scene they describe, and
 // every kind of bad input is an error naming file, line and key.
 
-#include "lfi/core/exr_io.h"
 #include "lfi/sim/scene_file.h"
+#include "lfi/core/exr_io.h"
 
 #include "lfi_test_support.h"
 
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <algorithm>
+#include <cstring>
 #include <fstream>
 #include <numbers>
 
@@ -20,7 +22,7 @@ using namespace lfi::sim;
 using lfi::testing_support::throwsError;
 
 class SceneFile : public testing::Test {
-protected:
+ protected:
   void SetUp() override {
     dir_ = fs::path(testing::TempDir()) / ("lfi_scene_" + std::to_string(::getpid()) + "_" +
                                            testing::UnitTest::GetInstance()->current_test_info()->name());
@@ -155,6 +157,142 @@ TEST_F(SceneFile, MeshesLoadWithOutwardSmoothNormals) {
   write("text.ply", "this is not a mesh\n");
   EXPECT_TRUE(throwsError([&] { loadMesh(dir_ / "text.ply"); }, Errc::InvalidFile, {"text.ply"}));
   EXPECT_TRUE(throwsError([&] { loadMesh(dir_ / "none.obj"); }, Errc::NotFound, {"none.obj"}));
+}
+
+// PLY bodies built byte by byte: values in either byte order.
+class PlyBody {
+ public:
+  explicit PlyBody(bool bigEndian) : big_(bigEndian) {}
+  template <typename T>
+  PlyBody& put(T value) {
+    unsigned char b[sizeof(T)];
+    std::memcpy(b, &value, sizeof(T));
+    if (big_) std::reverse(b, b + sizeof(T));
+    bytes_.append(reinterpret_cast<const char*>(b), sizeof(T));
+    return *this;
+  }
+  const std::string& bytes() const { return bytes_; }
+
+ private:
+  bool big_;
+  std::string bytes_;
+};
+
+// The octahedron's 6 vertices and 8 outward faces.
+const double kOcta[6][3] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
+const std::vector<std::vector<int>> kOctaFaces = {{0, 2, 4}, {2, 1, 4}, {1, 3, 4}, {3, 0, 4},
+                                                  {2, 0, 5}, {1, 2, 5}, {3, 1, 5}, {0, 3, 5}};
+
+// A binary PLY of the octahedron with what a real exporter adds: a comment,
+// a per-vertex colour, a second list on the faces and an element lfi skips.
+std::string binaryOcta(bool bigEndian) {
+  std::string text = fmt::format(
+      "ply\nformat binary_{}_endian 1.0\ncomment from a test\nelement vertex 6\nproperty double x\n"
+      "property uchar red\nproperty float y\nproperty float z\nelement face 8\n"
+      "property list uchar int vertex_indices\nproperty list ushort float texcoord\n"
+      "element edge 1\nproperty int vertex1\nproperty int vertex2\nend_header\n",
+      bigEndian ? "big" : "little");
+  PlyBody body(bigEndian);
+  for (const auto& v : kOcta)
+    body.put(v[0]).put(std::uint8_t{200}).put(static_cast<float>(v[1])).put(static_cast<float>(v[2]));
+  for (const auto& f : kOctaFaces) {
+    body.put(static_cast<std::uint8_t>(f.size()));
+    for (int i : f) body.put(std::int32_t{i});
+    body.put(std::uint16_t{2}).put(0.25f).put(0.5f);
+  }
+  body.put(std::int32_t{0}).put(std::int32_t{1});
+  return text + body.bytes();
+}
+
+TEST_F(SceneFile, PlyReadsAsciiAndBothBinaryByteOrdersAlike) {
+  std::string ascii =
+      "ply\r\nformat ascii 1.0\r\nelement vertex 6\r\nproperty float x\r\nproperty float y\r\n"
+      "property float z\r\nelement face 7\r\nproperty list uchar int vertex_indices\r\nend_header\r\n";
+  for (const auto& v : kOcta) ascii += fmt::format("{} {} {}\r\n", v[0], v[1], v[2]);
+  ascii += "4 4 0 2 1\n";  // faces 0 and 1 as one quad, fanned from vertex 4 into (4 0 2) and (4 2 1)
+  for (size_t f = 2; f < kOctaFaces.size(); ++f)
+    ascii += fmt::format("3 {} {} {}\n", kOctaFaces[f][0], kOctaFaces[f][1], kOctaFaces[f][2]);
+  write("octa.ply", ascii);
+  write("little.ply", binaryOcta(false));
+  write("big.ply", binaryOcta(true));
+  for (const char* file : {"octa.ply", "little.ply", "big.ply"}) {
+    SCOPED_TRACE(file);
+    const TriangleMesh mesh = loadMesh(dir_ / file);
+    ASSERT_EQ(mesh.vertices.size(), 6u);
+    for (size_t i = 0; i < 6; ++i) EXPECT_EQ(mesh.vertices[i], Vec3(kOcta[i][0], kOcta[i][1], kOcta[i][2]));
+    ASSERT_EQ(mesh.triangles.size(), 8u);
+    // Every triangle winds outwards, and the smooth normals point along the vertices.
+    for (const auto& t : mesh.triangles) {
+      const Vec3 n = (mesh.vertices[t[1]] - mesh.vertices[t[0]]).cross(mesh.vertices[t[2]] - mesh.vertices[t[0]]);
+      EXPECT_GT(n.dot(mesh.vertices[t[0]] + mesh.vertices[t[1]] + mesh.vertices[t[2]]), 0);
+    }
+    if (std::string(file) == "octa.ply") {
+      EXPECT_EQ(mesh.triangles[0], (std::array<unsigned, 3>{4, 0, 2}));
+      EXPECT_EQ(mesh.triangles[1], (std::array<unsigned, 3>{4, 2, 1}));
+    }
+    for (size_t f = 2; f < 8; ++f)
+      EXPECT_EQ(mesh.triangles[f], (std::array<unsigned, 3>{static_cast<unsigned>(kOctaFaces[f][0]),
+                                                            static_cast<unsigned>(kOctaFaces[f][1]),
+                                                            static_cast<unsigned>(kOctaFaces[f][2])}));
+  }
+}
+
+TEST_F(SceneFile, CorruptPlyIsAnErrorNamingFileAndPlace) {
+  const std::string header =
+      "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+      "property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n";
+  const std::string vertices = "0 0 0\n1 0 0\n0 1 0\n";
+  const std::string binary = binaryOcta(false);
+  struct Case {
+    std::string name, text;
+    std::vector<std::string> fragments;
+  };
+  const std::vector<Case> cases = {
+      // The shapes of the files that hung, aborted or crashed Debian's Assimp 5.2.5 (fuzzing, session 8).
+      {"cut-in-header.ply", header.substr(0, 60), {"no 'end_header'"}},
+      {"bad-end-header.ply",
+       "ply\nformat binary_little_endian 1.0\nelement vertex 1\nproperty float x\n"
+       "eheader\n" +
+           std::string(12, '\x7f'),
+       {"line 5", "unknown header keyword 'eheader'"}},
+      {"missing-face.ply", header + vertices, {"line 13", "face 0", "ends before"}},
+      {"negative-length.ply", header + vertices + "-1 0 1 2\n", {"face 0", "'-1' is not an integer"}},
+      {"inf-length.ply", header + vertices + "-inf 0 1 2\n", {"'-inf' is not an integer"}},
+      // Counts and indices the file cannot back.
+      {"count-past-end.ply",
+       "ply\nformat binary_little_endian 1.0\nelement vertex 1000000000\nproperty float x\n"
+       "property float y\nproperty float z\nelement face 0\n"
+       "property list uchar int vertex_indices\nend_header\n0000",
+       {"line 3", "'vertex' declares 1000000000 instances"}},
+      {"index-out-of-range.ply", header + vertices + "3 0 1 7\n", {"vertex index 7 is not among the 3 vertices"}},
+      {"long-list.ply",
+       "ply\nformat binary_little_endian 1.0\nelement vertex 0\nproperty float x\nproperty float y\n"
+       "property float z\nelement face 1\nproperty list int int vertex_indices\nend_header\n" +
+           std::string("\xff\xff\xff\x7f", 4),
+       {"byte ", "a list of 2147483647 values does not fit"}},
+      {"cut-in-body.ply", binary.substr(0, binary.size() - 17), {"byte ", "texcoord' of face 7", "ends inside"}},
+      // Malformed headers and values.
+      {"not-a-number.ply", header + "0 0 0\n1 zero 0\n", {"line 11", "property 'y' of vertex 1", "'zero'"}},
+      {"no-faces.ply",
+       "ply\nformat ascii 1.0\nelement vertex 0\nproperty float x\nproperty float y\n"
+       "property float z\nend_header\n",
+       {"no 'face' element"}},
+      {"no-format.ply", "ply\nelement vertex 0\nend_header\n", {"no 'format' line"}},
+      {"unknown-type.ply",
+       "ply\nformat ascii 1.0\nelement vertex 0\nproperty real x\nend_header\n",
+       {"line 4", "unknown property type 'real'"}},
+      {"binary-keyword.ply",
+       "ply\nformat ascii 1.0\nelem\x01\xffnt vertex 0\nend_header\n",
+       {"line 3", "'elem\\x01\\xffnt'"}},
+      {"not-ply.ply", "solid cube\nendsolid cube\n", {"not a PLY file"}},
+  };
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.name);
+    write(c.name, c.text);
+    std::vector<std::string> fragments = c.fragments;
+    fragments.push_back((dir_ / c.name).string());
+    EXPECT_TRUE(throwsError([&] { loadMesh(dir_ / c.name); }, Errc::InvalidFile, fragments));
+  }
 }
 
 TEST_F(SceneFile, MeshAndAnalyticSphereRefractAlike) {

@@ -9,6 +9,7 @@
 
 #include <stdexcept>
 #include <string>
+#include <string_view>
 
 namespace lfi {
 
@@ -35,6 +36,10 @@ public:
 private:
   Errc code_;
 };
+
+// Text read from a file, fit for a message: printable ASCII as it is, every
+// other byte as \xNN, cut to at most `limit` characters of the original ("...").
+std::string shown(std::string_view text, size_t limit = 40);
 
 // Builds and throws an Error with a {fmt}-formatted message.
 template <typename... Args>

@@ -45,8 +45,10 @@ struct SceneDescription {
 
 SceneDescription loadSceneFile(const std::filesystem::path& path);
 
-// A triangle mesh from any format Assimp reads (Wavefront OBJ, PLY, STL, ...;
-// polygons are triangulated, identical vertices joined) with smooth per-vertex
+// A triangle mesh from Stanford PLY (ASCII or binary; lfi's own reader, which
+// checks every count and index against the file) or any other format Assimp
+// reads (Wavefront OBJ, STL, ...; polygons are triangulated, identical
+// vertices joined), with smooth per-vertex
 // normals averaged from the faces around each vertex (area-weighted). The
 // file's units are taken as millimetres; faces must wind outwards.
 TriangleMesh loadMesh(const std::filesystem::path& path);
