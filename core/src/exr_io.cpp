@@ -14,8 +14,10 @@
 #include <OpenEXR/ImfStringAttribute.h>
 #include <zlib.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstddef>
+#include <string_view>
 
 namespace lfi {
 
@@ -40,7 +42,32 @@ constexpr const char* kDescription = "lfi.description";
 constexpr const char* kLightFieldKind = "light-field";
 constexpr const char* kRadianceKind = "radiance-image";
 
-std::string checksumText(unsigned long crc) { return fmt::format("crc32:{:08x}", crc); }
+std::string checksumText(unsigned long crc) {
+  return fmt::format("crc32:{:08x}", crc);
+}
+
+// The lfi.* attributes but lfi.checksum, as the text the checksum covers
+// (format version 2, docs/file-formats.md): by name, one line each,
+// "name type value": an int in decimal, a double in its shortest exact
+// decimal form, a string as its length, ':' and its bytes.
+std::string canonicalAttributes(const fs::path& path, const Imf::Header& header) {
+  std::string text;
+  for (auto it = header.begin(); it != header.end(); ++it) {  // by name (a std::map)
+    const std::string_view name = it.name();
+    if (!name.starts_with("lfi.") || name == kChecksum) continue;
+    const Imf::Attribute& a = it.attribute();
+    if (const auto* i = dynamic_cast<const Imf::IntAttribute*>(&a))
+      text += fmt::format("{} int {}\n", name, i->value());
+    else if (const auto* d = dynamic_cast<const Imf::DoubleAttribute*>(&a))
+      text += fmt::format("{} double {}\n", name, d->value());
+    else if (const auto* str = dynamic_cast<const Imf::StringAttribute*>(&a))
+      text += fmt::format("{} string {}:{}\n", name, str->value().size(), str->value());
+    else
+      fail(Errc::InvalidFile, "'{}': attribute '{}' has type '{}'; lfi attributes are int, double or string",
+           path.string(), shown(name), shown(a.typeName()));
+  }
+  return text;
+}
 
 void writeExr(const fs::path& path, const cv::Mat& image, Imf::Header header, Overwrite overwrite) {
   requireImageType(image, CV_32FC1, "EXR image '" + path.string() + "'");
@@ -49,7 +76,7 @@ void writeExr(const fs::path& path, const cv::Mat& image, Imf::Header header, Ov
   header.channels().insert("Y", Imf::Channel(Imf::FLOAT));
   header.insert(kVersion, Imf::IntAttribute(kExrFormatVersion));
   header.insert(kUnits, Imf::StringAttribute("lengths mm, angles rad, pixels linear relative radiance"));
-  header.insert(kChecksum, Imf::StringAttribute(checksumText(pixelChecksum(pixels))));
+  header.insert(kChecksum, Imf::StringAttribute(checksumText(fileChecksum(canonicalAttributes(path, header), pixels))));
   writeFileAtomically(path, overwrite, [&](const fs::path& temporary) {
     try {
       Imf::OutputFile file(temporary.c_str(), header);
@@ -76,23 +103,24 @@ const Attribute& requireAttribute(const fs::path& path, const Imf::Header& heade
   const Imf::Attribute* any = &it.attribute();
   const auto* typed = dynamic_cast<const Attribute*>(any);
   if (!typed)
-    fail(Errc::InvalidFile, "'{}': attribute '{}' has type '{}', expected '{}'", path.string(), name,
-         any->typeName(), Attribute::staticTypeName());
+    fail(Errc::InvalidFile, "'{}': attribute '{}' has type '{}', expected '{}'", path.string(), name, any->typeName(),
+         Attribute::staticTypeName());
   return *typed;
 }
 
 LoadedExr loadExr(const fs::path& path, const char* expectedKind) {
   if (!fs::exists(path)) fail(Errc::NotFound, "'{}': no such file", path.string());
   LoadedExr out;
+  int version = 0;
   try {
     Imf::InputFile file(path.c_str());
     out.header = file.header();
     const auto& kind = requireAttribute<Imf::StringAttribute>(path, out.header, kKind).value();
     if (kind != expectedKind)
       fail(Errc::InvalidFile, "'{}': attribute '{}' is '{}', expected '{}'", path.string(), kKind, kind, expectedKind);
-    const int version = requireAttribute<Imf::IntAttribute>(path, out.header, kVersion).value();
-    if (version != kExrFormatVersion)
-      fail(Errc::InvalidFile, "'{}': attribute '{}' is {}, this build reads version {}", path.string(), kVersion,
+    version = requireAttribute<Imf::IntAttribute>(path, out.header, kVersion).value();
+    if (version < 1 || version > kExrFormatVersion)
+      fail(Errc::InvalidFile, "'{}': attribute '{}' is {}, this build reads versions 1 to {}", path.string(), kVersion,
            version, kExrFormatVersion);
     const Imf::Channel* channel = out.header.channels().findChannel("Y");
     if (!channel || channel->type != Imf::FLOAT)
@@ -114,11 +142,13 @@ LoadedExr loadExr(const fs::path& path, const char* expectedKind) {
   } catch (const std::exception& e) {
     fail(Errc::InvalidFile, "'{}': not a readable OpenEXR file (truncated or corrupt): {}", path.string(), e.what());
   }
+  // Version 1 (before 2026-11-22) covered only the pixels; its attributes are read unchecked.
   const std::string expected = requireAttribute<Imf::StringAttribute>(path, out.header, kChecksum).value();
-  const std::string actual = checksumText(pixelChecksum(out.pixels));
+  const std::string actual = checksumText(
+      version == 1 ? pixelChecksum(out.pixels) : fileChecksum(canonicalAttributes(path, out.header), out.pixels));
   if (expected != actual)
-    fail(Errc::Checksum, "'{}': pixel data do not match attribute '{}' (recorded {}, computed {})", path.string(),
-         kChecksum, expected, actual);
+    fail(Errc::Checksum, "'{}': {} do not match attribute '{}' (recorded {}, computed {})", path.string(),
+         version == 1 ? "pixel data" : "lfi attributes or pixel data", kChecksum, shown(expected), actual);
   for (int r = 0; r < out.pixels.rows; ++r) {
     const float* row = out.pixels.ptr<float>(r);
     for (int c = 0; c < out.pixels.cols; ++c)
@@ -130,11 +160,20 @@ LoadedExr loadExr(const fs::path& path, const char* expectedKind) {
 
 }  // namespace
 
-unsigned long pixelChecksum(const cv::Mat& image) {
-  uLong crc = crc32(0L, Z_NULL, 0);
+unsigned long pixelChecksum(const cv::Mat& image, unsigned long crc) {
   const size_t rowBytes = image.cols * image.elemSize();
   for (int r = 0; r < image.rows; ++r) crc = crc32(crc, image.ptr<Bytef>(r), static_cast<uInt>(rowBytes));
   return crc;
+}
+
+unsigned long fileChecksum(std::string_view attributes, const cv::Mat& pixels) {
+  uLong crc = crc32(0L, Z_NULL, 0);
+  for (size_t at = 0; at < attributes.size();) {  // in pieces that fit zlib's uInt
+    const size_t n = std::min<size_t>(attributes.size() - at, 1u << 30);
+    crc = crc32(crc, reinterpret_cast<const Bytef*>(attributes.data() + at), static_cast<uInt>(n));
+    at += n;
+  }
+  return pixelChecksum(pixels, crc);
 }
 
 void writeLightFieldExr(const fs::path& path, const LightField& lightField, Overwrite overwrite) {
@@ -147,9 +186,8 @@ void writeLightFieldExr(const fs::path& path, const LightField& lightField, Over
   header.insert(kAngular, Imf::IntAttribute(g.angular));
   header.insert(kPixelPitch, Imf::DoubleAttribute(g.pixelPitch_mm));
   header.insert(kDistance, Imf::DoubleAttribute(g.distance_mm));
-  header.insert(kFrame, Imf::StringAttribute(
-                            "plane frame: origin at the grid centre, +z the viewing/emitting side; "
-                            "pixel (col,row) = (ex*n+u, ey*n+v), row increases with +y"));
+  header.insert(kFrame, Imf::StringAttribute("plane frame: origin at the grid centre, +z the viewing/emitting side; "
+                                             "pixel (col,row) = (ex*n+u, ey*n+v), row increases with +y"));
   header.insert(kParametrisation,
                 Imf::StringAttribute("lenslet image of SxxSy spatial elements of nxn angular elements; "
                                      "in-element position (px,py) in [-1,1]^2 sees direction "
@@ -172,13 +210,12 @@ LightField readLightFieldExr(const fs::path& path) {
   }
   if (exr.pixels.cols != g.width() || exr.pixels.rows != g.height())
     fail(Errc::InvalidFile, "'{}': image is {}x{} but attributes {}={}, {}={}, {}={} need {}x{}", path.string(),
-         exr.pixels.cols, exr.pixels.rows, kSpatialX, g.spatialX, kSpatialY, g.spatialY, kAngular, g.angular,
-         g.width(), g.height());
+         exr.pixels.cols, exr.pixels.rows, kSpatialX, g.spatialX, kSpatialY, g.spatialY, kAngular, g.angular, g.width(),
+         g.height());
   return LightField(g, std::move(exr.pixels));
 }
 
-void writeRadianceExr(const fs::path& path, const cv::Mat& image, const RadianceImageInfo& info,
-                      Overwrite overwrite) {
+void writeRadianceExr(const fs::path& path, const cv::Mat& image, const RadianceImageInfo& info, Overwrite overwrite) {
   requireImageType(image, CV_32FC1, "radiance image for '" + path.string() + "'");
   Imf::Header header(image.cols, image.rows);
   header.insert(kKind, Imf::StringAttribute(kRadianceKind));

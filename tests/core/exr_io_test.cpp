@@ -10,6 +10,7 @@
 #include <OpenEXR/ImfIntAttribute.h>
 #include <OpenEXR/ImfOutputFile.h>
 #include <OpenEXR/ImfStringAttribute.h>
+#include <OpenEXR/ImfVecAttribute.h>
 #include <fmt/format.h>
 #include "lfi_test_support.h"
 
@@ -42,7 +43,7 @@ using lfi::testing_support::throwsError;
 
 // A fresh directory per test, removed with everything in it at the end.
 class ExrIo : public testing::Test {
-protected:
+ protected:
   void SetUp() override {
     static std::atomic<int> counter{0};
     const auto* info = testing::UnitTest::GetInstance()->current_test_info();
@@ -102,15 +103,40 @@ bool bitIdentical(const cv::Mat& a, const cv::Mat& b) {
   return true;
 }
 
-std::string checksumText(const cv::Mat& pixels) { return fmt::format("crc32:{:08x}", lfi::pixelChecksum(pixels)); }
+std::string checksumText(unsigned long crc) {
+  return fmt::format("crc32:{:08x}", crc);
+}
+std::string checksumText(const cv::Mat& pixels) {
+  return checksumText(lfi::pixelChecksum(pixels));
+}
+
+// The canonical text of a header's lfi attributes, as docs/file-formats.md
+// defines it: every lfi.* attribute but lfi.checksum, by name, one line each.
+std::string canonicalText(const Imf::Header& header) {
+  std::string text;
+  for (auto it = header.begin(); it != header.end(); ++it) {
+    const std::string name = it.name();
+    if (!name.starts_with("lfi.") || name == "lfi.checksum") continue;
+    if (const auto* i = dynamic_cast<const Imf::IntAttribute*>(&it.attribute()))
+      text += fmt::format("{} int {}\n", name, i->value());
+    else if (const auto* d = dynamic_cast<const Imf::DoubleAttribute*>(&it.attribute()))
+      text += fmt::format("{} double {}\n", name, d->value());
+    else if (const auto* s = dynamic_cast<const Imf::StringAttribute*>(&it.attribute()))
+      text += fmt::format("{} string {}:{}\n", name, s->value().size(), s->value());
+  }
+  return text;
+}
 
 // Writes an EXR with the OpenEXR API directly: one FLOAT channel "Y" with the given
 // pixels and the header as prepared by `edit` (which may add or leave out attributes).
+// Unless `edit` records one, lfi.checksum is the correct version 2 checksum.
 void writeRawExr(const fs::path& path, const cv::Mat& pixels, const std::function<void(Imf::Header&)>& edit) {
   Imf::Header header(pixels.cols, pixels.rows);
   header.compression() = Imf::ZIP_COMPRESSION;
   header.channels().insert("Y", Imf::Channel(Imf::FLOAT));
   edit(header);
+  if (!header.findTypedAttribute<Imf::StringAttribute>("lfi.checksum"))
+    header.insert("lfi.checksum", Imf::StringAttribute(checksumText(lfi::fileChecksum(canonicalText(header), pixels))));
   Imf::OutputFile out(path.c_str(), header);
   Imf::FrameBuffer frame;
   frame.insert("Y", Imf::Slice(Imf::FLOAT, const_cast<char*>(pixels.ptr<char>()), sizeof(float), pixels.step));
@@ -129,7 +155,7 @@ void writeRawLightField(const fs::path& path, const cv::Mat& pixels, const RawLi
   writeRawExr(path, pixels, [&](Imf::Header& h) {
     h.insert("lfi.kind", Imf::StringAttribute("light-field"));
     h.insert("lfi.formatVersion", Imf::IntAttribute(lfi::kExrFormatVersion));
-    h.insert("lfi.checksum", Imf::StringAttribute(a.checksum.empty() ? checksumText(pixels) : a.checksum));
+    if (!a.checksum.empty()) h.insert("lfi.checksum", Imf::StringAttribute(a.checksum));
     h.insert("lfi.spatialX", Imf::IntAttribute(a.geometry.spatialX));
     h.insert("lfi.spatialY", Imf::IntAttribute(a.geometry.spatialY));
     if (a.withAngular) h.insert("lfi.angular", Imf::IntAttribute(a.geometry.angular));
@@ -241,7 +267,6 @@ TEST_F(ExrIo, MistypedAttributeIsNamed) {
   writeRawExr(file("typed.exr"), pixels, [&](Imf::Header& h) {
     h.insert("lfi.kind", Imf::StringAttribute("light-field"));
     h.insert("lfi.formatVersion", Imf::IntAttribute(lfi::kExrFormatVersion));
-    h.insert("lfi.checksum", Imf::StringAttribute(checksumText(pixels)));
     h.insert("lfi.spatialX", Imf::IntAttribute(g.spatialX));
     h.insert("lfi.spatialY", Imf::IntAttribute(g.spatialY));
     h.insert("lfi.angular", Imf::IntAttribute(g.angular));
@@ -285,6 +310,15 @@ TEST_F(ExrIo, NonFinitePixelIsNamed) {
   }
 }
 
+// Writes `pixels` under `header` as it is (its recorded checksum included).
+void rewrite(const fs::path& path, const Imf::Header& header, const cv::Mat& pixels) {
+  Imf::OutputFile out(path.c_str(), header);
+  Imf::FrameBuffer frame;
+  frame.insert("Y", Imf::Slice(Imf::FLOAT, const_cast<char*>(pixels.ptr<char>()), sizeof(float), pixels.step));
+  out.setFrameBuffer(frame);
+  out.writePixels(pixels.rows);
+}
+
 TEST_F(ExrIo, ModifiedPixelFailsChecksum) {
   const LightFieldGeometry g = geometry();
   const cv::Mat pixels = randomFloats(g.height(), g.width(), 13);
@@ -292,21 +326,114 @@ TEST_F(ExrIo, ModifiedPixelFailsChecksum) {
   lfi::writeLightFieldExr(valid, LightField(g, pixels));
   ASSERT_NO_THROW(lfi::readLightFieldExr(valid));
   // Keep lfi's header (with its checksum) as it is; change one pixel by one ulp.
-  Imf::Header header = Imf::InputFile(valid.c_str()).header();
+  const Imf::Header header = Imf::InputFile(valid.c_str()).header();
   cv::Mat tampered = pixels.clone();
   tampered.at<float>(5, 9) = std::nextafter(tampered.at<float>(5, 9), std::numeric_limits<float>::max());
   const fs::path path = file("tampered.exr");
-  {
-    Imf::OutputFile out(path.c_str(), header);
-    Imf::FrameBuffer frame;
-    frame.insert("Y", Imf::Slice(Imf::FLOAT, tampered.ptr<char>(), sizeof(float), tampered.step));
-    out.setFrameBuffer(frame);
-    out.writePixels(tampered.rows);
-  }
+  rewrite(path, header, tampered);
   const std::string recorded = header.typedAttribute<Imf::StringAttribute>("lfi.checksum").value();
-  EXPECT_EQ(recorded, checksumText(pixels));
-  EXPECT_TRUE(throwsError([&] { lfi::readLightFieldExr(path); }, Errc::Checksum,
-                          {path.string(), "lfi.checksum", recorded, checksumText(tampered)}));
+  EXPECT_EQ(recorded, checksumText(lfi::fileChecksum(canonicalText(header), pixels)));
+  EXPECT_TRUE(throwsError(
+      [&] { lfi::readLightFieldExr(path); }, Errc::Checksum,
+      {path.string(), "lfi.checksum", recorded, checksumText(lfi::fileChecksum(canonicalText(header), tampered))}));
+}
+
+TEST_F(ExrIo, ModifiedAttributeFailsChecksum) {
+  // One changed byte of a double moved the display distance from 30 to 3 mm
+  // and went unnoticed while the checksum covered only the pixels (fuzzing,
+  // session 8). Each lfi attribute is covered now, with the pixels intact.
+  const LightFieldGeometry g = geometry();
+  const cv::Mat pixels = randomFloats(g.height(), g.width(), 14);
+  const fs::path lightField = file("lf.exr"), radiance = file("r.exr");
+  lfi::writeLightFieldExr(lightField, LightField(g, pixels));
+  lfi::writeRadianceExr(radiance, pixels, {0.00345, "parallel illumination"});
+  const std::vector<std::pair<fs::path, std::function<void(Imf::Header&)>>> edits = {
+      {lightField, [](Imf::Header& h) { h.typedAttribute<Imf::DoubleAttribute>("lfi.distance_mm").value() /= 10; }},
+      {lightField, [](Imf::Header& h) { h.typedAttribute<Imf::DoubleAttribute>("lfi.pixelPitch_mm").value() *= 2; }},
+      {lightField, [](Imf::Header& h) { h.typedAttribute<Imf::StringAttribute>("lfi.frame").value() += " "; }},
+      {lightField, [](Imf::Header& h) { h.insert("lfi.note", Imf::StringAttribute("added")); }},
+      {radiance, [](Imf::Header& h) { h.typedAttribute<Imf::DoubleAttribute>("lfi.objectPixel_mm").value() = 0.01; }},
+      {radiance, [](Imf::Header& h) { h.typedAttribute<Imf::StringAttribute>("lfi.description").value() = "area"; }},
+  };
+  int n = 0;
+  for (const auto& [original, edit] : edits) {
+    Imf::Header header = Imf::InputFile(original.c_str()).header();
+    edit(header);
+    const fs::path path = file(fmt::format("edited-{}.exr", n++));
+    rewrite(path, header, pixels);
+    const auto read = [&] {
+      if (original == lightField)
+        lfi::readLightFieldExr(path);
+      else
+        lfi::readRadianceExr(path);
+    };
+    EXPECT_TRUE(throwsError(read, Errc::Checksum, {path.string(), "lfi attributes or pixel data"})) << path;
+  }
+}
+
+TEST_F(ExrIo, ChecksumIsCrc32OfTheCanonicalAttributesThenThePixels) {
+  // The canonical text of docs/file-formats.md, spelled out for a small header.
+  Imf::Header header(1, 1);
+  header.insert("lfi.kind", Imf::StringAttribute("light-field"));
+  header.insert("lfi.formatVersion", Imf::IntAttribute(2));
+  header.insert("lfi.checksum", Imf::StringAttribute("crc32:00000000"));
+  header.insert("lfi.distance_mm", Imf::DoubleAttribute(17.25));
+  header.insert("lfi.pixelPitch_mm", Imf::DoubleAttribute(0.1));
+  header.insert("other", Imf::StringAttribute("not lfi's"));
+  EXPECT_EQ(canonicalText(header),
+            "lfi.distance_mm double 17.25\nlfi.formatVersion int 2\nlfi.kind string 11:light-field\n"
+            "lfi.pixelPitch_mm double 0.1\n");
+  // CRC-32 of "123456789" is 0xcbf43926; the pixels go on from the text's CRC.
+  const cv::Mat pixels = randomFloats(3, 4, 15);
+  EXPECT_EQ(lfi::fileChecksum("123456789", cv::Mat()), 0xcbf43926ul);
+  EXPECT_EQ(lfi::fileChecksum("", pixels), lfi::pixelChecksum(pixels));
+  EXPECT_EQ(lfi::fileChecksum("123456789", pixels), lfi::pixelChecksum(pixels, 0xcbf43926ul));
+  // And lfi's reader agrees with this test's canonical text (RawWriterProducesReadableFiles
+  // reads a file sealed by it); lfi's writer records the same checksum.
+  const LightFieldGeometry g = geometry();
+  lfi::writeLightFieldExr(file("lf.exr"), LightField(g, randomFloats(g.height(), g.width(), 16)));
+  const Imf::Header written = Imf::InputFile(file("lf.exr").c_str()).header();
+  EXPECT_EQ(
+      written.typedAttribute<Imf::StringAttribute>("lfi.checksum").value(),
+      checksumText(lfi::fileChecksum(canonicalText(written), lfi::readLightFieldExr(file("lf.exr")).lensletImage())));
+}
+
+TEST_F(ExrIo, VersionOneFilesStillReadAndLaterVersionsAreRefused) {
+  // Files written before format version 2 recorded the CRC of the pixels only.
+  const LightFieldGeometry g = geometry();
+  const cv::Mat pixels = randomFloats(g.height(), g.width(), 17);
+  writeRawExr(file("v1.exr"), pixels, [&](Imf::Header& h) {
+    h.insert("lfi.kind", Imf::StringAttribute("light-field"));
+    h.insert("lfi.formatVersion", Imf::IntAttribute(1));
+    h.insert("lfi.checksum", Imf::StringAttribute(checksumText(pixels)));
+    h.insert("lfi.spatialX", Imf::IntAttribute(g.spatialX));
+    h.insert("lfi.spatialY", Imf::IntAttribute(g.spatialY));
+    h.insert("lfi.angular", Imf::IntAttribute(g.angular));
+    h.insert("lfi.pixelPitch_mm", Imf::DoubleAttribute(g.pixelPitch_mm));
+    h.insert("lfi.distance_mm", Imf::DoubleAttribute(g.distance_mm));
+  });
+  const LightField loaded = lfi::readLightFieldExr(file("v1.exr"));
+  EXPECT_TRUE(loaded.geometry() == g);
+  EXPECT_TRUE(bitIdentical(loaded.lensletImage(), pixels));
+  writeRawExr(file("v3.exr"), pixels, [&](Imf::Header& h) {
+    h.insert("lfi.kind", Imf::StringAttribute("light-field"));
+    h.insert("lfi.formatVersion", Imf::IntAttribute(3));
+  });
+  EXPECT_TRUE(throwsError([&] { lfi::readLightFieldExr(file("v3.exr")); }, Errc::InvalidFile,
+                          {file("v3.exr").string(), "lfi.formatVersion", "is 3", "versions 1 to 2"}));
+}
+
+TEST_F(ExrIo, LfiAttributeOfAnotherTypeIsNamed) {
+  const LightFieldGeometry g = geometry();
+  const cv::Mat pixels = randomFloats(g.height(), g.width(), 18);
+  writeRawExr(file("v2f.exr"), pixels, [&](Imf::Header& h) {
+    h.insert("lfi.kind", Imf::StringAttribute("light-field"));
+    h.insert("lfi.formatVersion", Imf::IntAttribute(lfi::kExrFormatVersion));
+    h.insert("lfi.checksum", Imf::StringAttribute("crc32:00000000"));
+    h.insert("lfi.offset", Imf::V2fAttribute(Imath::V2f(1, 2)));
+  });
+  EXPECT_TRUE(throwsError([&] { lfi::readLightFieldExr(file("v2f.exr")); }, Errc::InvalidFile,
+                          {file("v2f.exr").string(), "'lfi.offset'", "'v2f'"}));
 }
 
 TEST_F(ExrIo, FileThatIsNotExrIsInvalid) {

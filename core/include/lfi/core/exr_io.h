@@ -7,7 +7,8 @@
 // Loading validates everything and throws lfi::Error naming the file and the
 // attribute: Errc::InvalidFile for a missing/mistyped/out-of-range attribute,
 // a size that does not match, NaN/Inf pixels or a truncated file;
-// Errc::Checksum when the pixels do not match the recorded CRC-32.
+// Errc::Checksum when the lfi attributes or the pixels do not match the
+// recorded CRC-32 (version 1 files, read still, recorded it of the pixels only).
 
 #include "lfi/core/atomic_file.h"
 #include "lfi/core/light_field.h"
@@ -16,10 +17,11 @@
 
 #include <filesystem>
 #include <string>
+#include <string_view>
 
 namespace lfi {
 
-inline constexpr int kExrFormatVersion = 1;
+inline constexpr int kExrFormatVersion = 2;
 
 void writeLightFieldExr(const std::filesystem::path& path, const LightField& lightField,
                         Overwrite overwrite = Overwrite::Refuse);
@@ -36,7 +38,13 @@ void writeRadianceExr(const std::filesystem::path& path, const cv::Mat& image, c
                       Overwrite overwrite = Overwrite::Refuse);
 cv::Mat readRadianceExr(const std::filesystem::path& path, RadianceImageInfo* info = nullptr);
 
-// CRC-32 (zlib polynomial) of an image's pixel bytes, row by row.
-unsigned long pixelChecksum(const cv::Mat& image);
+// CRC-32 (zlib polynomial) of an image's pixel bytes, row by row, going on
+// from `crc` (0: from the start).
+unsigned long pixelChecksum(const cv::Mat& image, unsigned long crc = 0);
+
+// What lfi.checksum records (format version 2): the CRC-32 of `attributes`,
+// the canonical text of the file's lfi.* attributes (docs/file-formats.md),
+// followed by the pixel bytes.
+unsigned long fileChecksum(std::string_view attributes, const cv::Mat& pixels);
 
 }  // namespace lfi
