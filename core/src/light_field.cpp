@@ -16,9 +16,13 @@ void LightFieldGeometry::validate() const {
     fail(Errc::InvalidArgument, "light field spatialY = {} is outside [1, {}]", spatialY, kMaxElements);
   if (angular < 1 || angular > kMaxAngular)
     fail(Errc::InvalidArgument, "light field angular = {} is outside [1, {}]", angular, kMaxAngular);
-  if (static_cast<long long>(spatialX) * angular > kMaxElements * 4LL ||
-      static_cast<long long>(spatialY) * angular > kMaxElements * 4LL)
-    fail(Errc::InvalidArgument, "light field lenslet image {}x{} is too large", width(), height());
+  // At most 2^17 pixels a side and 2^30 in all (4 GiB of float32): a bigger
+  // image is a mistake, and would otherwise exhaust memory rather than fail.
+  const long long side = kMaxElements * 4LL, w = static_cast<long long>(spatialX) * angular,
+                  h = static_cast<long long>(spatialY) * angular;
+  if (w > side || h > side || w * h > (1LL << 30))
+    fail(Errc::InvalidArgument, "light field lenslet image {}x{} is too large (at most {} a side and 2^30 pixels)", w,
+         h, side);
   if (!(pixelPitch_mm > 0) || !std::isfinite(pixelPitch_mm) || pixelPitch_mm > 1000)
     fail(Errc::InvalidArgument, "light field pixelPitch_mm = {} is outside (0, 1000]", pixelPitch_mm);
   if (!(distance_mm >= 0) || !std::isfinite(distance_mm))
@@ -37,8 +41,8 @@ LightField::LightField(const LightFieldGeometry& geometry, cv::Mat lensletImage)
     fail(Errc::InvalidArgument, "light field lenslet image must be CV_32FC1 (got type {})", lenslet_.type());
   if (lenslet_.cols != geometry_.width() || lenslet_.rows != geometry_.height())
     fail(Errc::InvalidArgument, "light field lenslet image is {}x{} but {}x{} elements of {}x{} need {}x{}",
-         lenslet_.cols, lenslet_.rows, geometry_.spatialX, geometry_.spatialY, geometry_.angular,
-         geometry_.angular, geometry_.width(), geometry_.height());
+         lenslet_.cols, lenslet_.rows, geometry_.spatialX, geometry_.spatialY, geometry_.angular, geometry_.angular,
+         geometry_.width(), geometry_.height());
 }
 
 Vec2 LightField::elementCentre(int ex, int ey) const {
@@ -107,13 +111,11 @@ double LightField::radiance(const Vec2& q, const Vec3& d, LightFieldLookup mode)
 double LightField::radianceAt(double sx, double sy, const Vec2& disc, LightFieldLookup mode) const {
   if (lenslet_.empty()) return 0;
   if (!(sx >= 0 && sx < geometry_.spatialX && sy >= 0 && sy < geometry_.spatialY)) return 0;
-  if (mode == LightFieldLookup::Nearest)
-    return angularSample(static_cast<int>(sx), static_cast<int>(sy), disc, mode);
+  if (mode == LightFieldLookup::Nearest) return angularSample(static_cast<int>(sx), static_cast<int>(sy), disc, mode);
   const Lerp lx = lerpIndex(sx - 0.5, geometry_.spatialX), ly = lerpIndex(sy - 0.5, geometry_.spatialY);
-  return (1 - ly.t) * ((1 - lx.t) * angularSample(lx.i0, ly.i0, disc, mode) +
-                       lx.t * angularSample(lx.i1, ly.i0, disc, mode)) +
-         ly.t * ((1 - lx.t) * angularSample(lx.i0, ly.i1, disc, mode) +
-                 lx.t * angularSample(lx.i1, ly.i1, disc, mode));
+  return (1 - ly.t) *
+             ((1 - lx.t) * angularSample(lx.i0, ly.i0, disc, mode) + lx.t * angularSample(lx.i1, ly.i0, disc, mode)) +
+         ly.t * ((1 - lx.t) * angularSample(lx.i0, ly.i1, disc, mode) + lx.t * angularSample(lx.i1, ly.i1, disc, mode));
 }
 
 }  // namespace lfi

@@ -101,10 +101,18 @@ Rigid3 readPlacement(ConfigTable& t) {
 
 std::shared_ptr<const Solid> readSolid(ConfigTable& t, const std::string& kind) {
   if (kind == "sphere") return Solid::sphere(t.number("radius_mm", std::nullopt, 1e-6, 1e6));
-  if (kind == "lens")
-    return Solid::sphericalLens(
-        t.number("front_radius_mm", std::nullopt, -1e6, 1e6), t.number("back_radius_mm", std::nullopt, -1e6, 1e6),
-        t.number("centre_thickness_mm", std::nullopt, 1e-6, 1e6), t.number("diameter_mm", std::nullopt, 1e-6, 1e6));
+  if (kind == "lens") {
+    const double r1 = t.number("front_radius_mm", std::nullopt, -1e6, 1e6);
+    const double r2 = t.number("back_radius_mm", std::nullopt, -1e6, 1e6);
+    const double tc = t.number("centre_thickness_mm", std::nullopt, 1e-6, 1e6);
+    const double diameter = t.number("diameter_mm", std::nullopt, 1e-6, 1e6);
+    const std::pair<const char*, double> radii[] = {{"front_radius_mm", r1}, {"back_radius_mm", r2}};
+    for (const auto& [key, r] : radii)  // as Solid::sphericalLens requires
+      if (r != 0 && std::abs(r) < diameter / 2)
+        fail(Errc::Config, "{}: |radius| {} is smaller than the semi-diameter {} (0 for a flat face)", t.where(key),
+             std::abs(r), diameter / 2);
+    return Solid::sphericalLens(r1, r2, tc, diameter);
+  }
   if (kind == "cylinder") {
     // A finite cylinder along z, centred: the infinite one cut by two planes.
     const double r = t.number("radius_mm", std::nullopt, 1e-6, 1e6), h = t.number("length_mm", std::nullopt, 1e-6, 1e6);
@@ -253,6 +261,11 @@ SceneDescription loadSceneFile(const fs::path& path) {
     lfs.geometry.distance_mm = c.number("distance_mm", 0.0, 0, 1e6);
     lfs.worldFromSensor = readPlacement(c);
     c.finish();
+    try {
+      lfs.geometry.validate();
+    } catch (const Error& e) {
+      fail(Errc::Config, "{}: [light_field_sensor]: {}", path.string(), e.what());
+    }
     d.sensor = lfs;
   }
   if (root.has("camera_sensor")) {

@@ -19,6 +19,12 @@ Bench Bench::load(const std::filesystem::path& path) {
     b.lens.backRadius_mm = t.number("back_radius_mm", std::nullopt, -1e6, 1e6);
     b.lens.centreThickness_mm = t.number("centre_thickness_mm", std::nullopt, 0.01, 1000);
     b.lens.absorption_per_mm = t.number("absorption_per_mm", 0.0, 0, 100);
+    const std::pair<const char*, double> radii[] = {{"front_radius_mm", b.lens.frontRadius_mm},
+                                                    {"back_radius_mm", b.lens.backRadius_mm}};
+    for (const auto& [key, r] : radii)  // as Solid::sphericalLens requires
+      if (r != 0 && std::abs(r) < b.lens.diameter_mm / 2)
+        fail(Errc::Config, "{}: |radius| {} is smaller than the semi-diameter {} (0 for a flat face)", t.where(key),
+             std::abs(r), b.lens.diameter_mm / 2);
     t.finish();
   }
   {
@@ -73,6 +79,11 @@ Bench Bench::load(const std::filesystem::path& path) {
     t.finish();
   }
   root.finish();
+  try {
+    b.lightFieldGeometry().validate();
+  } catch (const Error& e) {
+    fail(Errc::Config, "{}: [inverse_schlieren] spatial and angular: {}", path.string(), e.what());
+  }
   const double semi = b.lens.diameter_mm / 2;
   if (std::abs(b.defects.rimRadial_mm) + b.defects.inclusionRadius_mm >= semi)
     fail(Errc::Config, "{}: [defects] rim_radial_mm + inclusion_radius_mm must stay inside the lens (semi-diameter {})",

@@ -3,12 +3,20 @@
 #include "lfi_test_support.h"
 
 #include "lfi/drivers/display.h"
+#include "lfi/drivers/display_calibration_file.h"
 #include "lfi/drivers/display_optics.h"
 
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <functional>
 #include <numbers>
+#include <string>
+#include <utility>
+#include <vector>
 
 namespace lfi {
 namespace {
@@ -27,7 +35,7 @@ DisplayInfo smallLenticular(SubpixelLayout layout, double slant_rad) {
 TEST(DisplayOptics, DefaultsAreALenticularOfTheLookingGlassClass) {
   const DisplayInfo info = defaultLenticularDisplay();
   const DisplayOptics optics(info);
-  EXPECT_NEAR(info.optics.lensPitch_px, 7.2, 0.1);                          // ~7 pixels per lens
+  EXPECT_NEAR(info.optics.lensPitch_px, 7.2, 0.1);                           // ~7 pixels per lens
   EXPECT_NEAR(info.optics.slant_rad * 180 / std::numbers::pi, 10.45, 0.05);  // ~10 degrees
   EXPECT_NEAR(optics.viewCone_rad() * 180 / std::numbers::pi, 40.0, 1e-9);   // 40 degree view cone
   EXPECT_NEAR(optics.lensPitchPerp_mm(), 25.4 / 47.58427, 1e-12);
@@ -154,6 +162,35 @@ TEST(DisplayOptics, InvalidParametersNameTheField) {
   EXPECT_TRUE(throwsError([&] { DisplayOptics optics(info); }, Errc::InvalidArgument, {"slitWidth_mm"}));
   info.optics.slitWidth_mm = 0.05;
   EXPECT_NO_THROW(DisplayOptics optics(info));
+}
+
+TEST(DisplayCalibrationFile, ValuesTheDisplayWouldRefuseAreNamedInTheFile) {
+  // A calibration file overrides what the device reports; a value that
+  // DisplayInfo::validate() refuses is named in the file, not blamed on the device.
+  const auto file = std::filesystem::path(::testing::TempDir()) / fmt::format("lfi-cal-{}.toml", ::getpid());
+  const DisplayOpticsParams device = defaultLenticularDisplay().optics;  // no slit width: a lenslet display
+  auto read = [&](const std::string& optics) {
+    std::ofstream(file) << "format = \"lfi-display-calibration\"\nversion = 1\n[optics]\n" << optics;
+    return readDisplayOpticsFile(file, device);
+  };
+  EXPECT_DOUBLE_EQ(read("lens_pitch_px = 12.5\n").lensPitch_px, 12.5);
+  struct Case {
+    std::string optics, key;
+    std::function<void(DisplayInfo&)> spoil;  // the same value, set on the display's info
+  };
+  const std::vector<Case> cases = {
+      {"lens_pitch_px = 0.5\n", "optics.lens_pitch_px", [](DisplayInfo& i) { i.optics.lensPitch_px = 0.5; }},
+      {"slant_rad = 0.8\n", "optics.slant_rad", [](DisplayInfo& i) { i.optics.slant_rad = 0.8; }},
+      {"optics = \"barrier\"\n", "optics.slit_width_mm", [](DisplayInfo& i) { i.optics.type = OpticsType::Barrier; }},
+  };
+  for (const Case& c : cases) {
+    EXPECT_TRUE(throwsError([&] { read(c.optics); }, Errc::Config, {file.string() + ":", c.key})) << c.optics;
+    DisplayInfo info = defaultLenticularDisplay();
+    c.spoil(info);
+    EXPECT_THROW(info.validate(), Error) << c.optics << ": the display accepts it, the file should too";
+  }
+  EXPECT_EQ(read("optics = \"barrier\"\nslit_width_mm = 0.05\n").type, OpticsType::Barrier);
+  std::filesystem::remove(file);
 }
 
 }  // namespace

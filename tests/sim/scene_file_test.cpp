@@ -111,6 +111,20 @@ TEST_F(SceneFile, BadValuesAreErrors) {
   EXPECT_TRUE(throwsError([&] { loadSceneFile(write("d.toml", head)); }, Errc::Config, {"no [[object]]"}));
   EXPECT_TRUE(throwsError(
       [&] {
+        loadSceneFile(write("lens.toml", head + "[[object]]\nname='l'\nshape='lens'\nfront_radius_mm=100\n"
+                                                "back_radius_mm=-10\ncentre_thickness_mm=7\ndiameter_mm=50\n"));
+      },
+      Errc::Config, {"lens.toml:", "object[0].back_radius_mm", "semi-diameter 25"}));
+  EXPECT_TRUE(throwsError(
+      [&] {
+        loadSceneFile(write("lfs.toml",
+                            "format = \"lfi-scene\"\nversion = 1\n[light_field_sensor]\n"
+                            "spatial_x = 32768\nspatial_y = 32768\nangular = 2\npixel_pitch_mm = 0.1\n"
+                            "[[object]]\nname='x'\nshape='sphere'\nradius_mm=1\n"));
+      },
+      Errc::Config, {"lfs.toml", "[light_field_sensor]", "too large"}));
+  EXPECT_TRUE(throwsError(
+      [&] {
         loadSceneFile(write(
             "e.toml", "format = \"lfi-scene\"\nversion = 1\n[[object]]\nname='x'\nshape='sphere'\nradius_mm=1\n"));
       },

@@ -1,8 +1,10 @@
 // The reference study in quick mode, end to end: what it writes, and the
 // expectations that physics (not today's numbers) guarantees.
 
-#include "lfi/core/error.h"
 #include "lfi/study/study.h"
+#include "lfi/core/error.h"
+
+#include "lfi_test_support.h"
 
 #include <gtest/gtest.h>
 #include <unistd.h>
@@ -17,6 +19,7 @@ namespace {
 
 namespace fs = std::filesystem;
 using lfi::Errc;
+using lfi::testing_support::throwsError;
 
 const fs::path kBench = fs::path(LFI_SOURCE_DIR) / "data" / "benches" / "reference.toml";
 
@@ -150,10 +153,10 @@ TEST(Sweep, AnswersFollowTheDeclaredThreshold) {
     return p;
   };
   nlohmann::ordered_json sweep;
-  sweep["points"] = {point("element", 0.4, 20), point("element", 0.8, 5), point("element", 1.6, 2.9),
-                     point("angular", 4, 1), point("angular", 8, 3.0), point("angular", 16, 9),
+  sweep["points"] = {point("element", 0.4, 20),   point("element", 0.8, 5),    point("element", 1.6, 2.9),
+                     point("angular", 4, 1),      point("angular", 8, 3.0),    point("angular", 16, 9),
                      point("delta_error", -2, 4), point("delta_error", -1, 6), point("delta_error", 0, 9),
-                     point("delta_error", 1, 5), point("delta_error", 2, 2), point("delta_error", 4, 9)};
+                     point("delta_error", 1, 5),  point("delta_error", 2, 2),  point("delta_error", 4, 9)};
   const auto a = lfi::study::sweepAnswers(sweep);
   EXPECT_EQ(a["d"]["nearest"]["coarsest_element_mm"], 0.8);
   EXPECT_EQ(a["d"]["nearest"]["fewest_angular"], 8);
@@ -198,6 +201,14 @@ TEST(Bench, OutOfRangeAndMalformedValuesAreErrors) {
   const fs::path bad = dir / "bad.toml";
   std::ofstream(bad) << replaceLine(readText(kBench), "ior = 1.5168", "ior = -3");
   EXPECT_THROW(lfi::study::Bench::load(bad), lfi::Error);
+  // Values each in range that the bench cannot build, named before a study starts.
+  std::ofstream(bad) << replaceLine(readText(kBench), "front_radius_mm = 51.5", "front_radius_mm = 10");
+  EXPECT_TRUE(throwsError([&] { lfi::study::Bench::load(bad); }, Errc::Config,
+                          {bad.string() + ":", "lens.front_radius_mm", "semi-diameter 12.7"}));
+  std::ofstream(bad) << replaceLine(replaceLine(readText(kBench), "spatial = 40", "spatial = 4096"), "angular = 16",
+                                    "angular = 256");
+  EXPECT_TRUE(throwsError([&] { lfi::study::Bench::load(bad); }, Errc::Config,
+                          {bad.string(), "[inverse_schlieren]", "too large"}));
   std::ofstream(bad) << "format = \"lfi-bench\"\nversion = [";
   try {
     lfi::study::Bench::load(bad);
