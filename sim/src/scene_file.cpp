@@ -125,6 +125,19 @@ std::shared_ptr<const Solid> readSolid(ConfigTable& t, const std::string& kind) 
   fail(Errc::Config, "{}: unknown shape '{}'", t.where("shape"), kind);
 }
 
+// Reads the file that key `key` of `t` names (relative to the scene file),
+// with `read`; its errors say which scene file and key named it.
+template <typename Read>
+auto readNamedFile(ConfigTable& t, const char* key, Read read) {
+  fs::path file = t.string(key);
+  if (file.is_relative()) file = t.directory() / file;
+  try {
+    return read(file);
+  } catch (const Error& e) {
+    throw Error(e.code(), fmt::format("{}: {}", t.where(key), e.what()));
+  }
+}
+
 Object readObject(ConfigTable& t) {
   Object obj;
   obj.name = t.string("name");
@@ -135,9 +148,7 @@ Object readObject(ConfigTable& t) {
     if (!(size[0] > 0 && size[1] > 0)) fail(Errc::Config, "{} must be positive", t.where("size_mm"));
     obj.shape = Rectangle{size[0], size[1]};
   } else if (kind == "mesh") {
-    fs::path file = t.string("file");
-    if (file.is_relative()) file = t.directory() / file;
-    obj.shape = loadMesh(file);
+    obj.shape = readNamedFile(t, "file", loadMesh);
   } else {
     std::shared_ptr<const Solid> solid = readSolid(t, kind);
     // Cut-outs: spheres subtracted from the solid (object frame).
@@ -165,10 +176,9 @@ Object readObject(ConfigTable& t) {
     } else if (e == "lambertian") {
       obj.emission = LambertianEmission{t.number("radiance", 1.0, 0, 1e12)};
     } else {
-      fs::path file = t.string("light_field");
-      if (file.is_relative()) file = t.directory() / file;
+      auto lightField = std::make_shared<LightField>(readNamedFile(t, "light_field", readLightFieldExr));
       const bool nearest = t.string("lookup", "nearest", {"nearest", "interpolated"}) == "nearest";
-      obj.emission = LightFieldEmission{std::make_shared<LightField>(readLightFieldExr(file)),
+      obj.emission = LightFieldEmission{std::move(lightField),
                                         nearest ? LightFieldLookup::Nearest : LightFieldLookup::Interpolated};
     }
   }

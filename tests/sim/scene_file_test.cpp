@@ -132,14 +132,17 @@ TEST_F(SceneFile, BadValuesAreErrors) {
   EXPECT_TRUE(throwsError([&] { loadSceneFile(write("f.toml", "format = \"lfi-scene\"\nversion = [\n")); },
                           Errc::Config, {"f.toml:"}));
   EXPECT_TRUE(throwsError([&] { loadSceneFile(dir_ / "missing.toml"); }, Errc::NotFound, {"missing.toml"}));
-  // A light field emitter whose file is corrupt: the EXR error names that file.
+  // A light field emitter whose file is corrupt: the EXR error names that file, and the scene file and key.
   write("lf.exr", "not an exr");
   EXPECT_TRUE(throwsError(
       [&] {
         loadSceneFile(write("g.toml", head + "[[object]]\nname='d'\nshape='rectangle'\nsize_mm=[1,1]\n"
                                              "emitter='light_field'\nlight_field='lf.exr'\n"));
       },
-      Errc::InvalidFile, {"lf.exr"}));
+      Errc::InvalidFile, {"g.toml:", "object[0].light_field", "lf.exr"}));
+  EXPECT_TRUE(throwsError(
+      [&] { loadSceneFile(write("h.toml", head + "[[object]]\nname='m'\nshape='mesh'\nfile='none.ply'\n")); },
+      Errc::NotFound, {"h.toml:", "object[0].file", "none.ply"}));
 }
 
 TEST_F(SceneFile, MeshesLoadWithOutwardSmoothNormals) {
