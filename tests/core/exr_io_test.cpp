@@ -26,6 +26,7 @@
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <iterator>
 #include <limits>
 #include <random>
 #include <string>
@@ -434,6 +435,56 @@ TEST_F(ExrIo, LfiAttributeOfAnotherTypeIsNamed) {
   });
   EXPECT_TRUE(throwsError([&] { lfi::readLightFieldExr(file("v2f.exr")); }, Errc::InvalidFile,
                           {file("v2f.exr").string(), "'lfi.offset'", "'v2f'"}));
+}
+
+TEST_F(ExrIo, MutatedFilesAreRefusedOrReadBackUnchanged) {
+  // Seeded damage to a light field file: byte changes, bit flips, cuts and
+  // repeats anywhere (OpenEXR's header, offsets, compressed pixels, lfi's
+  // attributes). With the checksum over the attributes and the pixels, a
+  // damaged file is either an lfi::Error naming it or, where the damage
+  // touched nothing that is read, the very same light field.
+  const LightFieldGeometry g = geometry();
+  const LightField original(g, randomFloats(g.height(), g.width(), 19));
+  lfi::writeLightFieldExr(file("seed.exr"), original);
+  std::string seed;
+  {
+    std::ifstream in(file("seed.exr"), std::ios::binary);
+    seed.assign(std::istreambuf_iterator<char>(in), {});
+  }
+  std::mt19937 rng(20261122);
+  int unchanged = 0, refused = 0;
+  for (int n = 0; n < 400; ++n) {
+    std::string bytes = seed;
+    auto at = [&] { return std::uniform_int_distribution<size_t>(0, bytes.size() - 1)(rng); };
+    switch (rng() % 4) {
+      case 0:
+        bytes[at()] = static_cast<char>(rng());
+        break;
+      case 1:
+        bytes[at()] ^= static_cast<char>(1u << (rng() % 8));
+        break;
+      case 2:
+        bytes.resize(at());
+        break;
+      default: {
+        const size_t from = at(), length = std::min<size_t>(1 + rng() % 8, bytes.size() - from);
+        bytes.insert(at(), bytes.substr(from, length));
+      }
+    }
+    const fs::path path = file("mutated.exr");
+    std::ofstream(path, std::ios::binary | std::ios::trunc) << bytes;
+    try {
+      const LightField loaded = lfi::readLightFieldExr(path);
+      ASSERT_TRUE(loaded.geometry() == g) << "case " << n;
+      ASSERT_TRUE(bitIdentical(loaded.lensletImage(), original.lensletImage())) << "case " << n;
+      ++unchanged;
+    } catch (const lfi::Error& e) {
+      ASSERT_NE(std::string(e.what()).find(path.string()), std::string::npos) << "case " << n << ": " << e.what();
+      ++refused;
+    }
+  }
+  EXPECT_GT(refused, 300);
+  EXPECT_GT(unchanged, 0);  // damage to bytes nothing reads (OpenEXR's header padding, say) is harmless
 }
 
 TEST_F(ExrIo, FileThatIsNotExrIsInvalid) {

@@ -13,6 +13,7 @@
 #include <cstring>
 #include <fstream>
 #include <numbers>
+#include <random>
 
 namespace {
 
@@ -310,6 +311,57 @@ TEST_F(SceneFile, CorruptPlyIsAnErrorNamingFileAndPlace) {
     fragments.push_back((dir_ / c.name).string());
     EXPECT_TRUE(throwsError([&] { loadMesh(dir_ / c.name); }, Errc::InvalidFile, fragments));
   }
+}
+
+TEST_F(SceneFile, MutatedPlyFilesLoadCheckedOrAreNamedErrors) {
+  // Seeded mutations of an ASCII and both binary octahedra (the kinds of
+  // damage that crashed Assimp): byte changes, bit flips, cuts, repeats.
+  // Each either loads as a mesh whose every index is in range and every
+  // vertex finite, or is an lfi::Error naming the file; never a crash or hang.
+  std::string ascii =
+      "ply\nformat ascii 1.0\nelement vertex 6\nproperty float x\nproperty float y\n"
+      "property float z\nelement face 8\nproperty list uchar int vertex_indices\nend_header\n";
+  for (const auto& v : kOcta) ascii += fmt::format("{} {} {}\n", v[0], v[1], v[2]);
+  for (const auto& f : kOctaFaces) ascii += fmt::format("3 {} {} {}\n", f[0], f[1], f[2]);
+  const std::string seeds[] = {ascii, binaryOcta(false), binaryOcta(true)};
+  std::mt19937 rng(20261122);
+  int loaded = 0, refused = 0;
+  for (int n = 0; n < 1500; ++n) {
+    std::string bytes = seeds[n % 3];
+    auto at = [&] { return std::uniform_int_distribution<size_t>(0, bytes.size() - 1)(rng); };
+    for (int edits = 1 + static_cast<int>(rng() % 3); edits > 0; --edits) {
+      switch (rng() % 4) {
+        case 0:
+          bytes[at()] = static_cast<char>(rng());
+          break;
+        case 1:
+          bytes[at()] ^= static_cast<char>(1u << (rng() % 8));
+          break;
+        case 2:
+          bytes.resize(at());
+          break;
+        default: {
+          const size_t from = at(), length = std::min<size_t>(rng() % 16, bytes.size() - from);
+          bytes.insert(at(), bytes.substr(from, length));
+        }
+      }
+      if (bytes.empty()) bytes = "p";
+    }
+    const fs::path file = write("m.ply", bytes);
+    try {
+      const TriangleMesh mesh = loadMesh(file);
+      for (const auto& t : mesh.triangles)
+        for (unsigned i : t) ASSERT_LT(i, mesh.vertices.size()) << "case " << n;
+      for (const Vec3& v : mesh.vertices) ASSERT_TRUE(std::isfinite(v.x + v.y + v.z)) << "case " << n;
+      ++loaded;
+    } catch (const Error& e) {
+      ASSERT_NE(std::string(e.what()).find(file.string()), std::string::npos) << "case " << n << ": " << e.what();
+      ++refused;
+    }
+  }
+  // Both outcomes occur: the mutations reach past the header checks.
+  EXPECT_GT(loaded, 50);
+  EXPECT_GT(refused, 500);
 }
 
 TEST_F(SceneFile, MeshAndAnalyticSphereRefractAlike) {
