@@ -48,10 +48,11 @@ double emittedRadiance(const Scene& scene, const Hit& hit, const Emission& emiss
 
 // The dielectric objects a path is inside, innermost last.
 class MediumStack {
-public:
+ public:
   static constexpr int kDepth = 8;
   int size() const { return size_; }
   int top() const { return items_[size_ - 1]; }
+  void clear() { size_ = 0; }
   // Throws Errc::Config, naming the objects, when the path would be inside
   // more than kDepth dielectrics at once (rather than lose one of them).
   void push(const Scene& scene, int object) {
@@ -74,11 +75,12 @@ public:
   }
   double absorption(const Scene& scene) const { return size_ ? scene.surface(top()).absorption_per_mm : 0.0; }
 
-private:
+ private:
   [[noreturn, gnu::cold, gnu::noinline]] void tooDeep(const Scene& scene, int object) const {
     std::string inside;
     for (int i = 0; i < size_; ++i) inside += fmt::format("{}'{}'", i ? ", " : "", scene.object(items_[i]).name);
-    fail(Errc::Config, "a path entering dielectric '{}' is already inside {} nested dielectrics ({}); the tracer "
+    fail(Errc::Config,
+         "a path entering dielectric '{}' is already inside {} nested dielectrics ({}); the tracer "
          "follows at most {}: nest fewer, or make the overlapping objects one solid",
          scene.object(object).name, size_, inside, kDepth);
   }
@@ -102,7 +104,9 @@ bool refract(const Vec3& d, const Vec3& n, double eta, Vec3& out) {
   return true;
 }
 
-Vec3 reflect(const Vec3& d, const Vec3& n) { return detail::renormalised(d - n * (2 * d.dot(n))); }
+Vec3 reflect(const Vec3& d, const Vec3& n) {
+  return detail::renormalised(d - n * (2 * d.dot(n)));
+}
 
 namespace {
 
@@ -206,7 +210,7 @@ double walk(const Scene& scene, PathState p, Policy& policy) {
 // first need one (`batched`); otherwise each is made when it is needed. Both
 // give the same values.
 struct StratifiedChoices {
-  std::array<double, detail::kBatchedChoices> u;                // when batched
+  std::array<double, detail::kBatchedChoices> u;              // when batched
   std::array<std::uint32_t, detail::kStratifiedChoices> key;  // the pixel's key of each choice
   std::uint32_t spp = 0, sample = 0;
   int used = detail::kStratifiedChoices;  // none left
@@ -267,8 +271,8 @@ namespace {
 // A pixel whose samples are being traced: its sample plan and their results.
 struct PixelWork {
   int i = 0, j = 0;
-  int issued = 0;    // samples started
-  int inFlight = 0;  // samples started and not yet ended
+  int issued = 0;              // samples started
+  int inFlight = 0;            // samples started and not yet ended
   std::vector<double> values;  // each sample's radiance, summed in sample order at the end
   std::uint64_t streams = 0;   // sample s's random stream is streams ^ s
   std::uint32_t stopKey = 0;   // permutes the stop strata against the pixel-area strata
@@ -298,8 +302,8 @@ struct Lanes {
   double radiance[kLanes];        // the sample's sum so far
   std::uint64_t sampler[kLanes];  // Sampler::state
   int depth[kLanes];
-  int pixel[kLanes];   // index into the tile's PixelWork slots
-  int sample[kLanes];  // index in the pixel
+  int pixel[kLanes];    // index into the tile's PixelWork slots
+  int sample[kLanes];   // index in the pixel
   int waiting[kLanes];  // branches waiting on the lane's stack (TileRenderer::branches_)
   std::array<StratifiedChoices, kLanes> choices;
   std::array<MediumStack, kLanes> media;
@@ -309,9 +313,12 @@ struct Lanes {
 // paths through Embree, refilled as samples end, so that the packet stays
 // full and coherent (neighbouring samples of one or two pixels).
 class TileRenderer {
-public:
+ public:
   TileRenderer(const Scene& scene, const Sensor& sensor, const RenderOptions& options)
-      : scene_(scene), sensor_(sensor), options_(options), width_(sensorWidth(sensor)),
+      : scene_(scene),
+        sensor_(sensor),
+        options_(options),
+        width_(sensorWidth(sensor)),
         cameraRays_(std::holds_alternative<TelecentricCamera>(sensor)
                         ? std::optional(TelecentricCamera::RayMap(std::get<TelecentricCamera>(sensor)))
                         : std::nullopt),
@@ -326,7 +333,10 @@ public:
     }
     branches_.resize(Scene::kPacket);
     isolated_.assign(scene.objects().size() + 1, 0);
-    for (size_t i = 0; i < scene.objects().size(); ++i) isolated_[i + 1] = scene.isolated(static_cast<int>(i));
+    for (size_t i = 0; i < scene.objects().size(); ++i) {
+      isolated_[i + 1] = scene.isolated(static_cast<int>(i));
+      absorbing_ = absorbing_ || scene.surface(static_cast<int>(i)).absorption_per_mm > 0;
+    }
   }
 
   void render(int x0, int y0, int x1, int y1, cv::Mat& image) {
@@ -347,7 +357,7 @@ public:
     }
   }
 
-private:
+ private:
   // Sets lane k's innermost medium from its media stack: the packet query's
   // hint, and whether the lane is inside an isolated solid.
   void setInside(int k) {
@@ -361,6 +371,7 @@ private:
   // Beer-Lambert transmittance of lane k's medium up to its hit (1 when it
   // does not absorb), as interact() applies it.
   double transmittance(int k) const {
+    if (!absorbing_) return 1.0;
     const MediumStack& media = lanes_.media[k];
     const double a = media.size() ? media.absorption(scene_) : 0.0;
     return a > 0 ? std::exp(-a * hits_.t[k]) : 1.0;
@@ -371,7 +382,7 @@ private:
   // whose samples end are written and set in `free`.
   LaneMask step(LaneMask lanes, LaneMask& free) {
     scene_.intersect(lanes_.ray, lanes, hits_);
-    LaneMask kept = 0, fresnel = 0, lightFields = 0;
+    LaneMask kept = 0, fresnel = 0, enteringLanes = 0, lightFields = 0;
     for (LaneMask bits = lanes; bits; bits &= bits - 1) {
       const int k = std::countr_zero(bits);
       const LaneMask bit = 1u << k;
@@ -388,6 +399,7 @@ private:
         const bool entering = direction(k).dot(hits_.normal(k)) < 0;
         fresnel_.n1[k] = entering ? media.ior(scene_) : surface.ior;
         fresnel_.n2[k] = entering ? surface.ior : media.ior(scene_, object);
+        if (entering) enteringLanes |= bit;
         fresnel |= bit;
         continue;
       }
@@ -424,7 +436,7 @@ private:
         kept |= bit;
       }
     }
-    if (fresnel) kept |= takeFresnelEvents(fresnel, free);
+    if (fresnel) kept |= takeFresnelEvents(fresnel, enteringLanes, free);
     if (lightFields) kept |= endOnLightFields(lightFields, free);
     return kept;
   }
@@ -464,10 +476,11 @@ private:
     return kept;
   }
 
-  // The Fresnel events of the lanes in `lanes` (fresnel_.n1, n2 set), as
-  // interact() takes them: total internal reflection, a split into both
-  // branches, or a choice of one. Returns the lanes that go on.
-  LaneMask takeFresnelEvents(LaneMask lanes, LaneMask& free) {
+  // The Fresnel events of the lanes in `lanes` (fresnel_.n1, n2 set; those in
+  // `enteringLanes` enter their dielectric), as interact() takes them: total
+  // internal reflection, a split into both branches, or a choice of one.
+  // Returns the lanes that go on.
+  LaneMask takeFresnelEvents(LaneMask lanes, LaneMask enteringLanes, LaneMask& free) {
     if (const LaneMask rest = lanes & (lanes - 1); (rest & (rest - 1)) != 0)  // more than two lanes
       detail::fresnelLanes(lanes_.ray.rays, hits_, fresnel_);
     else  // a path reflected inside a lens, or two: cheaper one by one
@@ -479,7 +492,7 @@ private:
     for (; lanes; lanes &= lanes - 1) {
       const int k = std::countr_zero(lanes);
       const int object = hits_.object[k], depth = lanes_.depth[k]++;
-      const bool entering = direction(k).dot(hits_.normal(k)) < 0;
+      const bool entering = (enteringLanes >> k & 1) != 0;
       lanes_.ray.on[k] = object;
       const Vec3 point(f.px[k], f.py[k], f.pz[k]), reflected(f.rx[k], f.ry[k], f.rz[k]);
       bool refract = f.cosT[k] >= 0;  // else total internal reflection
@@ -688,9 +701,10 @@ private:
       choices.sample = static_cast<std::uint32_t>(start.sample);
       choices.used = 0;
       choices.batched = false;
-      lanes_.media[static_cast<size_t>(lane)] = MediumStack();
-      setInside(lane);
+      lanes_.media[static_cast<size_t>(lane)].clear();  // in air: no medium, not inside an isolated solid
+      lanes_.ray.inside[lane] = -1;
     }
+    insideIsolated_ &= ~started;
     return started;
   }
 
@@ -728,6 +742,7 @@ private:
   Lanes lanes_;
   LaneMask insideIsolated_ = 0;  // lanes whose innermost medium is an isolated solid (Scene::isolated)
   std::vector<char> isolated_;   // Scene::isolated of object i at i + 1 (0: the ambient medium, false)
+  bool absorbing_ = false;       // any medium absorbs (else every transmittance is 1)
   Scene::HitPacket hits_;
   detail::FresnelLanes fresnel_;
   detail::LightFieldMapping lightFieldMapping_;
