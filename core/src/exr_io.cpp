@@ -42,9 +42,7 @@ constexpr const char* kDescription = "lfi.description";
 constexpr const char* kLightFieldKind = "light-field";
 constexpr const char* kRadianceKind = "radiance-image";
 
-std::string checksumText(unsigned long crc) {
-  return fmt::format("crc32:{:08x}", crc);
-}
+std::string checksumText(unsigned long crc) { return fmt::format("crc32:{:08x}", crc); }
 
 // The lfi.* attributes but lfi.checksum, as the text the checksum covers
 // (format version 2, docs/file-formats.md): by name, one line each,
@@ -103,8 +101,8 @@ const Attribute& requireAttribute(const fs::path& path, const Imf::Header& heade
   const Imf::Attribute* any = &it.attribute();
   const auto* typed = dynamic_cast<const Attribute*>(any);
   if (!typed)
-    fail(Errc::InvalidFile, "'{}': attribute '{}' has type '{}', expected '{}'", path.string(), name, any->typeName(),
-         Attribute::staticTypeName());
+    fail(Errc::InvalidFile, "'{}': attribute '{}' has type '{}', expected '{}'", path.string(), name,
+         any->typeName(), Attribute::staticTypeName());
   return *typed;
 }
 
@@ -186,8 +184,9 @@ void writeLightFieldExr(const fs::path& path, const LightField& lightField, Over
   header.insert(kAngular, Imf::IntAttribute(g.angular));
   header.insert(kPixelPitch, Imf::DoubleAttribute(g.pixelPitch_mm));
   header.insert(kDistance, Imf::DoubleAttribute(g.distance_mm));
-  header.insert(kFrame, Imf::StringAttribute("plane frame: origin at the grid centre, +z the viewing/emitting side; "
-                                             "pixel (col,row) = (ex*n+u, ey*n+v), row increases with +y"));
+  header.insert(kFrame, Imf::StringAttribute(
+                            "plane frame: origin at the grid centre, +z the viewing/emitting side; "
+                            "pixel (col,row) = (ex*n+u, ey*n+v), row increases with +y"));
   header.insert(kParametrisation,
                 Imf::StringAttribute("lenslet image of SxxSy spatial elements of nxn angular elements; "
                                      "in-element position (px,py) in [-1,1]^2 sees direction "
@@ -210,12 +209,13 @@ LightField readLightFieldExr(const fs::path& path) {
   }
   if (exr.pixels.cols != g.width() || exr.pixels.rows != g.height())
     fail(Errc::InvalidFile, "'{}': image is {}x{} but attributes {}={}, {}={}, {}={} need {}x{}", path.string(),
-         exr.pixels.cols, exr.pixels.rows, kSpatialX, g.spatialX, kSpatialY, g.spatialY, kAngular, g.angular, g.width(),
-         g.height());
+         exr.pixels.cols, exr.pixels.rows, kSpatialX, g.spatialX, kSpatialY, g.spatialY, kAngular, g.angular,
+         g.width(), g.height());
   return LightField(g, std::move(exr.pixels));
 }
 
-void writeRadianceExr(const fs::path& path, const cv::Mat& image, const RadianceImageInfo& info, Overwrite overwrite) {
+void writeRadianceExr(const fs::path& path, const cv::Mat& image, const RadianceImageInfo& info,
+                      Overwrite overwrite) {
   requireImageType(image, CV_32FC1, "radiance image for '" + path.string() + "'");
   Imf::Header header(image.cols, image.rows);
   header.insert(kKind, Imf::StringAttribute(kRadianceKind));

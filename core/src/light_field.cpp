@@ -41,8 +41,8 @@ LightField::LightField(const LightFieldGeometry& geometry, cv::Mat lensletImage)
     fail(Errc::InvalidArgument, "light field lenslet image must be CV_32FC1 (got type {})", lenslet_.type());
   if (lenslet_.cols != geometry_.width() || lenslet_.rows != geometry_.height())
     fail(Errc::InvalidArgument, "light field lenslet image is {}x{} but {}x{} elements of {}x{} need {}x{}",
-         lenslet_.cols, lenslet_.rows, geometry_.spatialX, geometry_.spatialY, geometry_.angular, geometry_.angular,
-         geometry_.width(), geometry_.height());
+         lenslet_.cols, lenslet_.rows, geometry_.spatialX, geometry_.spatialY, geometry_.angular,
+         geometry_.angular, geometry_.width(), geometry_.height());
 }
 
 Vec2 LightField::elementCentre(int ex, int ey) const {
@@ -111,11 +111,13 @@ double LightField::radiance(const Vec2& q, const Vec3& d, LightFieldLookup mode)
 double LightField::radianceAt(double sx, double sy, const Vec2& disc, LightFieldLookup mode) const {
   if (lenslet_.empty()) return 0;
   if (!(sx >= 0 && sx < geometry_.spatialX && sy >= 0 && sy < geometry_.spatialY)) return 0;
-  if (mode == LightFieldLookup::Nearest) return angularSample(static_cast<int>(sx), static_cast<int>(sy), disc, mode);
+  if (mode == LightFieldLookup::Nearest)
+    return angularSample(static_cast<int>(sx), static_cast<int>(sy), disc, mode);
   const Lerp lx = lerpIndex(sx - 0.5, geometry_.spatialX), ly = lerpIndex(sy - 0.5, geometry_.spatialY);
-  return (1 - ly.t) *
-             ((1 - lx.t) * angularSample(lx.i0, ly.i0, disc, mode) + lx.t * angularSample(lx.i1, ly.i0, disc, mode)) +
-         ly.t * ((1 - lx.t) * angularSample(lx.i0, ly.i1, disc, mode) + lx.t * angularSample(lx.i1, ly.i1, disc, mode));
+  return (1 - ly.t) * ((1 - lx.t) * angularSample(lx.i0, ly.i0, disc, mode) +
+                       lx.t * angularSample(lx.i1, ly.i0, disc, mode)) +
+         ly.t * ((1 - lx.t) * angularSample(lx.i0, ly.i1, disc, mode) +
+                 lx.t * angularSample(lx.i1, ly.i1, disc, mode));
 }
 
 }  // namespace lfi

@@ -48,7 +48,7 @@ double emittedRadiance(const Scene& scene, const Hit& hit, const Emission& emiss
 
 // The dielectric objects a path is inside, innermost last.
 class MediumStack {
- public:
+public:
   static constexpr int kDepth = 8;
   int size() const { return size_; }
   int top() const { return items_[size_ - 1]; }
@@ -75,12 +75,11 @@ class MediumStack {
   }
   double absorption(const Scene& scene) const { return size_ ? scene.surface(top()).absorption_per_mm : 0.0; }
 
- private:
+private:
   [[noreturn, gnu::cold, gnu::noinline]] void tooDeep(const Scene& scene, int object) const {
     std::string inside;
     for (int i = 0; i < size_; ++i) inside += fmt::format("{}'{}'", i ? ", " : "", scene.object(items_[i]).name);
-    fail(Errc::Config,
-         "a path entering dielectric '{}' is already inside {} nested dielectrics ({}); the tracer "
+    fail(Errc::Config, "a path entering dielectric '{}' is already inside {} nested dielectrics ({}); the tracer "
          "follows at most {}: nest fewer, or make the overlapping objects one solid",
          scene.object(object).name, size_, inside, kDepth);
   }
@@ -104,9 +103,7 @@ bool refract(const Vec3& d, const Vec3& n, double eta, Vec3& out) {
   return true;
 }
 
-Vec3 reflect(const Vec3& d, const Vec3& n) {
-  return detail::renormalised(d - n * (2 * d.dot(n)));
-}
+Vec3 reflect(const Vec3& d, const Vec3& n) { return detail::renormalised(d - n * (2 * d.dot(n))); }
 
 namespace {
 
@@ -210,7 +207,7 @@ double walk(const Scene& scene, PathState p, Policy& policy) {
 // first need one (`batched`); otherwise each is made when it is needed. Both
 // give the same values.
 struct StratifiedChoices {
-  std::array<double, detail::kBatchedChoices> u;              // when batched
+  std::array<double, detail::kBatchedChoices> u;                // when batched
   std::array<std::uint32_t, detail::kStratifiedChoices> key;  // the pixel's key of each choice
   std::uint32_t spp = 0, sample = 0;
   int used = detail::kStratifiedChoices;  // none left
@@ -271,8 +268,8 @@ namespace {
 // A pixel whose samples are being traced: its sample plan and their results.
 struct PixelWork {
   int i = 0, j = 0;
-  int issued = 0;              // samples started
-  int inFlight = 0;            // samples started and not yet ended
+  int issued = 0;    // samples started
+  int inFlight = 0;  // samples started and not yet ended
   std::vector<double> values;  // each sample's radiance, summed in sample order at the end
   std::uint64_t streams = 0;   // sample s's random stream is streams ^ s
   std::uint32_t stopKey = 0;   // permutes the stop strata against the pixel-area strata
@@ -302,8 +299,8 @@ struct Lanes {
   double radiance[kLanes];        // the sample's sum so far
   std::uint64_t sampler[kLanes];  // Sampler::state
   int depth[kLanes];
-  int pixel[kLanes];    // index into the tile's PixelWork slots
-  int sample[kLanes];   // index in the pixel
+  int pixel[kLanes];   // index into the tile's PixelWork slots
+  int sample[kLanes];  // index in the pixel
   int waiting[kLanes];  // branches waiting on the lane's stack (TileRenderer::branches_)
   std::array<StratifiedChoices, kLanes> choices;
   std::array<MediumStack, kLanes> media;
@@ -313,12 +310,9 @@ struct Lanes {
 // paths through Embree, refilled as samples end, so that the packet stays
 // full and coherent (neighbouring samples of one or two pixels).
 class TileRenderer {
- public:
+public:
   TileRenderer(const Scene& scene, const Sensor& sensor, const RenderOptions& options)
-      : scene_(scene),
-        sensor_(sensor),
-        options_(options),
-        width_(sensorWidth(sensor)),
+      : scene_(scene), sensor_(sensor), options_(options), width_(sensorWidth(sensor)),
         cameraRays_(std::holds_alternative<TelecentricCamera>(sensor)
                         ? std::optional(TelecentricCamera::RayMap(std::get<TelecentricCamera>(sensor)))
                         : std::nullopt),
@@ -357,7 +351,7 @@ class TileRenderer {
     }
   }
 
- private:
+private:
   // Sets lane k's innermost medium from its media stack: the packet query's
   // hint, and whether the lane is inside an isolated solid.
   void setInside(int k) {

@@ -5,9 +5,9 @@
 #include "lfi/core/exr_io.h"
 #include "lfi/drivers/display_optics.h"
 
+#include <assimp/Importer.hpp>
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
-#include <assimp/Importer.hpp>
 
 #include "ply_mesh.h"
 
@@ -36,9 +36,9 @@ TriangleMesh importMesh(const fs::path& path) {
   Assimp::Importer importer;
   // Triangles with shared vertices; the data structure is checked (indices in
   // range, no empty meshes) before anything reads it.
-  const aiScene* scene = importer.ReadFile(path.string(), aiProcess_Triangulate | aiProcess_JoinIdenticalVertices |
-                                                              aiProcess_ValidateDataStructure |
-                                                              aiProcess_FindDegenerates | aiProcess_SortByPType);
+  const aiScene* scene = importer.ReadFile(
+      path.string(), aiProcess_Triangulate | aiProcess_JoinIdenticalVertices | aiProcess_ValidateDataStructure |
+                         aiProcess_FindDegenerates | aiProcess_SortByPType);
   if (!scene || (scene->mFlags & AI_SCENE_FLAGS_INCOMPLETE) || !scene->HasMeshes())
     fail(Errc::InvalidFile, "'{}': not a readable mesh: {}", path.string(), importer.GetErrorString());
   TriangleMesh mesh;
@@ -154,9 +154,9 @@ Object readObject(ConfigTable& t) {
     // Cut-outs: spheres subtracted from the solid (object frame).
     for (ConfigTable& cut : t.tables("cut")) {
       const auto c = cut.numbers("position_mm", 3);
-      solid = Solid::combine(
-          Solid::Kind::Difference, solid,
-          Solid::sphere(cut.number("radius_mm", std::nullopt, 1e-9, 1e6), Rigid3::translation({c[0], c[1], c[2]})));
+      solid = Solid::combine(Solid::Kind::Difference, solid,
+                             Solid::sphere(cut.number("radius_mm", std::nullopt, 1e-9, 1e6),
+                                           Rigid3::translation({c[0], c[1], c[2]})));
       cut.finish();
     }
     obj.shape = solid;
@@ -197,9 +197,8 @@ DisplayParameters readDisplay(ConfigTable& t) {
   info.panelHeight_px = t.integer("panel_height_px", defaults.panelHeight_px, 1, 16384);
   info.pixelPitch_mm = t.number("pixel_pitch_mm", defaults.pixelPitch_mm, 1e-4, 10);
   const std::string sub = t.string("subpixels", "rgb", {"mono", "rgb", "bgr"});
-  info.subpixels = sub == "mono"  ? SubpixelLayout::Mono
-                   : sub == "rgb" ? SubpixelLayout::RgbStripe
-                                  : SubpixelLayout::BgrStripe;
+  info.subpixels = sub == "mono" ? SubpixelLayout::Mono : sub == "rgb" ? SubpixelLayout::RgbStripe
+                                                                        : SubpixelLayout::BgrStripe;
   DisplayOpticsParams& o = info.optics;
   const bool barrier = t.string("optics", "lenslet", {"lenslet", "barrier"}) == "barrier";
   o.type = barrier ? OpticsType::Barrier : OpticsType::Lenslet;

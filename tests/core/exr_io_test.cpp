@@ -44,7 +44,7 @@ using lfi::testing_support::throwsError;
 
 // A fresh directory per test, removed with everything in it at the end.
 class ExrIo : public testing::Test {
- protected:
+protected:
   void SetUp() override {
     static std::atomic<int> counter{0};
     const auto* info = testing::UnitTest::GetInstance()->current_test_info();
@@ -104,9 +104,7 @@ bool bitIdentical(const cv::Mat& a, const cv::Mat& b) {
   return true;
 }
 
-std::string checksumText(unsigned long crc) {
-  return fmt::format("crc32:{:08x}", crc);
-}
+std::string checksumText(unsigned long crc) { return fmt::format("crc32:{:08x}", crc); }
 std::string checksumText(const cv::Mat& pixels) {
   return checksumText(lfi::pixelChecksum(pixels));
 }

@@ -35,7 +35,7 @@ DisplayInfo smallLenticular(SubpixelLayout layout, double slant_rad) {
 TEST(DisplayOptics, DefaultsAreALenticularOfTheLookingGlassClass) {
   const DisplayInfo info = defaultLenticularDisplay();
   const DisplayOptics optics(info);
-  EXPECT_NEAR(info.optics.lensPitch_px, 7.2, 0.1);                           // ~7 pixels per lens
+  EXPECT_NEAR(info.optics.lensPitch_px, 7.2, 0.1);                          // ~7 pixels per lens
   EXPECT_NEAR(info.optics.slant_rad * 180 / std::numbers::pi, 10.45, 0.05);  // ~10 degrees
   EXPECT_NEAR(optics.viewCone_rad() * 180 / std::numbers::pi, 40.0, 1e-9);   // 40 degree view cone
   EXPECT_NEAR(optics.lensPitchPerp_mm(), 25.4 / 47.58427, 1e-12);

@@ -1,8 +1,8 @@
 // Scene files: the documented keys load into the scene they describe, and
 // every kind of bad input is an error naming file, line and key.
 
-#include "lfi/sim/scene_file.h"
 #include "lfi/core/exr_io.h"
+#include "lfi/sim/scene_file.h"
 
 #include "lfi_test_support.h"
 
@@ -23,7 +23,7 @@ using namespace lfi::sim;
 using lfi::testing_support::throwsError;
 
 class SceneFile : public testing::Test {
- protected:
+protected:
   void SetUp() override {
     dir_ = fs::path(testing::TempDir()) / ("lfi_scene_" + std::to_string(::getpid()) + "_" +
                                            testing::UnitTest::GetInstance()->current_test_info()->name());

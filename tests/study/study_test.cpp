@@ -1,8 +1,8 @@
 // The reference study in quick mode, end to end: what it writes, and the
 // expectations that physics (not today's numbers) guarantees.
 
-#include "lfi/study/study.h"
 #include "lfi/core/error.h"
+#include "lfi/study/study.h"
 
 #include "lfi_test_support.h"
 
@@ -153,10 +153,10 @@ TEST(Sweep, AnswersFollowTheDeclaredThreshold) {
     return p;
   };
   nlohmann::ordered_json sweep;
-  sweep["points"] = {point("element", 0.4, 20),   point("element", 0.8, 5),    point("element", 1.6, 2.9),
-                     point("angular", 4, 1),      point("angular", 8, 3.0),    point("angular", 16, 9),
+  sweep["points"] = {point("element", 0.4, 20), point("element", 0.8, 5), point("element", 1.6, 2.9),
+                     point("angular", 4, 1), point("angular", 8, 3.0), point("angular", 16, 9),
                      point("delta_error", -2, 4), point("delta_error", -1, 6), point("delta_error", 0, 9),
-                     point("delta_error", 1, 5),  point("delta_error", 2, 2),  point("delta_error", 4, 9)};
+                     point("delta_error", 1, 5), point("delta_error", 2, 2), point("delta_error", 4, 9)};
   const auto a = lfi::study::sweepAnswers(sweep);
   EXPECT_EQ(a["d"]["nearest"]["coarsest_element_mm"], 0.8);
   EXPECT_EQ(a["d"]["nearest"]["fewest_angular"], 8);
