@@ -327,6 +327,8 @@ TriangleMesh readPly(const fs::path& path) {
   const Element* face = nullptr;
   int vx = -1, vy = -1, vz = -1, indices = -1;
   for (const Element& e : elements) {
+    if ((e.name == "vertex" && vertex) || (e.name == "face" && face))
+      headerFail(path, e.line, fmt::format("a second '{}' element", e.name));
     if (e.name == "vertex") {
       vertex = &e;
       for (size_t i = 0; i < e.properties.size(); ++i) {

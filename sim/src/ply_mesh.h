@@ -11,7 +11,7 @@
 // `face` element's `vertex_indices` (or `vertex_index`) list; polygons of n > 3
 // vertices are fanned into n - 2 triangles, faces of fewer than 3 vertices
 // (points, lines) have no surface and are dropped; every other element and
-// property is skipped.
+// property is skipped. A second `vertex` or `face` element is an error.
 
 #include "lfi/sim/scene.h"
 

@@ -273,7 +273,7 @@ SceneDescription loadSceneFile(const fs::path& path) {
     try {
       lfs.geometry.validate();
     } catch (const Error& e) {
-      fail(Errc::Config, "{}: [light_field_sensor]: {}", path.string(), e.what());
+      fail(Errc::Config, "{} (with spatial_x, spatial_y): {}", c.where("angular"), e.what());
     }
     d.sensor = lfs;
   }

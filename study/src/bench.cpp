@@ -63,6 +63,11 @@ Bench Bench::load(const std::filesystem::path& path) {
                                                                                        : LightFieldLookup::Interpolated;
     s.captureHalfAngle_rad = t.number("capture_half_angle_rad", std::nullopt, 1e-6, 1.5);
     s.captureDistance_mm = t.number("capture_distance_mm", std::nullopt, 0.01, 1e4);
+    try {
+      b.lightFieldGeometry().validate();
+    } catch (const Error& e) {
+      fail(Errc::Config, "{} (with spatial): {}", t.where("angular"), e.what());
+    }
     t.finish();
   }
   {
@@ -79,11 +84,6 @@ Bench Bench::load(const std::filesystem::path& path) {
     t.finish();
   }
   root.finish();
-  try {
-    b.lightFieldGeometry().validate();
-  } catch (const Error& e) {
-    fail(Errc::Config, "{}: [inverse_schlieren] spatial and angular: {}", path.string(), e.what());
-  }
   const double semi = b.lens.diameter_mm / 2;
   if (std::abs(b.defects.rimRadial_mm) + b.defects.inclusionRadius_mm >= semi)
     fail(Errc::Config, "{}: [defects] rim_radial_mm + inclusion_radius_mm must stay inside the lens (semi-diameter {})",

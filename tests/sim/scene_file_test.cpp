@@ -123,7 +123,7 @@ TEST_F(SceneFile, BadValuesAreErrors) {
                             "spatial_x = 32768\nspatial_y = 32768\nangular = 2\npixel_pitch_mm = 0.1\n"
                             "[[object]]\nname='x'\nshape='sphere'\nradius_mm=1\n"));
       },
-      Errc::Config, {"lfs.toml", "[light_field_sensor]", "too large"}));
+      Errc::Config, {"lfs.toml:6:", "light_field_sensor.angular", "too large"}));
   EXPECT_TRUE(throwsError(
       [&] {
         loadSceneFile(write(
@@ -303,6 +303,13 @@ TEST_F(SceneFile, CorruptPlyIsAnErrorNamingFileAndPlace) {
        "ply\nformat ascii 1.0\nelem\x01\xffnt vertex 0\nend_header\n",
        {"line 3", "'elem\\x01\\xffnt'"}},
       {"not-ply.ply", "solid cube\nendsolid cube\n", {"not a PLY file"}},
+      // A repeated element read past its property list (fuzzing found it in the first version of the reader).
+      {"two-faces.ply",
+       header.substr(0, header.size() - 11) + "element face 1\nend_header\n" + vertices + "3 0 1 2\n",
+       {"line 9", "a second 'face'"}},
+      {"two-vertices.ply", "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\n"
+                           "property float z\nelement vertex 1\nproperty float w\nend_header\n0 0 0\n1\n",
+       {"line 7", "a second 'vertex'"}},
   };
   for (const Case& c : cases) {
     SCOPED_TRACE(c.name);
@@ -315,7 +322,8 @@ TEST_F(SceneFile, CorruptPlyIsAnErrorNamingFileAndPlace) {
 
 TEST_F(SceneFile, MutatedPlyFilesLoadCheckedOrAreNamedErrors) {
   // Seeded mutations of an ASCII and both binary octahedra (the kinds of
-  // damage that crashed Assimp): byte changes, bit flips, cuts, repeats.
+  // damage that crashed Assimp): byte changes, bit flips, cuts, repeated
+  // bytes and repeated lines.
   // Each either loads as a mesh whose every index is in range and every
   // vertex finite, or is an lfi::Error naming the file; never a crash or hang.
   std::string ascii =
@@ -330,7 +338,7 @@ TEST_F(SceneFile, MutatedPlyFilesLoadCheckedOrAreNamedErrors) {
     std::string bytes = seeds[n % 3];
     auto at = [&] { return std::uniform_int_distribution<size_t>(0, bytes.size() - 1)(rng); };
     for (int edits = 1 + static_cast<int>(rng() % 3); edits > 0; --edits) {
-      switch (rng() % 4) {
+      switch (rng() % 5) {
         case 0:
           bytes[at()] = static_cast<char>(rng());
           break;
@@ -340,6 +348,14 @@ TEST_F(SceneFile, MutatedPlyFilesLoadCheckedOrAreNamedErrors) {
         case 2:
           bytes.resize(at());
           break;
+        case 3: {  // a whole line repeated elsewhere: header lines too (a second 'element face', say)
+          const size_t start = bytes.rfind('\n', at()), from = start == std::string::npos ? 0 : start + 1;
+          const size_t end = bytes.find('\n', from);
+          const std::string line = bytes.substr(from, end == std::string::npos ? std::string::npos : end - from + 1);
+          const size_t to = bytes.find('\n', at());
+          bytes.insert(to == std::string::npos ? bytes.size() : to + 1, line);
+          break;
+        }
         default: {
           const size_t from = at(), length = std::min<size_t>(rng() % 16, bytes.size() - from);
           bytes.insert(at(), bytes.substr(from, length));
