@@ -231,7 +231,9 @@ TEST_F(ServedCameraTest, BinnedFramesEqualTheLocalRender) {
   camera->start(4);
   cv::Mat expected;
   for (int i = 0; i < 3; ++i) {
-    const Frame frame = camera->grab(5s);  // the first binned frame renders the binned radiance
+    // The first binned frame renders the binned radiance: 1-2 s alone, past 5 s once on a loaded
+    // 2-core machine (the full suite with -j2 beside a fuzzing job). A generous bound, not a timing test.
+    const Frame frame = camera->grab(30s);
     ASSERT_EQ(frame.status, FrameStatus::Complete);
     local.capture(resolved, frame.frameId, expected);
     EXPECT_EQ(cv::norm(frame.image, expected, cv::NORM_INF), 0) << "frame id " << frame.frameId;
