@@ -17,6 +17,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
+#include <cstdint>
+#include <fstream>
 #include <string_view>
 
 namespace lfi {
@@ -106,8 +108,42 @@ const Attribute& requireAttribute(const fs::path& path, const Imf::Header& heade
   return *typed;
 }
 
+// Walks the (first) header of an OpenEXR file as the file format lays it out:
+// magic number, version field, then attributes (name, type name, int32 size,
+// value) up to an empty name. A size past the end of the file is an error
+// here: OpenEXR would first allocate it (a 2 KB file declaring a 1.9 GB
+// attribute took it seconds and that memory). Files that are not OpenEXR are
+// left to OpenEXR's own error.
+void checkHeaderSizes(const fs::path& path) {
+  std::error_code error;
+  const auto fileSize = static_cast<std::uint64_t>(fs::file_size(path, error));
+  if (error) return;  // not a regular file: OpenEXR names the problem
+  std::ifstream in(path, std::ios::binary);
+  unsigned char start[8];
+  if (!in.read(reinterpret_cast<char*>(start), 8) || start[0] != 0x76 || start[1] != 0x2f || start[2] != 0x31 ||
+      start[3] != 0x01)
+    return;
+  auto cString = [&](std::string& s) {  // names are at most 255 bytes
+    s.clear();
+    for (char c; in.get(c) && c != '\0';)
+      if (s.size() < 256) s += c;
+    return static_cast<bool>(in);
+  };
+  for (std::string name, type; cString(name) && !name.empty();) {
+    unsigned char size[4];
+    if (!cString(type) || !in.read(reinterpret_cast<char*>(size), 4)) return;  // truncated: OpenEXR says so
+    const std::uint32_t n = size[0] | size[1] << 8 | size[2] << 16 | static_cast<std::uint32_t>(size[3]) << 24;
+    const auto at = static_cast<std::uint64_t>(in.tellg());
+    if (n > fileSize - std::min(at, fileSize))
+      fail(Errc::InvalidFile, "'{}': attribute '{}' declares {} bytes, more than the file's remaining {} "
+           "(truncated or corrupt)", path.string(), shown(name), n, fileSize - std::min(at, fileSize));
+    in.seekg(static_cast<std::streamoff>(n), std::ios::cur);
+  }
+}
+
 LoadedExr loadExr(const fs::path& path, const char* expectedKind) {
   if (!fs::exists(path)) fail(Errc::NotFound, "'{}': no such file", path.string());
+  checkHeaderSizes(path);
   LoadedExr out;
   int version = 0;
   try {

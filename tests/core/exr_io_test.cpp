@@ -250,6 +250,24 @@ TEST_F(ExrIo, TruncatedFileIsInvalid) {
   }
 }
 
+TEST_F(ExrIo, AttributeSizePastTheEndOfTheFileIsNamed) {
+  // A few bytes can declare a huge attribute; OpenEXR would allocate it
+  // (1.9 GB for a 2 KB file, found by fuzzing) before failing.
+  lfi::writeRadianceExr(file("r.exr"), randomFloats(8, 8, 20), {0.01, "a description"});
+  std::string bytes;
+  {
+    std::ifstream in(file("r.exr"), std::ios::binary);
+    bytes.assign(std::istreambuf_iterator<char>(in), {});
+  }
+  const std::string field("lfi.description\0string\0", 23);
+  const size_t at = bytes.find(field);
+  ASSERT_NE(at, std::string::npos);
+  bytes.replace(at + field.size(), 4, std::string("\x00\x00\x00\x70", 4));  // 0x70000000 bytes, little-endian
+  std::ofstream(file("huge.exr"), std::ios::binary) << bytes;
+  EXPECT_TRUE(throwsError([&] { lfi::readRadianceExr(file("huge.exr")); }, Errc::InvalidFile,
+                          {file("huge.exr").string(), "'lfi.description'", "declares 1879048192 bytes"}));
+}
+
 TEST_F(ExrIo, MissingAttributeIsNamed) {
   const LightFieldGeometry g = geometry();
   RawLightFieldAttributes a;
