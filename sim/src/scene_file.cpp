@@ -254,6 +254,9 @@ SceneDescription loadSceneFile(const fs::path& path) {
     cam.height = c.integer("height", std::nullopt, 1, 65536);
     cam.worldFromCamera = readPlacement(c);
     c.finish();
+    if (cam.imageDistance_mm <= cam.focalLength_mm)
+      fail(Errc::Config, "{} = {} must exceed focal_length_mm = {} (otherwise no real object is in focus)",
+           c.where("image_distance_mm"), cam.imageDistance_mm, cam.focalLength_mm);
     try {
       cam.validate();
     } catch (const Error& e) {

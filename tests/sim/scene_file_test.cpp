@@ -110,6 +110,10 @@ TEST_F(SceneFile, BadValuesAreErrors) {
       },
       Errc::Config, {"object[0].position_mm", "3 numbers"}));
   EXPECT_TRUE(throwsError([&] { loadSceneFile(write("d.toml", head)); }, Errc::Config, {"no [[object]]"}));
+  std::string nearCamera = head;
+  nearCamera.replace(nearCamera.find("image_distance_mm = 200"), 23, "image_distance_mm = 90");
+  EXPECT_TRUE(throwsError([&] { loadSceneFile(write("near.toml", nearCamera)); }, Errc::Config,
+                          {"near.toml:6:", "camera.image_distance_mm", "must exceed focal_length_mm = 100"}));
   EXPECT_TRUE(throwsError(
       [&] {
         loadSceneFile(write("lens.toml", head + "[[object]]\nname='l'\nshape='lens'\nfront_radius_mm=100\n"
