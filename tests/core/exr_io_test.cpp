@@ -471,22 +471,7 @@ TEST_F(ExrIo, MutatedFilesAreRefusedOrReadBackUnchanged) {
   int unchanged = 0, refused = 0;
   for (int n = 0; n < 400; ++n) {
     std::string bytes = seed;
-    auto at = [&] { return std::uniform_int_distribution<size_t>(0, bytes.size() - 1)(rng); };
-    switch (rng() % 4) {
-      case 0:
-        bytes[at()] = static_cast<char>(rng());
-        break;
-      case 1:
-        bytes[at()] ^= static_cast<char>(1u << (rng() % 8));
-        break;
-      case 2:
-        bytes.resize(at());
-        break;
-      default: {
-        const size_t from = at(), length = std::min<size_t>(1 + rng() % 8, bytes.size() - from);
-        bytes.insert(at(), bytes.substr(from, length));
-      }
-    }
+    lfi::testing_support::damage(bytes, rng);
     const fs::path path = file("mutated.exr");
     std::ofstream(path, std::ios::binary | std::ios::trunc) << bytes;
     try {

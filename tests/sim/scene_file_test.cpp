@@ -340,33 +340,7 @@ TEST_F(SceneFile, MutatedPlyFilesLoadCheckedOrAreNamedErrors) {
   int loaded = 0, refused = 0;
   for (int n = 0; n < 1500; ++n) {
     std::string bytes = seeds[n % 3];
-    auto at = [&] { return std::uniform_int_distribution<size_t>(0, bytes.size() - 1)(rng); };
-    for (int edits = 1 + static_cast<int>(rng() % 3); edits > 0; --edits) {
-      switch (rng() % 5) {
-        case 0:
-          bytes[at()] = static_cast<char>(rng());
-          break;
-        case 1:
-          bytes[at()] ^= static_cast<char>(1u << (rng() % 8));
-          break;
-        case 2:
-          bytes.resize(at());
-          break;
-        case 3: {  // a whole line repeated elsewhere: header lines too (a second 'element face', say)
-          const size_t start = bytes.rfind('\n', at()), from = start == std::string::npos ? 0 : start + 1;
-          const size_t end = bytes.find('\n', from);
-          const std::string line = bytes.substr(from, end == std::string::npos ? std::string::npos : end - from + 1);
-          const size_t to = bytes.find('\n', at());
-          bytes.insert(to == std::string::npos ? bytes.size() : to + 1, line);
-          break;
-        }
-        default: {
-          const size_t from = at(), length = std::min<size_t>(rng() % 16, bytes.size() - from);
-          bytes.insert(at(), bytes.substr(from, length));
-        }
-      }
-      if (bytes.empty()) bytes = "p";
-    }
+    for (int edits = 1 + static_cast<int>(rng() % 3); edits > 0; --edits) lfi::testing_support::damage(bytes, rng);
     const fs::path file = write("m.ply", bytes);
     try {
       const TriangleMesh mesh = loadMesh(file);

@@ -6,7 +6,9 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <functional>
+#include <random>
 #include <string>
 #include <vector>
 
@@ -29,6 +31,38 @@ inline ::testing::AssertionResult throwsError(const std::function<void()>& f, Er
     return ::testing::AssertionFailure() << "threw a non-lfi exception: " << e.what();
   }
   return ::testing::AssertionFailure() << "did not throw";
+}
+
+// One random edit of a file's bytes, of the kinds fuzzing found damaging: a
+// byte changed, a bit flipped, the end cut off, a few bytes repeated, or a
+// whole line repeated elsewhere (in a text header: a second 'element face').
+// Never leaves the bytes empty.
+inline void damage(std::string& bytes, std::mt19937& rng) {
+  auto at = [&] { return std::uniform_int_distribution<size_t>(0, bytes.size() - 1)(rng); };
+  switch (rng() % 5) {
+    case 0:
+      bytes[at()] = static_cast<char>(rng());
+      break;
+    case 1:
+      bytes[at()] ^= static_cast<char>(1u << (rng() % 8));
+      break;
+    case 2:
+      bytes.resize(at());
+      break;
+    case 3: {
+      const size_t start = bytes.rfind('\n', at()), from = start == std::string::npos ? 0 : start + 1;
+      const size_t end = bytes.find('\n', from);
+      const std::string line = bytes.substr(from, end == std::string::npos ? std::string::npos : end - from + 1);
+      const size_t to = bytes.find('\n', at());
+      bytes.insert(to == std::string::npos ? bytes.size() : to + 1, line);
+      break;
+    }
+    default: {
+      const size_t from = at(), length = std::min<size_t>(1 + rng() % 16, bytes.size() - from);
+      bytes.insert(at(), bytes.substr(from, length));
+    }
+  }
+  if (bytes.empty()) bytes = "p";
 }
 
 inline void expectNear(const Vec3& actual, const Vec3& expected, double tol) {
