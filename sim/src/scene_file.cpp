@@ -99,6 +99,21 @@ Rigid3 readPlacement(ConfigTable& t) {
                    t.numbers("rotation_deg", 3, std::vector<double>{0, 0, 0}));
 }
 
+}  // namespace
+
+const char* lensKey(LensFault::Part part) {
+  switch (part) {
+    case LensFault::Part::Thickness: return "centre_thickness_mm";
+    case LensFault::Part::Diameter: return "diameter_mm";
+    case LensFault::Part::FrontRadius: return "front_radius_mm";
+    case LensFault::Part::BackRadius: return "back_radius_mm";
+    case LensFault::Part::Edge: return "centre_thickness_mm";
+  }
+  return "diameter_mm";
+}
+
+namespace {
+
 std::shared_ptr<const Solid> readSolid(ConfigTable& t, const std::string& kind) {
   if (kind == "sphere") return Solid::sphere(t.number("radius_mm", std::nullopt, 1e-6, 1e6));
   if (kind == "lens") {
@@ -106,11 +121,8 @@ std::shared_ptr<const Solid> readSolid(ConfigTable& t, const std::string& kind) 
     const double r2 = t.number("back_radius_mm", std::nullopt, -1e6, 1e6);
     const double tc = t.number("centre_thickness_mm", std::nullopt, 1e-6, 1e6);
     const double diameter = t.number("diameter_mm", std::nullopt, 1e-6, 1e6);
-    const std::pair<const char*, double> radii[] = {{"front_radius_mm", r1}, {"back_radius_mm", r2}};
-    for (const auto& [key, r] : radii)  // as Solid::sphericalLens requires
-      if (r != 0 && std::abs(r) < diameter / 2)
-        fail(Errc::Config, "{}: |radius| {} is smaller than the semi-diameter {} (0 for a flat face)", t.where(key),
-             std::abs(r), diameter / 2);
+    if (const auto fault = sphericalLensFault(r1, r2, tc, diameter))
+      fail(Errc::Config, "{}: {}", t.where(lensKey(fault->part)), fault->why);
     return Solid::sphericalLens(r1, r2, tc, diameter);
   }
   if (kind == "cylinder") {

@@ -196,12 +196,30 @@ std::shared_ptr<Solid> Solid::combine(Kind op, std::shared_ptr<const Solid> a, s
   return s;
 }
 
+double sphericalFaceZ(double radius, double z0, double r) {
+  if (radius == 0) return z0;
+  return z0 + radius - std::copysign(std::sqrt(radius * radius - r * r), radius);
+}
+
+std::optional<LensFault> sphericalLensFault(double r1, double r2, double tc, double diameter) {
+  using Part = LensFault::Part;
+  if (!(tc > 0) || !std::isfinite(tc)) return LensFault{Part::Thickness, fmt::format("thickness {} must be > 0", tc)};
+  if (!(diameter > 0) || !std::isfinite(diameter))
+    return LensFault{Part::Diameter, fmt::format("diameter {} must be > 0", diameter)};
+  const double semi = diameter / 2;
+  for (const auto& [r, part] : {std::pair{r1, Part::FrontRadius}, std::pair{r2, Part::BackRadius}})
+    if (!std::isfinite(r) || (r != 0 && std::abs(r) < semi))
+      return LensFault{part, fmt::format("|radius| {} is smaller than the semi-diameter {} (0 for a flat face)",
+                                         std::abs(r), semi)};
+  if (const double edge = sphericalFaceZ(r2, tc / 2, semi) - sphericalFaceZ(r1, -tc / 2, semi); edge < 0)
+    return LensFault{Part::Edge, fmt::format("the faces meet inside the diameter {}: the edge would be {:.4g} mm "
+                                             "thick (centre thickness {}); make the lens thicker or narrower",
+                                             diameter, edge, tc)};
+  return std::nullopt;
+}
+
 std::shared_ptr<Solid> Solid::sphericalLens(double r1, double r2, double tc, double diameter) {
-  if (!(tc > 0) || !(diameter > 0) || !std::isfinite(tc) || !std::isfinite(diameter))
-    fail(Errc::InvalidArgument, "lens: thickness {} and diameter {} must be finite and > 0", tc, diameter);
-  for (double r : {r1, r2})
-    if (r != 0 && std::abs(r) < diameter / 2)
-      fail(Errc::InvalidArgument, "lens: |radius| {} is smaller than the semi-diameter {}", std::abs(r), diameter / 2);
+  if (const auto fault = sphericalLensFault(r1, r2, tc, diameter)) fail(Errc::InvalidArgument, "lens: {}", fault->why);
   // The half space on the glass side of the plane z = z0.
   auto glassSide = [](double z0, bool glassTowardsPlusZ) {
     Rigid3 x = glassTowardsPlusZ ? Rigid3::rotation({1, 0, 0}, std::numbers::pi) : Rigid3();

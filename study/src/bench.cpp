@@ -1,34 +1,87 @@
 #include "lfi/core/config.h"
 #include "lfi/core/error.h"
+#include "lfi/sim/scene_file.h"
+#include "lfi/sim/solid.h"
 #include "lfi/study/study.h"
 
 #include <cmath>
 
 namespace lfi::study {
 
+namespace {
+
+// Every value is in range by itself; these are the combinations that would
+// put one part inside another, or a defect outside the lens: the study would
+// run and answer for a bench that cannot exist.
+void checkGeometry(const Bench& b, const ConfigTable& cameraTable, const ConfigTable& parallelTable,
+                   const ConfigTable& areaTable, const ConfigTable& schlierenTable, const ConfigTable& defectsTable) {
+  const auto& [lens, camera, parallel, area, inverseSchlieren, defects] = b;
+  const Bench::Span span = b.lensSpan();
+  const std::string spanned =
+      fmt::format("the lens (from z = {:.4g} to {:.4g} mm, both of its positions with [defects] misalignment_mm = {})",
+                  span.low, span.high, defects.misalignment_mm);
+  if (camera.workingDistance_mm <= span.high)
+    fail(Errc::Config, "{} = {}: the camera's lens plane would be inside or below {}",
+         cameraTable.where("working_distance_mm"), camera.workingDistance_mm, spanned);
+  if (inverseSchlieren.captureDistance_mm <= span.high)
+    fail(Errc::Config, "{} = {}: the capture beam's emitter would be inside or below {}",
+         schlierenTable.where("capture_distance_mm"), inverseSchlieren.captureDistance_mm, spanned);
+  const std::pair<const ConfigTable*, double> below[] = {{&parallelTable, parallel.distance_mm},
+                                                         {&areaTable, area.distance_mm},
+                                                         {&schlierenTable, inverseSchlieren.distance_mm}};
+  for (const auto& [table, distance] : below)
+    if (-distance >= span.low)
+      fail(Errc::Config, "{} = {}: the plane at z = {} would be inside or above {}", table->where("distance_mm"),
+           distance, -distance, spanned);
+  const double semi = lens.diameter_mm / 2;
+  const std::pair<const char*, double> cuts[] = {{"cut_large_radial_mm", defects.cutLargeRadial_mm},
+                                                 {"cut_subpixel_radial_mm", defects.cutSubpixelRadial_mm}};
+  for (const auto& [key, radial] : cuts)
+    if (std::abs(radial) >= semi)
+      fail(Errc::Config, "{} = {}: the cut's centre would be outside the lens (semi-diameter {})",
+           defectsTable.where(key), radial, semi);
+  // The inclusions, spheres at z = 0, must lie inside the glass: the faces,
+  // monotonic in r, checked at the two radii the sphere spans.
+  const double ri = defects.inclusionRadius_mm;
+  for (const double radial : {0.0, std::abs(defects.rimRadial_mm)}) {
+    bool inside = radial + ri < semi;
+    for (const double r : {std::max(0.0, radial - ri), std::min(semi, radial + ri)})
+      inside = inside && sim::sphericalFaceZ(lens.frontRadius_mm, -lens.centreThickness_mm / 2, r) < -ri &&
+               sim::sphericalFaceZ(lens.backRadius_mm, lens.centreThickness_mm / 2, r) > ri;
+    if (!inside)
+      fail(Errc::Config, "{}: the inclusion of radius {} mm, {} mm from the axis, would not lie inside the lens "
+           "(diameter {}, centre thickness {})",
+           defectsTable.where(radial > 0 ? "rim_radial_mm" : "inclusion_radius_mm"), ri, radial, lens.diameter_mm,
+           lens.centreThickness_mm);
+  }
+}
+
+}  // namespace
+
 Bench Bench::load(const std::filesystem::path& path) {
   ConfigTable root = ConfigTable::parseFile(path);
   root.string("format", std::nullopt, {"lfi-bench"});
   root.integer("version", std::nullopt, 1, 1);
   Bench b;
+  // Kept to name their keys in the checks across tables at the end.
+  ConfigTable lensTable = root.table("lens"), cameraTable = root.table("camera");
+  ConfigTable parallelTable = root.table("parallel"), areaTable = root.table("area");
+  ConfigTable schlierenTable = root.table("inverse_schlieren"), defectsTable = root.table("defects");
   {
-    ConfigTable t = root.table("lens");
+    ConfigTable& t = lensTable;
     b.lens.ior = t.number("ior", std::nullopt, 1.0, 4.0);
     b.lens.diameter_mm = t.number("diameter_mm", std::nullopt, 0.1, 1000);
     b.lens.frontRadius_mm = t.number("front_radius_mm", std::nullopt, -1e6, 1e6);
     b.lens.backRadius_mm = t.number("back_radius_mm", std::nullopt, -1e6, 1e6);
     b.lens.centreThickness_mm = t.number("centre_thickness_mm", std::nullopt, 0.01, 1000);
     b.lens.absorption_per_mm = t.number("absorption_per_mm", 0.0, 0, 100);
-    const std::pair<const char*, double> radii[] = {{"front_radius_mm", b.lens.frontRadius_mm},
-                                                    {"back_radius_mm", b.lens.backRadius_mm}};
-    for (const auto& [key, r] : radii)  // as Solid::sphericalLens requires
-      if (r != 0 && std::abs(r) < b.lens.diameter_mm / 2)
-        fail(Errc::Config, "{}: |radius| {} is smaller than the semi-diameter {} (0 for a flat face)", t.where(key),
-             std::abs(r), b.lens.diameter_mm / 2);
+    if (const auto fault = sim::sphericalLensFault(b.lens.frontRadius_mm, b.lens.backRadius_mm,
+                                                   b.lens.centreThickness_mm, b.lens.diameter_mm))
+      fail(Errc::Config, "{}: {}", t.where(sim::lensKey(fault->part)), fault->why);
     t.finish();
   }
   {
-    ConfigTable t = root.table("camera");
+    ConfigTable& t = cameraTable;
     b.camera.pixelPitch_mm = t.number("pixel_pitch_mm", std::nullopt, 1e-4, 1);
     b.camera.width = t.integer("width", std::nullopt, 8, 16384);
     b.camera.height = t.integer("height", std::nullopt, 8, 16384);
@@ -41,8 +94,7 @@ Bench Bench::load(const std::filesystem::path& path) {
     b.camera.exposureFill = t.number("exposure_fill", 0.7, 0.01, 1.0);
     t.finish();
   }
-  auto backlight = [&](const char* name, bool parallel) {
-    ConfigTable t = root.table(name);
+  auto backlight = [&](ConfigTable& t, bool parallel) {
     Backlight l{};
     l.distance_mm = t.number("distance_mm", std::nullopt, 0.01, 1e4);
     l.size_mm = t.number("size_mm", std::nullopt, 0.01, 1e4);
@@ -50,10 +102,10 @@ Bench Bench::load(const std::filesystem::path& path) {
     t.finish();
     return l;
   };
-  b.parallel = backlight("parallel", true);
-  b.area = backlight("area", false);
+  b.parallel = backlight(parallelTable, true);
+  b.area = backlight(areaTable, false);
   {
-    ConfigTable t = root.table("inverse_schlieren");
+    ConfigTable& t = schlierenTable;
     auto& s = b.inverseSchlieren;
     s.distance_mm = t.number("distance_mm", std::nullopt, 0.01, 1e4);
     s.pixelPitch_mm = t.number("pixel_pitch_mm", std::nullopt, 1e-4, 10);
@@ -71,7 +123,7 @@ Bench Bench::load(const std::filesystem::path& path) {
     t.finish();
   }
   {
-    ConfigTable t = root.table("defects");
+    ConfigTable& t = defectsTable;
     auto& d = b.defects;
     d.inclusionRadius_mm = t.number("inclusion_radius_mm", std::nullopt, 1e-4, 100);
     d.rimRadial_mm = t.number("rim_radial_mm", std::nullopt, -1e3, 1e3);
@@ -84,11 +136,18 @@ Bench Bench::load(const std::filesystem::path& path) {
     t.finish();
   }
   root.finish();
-  const double semi = b.lens.diameter_mm / 2;
-  if (std::abs(b.defects.rimRadial_mm) + b.defects.inclusionRadius_mm >= semi)
-    fail(Errc::Config, "{}: [defects] rim_radial_mm + inclusion_radius_mm must stay inside the lens (semi-diameter {})",
-         path.string(), semi);
+  checkGeometry(b, cameraTable, parallelTable, areaTable, schlierenTable, defectsTable);
   return b;
+}
+
+Bench::Span Bench::lensSpan() const {
+  const double semi = lens.diameter_mm / 2, t = lens.centreThickness_mm;
+  const double front = std::min(sim::sphericalFaceZ(lens.frontRadius_mm, -t / 2, 0),
+                                sim::sphericalFaceZ(lens.frontRadius_mm, -t / 2, semi));
+  const double back = std::max(sim::sphericalFaceZ(lens.backRadius_mm, t / 2, 0),
+                               sim::sphericalFaceZ(lens.backRadius_mm, t / 2, semi));
+  const double shift = -defects.misalignment_mm;  // the misaligned scene's lens
+  return {front + std::min(0.0, shift), back + std::max(0.0, shift)};
 }
 
 sim::TelecentricCamera Bench::telecentricCamera() const {

@@ -57,13 +57,6 @@ struct SceneSpec {
   std::vector<Defect> defects;
 };
 
-// Height of the camera-side (back) surface at radial distance r, lens frame.
-double backSurfaceZ(const Bench::Lens& lens, double r) {
-  const double R = lens.backRadius_mm, z0 = lens.centreThickness_mm / 2;
-  if (R == 0) return z0;
-  return z0 + R - (R > 0 ? 1 : -1) * std::sqrt(R * R - r * r);
-}
-
 std::vector<SceneSpec> sceneSpecs(const Bench& bench) {
   const auto& d = bench.defects;
   const auto lensSolid = Solid::sphericalLens(bench.lens.frontRadius_mm, bench.lens.backRadius_mm,
@@ -80,7 +73,9 @@ std::vector<SceneSpec> sceneSpecs(const Bench& bench) {
   }
   for (auto [name, radius, radial] : {std::tuple{"cut_large", d.cutLargeRadius_mm, d.cutLargeRadial_mm},
                                       std::tuple{"cut_subpixel", d.cutSubpixelRadius_mm, d.cutSubpixelRadial_mm}}) {
-    const Vec3 c(radial, 0, backSurfaceZ(bench.lens, std::abs(radial)));
+    // Centred on the camera-side (back) surface.
+    const Vec3 c(radial, 0, sim::sphericalFaceZ(bench.lens.backRadius_mm, bench.lens.centreThickness_mm / 2,
+                                                std::abs(radial)));
     SceneSpec s{.name = name};
     s.cuts = {{c, radius}};
     s.defects = {{"cut", Solid::sphere(radius, Rigid3::translation(c))}};
@@ -429,11 +424,57 @@ double lensFocalLength(const Bench::Lens& lens) {
 }
 
 struct SweepVariant {
-  std::string series;  // angular | element | delta_error
-  double value;
+  SweepPoint point;
   LightFieldGeometry geometry;
   double displayError_mm = 0;
 };
+
+// The sweep's light field variants, each captured only as large as the
+// lens's footprint on the display plane needs. Every point is checked before
+// the study starts: a known series, a light field that can be made, a display
+// that stays below the lens.
+std::vector<SweepVariant> sweepVariants(const Bench& bench, const std::vector<SweepPoint>& sweep) {
+  const LightFieldGeometry reference = bench.lightFieldGeometry();
+  const double delta = reference.distance_mm, shift = std::abs(bench.defects.misalignment_mm);
+  const double footprint = 0.5 * bench.lens.diameter_mm * std::abs(1 - delta / lensFocalLength(bench.lens)) +
+                           (delta + 2 * shift) * std::tan(bench.camera.objectNa) + shift + 2.0;
+  const double lowest = bench.lensSpan().low;
+  std::vector<SweepVariant> variants;
+  for (const SweepPoint& point : sweep) {
+    SweepVariant v{point, reference};
+    LightFieldGeometry& g = v.geometry;
+    auto refuse = [&](const std::string& why) {
+      fail(Errc::InvalidArgument, "sweep point {} = {}: {}", point.series, point.value, why);
+    };
+    if (!std::isfinite(point.value)) refuse("not a number");
+    if (point.series == "angular") {
+      if (point.value < 1 || point.value > 256 || point.value != std::floor(point.value))
+        refuse("the angular elements per side must be a whole number in [1, 256]");
+      g.angular = static_cast<int>(point.value);
+      g.pixelPitch_mm = reference.elementPitch_mm() / g.angular;
+    } else if (point.series == "element") {
+      if (!(point.value > 0)) refuse("the element pitch must be > 0 mm");
+      g.pixelPitch_mm = point.value / g.angular;
+    } else if (point.series == "delta_error") {
+      v.displayError_mm = point.value;
+      if (-(delta + point.value) >= lowest)
+        refuse(fmt::format("the display plane at z = {} would be inside or above the lens, which reaches down to "
+                           "z = {:.4g} (with the bench's misalignment_mm); choose a larger [inverse_schlieren] "
+                           "distance_mm, or leave the sweep out (--no-sweep)",
+                           -(delta + point.value), lowest));
+    } else {
+      refuse("unknown series (angular, element, delta_error)");
+    }
+    g.spatialX = g.spatialY = std::max(2, static_cast<int>(std::ceil(2 * footprint / g.elementPitch_mm())));
+    try {
+      g.validate();
+    } catch (const Error& e) {
+      refuse(e.what());
+    }
+    variants.push_back(std::move(v));
+  }
+  return variants;
+}
 
 }  // namespace
 
@@ -447,6 +488,9 @@ std::vector<SweepPoint> defaultSweep() {
 
 nlohmann::ordered_json runStudy(const Bench& bench, const fs::path& outDir, const StudyOptions& options) {
   const Overwrite overwrite = options.overwrite ? Overwrite::Allow : Overwrite::Refuse;
+  const std::vector<SweepVariant> sweep = sweepVariants(
+      bench,
+      options.sweep ? *options.sweep : (options.quality == Quality::Quick ? std::vector<SweepPoint>{} : defaultSweep()));
   if (!options.overwrite && fs::exists(outDir / "study.json"))
     fail(Errc::Exists, "'{}' already holds a study; use --force to replace it", outDir.string());
   fs::create_directories(outDir / "images");
@@ -461,8 +505,6 @@ nlohmann::ordered_json runStudy(const Bench& bench, const fs::path& outDir, cons
   };
   const sim::TelecentricCamera camera = binned(q.binning);
   const auto specs = sceneSpecs(bench);
-  const std::vector<SweepPoint> sweep =
-      options.sweep ? *options.sweep : (options.quality == Quality::Quick ? std::vector<SweepPoint>{} : defaultSweep());
 
   // The sweep runs the inverse schlieren setup only, at the quick camera
   // resolution, so that its many variants fit the time budget; its light
@@ -540,31 +582,14 @@ nlohmann::ordered_json runStudy(const Bench& bench, const fs::path& outDir, cons
     sro.samplesPerPixel = sweepQuality.samplesPerPixel;
     sro.threads = options.threads;
     const LightFieldGeometry reference = bench.lightFieldGeometry();
-    const double delta = reference.distance_mm;
-    const double footprint = 0.5 * bench.lens.diameter_mm * std::abs(1 - delta / lensFocalLength(bench.lens)) +
-                             (delta + 2 * std::abs(bench.defects.misalignment_mm)) * std::tan(bench.camera.objectNa) +
-                             std::abs(bench.defects.misalignment_mm) + 2.0;
     auto& out = study["sweep"];
     out["setup"] = "inverse_schlieren";
     out["camera"] = {{"width", sweepCamera.width}, {"height", sweepCamera.height},
                      {"samples_per_pixel", sro.samplesPerPixel}};
     out["capture_samples_per_pixel"] = sweepQuality.captureSamples;
     out["reference"] = {{"angular", reference.angular}, {"element_mm", reference.elementPitch_mm()},
-                        {"distance_mm", delta}};
-    for (const SweepPoint& point : sweep) {
-      LightFieldGeometry g = reference;
-      double displayError = 0;
-      if (point.series == "angular") {
-        g.angular = static_cast<int>(point.value);
-        g.pixelPitch_mm = reference.elementPitch_mm() / g.angular;
-      } else if (point.series == "element") {
-        g.pixelPitch_mm = point.value / g.angular;
-      } else if (point.series == "delta_error") {
-        displayError = point.value;
-      } else {
-        fail(Errc::InvalidArgument, "unknown sweep series '{}' (angular, element, delta_error)", point.series);
-      }
-      g.spatialX = g.spatialY = std::max(2, static_cast<int>(std::ceil(2 * footprint / g.elementPitch_mm())));
+                        {"distance_mm", reference.distance_mm}};
+    for (const auto& [point, g, displayError] : sweep) {
       const std::string label = fmt::format("sweep {}={}", point.series, point.value);
       auto lf = std::make_shared<LightField>(
           captureLightField(bench, g, sweepQuality.captureSamples, options.seed, options.threads,

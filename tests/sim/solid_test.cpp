@@ -84,6 +84,8 @@ TEST(Solid, LensOffAxisRayFollowsTheSagFormula) {
       lens->intervals({o, {0, 0, 1}}, list);
       ASSERT_EQ(list.size(), 1);
       const double zf = faceZ(-k.tc / 2, k.r1, h), zb = faceZ(k.tc / 2, k.r2, h);
+      EXPECT_NEAR(sphericalFaceZ(k.r1, -k.tc / 2, h), zf, 1e-12);  // what file readers check lenses with
+      EXPECT_NEAR(sphericalFaceZ(k.r2, k.tc / 2, h), zb, 1e-12);
       EXPECT_NEAR(o.z + list[0].enter.t, zf, 1e-9);
       EXPECT_NEAR(o.z + list[0].exit.t, zb, 1e-9);
       const Vec3 pf = o + Vec3(0, 0, list[0].enter.t), pb = o + Vec3(0, 0, list[0].exit.t);
@@ -119,6 +121,30 @@ TEST(Solid, ConcaveFrontFaceIsThickerAtTheRim) {
   // axis, is air, while the same z near the rim is glass.
   EXPECT_FALSE(lens->contains({0, 0, -tc / 2 - 0.5}));
   EXPECT_TRUE(lens->contains({0, 24, -tc / 2 - 0.5}));
+}
+
+// A lens whose faces meet inside its diameter would silently be a narrower
+// lens; one with a face flatter than a hemisphere cannot be made at all.
+TEST(Solid, LensShapesThatCannotBeMadeAreNamed) {
+  using Part = LensFault::Part;
+  EXPECT_FALSE(sphericalLensFault(100, -100, 7, 50));
+  EXPECT_FALSE(sphericalLensFault(0, 0, 5, 30));
+  // Bi-convex R = 25.4 on Ø50: each face sags 25.4 - sqrt(25.4^2 - 25^2) = 20.91 mm at the rim.
+  const double sag = 25.4 - std::sqrt(25.4 * 25.4 - 25.0 * 25.0);
+  EXPECT_FALSE(sphericalLensFault(25.4, -25.4, 2 * sag + 1e-9, 50));  // a knife edge is still a lens
+  const auto meet = sphericalLensFault(25.4, -25.4, 2 * sag - 0.1, 50);
+  ASSERT_TRUE(meet);
+  EXPECT_EQ(meet->part, Part::Edge);
+  EXPECT_NE(meet->why.find("-0.1 mm thick"), std::string::npos) << meet->why;
+  // A meniscus whose faces cross: both bend towards +z, the back one more.
+  EXPECT_EQ(sphericalLensFault(-100, -26, 3, 50)->part, Part::Edge);
+  EXPECT_EQ(sphericalLensFault(-100, -26, 30, 50), std::nullopt);
+  EXPECT_EQ(sphericalLensFault(24, -100, 7, 50)->part, Part::FrontRadius);
+  EXPECT_EQ(sphericalLensFault(100, 24.9, 7, 50)->part, Part::BackRadius);
+  EXPECT_EQ(sphericalLensFault(100, -100, 0, 50)->part, Part::Thickness);
+  EXPECT_EQ(sphericalLensFault(100, -100, 7, NAN)->part, Part::Diameter);
+  EXPECT_TRUE(lfi::testing_support::throwsError([] { Solid::sphericalLens(25.4, -25.4, 10, 50); },
+                                                lfi::Errc::InvalidArgument, {"lens: the faces meet"}));
 }
 
 TEST(Solid, DifferenceFlipsTheSubtractedNormals) {

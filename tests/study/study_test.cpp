@@ -220,4 +220,74 @@ TEST(Bench, OutOfRangeAndMalformedValuesAreErrors) {
   fs::remove_all(dir);
 }
 
+
+// Values each in range that together make a bench that cannot exist: a part
+// inside the lens, a defect outside it. The reference lens (R = 51.5, Ø25.4,
+// 5 mm thick, bi-convex) spans z = -2.5 .. 2.5, and -5.5 .. 2.5 with the
+// misaligned scene's 3 mm shift; each error names the key that moves.
+TEST(Bench, PartsThatWouldMeetTheLensAreErrorsNamingTheKey) {
+  const fs::path dir = freshDir("geometry");
+  const fs::path bad = dir / "bad.toml";
+  const std::string reference = readText(kBench);
+  struct Case {
+    std::string from, to, key, says, drop = "";  // drop: a line taken out first
+  };
+  const Case cases[] = {
+      {"working_distance_mm = 102.5", "working_distance_mm = 2.0", "camera.working_distance_mm", "inside or below"},
+      {"capture_distance_mm = 50", "capture_distance_mm = 2", "inverse_schlieren.capture_distance_mm", "capture beam"},
+      {"distance_mm = 50             # emitter", "distance_mm = 5             # emitter", "parallel.distance_mm",
+       "z = -5 would be inside"},
+      {"distance_mm = 30             # Δ", "distance_mm = 4             # Δ", "inverse_schlieren.distance_mm",
+       "z = -4"},
+      {"misalignment_mm = 3.0", "misalignment_mm = 48", "parallel.distance_mm", "misalignment_mm = 48"},
+      {"cut_large_radial_mm = 6.0", "cut_large_radial_mm = 60", "defects.cut_large_radial_mm", "outside the lens"},
+      {"cut_subpixel_radial_mm = -6.0", "cut_subpixel_radial_mm = -12.7", "defects.cut_subpixel_radial_mm",
+       "semi-diameter 12.7"},
+      {"inclusion_radius_mm = 0.5", "inclusion_radius_mm = 2.6", "defects.inclusion_radius_mm", "not lie inside"},
+      // 11.5 + 1 < 12.7, but 12.5 mm from the axis the glass is 2 x 0.96 mm thick: a sphere of radius 1 sticks out.
+      {"inclusion_radius_mm = 0.5", "inclusion_radius_mm = 1.0\nrim_radial_mm = 11.5", "defects.rim_radial_mm",
+       "11.5 mm from the axis", "rim_radial_mm = 10.0"},
+      // Faces of radius 13 on a 25.4 mm lens: each sags 10.2 mm at the rim, more than half of 5 mm.
+      {"front_radius_mm = 51.5", "front_radius_mm = 13\nback_radius_mm = -13", "lens.centre_thickness_mm",
+       "the faces meet inside the diameter", "back_radius_mm = -51.5"},
+  };
+  for (const Case& c : cases) {
+    const std::string text = replaceLine(c.drop.empty() ? reference : replaceLine(reference, c.drop, ""), c.from, c.to);
+    std::ofstream(bad) << text;
+    EXPECT_TRUE(throwsError([&] { lfi::study::Bench::load(bad); }, Errc::Config,
+                            {bad.string() + ":", "key '" + c.key + "'", c.says}))
+        << c.to;
+  }
+  // The reference bench itself passes, and its span is the lens's.
+  const auto span = lfi::study::Bench::load(kBench).lensSpan();
+  EXPECT_NEAR(span.low, -2.5 - 3.0, 1e-12);
+  EXPECT_NEAR(span.high, 2.5, 1e-12);
+  fs::remove_all(dir);
+}
+
+// A sweep point the study could not run is refused before anything is
+// written, not after the main study's hours.
+TEST(Bench, SweepPointsAreCheckedBeforeTheStudyStarts) {
+  const fs::path dir = freshDir("sweep") / "out";
+  const auto bench = lfi::study::Bench::load(kBench);
+  lfi::study::StudyOptions options;
+  options.quality = lfi::study::Quality::Quick;
+  const std::pair<lfi::study::SweepPoint, std::string> refused[] = {
+      // Δ = 30 mm; the lens reaches down to z = -5.5: the display would sit at z = -2.
+      {{"delta_error", -28}, "inside or above the lens"},
+      {{"angular", 2.5}, "whole number"},
+      {{"angular", 0}, "whole number"},
+      {{"element", -0.4}, "must be > 0"},
+      {{"element", NAN}, "not a number"},
+      {{"focus", 1}, "unknown series"},
+  };
+  for (const auto& [point, says] : refused) {
+    options.sweep = std::vector<lfi::study::SweepPoint>{{"angular", 16}, point};
+    EXPECT_TRUE(throwsError([&] { lfi::study::runStudy(bench, dir, options); }, Errc::InvalidArgument,
+                            {"sweep point " + point.series, says}));
+    EXPECT_FALSE(fs::exists(dir)) << point.series << " = " << point.value;
+  }
+  fs::remove_all(dir.parent_path());
+}
+
 }  // namespace

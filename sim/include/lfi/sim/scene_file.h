@@ -32,6 +32,10 @@ struct DisplayParameters {
   double brightness = 1;    // radiance at drive level 255 and backlight level brightnessMax
 };
 
+// The key that holds a lens value in a scene file's lens shape; the bench
+// file's [lens] spells them alike. For naming a sphericalLensFault().
+const char* lensKey(LensFault::Part part);
+
 struct SceneDescription {
   std::string name;
   std::vector<Object> objects;  // with [display]: its object last, emitting a dark panel

@@ -18,9 +18,29 @@
 #include <cstdint>
 #include <limits>
 #include <memory>
+#include <optional>
+#include <string>
 #include <vector>
 
 namespace lfi::sim {
+
+// z of a spherical lens face (radius as Solid::sphericalLens, 0: flat) whose
+// vertex is at z0, at radial distance r <= |radius| from the axis.
+double sphericalFaceZ(double radius, double z0, double r);
+
+// Why no spherical lens (Solid::sphericalLens) has this shape, or nothing:
+// which value is at fault and why. A face's |radius| must reach the
+// semi-diameter, and the faces must not meet inside the diameter (the edge
+// thickness, backZ - frontZ at the semi-diameter, must be >= 0; the thickness
+// is monotonic in r, so the centre and the edge bound it). File readers use
+// the part to name their own key.
+struct LensFault {
+  enum class Part { Thickness, Diameter, FrontRadius, BackRadius, Edge };
+  Part part;
+  std::string why;
+};
+std::optional<LensFault> sphericalLensFault(double frontRadius, double backRadius, double centreThickness,
+                                            double diameter);
 
 struct Ray {
   Vec3 origin;
@@ -92,6 +112,7 @@ public:
   // A spherical lens in optics sign convention: front vertex at z = -tc/2,
   // back vertex at z = +tc/2, radius > 0 when the centre of curvature lies on
   // the +z side of the vertex, 0 for a flat face; diameter is the edge cylinder.
+  // Throws Errc::InvalidArgument for a shape sphericalLensFault() refuses.
   static std::shared_ptr<Solid> sphericalLens(double frontRadius, double backRadius, double centreThickness,
                                               double diameter);
 

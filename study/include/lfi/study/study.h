@@ -44,7 +44,16 @@ struct Bench {
         cutSubpixelRadial_mm, indexFactor, misalignment_mm;
   } defects;
 
+  // Reads a bench file. Errors name the file, line and key, also for values
+  // in range that together make a bench that cannot exist (a part inside the
+  // lens, a defect outside it).
   static Bench load(const std::filesystem::path& path);
+  // The lens's lowest and highest z (world frame, mm) over both of its
+  // positions: at the origin, and moved by -misalignment_mm along z.
+  struct Span {
+    double low, high;
+  };
+  Span lensSpan() const;
   sim::TelecentricCamera telecentricCamera() const;
   sim::CameraSensorModel sensorModel() const;
   LightFieldGeometry lightFieldGeometry() const;
