@@ -111,26 +111,34 @@ public:
     requirePanelImage(info_, panel, name_);
     const std::uint32_t sequence = ++sequence_;
     buildFrame(panel, sequence);
+    // The device keeps the bytes of a frame that timed out (in bulk OUT or at
+    // PRESENT) until PRESENT or CLEAR_HALT resets its receive state; appended
+    // to them, this frame would overflow.
+    if (resync_ && !clearHalt())
+      return {PresentStatus::Timeout, sequence,
+              fmt::format("{}: CLEAR_HALT of endpoint 0x{:02x}, sent to discard an earlier frame that timed out, "
+                          "timed out too", name_, endpoint_)};
 
     for (int attempt = 0;; ++attempt) {
       std::size_t sent = 0;
       const BulkOutcome outcome = sendFrame(sent);
       if (outcome == BulkOutcome::Ok) break;
       if (outcome == BulkOutcome::NoDevice) vanished(fmt::format("bulk OUT of frame {}", sequence));
-      if (outcome == BulkOutcome::Timeout)
+      if (outcome == BulkOutcome::Timeout) {
+        resync_ = true;
         return {PresentStatus::Timeout, sequence,
                 fmt::format("{}: bulk OUT of frame {} to endpoint 0x{:02x} timed out ({} ms per transfer; {} of {} "
                             "bytes acknowledged)",
                             name_, sequence, endpoint_, options_.transferTimeout.count(), sent, frame_.size())};
+      }
       if (outcome == BulkOutcome::Stall) {
         if (attempt >= options_.stallRetries)
           fail(Errc::Device, "{}: endpoint 0x{:02x} stalled again on frame {} after {} clear-halt retries", name_,
                endpoint_, sequence, options_.stallRetries);
-        const int rc = libusb_clear_halt(handle_, endpoint_);
-        if (rc == LIBUSB_ERROR_NO_DEVICE) vanished("CLEAR_HALT");
-        if (rc != 0)
-          fail(Errc::Device, "{}: CLEAR_HALT on endpoint 0x{:02x} failed: {}", name_, endpoint_,
-               libusb_error_name(rc));
+        if (!clearHalt())
+          return {PresentStatus::Timeout, sequence,
+                  fmt::format("{}: endpoint 0x{:02x} stalled on frame {} and CLEAR_HALT timed out", name_, endpoint_,
+                              sequence)};
         ++stallsCleared_;
         continue;
       }
@@ -141,6 +149,7 @@ public:
     const int rc = control(LIBUSB_ENDPOINT_OUT, proto::Request::Present, static_cast<std::uint16_t>(sequence),
                            nullptr, 0);
     if (rc == LIBUSB_ERROR_PIPE) return {PresentStatus::Rejected, sequence, rejection(sequence)};
+    resync_ = rc == LIBUSB_ERROR_TIMEOUT;
     requireOk(rc, proto::Request::Present);
     state_ = State::Showing;
     return {PresentStatus::Presented, sequence, {}};
@@ -325,6 +334,18 @@ private:
                                    static_cast<unsigned>(options_.controlTimeout.count()));
   }
 
+  // CLEAR_FEATURE(ENDPOINT_HALT) of the frame endpoint, which also resets the
+  // device's receive state; false when the device did not answer in time
+  // (then the next frame tries again).
+  bool clearHalt() {
+    const int rc = libusb_clear_halt(handle_, endpoint_);
+    if (rc == LIBUSB_ERROR_NO_DEVICE) vanished("CLEAR_HALT");
+    resync_ = rc == LIBUSB_ERROR_TIMEOUT;
+    if (rc != 0 && !resync_)
+      fail(Errc::Device, "{}: CLEAR_HALT on endpoint 0x{:02x} failed: {}", name_, endpoint_, libusb_error_name(rc));
+    return !resync_;
+  }
+
   void requireOk(int rc, proto::Request request) {
     if (rc >= 0) return;
     if (rc == LIBUSB_ERROR_NO_DEVICE) vanished(proto::toString(request));
@@ -480,6 +501,7 @@ private:
   State state_ = State::Closed;
   std::uint32_t sequence_ = 0;
   std::uint64_t stallsCleared_ = 0;
+  bool resync_ = false;  // a frame timed out: clear the endpoint's halt before the next one
   std::vector<std::uint8_t> frame_;
 };
 

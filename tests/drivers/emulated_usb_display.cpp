@@ -84,6 +84,8 @@ struct EmulatedUsbDisplay::Impl {
   bool stallNext = false, stallAll = false, corruptNext = false, unplugNext = false, silent = false;
   bool absurdInfo = false, badCalibrationCrc = false;
   std::size_t truncateNext = 0;
+  int silentAfterUrbs = -1;  // bulk URBs to take before turning silent; -1: never
+  bool silentAtPresent = false;
   // frame assembly
   std::vector<std::uint8_t> rx;
   std::size_t expected = 0;  // header + payload once the header is in
@@ -328,6 +330,8 @@ struct EmulatedUsbDisplay::Impl {
 
     if (urb->type == USBDEVFS_URB_TYPE_CONTROL && length >= 8) {
       ++state.controlRequests;
+      if (silentAtPresent && bytes[1] == static_cast<std::uint8_t>(proto::Request::Present))
+        silent = true, silentAtPresent = false;
       if (silent) {
         held.push_back(u);
       } else {
@@ -336,6 +340,7 @@ struct EmulatedUsbDisplay::Impl {
       }
     } else if (urb->type == USBDEVFS_URB_TYPE_BULK && urb->endpoint == proto::kFrameEndpoint) {
       u.bulk = true;
+      if (silentAfterUrbs >= 0 && silentAfterUrbs-- == 0) silent = true;
       ++state.bulkUrbs;
       ++inFlight;
       state.maxUrbsInFlight = std::max(state.maxUrbsInFlight, inFlight);
@@ -679,6 +684,14 @@ void EmulatedUsbDisplay::unplugDuringNextFrame() {
 void EmulatedUsbDisplay::setSilent(bool on) {
   std::lock_guard lock(impl_->mutex);
   impl_->silent = on;
+}
+void EmulatedUsbDisplay::silentAfterBulkUrbs(int urbs) {
+  std::lock_guard lock(impl_->mutex);
+  impl_->silentAfterUrbs = urbs;
+}
+void EmulatedUsbDisplay::silentAtNextPresent() {
+  std::lock_guard lock(impl_->mutex);
+  impl_->silentAtPresent = true;
 }
 void EmulatedUsbDisplay::setAbsurdDeviceInfo(bool on) {
   std::lock_guard lock(impl_->mutex);

@@ -77,6 +77,8 @@ public:
   void truncateNextFrame(std::size_t bytes);  // the device loses the last `bytes` of the next frame
   void unplugDuringNextFrame();           // the device vanishes after the first bulk URB of the next frame
   void setSilent(bool on);                // accept URBs but never complete them (a hung device)
+  void silentAfterBulkUrbs(int urbs);     // take `urbs` more bulk URBs, then be silent (hangs mid-frame)
+  void silentAtNextPresent();             // be silent from the next PRESENT request on (the frame stays held)
   void setAbsurdDeviceInfo(bool on);      // GET_DEVICE_INFO announces a 4 GiB calibration blob
   void setBadCalibrationCrc(bool on);     // the calibration blob's CRC does not match
 

@@ -310,6 +310,40 @@ TEST_F(UsbDisplayTest, ADeviceThatNeverAnswersTimesOut) {
   EXPECT_TRUE(sameBytes(device.presented(), panel));
 }
 
+// A device that stops answering keeps the bytes of the frame it was taking
+// until PRESENT or CLEAR_HALT resets it: the next frame must not be appended
+// to them (it would overflow and be refused), whether the device fell silent
+// mid-frame or at PRESENT.
+TEST_F(UsbDisplayTest, AFrameAfterATimeoutIsPresented) {
+  EmulatedUsbDisplay device;
+  device.plug();
+  UsbDisplayOptions options;
+  options.transferSize_bytes = 64 * 1024;  // several transfers per frame
+  options.transferTimeout = options.controlTimeout = std::chrono::milliseconds(200);
+  const UsbDisplaySelector selector{usbdisplay::kDefaultVendorId, usbdisplay::kDefaultProductId, ""};
+  auto display = openUsbDisplay(selector, options);
+  const cv::Mat first = randomPanel(display->info(), 12), second = randomPanel(display->info(), 13);
+  device.silentAfterBulkUrbs(2);
+  const PresentResult result = display->show(first);
+  EXPECT_EQ(result.status, PresentStatus::Timeout);
+  EXPECT_NE(result.message.find("timed out"), std::string::npos) << result.message;
+  device.setSilent(false);
+  std::uint32_t halts = device.state().clearHalts;
+  PresentResult next = display->show(second);
+  EXPECT_EQ(next.status, PresentStatus::Presented) << next.message;
+  EXPECT_TRUE(sameBytes(device.presented(), second));
+  EXPECT_EQ(device.state().clearHalts, halts + 1);
+
+  device.silentAtNextPresent();
+  EXPECT_TRUE(throwsError([&] { display->show(first); }, Errc::Timeout, {"PRESENT timed out"}));
+  device.setSilent(false);
+  halts = device.state().clearHalts;
+  next = display->show(first);
+  EXPECT_EQ(next.status, PresentStatus::Presented) << next.message;
+  EXPECT_TRUE(sameBytes(device.presented(), first));
+  EXPECT_EQ(device.state().clearHalts, halts + 1);
+}
+
 TEST_F(UsbDisplayTest, UnplugMidTransferThenReplug) {
   EmulatedUsbDisplay device;
   device.plug();
