@@ -21,14 +21,40 @@
 #include <algorithm>
 #include <atomic>
 #include <cerrno>
+#include <cmath>
 #include <cstring>
 #include <mutex>
+#include <optional>
 
 namespace lfi {
 namespace {
 
 // Not in Aravis 0.8's arvenums.h; PFNC value.
 constexpr ArvPixelFormat kPixelFormatMono12p = 0x010C0047u;
+
+// The wire formats (GenICam names) that give each of our pixel formats, in
+// order of preference, and whether a frame's format is one of them.
+std::vector<std::string> wireFormats(PixelFormat format) {
+  switch (format) {
+    case PixelFormat::Mono8: return {"Mono8"};
+    case PixelFormat::Mono12: return {"Mono12", "Mono12p", "Mono12Packed"};
+    case PixelFormat::Mono16: return {"Mono16"};
+  }
+  return {};
+}
+// The fewest bits per pixel any of them takes.
+unsigned bitsOnTheWire(PixelFormat format) {
+  return format == PixelFormat::Mono8 ? 8 : format == PixelFormat::Mono12 ? 12 : 16;
+}
+bool wireFormatOf(PixelFormat format, ArvPixelFormat wire) {
+  switch (format) {
+    case PixelFormat::Mono8: return wire == ARV_PIXEL_FORMAT_MONO_8;
+    case PixelFormat::Mono12:
+      return wire == ARV_PIXEL_FORMAT_MONO_12 || wire == ARV_PIXEL_FORMAT_MONO_12_PACKED || wire == kPixelFormatMono12p;
+    case PixelFormat::Mono16: return wire == ARV_PIXEL_FORMAT_MONO_16;
+  }
+  return false;
+}
 
 std::mutex& aravisMutex() {
   static std::mutex mutex;
@@ -270,6 +296,22 @@ class AravisCamera final : public Camera {
       g_clear_object(&stream_);
       check(error, name(), "arv_camera_get_payload");
     }
+    // The device's PayloadSize sizes every buffer: it must hold the image the
+    // camera is configured for, and an absurd one must not reach g_malloc
+    // (which aborts the process when it fails). Chunk data may add a little.
+    int x = 0, y = 0, width = 0, height = 0;
+    arv_camera_get_region(camera_, &x, &y, &width, &height, &error);
+    if (error != nullptr) {
+      g_clear_object(&stream_);
+      check(error, name(), "arv_camera_get_region");
+    }
+    const std::uint64_t image = static_cast<std::uint64_t>(std::max(width, 0)) * static_cast<std::uint64_t>(
+        std::max(height, 0)) * bitsOnTheWire(settings_.pixelFormat) / 8;
+    if (payload < image || payload > 4 * image + (16u << 20)) {
+      g_clear_object(&stream_);
+      fail(Errc::Device, "camera '{}': the device's PayloadSize of {} bytes does not fit its {} x {} px {} image "
+           "(at least {} bytes)", name(), payload, width, height, toString(settings_.pixelFormat), image);
+    }
     for (int i = 0; i < bufferCount; ++i) arv_stream_push_buffer(stream_, arv_buffer_new_allocate(payload));
     arv_camera_set_acquisition_mode(camera_, ARV_ACQUISITION_MODE_CONTINUOUS, &error);
     if (error == nullptr) arv_camera_start_acquisition(camera_, &error);
@@ -327,10 +369,9 @@ class AravisCamera final : public Camera {
     frame.timestamp_ns = arv_buffer_get_timestamp(buffer);
     if (frame.timestamp_ns == 0) frame.timestamp_ns = arv_buffer_get_system_timestamp(buffer);
     frame.status = status == ARV_BUFFER_STATUS_SUCCESS ? FrameStatus::Complete : FrameStatus::Incomplete;
-    if (!copyImage(buffer, frame.image)) {
+    if (const auto refused = copyImage(buffer, frame.image)) {
       if (frame.status == FrameStatus::Complete)
-        fail(Errc::Device, "camera '{}': frame {} is complete but its payload is not a {} image", name(), frame.frameId,
-             toString(settings_.pixelFormat));
+        fail(Errc::Device, "camera '{}': frame {} is complete but {}", name(), frame.frameId, *refused);
       frame.image.release();
     }
   }
@@ -460,7 +501,7 @@ class AravisCamera final : public Camera {
     if (arv_camera_is_feature_available(camera_, "SensorPixelWidth", nullptr)) {
       const double pitch = arv_camera_get_float(camera_, "SensorPixelWidth", &error);
       check(error, name(), "reading feature 'SensorPixelWidth'");
-      if (pitch > 0) info_.pixelSize_um = pitch;
+      if (pitch > 0 && std::isfinite(pitch)) info_.pixelSize_um = pitch;  // else unknown, as when absent
     }
   }
 
@@ -496,19 +537,7 @@ class AravisCamera final : public Camera {
   }
 
   void applyPixelFormat(PixelFormat format) {
-    // Wire formats in order of preference for each of ours.
-    std::vector<std::string> candidates;
-    switch (format) {
-      case PixelFormat::Mono8:
-        candidates = {"Mono8"};
-        break;
-      case PixelFormat::Mono12:
-        candidates = {"Mono12", "Mono12p", "Mono12Packed"};
-        break;
-      case PixelFormat::Mono16:
-        candidates = {"Mono16"};
-        break;
-    }
+    const std::vector<std::string> candidates = wireFormats(format);
     const std::vector<std::string> available = availablePixelFormats();
     for (const std::string& candidate : candidates) {
       if (std::find(available.begin(), available.end(), candidate) == available.end()) continue;
@@ -641,42 +670,49 @@ class AravisCamera final : public Camera {
   }
 
   // Copies (or unpacks) the buffer's image into `out`, reusing its memory when
-  // the size and type fit and nobody else holds it. False if the payload is not
-  // an image we understand.
-  bool copyImage(ArvBuffer* buffer, cv::Mat& out) const {
-    if (arv_buffer_get_payload_type(buffer) != ARV_BUFFER_PAYLOAD_TYPE_IMAGE) return false;
+  // the size and type fit and nobody else holds it. Returns why the payload is
+  // not the image the camera was configured for, or nothing.
+  std::optional<std::string> copyImage(ArvBuffer* buffer, cv::Mat& out) const {
+    if (arv_buffer_get_payload_type(buffer) != ARV_BUFFER_PAYLOAD_TYPE_IMAGE) return "its payload is not an image";
     // A frame whose leader was lost has no image part (Aravis then asserts in the getters below).
     if (arv_buffer_get_n_parts(buffer) < 1 ||
         arv_buffer_get_part_data_type(buffer, 0) != ARV_BUFFER_PART_DATA_TYPE_2D_IMAGE)
-      return false;
+      return "its payload has no 2D image part";
     size_t size = 0;
     const auto* data = static_cast<const std::uint8_t*>(arv_buffer_get_image_data(buffer, &size));
     const int width = arv_buffer_get_image_width(buffer);
     const int height = arv_buffer_get_image_height(buffer);
-    if (data == nullptr || width <= 0 || height <= 0) return false;
+    if (data == nullptr || width <= 0 || height <= 0)
+      return fmt::format("its image is empty ({} x {} px, {} bytes)", width, height, size);
+    const ArvPixelFormat format = arv_buffer_get_image_pixel_format(buffer);
+    if (!wireFormatOf(settings_.pixelFormat, format))
+      return fmt::format("its pixel format is 0x{:08x}, not one of {} (configured {})", static_cast<unsigned>(format),
+                         fmt::join(wireFormats(settings_.pixelFormat), ", "), toString(settings_.pixelFormat));
+    int xPadding = 0, yPadding = 0;  // bytes after each line, and after the image
+    arv_buffer_get_image_padding(buffer, &xPadding, &yPadding);
+    if (xPadding < 0) return fmt::format("its line padding is {} bytes", xPadding);
     if (!out.empty() && (out.u == nullptr || out.u->refcount > 1 || !out.isContinuous() || out.isSubmatrix()))
       out.release();  // a caller still holds the previous image: do not overwrite it
-    const ArvPixelFormat format = arv_buffer_get_image_pixel_format(buffer);
-    switch (format) {
-      case ARV_PIXEL_FORMAT_MONO_8:
-      case ARV_PIXEL_FORMAT_MONO_12:
-      case ARV_PIXEL_FORMAT_MONO_16: {
-        const int type = format == ARV_PIXEL_FORMAT_MONO_8 ? CV_8UC1 : CV_16UC1;
-        const std::size_t rowBytes = static_cast<std::size_t>(width) * (type == CV_8UC1 ? 1 : 2);
-        if (size < rowBytes * static_cast<std::size_t>(height)) return false;
-        out.create(height, width, type);
-        std::memcpy(out.data, data, rowBytes * static_cast<std::size_t>(height));  // GigE/USB3 Vision: little endian
-        return true;
-      }
-      case ARV_PIXEL_FORMAT_MONO_12_PACKED:
-      case kPixelFormatMono12p:
-        if (size < mono12PackedSize(width, height)) return false;
-        unpackMono12(data, size, width, height,
-                     format == kPixelFormatMono12p ? Mono12Packing::Pfnc : Mono12Packing::GigEVisionPacked, out);
-        return true;
-      default:
-        return false;
+    const auto rows = static_cast<std::size_t>(height);
+    if (format == ARV_PIXEL_FORMAT_MONO_12_PACKED || format == kPixelFormatMono12p) {
+      if (xPadding != 0) return fmt::format("its packed lines carry {} bytes of padding", xPadding);
+      if (size < mono12PackedSize(width, height))
+        return fmt::format("its {} x {} px packed image needs {} bytes, the payload has {}", width, height,
+                           mono12PackedSize(width, height), size);
+      unpackMono12(data, size, width, height,
+                   format == kPixelFormatMono12p ? Mono12Packing::Pfnc : Mono12Packing::GigEVisionPacked, out);
+      return std::nullopt;
     }
+    const int type = format == ARV_PIXEL_FORMAT_MONO_8 ? CV_8UC1 : CV_16UC1;
+    const std::size_t rowBytes = static_cast<std::size_t>(width) * (type == CV_8UC1 ? 1 : 2);
+    const std::size_t stride = rowBytes + static_cast<std::size_t>(xPadding);
+    if (size < stride * (rows - 1) + rowBytes)
+      return fmt::format("its {} x {} px image ({} bytes per line) needs {} bytes, the payload has {}", width, height,
+                         stride, stride * (rows - 1) + rowBytes, size);
+    out.create(height, width, type);
+    // GigE/USB3 Vision: little endian; padded lines are copied one by one.
+    cv::Mat(height, width, type, const_cast<std::uint8_t*>(data), stride).copyTo(out);
+    return std::nullopt;
   }
 
   StreamStatistics readStatistics() const {
