@@ -266,7 +266,10 @@ private:
     if (const int rc = libusb_claim_interface(handle_, interface_); rc != 0) {
       if (rc == LIBUSB_ERROR_NO_DEVICE) vanished("CLAIM_INTERFACE");
       fail(Errc::Device, "{}: cannot claim interface {}: {}{}", name_, interface_, libusb_error_name(rc),
-           rc == LIBUSB_ERROR_BUSY ? " (another program has it)" : "");
+           rc != LIBUSB_ERROR_BUSY ? ""
+           : wedged_ ? " (this process still holds it: transfers of an earlier frame never completed nor were "
+                       "cancelled; restart the process)"
+                     : " (another program has it)");
     }
     claimed_ = true;
   }
@@ -412,6 +415,7 @@ private:
     const std::size_t count = (frame_.size() + size - 1) / size;
     std::vector<Chunk> chunks(count);
     BulkOutcome outcome = BulkOutcome::Ok;
+    bool outOfMemory = false;  // reported once the transfers in flight are drained, not while libusb holds `chunks`
     std::size_t next = 0, inFlight = 0;
     // A guard above libusb's own per-transfer timeouts, in case a cancellation never completes.
     const auto deadline = Clock::now() + options_.transferTimeout * static_cast<int>(count + 1) +
@@ -425,7 +429,11 @@ private:
         Chunk& c = chunks[next];
         c.length = static_cast<int>(std::min(size, frame_.size() - next * size));
         c.transfer = libusb_alloc_transfer(0);
-        if (!c.transfer) fail(Errc::Device, "{}: libusb_alloc_transfer failed (out of memory)", name_);
+        if (!c.transfer) {
+          outOfMemory = true;
+          record(BulkOutcome::Error);
+          break;
+        }
         libusb_fill_bulk_transfer(c.transfer, handle_, endpoint_, frame_.data() + next * size, c.length, onChunkDone,
                                   &c, static_cast<unsigned>(options_.transferTimeout.count()));
         const int rc = libusb_submit_transfer(c.transfer);
@@ -475,6 +483,7 @@ private:
           handle_ = nullptr;
           ctx_ = nullptr;
           claimed_ = false;
+          wedged_ = true;
           state_ = State::Closed;
           fail(Errc::Device, "{}: bulk OUT transfers neither completed nor cancelled within the deadline; the "
                              "display is closed", name_);
@@ -484,6 +493,7 @@ private:
     }
     for (Chunk& c : chunks)
       if (c.transfer) libusb_free_transfer(c.transfer);
+    if (outOfMemory) fail(Errc::Device, "{}: libusb_alloc_transfer failed (out of memory)", name_);
     return outcome;
   }
 
@@ -502,6 +512,7 @@ private:
   std::uint32_t sequence_ = 0;
   std::uint64_t stallsCleared_ = 0;
   bool resync_ = false;  // a frame timed out: clear the endpoint's halt before the next one
+  bool wedged_ = false;  // given up with transfers libusb still owns (sendFrame's deadline)
   std::vector<std::uint8_t> frame_;
 };
 
