@@ -237,6 +237,36 @@ DisplayParameters readDisplay(ConfigTable& t) {
 
 }  // namespace
 
+namespace {
+
+// Rays start in air: a sensor whose rays would start inside a solid gives a
+// wrong image without a word. Checks points where the sensor's rays start,
+// a grid over a rectangle of half sizes halfX, halfY about the origin of its
+// plane, each moved by `reach` in eight directions (a stop's disc), against
+// every solid.
+void requireOutsideSolids(const std::vector<Object>& objects, const Rigid3& worldFromPlane, double halfX, double halfY,
+                          double reach, const std::string& where) {
+  constexpr int kGrid = 17, kDirections = 8;
+  for (const Object& object : objects) {
+    const auto* solid = std::get_if<std::shared_ptr<const Solid>>(&object.shape);
+    if (!solid) continue;
+    const Rigid3 objectFromWorld = object.worldFromObject.inverse();
+    for (int i = 0; i < kGrid; ++i)
+      for (int j = 0; j < kGrid; ++j)
+        for (int k = 0; k <= (reach > 0 ? kDirections : 0); ++k) {
+          const double u = 2.0 * i / (kGrid - 1) - 1, v = 2.0 * j / (kGrid - 1) - 1;
+          const double a = 2 * std::numbers::pi * k / kDirections, r = k == 0 ? 0.0 : reach;
+          const Vec3 p = worldFromPlane.point({halfX * u + r * std::cos(a), halfY * v + r * std::sin(a), 0});
+          if ((*solid)->contains(objectFromWorld.point(p)))
+            fail(Errc::Config, "{}: the sensor's rays would start inside object '{}' (at ({:.4g}, {:.4g}, {:.4g}) "
+                 "mm); the tracer starts them in air: move the sensor or the object", where, object.name, p.x, p.y,
+                 p.z);
+        }
+  }
+}
+
+}  // namespace
+
 SceneDescription loadSceneFile(const fs::path& path) {
   ConfigTable root = ConfigTable::parseFile(path);
   root.string("format", std::nullopt, {"lfi-scene"});
@@ -253,6 +283,7 @@ SceneDescription loadSceneFile(const fs::path& path) {
     r.finish();
   }
   const bool hasCamera = root.has("camera"), hasLightField = root.has("light_field_sensor");
+  std::string sensorWhere;  // the sensor's position_mm, to name it
   if (hasCamera == hasLightField)
     fail(Errc::Config, "{}: give exactly one sensor: [camera] or [light_field_sensor]", path.string());
   if (hasCamera) {
@@ -265,6 +296,7 @@ SceneDescription loadSceneFile(const fs::path& path) {
     cam.width = c.integer("width", std::nullopt, 1, 65536);
     cam.height = c.integer("height", std::nullopt, 1, 65536);
     cam.worldFromCamera = readPlacement(c);
+    sensorWhere = c.where("position_mm");
     c.finish();
     if (cam.imageDistance_mm <= cam.focalLength_mm)
       fail(Errc::Config, "{} = {} must exceed focal_length_mm = {} (otherwise no real object is in focus)",
@@ -284,6 +316,7 @@ SceneDescription loadSceneFile(const fs::path& path) {
     lfs.geometry.pixelPitch_mm = c.number("pixel_pitch_mm", std::nullopt, 1e-6, 100);
     lfs.geometry.distance_mm = c.number("distance_mm", 0.0, 0, 1e6);
     lfs.worldFromSensor = readPlacement(c);
+    sensorWhere = c.where("position_mm");
     c.finish();
     try {
       lfs.geometry.validate();
@@ -316,6 +349,16 @@ SceneDescription loadSceneFile(const fs::path& path) {
     d.objects.push_back(std::move(obj));
   }
   if (d.objects.empty()) fail(Errc::Config, "{}: the scene has no [[object]]", path.string());
+  if (const auto* cam = std::get_if<TelecentricCamera>(&d.sensor)) {
+    const TelecentricCamera::RayMap map(*cam);  // origins: the field, moved by up to the stop's radius
+    requireOutsideSolids(d.objects, cam->worldFromCamera, map.pixel * map.halfW, map.pixel * map.halfH, map.stop,
+                         sensorWhere);
+  } else {
+    const auto& lfs = std::get<LightFieldSensor>(d.sensor);
+    const double e = lfs.geometry.elementPitch_mm();  // origins: the element centres
+    requireOutsideSolids(d.objects, lfs.worldFromSensor, 0.5 * (lfs.geometry.extentX_mm() - e),
+                         0.5 * (lfs.geometry.extentY_mm() - e), 0, sensorWhere);
+  }
   root.finish();
   return d;
 }
