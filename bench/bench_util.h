@@ -41,16 +41,21 @@ inline double bestOf(const TurnSeconds& seconds, size_t i) {
 
 // The ratio seconds[a] / seconds[b] of every turn: its two ends ran next to
 // each other in time, so the machine's load, which drifts over seconds (a
-// shared host), weighs on both alike. Sorted: the median is in the middle.
+// shared host), weighs on both alike.
 inline std::vector<double> ratiosByTurn(const TurnSeconds& seconds, size_t a, size_t b) {
   std::vector<double> r;
   for (const auto& turn : seconds) r.push_back(turn[a] / turn[b]);
-  std::sort(r.begin(), r.end());
   return r;
 }
-inline double median(const std::vector<double>& sorted) {
-  const size_t n = sorted.size();
-  return n == 0 ? 0.0 : n % 2 ? sorted[n / 2] : 0.5 * (sorted[n / 2 - 1] + sorted[n / 2]);
+// The median of values and their range, as the benchmarks print a ratio.
+struct Spread {
+  double median = 0, low = 0, high = 0;
+};
+inline Spread spreadOf(std::vector<double> v) {
+  if (v.empty()) return {};
+  std::sort(v.begin(), v.end());
+  const size_t n = v.size();
+  return {n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]), v.front(), v.back()};
 }
 
 // The best of `repeats` runs of each of `fs`, run in turns.

@@ -55,7 +55,7 @@ using namespace lfi::sim;
 using lfi::bench::bestOf;
 using lfi::bench::bestSeconds;
 using lfi::bench::bestSecondsInTurns;
-using lfi::bench::median;
+using lfi::bench::spreadOf;
 using lfi::bench::ratiosByTurn;
 using lfi::bench::secondsInTurns;
 
@@ -228,9 +228,9 @@ static int run(int argc, char** argv) {
   for (size_t i = 0; i < 2; ++i)
     fmt::print("  tracer   {} thread(s): {:8.3f} M samples/s\n", i ? threads : 1,
                samples / bestOf(scalingRuns, i) / 1e6);
-  const std::vector<double> scaling = ratiosByTurn(scalingRuns, 0, 1);
-  fmt::print("  scaling  1 -> {} threads: {:.2f}x (median of {} turns; {:.2f}-{:.2f})\n", threads, median(scaling),
-             turns, scaling.front(), scaling.back());
+  const auto scaling = spreadOf(ratiosByTurn(scalingRuns, 0, 1));
+  fmt::print("  scaling  1 -> {} threads: {:.2f}x (median of {} turns; {:.2f}-{:.2f})\n", threads, scaling.median,
+             turns, scaling.low, scaling.high);
 
   // The study's three illuminations behind the same lens and camera: a
   // collimated back light (0.0087 rad), the Lambertian one above, and a light
@@ -425,16 +425,13 @@ static int run(int argc, char** argv) {
     boundRatio.push_back(std::max({speed(turn, 1), speed(turn, 2), speed(turn, 3), speed(turn, 4)}) / speed(turn, 0));
     queryRatio.push_back(speed(turn, 5) / speed(turn, 0));
   }
-  std::sort(boundRatio.begin(), boundRatio.end());
-  std::sort(queryRatio.begin(), queryRatio.end());
+  const auto bound = spreadOf(boundRatio), queries = spreadOf(queryRatio);
   fmt::print("  ratio    bound / tracer per ray, 1 thread: {:.2f} (median of {} turns; {:.2f}-{:.2f}; target <= 2; "
-             "bound: the fastest of the above in each turn)\n", median(boundRatio), turns, boundRatio.front(),
-             boundRatio.back());
+             "bound: the fastest of the above in each turn)\n", bound.median, turns, bound.low, bound.high);
   fmt::print("  queries  1 thread:  {:8.3f} M rays/s  (the tracer's own ray queries, Scene::intersect, same rays and "
              "packets; {:.0f} % hit)\n", best(5) / 1e6, 100.0 * static_cast<double>(hitCount) / n);
   fmt::print("  ratio    queries / tracer per ray, 1 thread: {:.2f} (median of {} turns; {:.2f}-{:.2f}; what "
-             "sampling, shading and bookkeeping add)\n", median(queryRatio), turns, queryRatio.front(),
-             queryRatio.back());
+             "sampling, shading and bookkeeping add)\n", queries.median, turns, queries.low, queries.high);
   fmt::print("  ceiling  {} threads at the fastest bound: {:.1f} M samples/s (Embree alone, zero shading)\n", threads,
              std::max({best(1), best(2), best(3), best(4)}) * threads / raysPerSample / 1e6);
   rtcReleaseScene(raw);
