@@ -32,28 +32,31 @@ namespace {
 // Not in Aravis 0.8's arvenums.h; PFNC value.
 constexpr ArvPixelFormat kPixelFormatMono12p = 0x010C0047u;
 
-// The wire formats (GenICam names) that give each of our pixel formats, in
-// order of preference, and whether a frame's format is one of them.
-std::vector<std::string> wireFormats(PixelFormat format) {
+// The wire formats that give each of our pixel formats, in order of
+// preference: GenICam name and PFNC code.
+struct WireFormat {
+  const char* name;
+  ArvPixelFormat code;
+};
+std::vector<WireFormat> wireFormats(PixelFormat format) {
   switch (format) {
-    case PixelFormat::Mono8: return {"Mono8"};
-    case PixelFormat::Mono12: return {"Mono12", "Mono12p", "Mono12Packed"};
-    case PixelFormat::Mono16: return {"Mono16"};
+    case PixelFormat::Mono8: return {{"Mono8", ARV_PIXEL_FORMAT_MONO_8}};
+    case PixelFormat::Mono12:
+      return {{"Mono12", ARV_PIXEL_FORMAT_MONO_12},
+              {"Mono12p", kPixelFormatMono12p},
+              {"Mono12Packed", ARV_PIXEL_FORMAT_MONO_12_PACKED}};
+    case PixelFormat::Mono16: return {{"Mono16", ARV_PIXEL_FORMAT_MONO_16}};
   }
   return {};
+}
+std::vector<std::string> wireFormatNames(PixelFormat format) {
+  std::vector<std::string> names;
+  for (const WireFormat& w : wireFormats(format)) names.emplace_back(w.name);
+  return names;
 }
 // The fewest bits per pixel any of them takes.
 unsigned bitsOnTheWire(PixelFormat format) {
   return format == PixelFormat::Mono8 ? 8 : format == PixelFormat::Mono12 ? 12 : 16;
-}
-bool wireFormatOf(PixelFormat format, ArvPixelFormat wire) {
-  switch (format) {
-    case PixelFormat::Mono8: return wire == ARV_PIXEL_FORMAT_MONO_8;
-    case PixelFormat::Mono12:
-      return wire == ARV_PIXEL_FORMAT_MONO_12 || wire == ARV_PIXEL_FORMAT_MONO_12_PACKED || wire == kPixelFormatMono12p;
-    case PixelFormat::Mono16: return wire == ARV_PIXEL_FORMAT_MONO_16;
-  }
-  return false;
 }
 
 std::mutex& aravisMutex() {
@@ -299,18 +302,18 @@ class AravisCamera final : public Camera {
     // The device's PayloadSize sizes every buffer: it must hold the image the
     // camera is configured for, and an absurd one must not reach g_malloc
     // (which aborts the process when it fails). Chunk data may add a little.
-    int x = 0, y = 0, width = 0, height = 0;
-    arv_camera_get_region(camera_, &x, &y, &width, &height, &error);
+    int width = 0, height = 0;
+    arv_camera_get_region(camera_, nullptr, nullptr, &width, &height, &error);
     if (error != nullptr) {
       g_clear_object(&stream_);
       check(error, name(), "arv_camera_get_region");
     }
     const std::uint64_t image = static_cast<std::uint64_t>(std::max(width, 0)) * static_cast<std::uint64_t>(
         std::max(height, 0)) * bitsOnTheWire(settings_.pixelFormat) / 8;
-    if (payload < image || payload > 4 * image + (16u << 20)) {
+    if (const std::uint64_t most = 4 * image + (16u << 20); payload < image || payload > most) {
       g_clear_object(&stream_);
       fail(Errc::Device, "camera '{}': the device's PayloadSize of {} bytes does not fit its {} x {} px {} image "
-           "(at least {} bytes)", name(), payload, width, height, toString(settings_.pixelFormat), image);
+           "({} to {} bytes)", name(), payload, width, height, toString(settings_.pixelFormat), image, most);
     }
     for (int i = 0; i < bufferCount; ++i) arv_stream_push_buffer(stream_, arv_buffer_new_allocate(payload));
     arv_camera_set_acquisition_mode(camera_, ARV_ACQUISITION_MODE_CONTINUOUS, &error);
@@ -328,6 +331,10 @@ class AravisCamera final : public Camera {
     statistics_ = readStatistics();
     GError* error = nullptr;
     arv_camera_stop_acquisition(camera_, &error);
+    if (error != nullptr && !deviceAnswers()) {  // gone: Closed, as when a grab finds it gone
+      g_error_free(error);
+      declareLost("it did not answer AcquisitionStop");
+    }
     g_clear_object(&stream_);
     state_ = State::Configured;
     check(error, name(), "arv_camera_stop_acquisition");
@@ -537,7 +544,7 @@ class AravisCamera final : public Camera {
   }
 
   void applyPixelFormat(PixelFormat format) {
-    const std::vector<std::string> candidates = wireFormats(format);
+    const std::vector<std::string> candidates = wireFormatNames(format);
     const std::vector<std::string> available = availablePixelFormats();
     for (const std::string& candidate : candidates) {
       if (std::find(available.begin(), available.end(), candidate) == available.end()) continue;
@@ -685,12 +692,12 @@ class AravisCamera final : public Camera {
     if (data == nullptr || width <= 0 || height <= 0)
       return fmt::format("its image is empty ({} x {} px, {} bytes)", width, height, size);
     const ArvPixelFormat format = arv_buffer_get_image_pixel_format(buffer);
-    if (!wireFormatOf(settings_.pixelFormat, format))
+    const auto wire = wireFormats(settings_.pixelFormat);
+    if (std::none_of(wire.begin(), wire.end(), [&](const WireFormat& w) { return w.code == format; }))
       return fmt::format("its pixel format is 0x{:08x}, not one of {} (configured {})", static_cast<unsigned>(format),
-                         fmt::join(wireFormats(settings_.pixelFormat), ", "), toString(settings_.pixelFormat));
-    int xPadding = 0, yPadding = 0;  // bytes after each line, and after the image
-    arv_buffer_get_image_padding(buffer, &xPadding, &yPadding);
-    if (xPadding < 0) return fmt::format("its line padding is {} bytes", xPadding);
+                         fmt::join(wireFormatNames(settings_.pixelFormat), ", "), toString(settings_.pixelFormat));
+    int xPadding = 0;  // bytes after each line
+    arv_buffer_get_image_padding(buffer, &xPadding, nullptr);
     if (!out.empty() && (out.u == nullptr || out.u->refcount > 1 || !out.isContinuous() || out.isSubmatrix()))
       out.release();  // a caller still holds the previous image: do not overwrite it
     const auto rows = static_cast<std::size_t>(height);
@@ -709,7 +716,6 @@ class AravisCamera final : public Camera {
     if (size < stride * (rows - 1) + rowBytes)
       return fmt::format("its {} x {} px image ({} bytes per line) needs {} bytes, the payload has {}", width, height,
                          stride, stride * (rows - 1) + rowBytes, size);
-    out.create(height, width, type);
     // GigE/USB3 Vision: little endian; padded lines are copied one by one.
     cv::Mat(height, width, type, const_cast<std::uint8_t*>(data), stride).copyTo(out);
     return std::nullopt;

@@ -111,26 +111,25 @@ public:
     requirePanelImage(info_, panel, name_);
     const std::uint32_t sequence = ++sequence_;
     buildFrame(panel, sequence);
-    // The device keeps the bytes of a frame that timed out (in bulk OUT or at
-    // PRESENT) until PRESENT or CLEAR_HALT resets its receive state; appended
-    // to them, this frame would overflow.
+    // The device keeps the bytes of a frame that failed or timed out (in bulk
+    // OUT or at PRESENT) until PRESENT or CLEAR_HALT resets its receive state;
+    // appended to them, this frame would overflow.
     if (resync_ && !clearHalt())
       return {PresentStatus::Timeout, sequence,
-              fmt::format("{}: CLEAR_HALT of endpoint 0x{:02x}, sent to discard an earlier frame that timed out, "
-                          "timed out too", name_, endpoint_)};
+              fmt::format("{}: CLEAR_HALT of endpoint 0x{:02x}, sent to discard an earlier frame that failed, "
+                          "timed out", name_, endpoint_)};
 
     for (int attempt = 0;; ++attempt) {
       std::size_t sent = 0;
       const BulkOutcome outcome = sendFrame(sent);
       if (outcome == BulkOutcome::Ok) break;
+      resync_ = true;  // the device may hold part of the frame (cleared below for a stall)
       if (outcome == BulkOutcome::NoDevice) vanished(fmt::format("bulk OUT of frame {}", sequence));
-      if (outcome == BulkOutcome::Timeout) {
-        resync_ = true;
+      if (outcome == BulkOutcome::Timeout)
         return {PresentStatus::Timeout, sequence,
                 fmt::format("{}: bulk OUT of frame {} to endpoint 0x{:02x} timed out ({} ms per transfer; {} of {} "
                             "bytes acknowledged)",
                             name_, sequence, endpoint_, options_.transferTimeout.count(), sent, frame_.size())};
-      }
       if (outcome == BulkOutcome::Stall) {
         if (attempt >= options_.stallRetries)
           fail(Errc::Device, "{}: endpoint 0x{:02x} stalled again on frame {} after {} clear-halt retries", name_,
@@ -211,7 +210,7 @@ private:
         if (n > 0) serial.assign(reinterpret_cast<char*>(text), static_cast<std::size_t>(n));
       }
       if (!selector_.serial.empty() && serial != selector_.serial) {
-        seen.back() += "/" + serial;
+        seen.back() += "/" + shown(serial, 126);  // the device's own bytes, escaped
         libusb_close(handle);
         continue;
       }
@@ -230,7 +229,7 @@ private:
     if (matches.size() > 1) {
       std::vector<std::string> serials;
       for (auto& [h, s] : matches) {
-        serials.push_back(s);
+        serials.push_back(shown(s, 126));
         libusb_close(h);
       }
       fail(Errc::Config, "{}: {} displays match; name one by serial (usb:{:04x}:{:04x}/<serial>, serials: {})", name_,
@@ -493,7 +492,10 @@ private:
     }
     for (Chunk& c : chunks)
       if (c.transfer) libusb_free_transfer(c.transfer);
-    if (outOfMemory) fail(Errc::Device, "{}: libusb_alloc_transfer failed (out of memory)", name_);
+    if (outOfMemory) {
+      resync_ = true;  // the device may hold the transfers sent before
+      fail(Errc::Device, "{}: libusb_alloc_transfer failed (out of memory)", name_);
+    }
     return outcome;
   }
 
@@ -511,7 +513,7 @@ private:
   State state_ = State::Closed;
   std::uint32_t sequence_ = 0;
   std::uint64_t stallsCleared_ = 0;
-  bool resync_ = false;  // a frame timed out: clear the endpoint's halt before the next one
+  bool resync_ = false;  // a frame failed or timed out: clear the endpoint's halt before the next one
   bool wedged_ = false;  // given up with transfers libusb still owns (sendFrame's deadline)
   std::vector<std::uint8_t> frame_;
 };

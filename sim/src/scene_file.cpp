@@ -99,21 +99,6 @@ Rigid3 readPlacement(ConfigTable& t) {
                    t.numbers("rotation_deg", 3, std::vector<double>{0, 0, 0}));
 }
 
-}  // namespace
-
-const char* lensKey(LensFault::Part part) {
-  switch (part) {
-    case LensFault::Part::Thickness: return "centre_thickness_mm";
-    case LensFault::Part::Diameter: return "diameter_mm";
-    case LensFault::Part::FrontRadius: return "front_radius_mm";
-    case LensFault::Part::BackRadius: return "back_radius_mm";
-    case LensFault::Part::Edge: return "centre_thickness_mm";
-  }
-  return "diameter_mm";
-}
-
-namespace {
-
 std::shared_ptr<const Solid> readSolid(ConfigTable& t, const std::string& kind) {
   if (kind == "sphere") return Solid::sphere(t.number("radius_mm", std::nullopt, 1e-6, 1e6));
   if (kind == "lens") {
@@ -235,12 +220,9 @@ DisplayParameters readDisplay(ConfigTable& t) {
   return d;
 }
 
-}  // namespace
-
-namespace {
-
 // Rays start in air: a sensor whose rays would start inside a solid gives a
-// wrong image without a word. Checks points where the sensor's rays start,
+// wrong image without a word. Checks a sample of the points where the
+// sensor's rays start (a solid small enough to fit between them is missed),
 // a grid over a rectangle of half sizes halfX, halfY about the origin of its
 // plane, each moved by `reach` in eight directions (a stop's disc), against
 // every solid.
@@ -361,6 +343,17 @@ SceneDescription loadSceneFile(const fs::path& path) {
   }
   root.finish();
   return d;
+}
+
+const char* lensKey(LensFault::Part part) {
+  switch (part) {
+    case LensFault::Part::Thickness: return "centre_thickness_mm";
+    case LensFault::Part::Diameter: return "diameter_mm";
+    case LensFault::Part::FrontRadius: return "front_radius_mm";
+    case LensFault::Part::BackRadius: return "back_radius_mm";
+    case LensFault::Part::Edge: return "centre_thickness_mm";
+  }
+  return "diameter_mm";
 }
 
 }  // namespace lfi::sim

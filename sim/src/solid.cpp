@@ -203,19 +203,37 @@ double sphericalFaceZ(double radius, double z0, double r) {
 
 std::optional<LensFault> sphericalLensFault(double r1, double r2, double tc, double diameter) {
   using Part = LensFault::Part;
-  if (!(tc > 0) || !std::isfinite(tc)) return LensFault{Part::Thickness, fmt::format("thickness {} must be > 0", tc)};
+  if (!(tc > 0) || !std::isfinite(tc))
+    return LensFault{Part::Thickness, fmt::format("thickness {} must be finite and > 0", tc)};
   if (!(diameter > 0) || !std::isfinite(diameter))
-    return LensFault{Part::Diameter, fmt::format("diameter {} must be > 0", diameter)};
+    return LensFault{Part::Diameter, fmt::format("diameter {} must be finite and > 0", diameter)};
   const double semi = diameter / 2;
-  for (const auto& [r, part] : {std::pair{r1, Part::FrontRadius}, std::pair{r2, Part::BackRadius}})
-    if (!std::isfinite(r) || (r != 0 && std::abs(r) < semi))
+  for (const auto& [r, part] : {std::pair{r1, Part::FrontRadius}, std::pair{r2, Part::BackRadius}}) {
+    if (!std::isfinite(r)) return LensFault{part, fmt::format("radius {} must be finite (0 for a flat face)", r)};
+    if (r != 0 && std::abs(r) < semi)
       return LensFault{part, fmt::format("|radius| {} is smaller than the semi-diameter {} (0 for a flat face)",
                                          std::abs(r), semi)};
+  }
   if (const double edge = sphericalFaceZ(r2, tc / 2, semi) - sphericalFaceZ(r1, -tc / 2, semi); edge < 0)
     return LensFault{Part::Edge, fmt::format("the faces meet inside the diameter {}: the edge would be {:.4g} mm "
                                              "thick (centre thickness {}); make the lens thicker or narrower",
                                              diameter, edge, tc)};
   return std::nullopt;
+}
+
+bool sphericalLensHolds(double r1, double r2, double tc, double diameter, const Vec3& c, double radius) {
+  if (std::hypot(c.x, c.y) + radius >= diameter / 2) return false;  // the edge cylinder
+  // Each face as sphericalLens() builds it; `glassUp`: the glass lies towards +z of it (the front face).
+  auto holds = [&](double r, double z0, bool glassUp) {
+    const double side = glassUp ? 1 : -1;  // the glass is where side * (z - plane) > 0
+    if (r == 0) return side * (c.z - z0) > radius;
+    const double d = (c - Vec3(0, 0, z0 + r)).length();
+    if (glassUp ? r > 0 : r < 0) return d + radius < std::abs(r);  // convex: inside the face's sphere
+    const double sag = std::abs(r) - std::sqrt(r * r - diameter * diameter / 4);
+    // Concave: outside the face's sphere, and on the glass side of the rim's plane.
+    return d - radius > std::abs(r) && side * (c.z - (z0 - side * sag)) > radius;
+  };
+  return holds(r1, -tc / 2, true) && holds(r2, tc / 2, false);
 }
 
 std::shared_ptr<Solid> Solid::sphericalLens(double r1, double r2, double tc, double diameter) {

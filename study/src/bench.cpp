@@ -15,20 +15,22 @@ namespace {
 // run and answer for a bench that cannot exist.
 void checkGeometry(const Bench& b, const ConfigTable& cameraTable, const ConfigTable& parallelTable,
                    const ConfigTable& areaTable, const ConfigTable& schlierenTable, const ConfigTable& defectsTable) {
-  const auto& [lens, camera, parallel, area, inverseSchlieren, defects] = b;
-  const Bench::Span span = b.lensSpan();
+  const Bench::Lens& lens = b.lens;
+  const Bench::Defects& defects = b.defects;
+  const Bench::Span span = b.lensSpan(true), intact = b.lensSpan(false);
   const std::string spanned =
       fmt::format("the lens (from z = {:.4g} to {:.4g} mm, both of its positions with [defects] misalignment_mm = {})",
                   span.low, span.high, defects.misalignment_mm);
-  if (camera.workingDistance_mm <= span.high)
+  if (b.camera.workingDistance_mm <= span.high)
     fail(Errc::Config, "{} = {}: the camera's lens plane would be inside or below {}",
-         cameraTable.where("working_distance_mm"), camera.workingDistance_mm, spanned);
-  if (inverseSchlieren.captureDistance_mm <= span.high)
-    fail(Errc::Config, "{} = {}: the capture beam's emitter would be inside or below {}",
-         schlierenTable.where("capture_distance_mm"), inverseSchlieren.captureDistance_mm, spanned);
-  const std::pair<const ConfigTable*, double> below[] = {{&parallelTable, parallel.distance_mm},
-                                                         {&areaTable, area.distance_mm},
-                                                         {&schlierenTable, inverseSchlieren.distance_mm}};
+         cameraTable.where("working_distance_mm"), b.camera.workingDistance_mm, spanned);
+  // The capture sees the intact lens at the origin only.
+  if (b.inverseSchlieren.captureDistance_mm <= intact.high)
+    fail(Errc::Config, "{} = {}: the capture beam's emitter would be inside or below the lens (up to z = {:.4g} mm)",
+         schlierenTable.where("capture_distance_mm"), b.inverseSchlieren.captureDistance_mm, intact.high);
+  const std::pair<const ConfigTable*, double> below[] = {{&parallelTable, b.parallel.distance_mm},
+                                                         {&areaTable, b.area.distance_mm},
+                                                         {&schlierenTable, b.inverseSchlieren.distance_mm}};
   for (const auto& [table, distance] : below)
     if (-distance >= span.low)
       fail(Errc::Config, "{} = {}: the plane at z = {} would be inside or above {}", table->where("distance_mm"),
@@ -40,20 +42,14 @@ void checkGeometry(const Bench& b, const ConfigTable& cameraTable, const ConfigT
     if (std::abs(radial) >= semi)
       fail(Errc::Config, "{} = {}: the cut's centre would be outside the lens (semi-diameter {})",
            defectsTable.where(key), radial, semi);
-  // The inclusions, spheres at z = 0, must lie inside the glass: the faces,
-  // monotonic in r, checked at the two radii the sphere spans.
-  const double ri = defects.inclusionRadius_mm;
-  for (const double radial : {0.0, std::abs(defects.rimRadial_mm)}) {
-    bool inside = radial + ri < semi;
-    for (const double r : {std::max(0.0, radial - ri), std::min(semi, radial + ri)})
-      inside = inside && sim::sphericalFaceZ(lens.frontRadius_mm, -lens.centreThickness_mm / 2, r) < -ri &&
-               sim::sphericalFaceZ(lens.backRadius_mm, lens.centreThickness_mm / 2, r) > ri;
-    if (!inside)
+  // The inclusions, spheres at z = 0, must lie wholly inside the glass.
+  for (const double radial : {0.0, defects.rimRadial_mm})
+    if (!sim::sphericalLensHolds(lens.frontRadius_mm, lens.backRadius_mm, lens.centreThickness_mm, lens.diameter_mm,
+                                 {radial, 0, 0}, defects.inclusionRadius_mm))
       fail(Errc::Config, "{}: the inclusion of radius {} mm, {} mm from the axis, would not lie inside the lens "
            "(diameter {}, centre thickness {})",
-           defectsTable.where(radial > 0 ? "rim_radial_mm" : "inclusion_radius_mm"), ri, radial, lens.diameter_mm,
-           lens.centreThickness_mm);
-  }
+           defectsTable.where(radial != 0 ? "rim_radial_mm" : "inclusion_radius_mm"), defects.inclusionRadius_mm,
+           radial, lens.diameter_mm, lens.centreThickness_mm);
 }
 
 }  // namespace
@@ -140,13 +136,13 @@ Bench Bench::load(const std::filesystem::path& path) {
   return b;
 }
 
-Bench::Span Bench::lensSpan() const {
+Bench::Span Bench::lensSpan(bool misaligned) const {
   const double semi = lens.diameter_mm / 2, t = lens.centreThickness_mm;
   const double front = std::min(sim::sphericalFaceZ(lens.frontRadius_mm, -t / 2, 0),
                                 sim::sphericalFaceZ(lens.frontRadius_mm, -t / 2, semi));
   const double back = std::max(sim::sphericalFaceZ(lens.backRadius_mm, t / 2, 0),
                                sim::sphericalFaceZ(lens.backRadius_mm, t / 2, semi));
-  const double shift = -defects.misalignment_mm;  // the misaligned scene's lens
+  const double shift = misaligned ? -defects.misalignment_mm : 0.0;  // the misaligned scene's lens
   return {front + std::min(0.0, shift), back + std::max(0.0, shift)};
 }
 

@@ -438,7 +438,7 @@ std::vector<SweepVariant> sweepVariants(const Bench& bench, const std::vector<Sw
   const double delta = reference.distance_mm, shift = std::abs(bench.defects.misalignment_mm);
   const double footprint = 0.5 * bench.lens.diameter_mm * std::abs(1 - delta / lensFocalLength(bench.lens)) +
                            (delta + 2 * shift) * std::tan(bench.camera.objectNa) + shift + 2.0;
-  const double lowest = bench.lensSpan().low;
+  const double lowest = bench.lensSpan(true).low;
   std::vector<SweepVariant> variants;
   for (const SweepPoint& point : sweep) {
     SweepVariant v{point, reference};

@@ -120,6 +120,12 @@ TEST_F(SceneFile, BadValuesAreErrors) {
                                                 "back_radius_mm=-10\ncentre_thickness_mm=7\ndiameter_mm=50\n"));
       },
       Errc::Config, {"lens.toml:", "object[0].back_radius_mm", "semi-diameter 25"}));
+  EXPECT_TRUE(throwsError(  // faces of radius 26 on Ø50 sag 18.9 mm each: they meet inside the diameter
+      [&] {
+        loadSceneFile(write("edge.toml", head + "[[object]]\nname='l'\nshape='lens'\nfront_radius_mm=26\n"
+                                                "back_radius_mm=-26\ncentre_thickness_mm=7\ndiameter_mm=50\n"));
+      },
+      Errc::Config, {"edge.toml:", "object[0].centre_thickness_mm", "the faces meet inside the diameter"}));
   EXPECT_TRUE(throwsError(
       [&] {
         loadSceneFile(write("lfs.toml",

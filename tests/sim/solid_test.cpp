@@ -147,6 +147,42 @@ TEST(Solid, LensShapesThatCannotBeMadeAreNamed) {
                                                 lfi::Errc::InvalidArgument, {"lens: the faces meet"}));
 }
 
+// Whether a ball lies inside a lens: known answers for a bi-convex and a
+// plano-concave lens, and every ball said to be inside is, on its surface,
+// by contains().
+TEST(Solid, LensHoldsABallExactlyWhenItLiesInsideTheGlass) {
+  // Bi-convex R = ±51.5, 5 mm, Ø25.4 (the reference bench's lens).
+  EXPECT_TRUE(sphericalLensHolds(51.5, -51.5, 5, 25.4, {0, 0, 0}, 2.4));
+  EXPECT_FALSE(sphericalLensHolds(51.5, -51.5, 5, 25.4, {0, 0, 0}, 2.5));  // touches both vertices
+  EXPECT_TRUE(sphericalLensHolds(51.5, -51.5, 5, 25.4, {11.5, 0, 0}, 1.0));   // 0.17 mm of glass all round
+  EXPECT_FALSE(sphericalLensHolds(51.5, -51.5, 5, 25.4, {11.0, 0, 0}, 1.5));  // 11 + 1.5 < 12.7, but the faces cut it
+  EXPECT_FALSE(sphericalLensHolds(51.5, -51.5, 5, 25.4, {0, 12.0, 0}, 0.8));  // through the edge cylinder
+  // Plano-concave R1 = -100, 3 mm, Ø50: thinnest on the axis, 3 + 3.18 mm at the rim.
+  EXPECT_TRUE(sphericalLensHolds(-100, 0, 3, 50, {0, 0, 0}, 1.4));
+  EXPECT_FALSE(sphericalLensHolds(-100, 0, 3, 50, {0, 0, 0}, 1.6));
+  EXPECT_TRUE(sphericalLensHolds(-100, 0, 3, 50, {24, 0, -3}, 0.5));  // below the vertex, in the thick rim
+  EXPECT_FALSE(sphericalLensHolds(-100, 0, 3, 50, {24, 0, -4.5}, 0.5));  // through the front face
+
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> u(-1, 1);
+  int held = 0;
+  for (const auto& [r1, r2, tc, d] : {std::tuple{51.5, -51.5, 5.0, 25.4}, std::tuple{-100.0, 0.0, 3.0, 50.0},
+                                      std::tuple{50.0, 120.0, 6.0, 40.0}}) {
+    const auto lens = Solid::sphericalLens(r1, r2, tc, d);
+    for (int i = 0; i < 400; ++i) {
+      const Vec3 c(0.5 * d * u(rng), 0.5 * d * u(rng), 4 * u(rng));
+      const double radius = 0.05 + 2 * std::abs(u(rng));
+      if (!sphericalLensHolds(r1, r2, tc, d, c, radius)) continue;
+      ++held;
+      for (int k = 0; k < 64; ++k) {
+        const Vec3 v = Vec3(u(rng), u(rng), u(rng)).normalized();
+        ASSERT_TRUE(lens->contains(c + v * radius)) << "ball at " << c << " radius " << radius;
+      }
+    }
+  }
+  EXPECT_GT(held, 50);  // the property was exercised
+}
+
 TEST(Solid, DifferenceFlipsTheSubtractedNormals) {
   // A spherical shell: ball 10 minus ball 5. Along x from -20 the shell gives
   // [-10, -5] and [5, 10] (in x); at the cavity the outward normal of the

@@ -224,7 +224,8 @@ TEST(Bench, OutOfRangeAndMalformedValuesAreErrors) {
 // Values each in range that together make a bench that cannot exist: a part
 // inside the lens, a defect outside it. The reference lens (R = 51.5, Ø25.4,
 // 5 mm thick, bi-convex) spans z = -2.5 .. 2.5, and -5.5 .. 2.5 with the
-// misaligned scene's 3 mm shift; each error names the key that moves.
+// misaligned scene's 3 mm shift; each error names the key of the part that
+// would meet the lens (or of the defect), and says why.
 TEST(Bench, PartsThatWouldMeetTheLensAreErrorsNamingTheKey) {
   const fs::path dir = freshDir("geometry");
   const fs::path bad = dir / "bad.toml";
@@ -244,9 +245,9 @@ TEST(Bench, PartsThatWouldMeetTheLensAreErrorsNamingTheKey) {
       {"cut_subpixel_radial_mm = -6.0", "cut_subpixel_radial_mm = -12.7", "defects.cut_subpixel_radial_mm",
        "semi-diameter 12.7"},
       {"inclusion_radius_mm = 0.5", "inclusion_radius_mm = 2.6", "defects.inclusion_radius_mm", "not lie inside"},
-      // 11.5 + 1 < 12.7, but 12.5 mm from the axis the glass is 2 x 0.96 mm thick: a sphere of radius 1 sticks out.
-      {"inclusion_radius_mm = 0.5", "inclusion_radius_mm = 1.0\nrim_radial_mm = 11.5", "defects.rim_radial_mm",
-       "11.5 mm from the axis", "rim_radial_mm = 10.0"},
+      // 11 + 1.5 < 12.7, but the faces cut the sphere (Solid.LensHoldsABallExactlyWhenItLiesInsideTheGlass).
+      {"inclusion_radius_mm = 0.5", "inclusion_radius_mm = 1.5\nrim_radial_mm = 11", "defects.rim_radial_mm",
+       "11 mm from the axis", "rim_radial_mm = 10.0"},
       // Faces of radius 13 on a 25.4 mm lens: each sags 10.2 mm at the rim, more than half of 5 mm.
       {"front_radius_mm = 51.5", "front_radius_mm = 13\nback_radius_mm = -13", "lens.centre_thickness_mm",
        "the faces meet inside the diameter", "back_radius_mm = -51.5"},
@@ -258,10 +259,21 @@ TEST(Bench, PartsThatWouldMeetTheLensAreErrorsNamingTheKey) {
                             {bad.string() + ":", "key '" + c.key + "'", c.says}))
         << c.to;
   }
-  // The reference bench itself passes, and its span is the lens's.
-  const auto span = lfi::study::Bench::load(kBench).lensSpan();
-  EXPECT_NEAR(span.low, -2.5 - 3.0, 1e-12);
-  EXPECT_NEAR(span.high, 2.5, 1e-12);
+  // The reference bench itself passes, and its spans are the lens's.
+  const auto bench = lfi::study::Bench::load(kBench);
+  EXPECT_NEAR(bench.lensSpan(true).low, -2.5 - 3.0, 1e-12);
+  EXPECT_NEAR(bench.lensSpan(true).high, 2.5, 1e-12);
+  EXPECT_NEAR(bench.lensSpan(false).low, -2.5, 1e-12);
+  // A lens moved towards the camera (misalignment < 0) does not concern the
+  // capture, which sees the intact lens at the origin.
+  std::ofstream(bad) << replaceLine(replaceLine(reference, "misalignment_mm = 3.0", "misalignment_mm = -3.0"),
+                                    "capture_distance_mm = 50", "capture_distance_mm = 4");
+  EXPECT_NO_THROW(lfi::study::Bench::load(bad));
+  std::ofstream(bad) << replaceLine(reference, "working_distance_mm = 102.5", "working_distance_mm = 4");
+  EXPECT_NO_THROW(lfi::study::Bench::load(bad));
+  std::ofstream(bad) << replaceLine(replaceLine(reference, "misalignment_mm = 3.0", "misalignment_mm = -3.0"),
+                                    "working_distance_mm = 102.5", "working_distance_mm = 4");
+  EXPECT_TRUE(throwsError([&] { lfi::study::Bench::load(bad); }, Errc::Config, {"camera.working_distance_mm"}));
   fs::remove_all(dir);
 }
 

@@ -42,6 +42,12 @@ struct LensFault {
 std::optional<LensFault> sphericalLensFault(double frontRadius, double backRadius, double centreThickness,
                                             double diameter);
 
+// Whether the ball of `radius` about `centre` (the lens's frame) lies wholly
+// inside the spherical lens of these faces (as Solid::sphericalLens builds it,
+// its rim planes included), exactly.
+bool sphericalLensHolds(double frontRadius, double backRadius, double centreThickness, double diameter,
+                        const Vec3& centre, double radius);
+
 struct Ray {
   Vec3 origin;
   Vec3 direction;  // unit length

@@ -48,12 +48,13 @@ struct Bench {
   // in range that together make a bench that cannot exist (a part inside the
   // lens, a defect outside it).
   static Bench load(const std::filesystem::path& path);
-  // The lens's lowest and highest z (world frame, mm) over both of its
-  // positions: at the origin, and moved by -misalignment_mm along z.
+  // The lens's lowest and highest z (world frame, mm): at the origin, and
+  // with `misaligned` over both of its positions (also moved by
+  // -misalignment_mm along z, the misaligned scene's).
   struct Span {
     double low, high;
   };
-  Span lensSpan() const;
+  Span lensSpan(bool misaligned) const;
   sim::TelecentricCamera telecentricCamera() const;
   sim::CameraSensorModel sensorModel() const;
   LightFieldGeometry lightFieldGeometry() const;
