@@ -82,6 +82,11 @@ public:
     try {
       openDevice();
       readIdentity();
+      // Start from a known receive state: a host that died, or gave up, in the
+      // middle of a frame left its bytes in the device.
+      if (!clearHalt())
+        fail(Errc::Timeout, "{}: CLEAR_HALT of endpoint 0x{:02x} timed out (the device does not answer)", name_,
+             endpoint_);
     } catch (...) {
       close();
       throw;

@@ -223,11 +223,12 @@ TEST_F(UsbDisplayTest, StallIsClearedAndTheFrameResent) {
   device.plug();
   auto display = openDisplay("usb:1209:4c46");
   const cv::Mat panel = randomPanel(display->info(), 5);
+  const std::uint32_t halts = device.state().clearHalts;  // one at open
   device.stallNextFrame();
   const PresentResult result = display->show(panel);
   ASSERT_EQ(result.status, PresentStatus::Presented) << result.message;
   EXPECT_TRUE(sameBytes(device.presented(), panel));
-  EXPECT_EQ(device.state().clearHalts, 1u);
+  EXPECT_EQ(device.state().clearHalts, halts + 1);
   EXPECT_EQ(display->status().stallsCleared, 1u);
 
   device.stallAlways(true);
@@ -342,6 +343,27 @@ TEST_F(UsbDisplayTest, AFrameAfterATimeoutIsPresented) {
   EXPECT_EQ(next.status, PresentStatus::Presented) << next.message;
   EXPECT_TRUE(sameBytes(device.presented(), first));
   EXPECT_EQ(device.state().clearHalts, halts + 1);
+}
+
+// The same when the host that left part of a frame is gone (a crashed
+// process): the next host's first frame is presented.
+TEST_F(UsbDisplayTest, AFrameAfterAnotherHostLeftPartOfOneIsPresented) {
+  EmulatedUsbDisplay device;
+  device.plug();
+  UsbDisplayOptions options;
+  options.transferSize_bytes = 64 * 1024;
+  options.transferTimeout = std::chrono::milliseconds(200);
+  const UsbDisplaySelector selector{usbdisplay::kDefaultVendorId, usbdisplay::kDefaultProductId, ""};
+  auto first = openUsbDisplay(selector, options);
+  const cv::Mat panel = randomPanel(first->info(), 14);
+  device.silentAfterBulkUrbs(2);
+  EXPECT_EQ(first->show(panel).status, PresentStatus::Timeout);
+  first.reset();
+  device.setSilent(false);
+  auto second = openUsbDisplay(selector, options);
+  const PresentResult result = second->show(panel);
+  EXPECT_EQ(result.status, PresentStatus::Presented) << result.message;
+  EXPECT_TRUE(sameBytes(device.presented(), panel));
 }
 
 TEST_F(UsbDisplayTest, UnplugMidTransferThenReplug) {
