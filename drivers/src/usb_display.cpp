@@ -153,7 +153,7 @@ public:
     const int rc = control(LIBUSB_ENDPOINT_OUT, proto::Request::Present, static_cast<std::uint16_t>(sequence),
                            nullptr, 0);
     if (rc == LIBUSB_ERROR_PIPE) return {PresentStatus::Rejected, sequence, rejection(sequence)};
-    resync_ = rc == LIBUSB_ERROR_TIMEOUT;
+    resync_ = rc < 0;  // unanswered or failed: the device may still hold the frame
     requireOk(rc, proto::Request::Present);
     state_ = State::Showing;
     return {PresentStatus::Presented, sequence, {}};

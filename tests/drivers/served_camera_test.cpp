@@ -234,7 +234,10 @@ TEST_F(ServedCameraTest, BinnedFramesEqualTheLocalRender) {
     // The first binned frame renders the binned radiance: 1-2 s alone, past 5 s once on a loaded
     // 2-core machine (the full suite with -j2 beside a fuzzing job). A generous bound, not a timing test.
     const Frame frame = camera->grab(30s);
-    ASSERT_EQ(frame.status, FrameStatus::Complete);
+    const StreamStatistics st = camera->statistics();  // what the stream saw, should this ever time out again
+    ASSERT_EQ(frame.status, FrameStatus::Complete)
+        << "frame " << i << ": " << toString(frame.status) << "; stream: " << st.completed << " completed, "
+        << st.failed << " failed, " << st.underruns << " underruns, " << st.missingPackets << " packets missing";
     local.capture(resolved, frame.frameId, expected);
     EXPECT_EQ(cv::norm(frame.image, expected, cv::NORM_INF), 0) << "frame id " << frame.frameId;
   }
