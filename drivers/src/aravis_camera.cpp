@@ -503,13 +503,50 @@ class AravisCamera final : public Camera {
     info_.serial = orEmpty(arv_camera_get_device_serial_number(camera_, &error));
     check(error, name(), "arv_camera_get_device_serial_number");
     info_.deviceId = deviceId_;
-    arv_camera_get_sensor_size(camera_, &info_.sensorWidth_px, &info_.sensorHeight_px, &error);
-    check(error, name(), "arv_camera_get_sensor_size");
+    readSensorSize();
     if (arv_camera_is_feature_available(camera_, "SensorPixelWidth", nullptr)) {
       const double pitch = arv_camera_get_float(camera_, "SensorPixelWidth", &error);
       check(error, name(), "reading feature 'SensorPixelWidth'");
       if (pitch > 0 && std::isfinite(pitch)) info_.pixelSize_um = pitch;  // else unknown, as when absent
     }
+  }
+
+  // SFNC only recommends SensorWidth and SensorHeight. Without them the sensor
+  // is the largest image (WidthMax and HeightMax, else the bounds of Width and
+  // Height) times the binning in force.
+  void readSensorSize() {
+    GError* error = nullptr;
+    auto has = [&](const char* feature) { return arv_camera_is_feature_available(camera_, feature, nullptr) != FALSE; };
+    auto integer = [&](const char* feature) {
+      const gint64 value = arv_camera_get_integer(camera_, feature, &error);
+      check(error, name(), fmt::format("reading feature '{}'", feature));
+      return value;
+    };
+    std::int64_t width = 0, height = 0;
+    if (has("SensorWidth") && has("SensorHeight")) {
+      width = integer("SensorWidth"), height = integer("SensorHeight");
+    } else {
+      if (has("WidthMax") && has("HeightMax")) {
+        width = integer("WidthMax"), height = integer("HeightMax");
+      } else {
+        int min = 0, w = 0, h = 0;
+        arv_camera_get_width_bounds(camera_, &min, &w, &error);
+        check(error, name(), "arv_camera_get_width_bounds");
+        arv_camera_get_height_bounds(camera_, &min, &h, &error);
+        check(error, name(), "arv_camera_get_height_bounds");
+        width = w, height = h;
+      }
+      if (arv_camera_is_binning_available(camera_, nullptr)) {
+        int bx = 1, by = 1;
+        arv_camera_get_binning(camera_, &bx, &by, &error);
+        check(error, name(), "arv_camera_get_binning");
+        width *= std::max(bx, 1), height *= std::max(by, 1);
+      }
+    }
+    constexpr std::int64_t kMaxSide = 1 << 20;  // far beyond any sensor: a larger value is a misreading
+    if (width < 1 || height < 1 || width > kMaxSide || height > kMaxSide)
+      fail(Errc::Device, "camera '{}': the device reports a {} x {} px sensor", name(), width, height);
+    info_.sensorWidth_px = static_cast<int>(width), info_.sensorHeight_px = static_cast<int>(height);
   }
 
   ArvGcFeatureNode* featureNode(const char* method, const std::string& feature) {

@@ -11,6 +11,8 @@
 #include "lfi/drivers/registry.h"
 
 #include "gige_device_process.h"
+
+#include <arv.h>
 #include "lfi_test_support.h"
 
 #include <fcntl.h>
@@ -68,11 +70,17 @@ class FakeGvCamera {
   const std::string& serial() const { return serial_; }
 
   // Starts the process and waits (up to 5 s) until it answers GVCP.
-  void start(const std::string& binary, int lostPacketsPerThousand = 0) {
+  // genicam: a GenICam description to serve instead of the built-in one (it
+  // must address the fake device's registers).
+  void start(const std::string& binary, int lostPacketsPerThousand = 0, const std::string& genicam = {}) {
     std::vector<std::string> args = {binary, "-i", "127.0.0.1", "-s", serial_};
     if (lostPacketsPerThousand > 0) {
       args.push_back("-r");
       args.push_back(std::to_string(lostPacketsPerThousand));
+    }
+    if (!genicam.empty()) {
+      args.push_back("-g");
+      args.push_back(genicam);
     }
     process_ = std::make_unique<GigeDeviceProcess>(args, 5s);
   }
@@ -150,6 +158,53 @@ TEST_F(AravisCameraTest, OpensByIdAndByAddress) {
 
   auto byAddress = openCamera("aravis:127.0.0.1");
   EXPECT_EQ(byAddress->info().serial, fake_->serial());
+}
+
+// The fake device's own GenICam description with every node named after
+// `feature` renamed, so that the device no longer has that feature but keeps
+// its registers.
+std::filesystem::path genicamWithout(std::initializer_list<std::string> features, const std::filesystem::path& file) {
+  ArvFakeCamera* fake = arv_fake_camera_new("genicam");
+  std::size_t size = 0;
+  const char* xml = arv_fake_camera_get_genicam_xml(fake, &size);
+  std::string text(xml, size);
+  g_object_unref(fake);
+  for (const std::string& feature : features) {
+    std::size_t replaced = 0;
+    for (std::size_t at = 0; (at = text.find(feature, at)) != std::string::npos; at += feature.size() + 6, ++replaced)
+      text.insert(at, "Hidden");
+    EXPECT_GT(replaced, 0u) << feature << " is not in the fake device's description";
+  }
+  std::FILE* out = std::fopen(file.c_str(), "wb");
+  EXPECT_NE(out, nullptr) << file;
+  if (out != nullptr) {
+    std::fwrite(text.data(), 1, text.size(), out);
+    std::fclose(out);
+  }
+  return file;
+}
+
+// SFNC only recommends SensorWidth and SensorHeight: a device without them
+// opens, and its sensor is the largest image it gives.
+TEST_F(AravisCameraTest, ADeviceWithoutSensorSizeFeaturesOpensWithItsLargestImage) {
+  const std::filesystem::path xml = genicamWithout(
+      {"SensorWidth", "SensorHeight"}, std::filesystem::temp_directory_path() / ("lfi-genicam-" + fake_->serial() + ".xml"));
+  fake_.reset();
+  fake_ = std::make_unique<FakeGvCamera>("LFIG" + std::to_string(::getpid()));
+  fake_->start(binary_, 0, xml.string());
+  auto camera = openFake();
+  EXPECT_TRUE(throwsError([&] { camera->getIntegerFeature("SensorWidth"); }, Errc::NotFound, {"SensorWidth"}));
+  EXPECT_EQ(camera->getIntegerFeature("Width"), 512);  // the fake device's start-up image, smaller than its sensor
+  const CameraInfo info = camera->info();
+  EXPECT_EQ(info.sensorWidth_px, 2048);
+  EXPECT_EQ(info.sensorHeight_px, 2048);
+  // The full image is that size: a whole-sensor region is accepted.
+  CameraSettings s;
+  s.exposure_us = 1000;
+  camera->configure(s);
+  EXPECT_EQ(camera->getIntegerFeature("Width"), 2048);
+  camera.reset();
+  std::filesystem::remove(xml);
 }
 
 TEST_F(AravisCameraTest, WrongIdIsNotFoundAndListsTheDevices) {
