@@ -29,6 +29,38 @@ std::uint16_t parseHex16(std::string_view text, const char* what, const std::str
   return static_cast<std::uint16_t>(value);
 }
 
+// A serial as it stands in a URI: bytes other than printable ASCII, and the
+// URI's own delimiters, percent-encoded.
+std::string serialInUri(std::string_view serial) {
+  std::string out;
+  for (const char c : serial) {
+    if (c > 0x20 && c < 0x7f && std::string_view("%/?&#=").find(c) == std::string_view::npos)
+      out += c;
+    else
+      out += fmt::format("%{:02X}", static_cast<unsigned char>(c));
+  }
+  return out;
+}
+
+std::string decodeSerial(std::string_view text, const std::string& uri) {
+  std::string out;
+  for (std::size_t i = 0; i < text.size(); ++i) {
+    if (text[i] != '%') {
+      out += text[i];
+      continue;
+    }
+    unsigned value = 0;
+    const char* first = text.data() + i + 1;
+    const auto [end, ec] = std::from_chars(first, first + std::min<std::size_t>(2, text.size() - i - 1), value, 16);
+    if (ec != std::errc() || end != first + 2 || value == 0)
+      fail(Errc::Config, "display URI '{}': serial '{}' has a '%' not followed by two hex digits of a byte 01..FF",
+           uri, text);
+    out += static_cast<char>(value);
+    i += 2;
+  }
+  return out;
+}
+
 SubpixelLayout toLayout(proto::SubpixelCode code) {
   switch (code) {
     case proto::SubpixelCode::RgbStripe: return SubpixelLayout::RgbStripe;
@@ -215,7 +247,7 @@ private:
         if (n > 0) serial.assign(reinterpret_cast<char*>(text), static_cast<std::size_t>(n));
       }
       if (!selector_.serial.empty() && serial != selector_.serial) {
-        seen.back() += "/" + shown(serial, 126);  // the device's own bytes, escaped
+        seen.back() += "/" + serialInUri(serial);  // as the URI would name it
         libusb_close(handle);
         continue;
       }
@@ -234,7 +266,7 @@ private:
     if (matches.size() > 1) {
       std::vector<std::string> serials;
       for (auto& [h, s] : matches) {
-        serials.push_back(shown(s, 126));
+        serials.push_back(serialInUri(s));
         libusb_close(h);
       }
       fail(Errc::Config, "{}: {} displays match; name one by serial (usb:{:04x}:{:04x}/<serial>, serials: {})", name_,
@@ -304,7 +336,7 @@ private:
     info.model = block.model;
     info.serial = block.serial;
     info.deviceId = fmt::format("{:04x}:{:04x}/{}", selector_.vendorId, selector_.productId,
-                                serial_.empty() ? block.serial : serial_);
+                                serialInUri(serial_.empty() ? block.serial : serial_));
     info.panelWidth_px = block.panelWidth_px;
     info.panelHeight_px = block.panelHeight_px;
     info.pixelPitch_mm = cal.pixelPitch_mm;
@@ -527,7 +559,7 @@ private:
 
 std::string UsbDisplaySelector::uri() const {
   return serial.empty() ? fmt::format("usb:{:04x}:{:04x}", vendorId, productId)
-                        : fmt::format("usb:{:04x}:{:04x}/{}", vendorId, productId, serial);
+                        : fmt::format("usb:{:04x}:{:04x}/{}", vendorId, productId, serialInUri(serial));
 }
 
 UsbDisplaySelector parseUsbDisplayPath(std::string_view path, const std::string& uri) {
@@ -540,11 +572,11 @@ UsbDisplaySelector parseUsbDisplayPath(std::string_view path, const std::string&
   s.vendorId = parseHex16(ids.substr(0, colon), "vendor id", uri);
   s.productId = parseHex16(ids.substr(colon + 1), "product id", uri);
   if (slash != std::string_view::npos) {
-    s.serial = std::string(path.substr(slash + 1));
-    if (s.serial.empty() || s.serial.size() > 126 ||
-        !std::all_of(s.serial.begin(), s.serial.end(), [](char c) { return c > 0x20 && c < 0x7f && c != '/'; }))
-      fail(Errc::Config, "display URI '{}': serial '{}' must be 1..126 printable characters without '/' or spaces",
-           uri, s.serial);
+    const std::string_view text = path.substr(slash + 1);
+    s.serial = decodeSerial(text, uri);
+    if (s.serial.empty() || s.serial.size() > 126)
+      fail(Errc::Config, "display URI '{}': serial '{}' must be 1..126 bytes (write a space, '/', '%', '?', '&', '#', "
+           "'=' or a non-ASCII byte as %XX)", uri, text);
   }
   return s;
 }

@@ -106,6 +106,34 @@ TEST_F(UsbDisplayTest, ABenchFileOverridesTheOpticsTheDeviceReports) {
                           Errc::NotFound, {"none.toml"}));
 }
 
+// A serial with a space, a '/' and a '%' is named percent-encoded wherever a
+// URI shows it, and that URI opens the display.
+TEST_F(UsbDisplayTest, ASerialWithSpacesAndSlashesIsNamedPercentEncoded) {
+  EmulatedDisplayConfig config;
+  config.serial = "Bench A/2 50%";
+  EmulatedUsbDisplay device(config);
+  device.plug();
+  const std::string uri = "usb:1209:4c46/Bench%20A%2F2%2050%25";
+  EXPECT_TRUE(throwsError([] { openDisplay("usb:1209:4c46/NOPE"); }, Errc::NotFound, {"1209:4c46/Bench%20A%2F2%2050%25"}));
+  auto display = openDisplay(uri);
+  EXPECT_EQ(display->info().serial, config.serial);
+  EXPECT_EQ("usb:" + display->info().deviceId, uri);
+  EXPECT_EQ((UsbDisplaySelector{0x1209, 0x4c46, config.serial}.uri()), uri);
+  display->close();
+  // Lower-case hex digits decode too; a '%' without two of them is an error naming the URI.
+  EXPECT_NO_THROW(openDisplay("usb:1209:4c46/Bench%20A%2f2%2050%25"));
+  for (const char* bad : {"usb:1209:4c46/a%2", "usb:1209:4c46/a%zz", "usb:1209:4c46/%00"})
+    EXPECT_TRUE(throwsError([&] { openDisplay(bad); }, Errc::Config, {bad, "two hex digits"})) << bad;
+  // Every byte but NUL survives the round trip through a URI.
+  std::string all;
+  for (int c = 1; c < 256; ++c) all += static_cast<char>(c);
+  for (std::size_t i = 0; i < all.size(); i += 100) {
+    const UsbDisplaySelector s{0x1209, 0x4c46, all.substr(i, 100)};
+    const std::string text = s.uri();
+    EXPECT_EQ(parseUsbDisplayPath(std::string_view(text).substr(4), text).serial, s.serial);
+  }
+}
+
 TEST_F(UsbDisplayTest, UriErrorsNameTheUri) {
   EXPECT_TRUE(throwsError([] { openDisplay("usb:12:4c46"); }, Errc::Config, {"usb:12:4c46", "4 hex digits"}));
   EXPECT_TRUE(throwsError([] { openDisplay("usb:1209:4c46?speed=1"); }, Errc::Config, {"unknown key 'speed'"}));

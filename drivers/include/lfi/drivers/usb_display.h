@@ -33,12 +33,13 @@ struct UsbDisplaySelector {
   std::uint16_t vendorId = 0;
   std::uint16_t productId = 0;
   std::string serial;  // empty: any serial (an error if several displays match)
-  // "usb:1209:4c46[/serial]"
+  // "usb:1209:4c46[/serial]", the serial's spaces, delimiters ("%/?&#=") and
+  // other bytes outside printable ASCII percent-encoded ("Bench A" → "Bench%20A").
   std::string uri() const;
 };
 
-// Parses "<vid>:<pid>[/<serial>]" (4 hex digits each). Throws Errc::Config naming
-// `uriForMessages`.
+// Parses "<vid>:<pid>[/<serial>]" (4 hex digits each; the serial percent-decoded,
+// 1..126 bytes). Throws Errc::Config naming `uriForMessages`.
 UsbDisplaySelector parseUsbDisplayPath(std::string_view path, const std::string& uriForMessages);
 
 struct UsbDisplayOptions {
