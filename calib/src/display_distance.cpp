@@ -2,16 +2,23 @@
 
 #include "lfi/core/error.h"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <cmath>
+#include <functional>
 
 namespace lfi::calib {
 
 LightField propagateLightField(const LightField& lightField, double dz, LightFieldLookup lookup) {
   if (!std::isfinite(dz)) fail(Errc::InvalidArgument, "propagateLightField: dz = {} is not finite", dz);
   const LightFieldGeometry& g = lightField.geometry();
+  if (g.distance_mm - dz < 0)
+    fail(Errc::InvalidArgument,
+         "propagateLightField: moving the plane {} mm towards the part, which is {} mm away, would pass it", dz,
+         g.distance_mm);
   LightFieldGeometry out = g;
-  out.distance_mm = std::max(0.0, g.distance_mm - dz);
+  out.distance_mm = g.distance_mm - dz;
   LightField result(out);
   for (int ey = 0; ey < g.spatialY; ++ey)
     for (int ex = 0; ex < g.spatialX; ++ex) {
@@ -29,39 +36,64 @@ LightField propagateLightField(const LightField& lightField, double dz, LightFie
   return result;
 }
 
+namespace {
+
+std::string scanTable(const std::vector<double>& candidates, const std::vector<double>& brightness) {
+  std::string table;
+  for (size_t i = 0; i < brightness.size(); ++i)
+    table += fmt::format("{}{:+g} mm: {:.6g}", i ? ", " : "", candidates[i], brightness[i]);
+  return table;
+}
+
+}  // namespace
+
 DisplayDistanceScan calibrateDisplayDistance(const LightField& captured, const InspectFunction& inspect,
                                              const std::vector<double>& candidates, const cv::Mat& roi) {
+  constexpr const char* kWhat = "display distance calibration";
   if (candidates.size() < 3)
-    fail(Errc::InvalidArgument, "display distance calibration needs at least 3 candidates (got {})", candidates.size());
-  if (!std::is_sorted(candidates.begin(), candidates.end()) ||
-      std::adjacent_find(candidates.begin(), candidates.end()) != candidates.end())
-    fail(Errc::InvalidArgument, "display distance calibration: candidates must be strictly increasing");
+    fail(Errc::InvalidArgument, "{} needs at least 3 candidates (got {})", kWhat, candidates.size());
+  if (!std::all_of(candidates.begin(), candidates.end(), [](double c) { return std::isfinite(c); }) ||
+      std::adjacent_find(candidates.begin(), candidates.end(), std::greater_equal<>()) != candidates.end())
+    fail(Errc::InvalidArgument, "{}: candidates must be finite and strictly increasing", kWhat);
+  if (const double distance = captured.geometry().distance_mm; distance + candidates.front() <= 0)
+    fail(Errc::InvalidArgument, "{}: candidate {:+g} mm would put the display at or past the part ({} mm away)", kWhat,
+         candidates.front(), distance);
+  if (!roi.empty() && (roi.type() != CV_8UC1 || cv::countNonZero(roi) == 0))
+    fail(Errc::InvalidArgument, "{}: the ROI must be a CV_8UC1 mask with at least one non-zero pixel", kWhat);
   DisplayDistanceScan scan;
   scan.candidates_mm = candidates;
   for (double epsilon : candidates) {
     // The display is ε further away: show the field as it is ε further away.
     cv::Mat image = inspect(propagateLightField(captured, -epsilon));
-    if (image.empty()) fail(Errc::Device, "display distance calibration: the camera returned no image");
+    if (image.empty()) fail(Errc::Device, "{}: the camera returned no image", kWhat);
+    if (image.channels() != 1) fail(Errc::InvalidArgument, "{} needs a single-channel image", kWhat);
     cv::Mat f;
     image.convertTo(f, CV_32F);
-    if (f.channels() != 1) fail(Errc::InvalidArgument, "display distance calibration needs a single-channel image");
     if (!roi.empty() && roi.size() != f.size())
-      fail(Errc::InvalidArgument, "display distance calibration: ROI {}x{} does not match the image {}x{}", roi.cols,
-           roi.rows, f.cols, f.rows);
-    scan.brightness.push_back(roi.empty() ? cv::mean(f)[0] : cv::mean(f, roi)[0]);
+      fail(Errc::InvalidArgument, "{}: ROI {}x{} does not match the image {}x{}", kWhat, roi.cols, roi.rows, f.cols,
+           f.rows);
+    const double mean = roi.empty() ? cv::mean(f)[0] : cv::mean(f, roi)[0];
+    if (!std::isfinite(mean))
+      fail(Errc::Device, "{}: the image for candidate {:+g} mm has non-finite values", kWhat, epsilon);
+    scan.brightness.push_back(mean);
   }
-  const auto best = static_cast<size_t>(
-      std::max_element(scan.brightness.begin(), scan.brightness.end()) - scan.brightness.begin());
-  scan.estimate_mm = candidates[best];
-  if (best > 0 && best + 1 < candidates.size()) {
-    // Vertex of the parabola through the best point and its neighbours.
-    const double x0 = candidates[best - 1], x1 = candidates[best], x2 = candidates[best + 1];
-    const double y0 = scan.brightness[best - 1], y1 = scan.brightness[best], y2 = scan.brightness[best + 1];
-    const double denom = (x0 - x1) * (x0 - x2) * (x1 - x2);
-    const double a = (x2 * (y1 - y0) + x1 * (y0 - y2) + x0 * (y2 - y1)) / denom;
-    const double b = (x2 * x2 * (y0 - y1) + x1 * x1 * (y2 - y0) + x0 * x0 * (y1 - y2)) / denom;
-    if (a < 0) scan.estimate_mm = std::clamp(-b / (2 * a), x0, x2);
-  }
+  const auto lowest = std::min_element(scan.brightness.begin(), scan.brightness.end());
+  const auto highest = std::max_element(scan.brightness.begin(), scan.brightness.end());
+  if (*highest - *lowest <= 1e-9 * std::abs(*highest))
+    fail(Errc::Device, "{}: the part's brightness does not change across the scan ({}): is the display showing, the "
+         "camera unsaturated, the region on the part?", kWhat, scanTable(candidates, scan.brightness));
+  const auto best = static_cast<size_t>(highest - scan.brightness.begin());
+  if (best == 0 || best + 1 == candidates.size())
+    fail(Errc::InvalidArgument, "{}: the brightest candidate is the {} one of the scan ({}): the display's error may "
+         "lie beyond it; scan further that way", kWhat, best == 0 ? "first" : "last",
+         scanTable(candidates, scan.brightness));
+  // Vertex of the parabola through the best point and its neighbours (a < 0 unless the three are equal).
+  const double x0 = candidates[best - 1], x1 = candidates[best], x2 = candidates[best + 1];
+  const double y0 = scan.brightness[best - 1], y1 = scan.brightness[best], y2 = scan.brightness[best + 1];
+  const double denom = (x0 - x1) * (x0 - x2) * (x1 - x2);
+  const double a = (x2 * (y1 - y0) + x1 * (y0 - y2) + x0 * (y2 - y1)) / denom;
+  const double b = (x2 * x2 * (y0 - y1) + x1 * x1 * (y2 - y0) + x0 * x0 * (y1 - y2)) / denom;
+  scan.estimate_mm = a < 0 ? std::clamp(-b / (2 * a), x0, x2) : x1;
   return scan;
 }
 

@@ -145,6 +145,29 @@ TEST(DisplayDistance, MeasuresHowFarTheDisplayMoved) {
   for (double trueError : {1.5, -2.0}) EXPECT_NEAR(estimate(trueError) - offset, trueError, 0.6) << trueError;
 }
 
+// The distance of the plane a shown light field was propagated to, from the
+// plane it was captured on: the ε the calibration tried.
+double shownEpsilon(const LightField& shown) { return shown.geometry().distance_mm - smallGeometry().distance_mm; }
+
+TEST(DisplayDistance, APeakBetweenCandidatesIsFoundByTheParabola) {
+  // A brightness that is a parabola in ε with its vertex at 0.3 mm: the three
+  // points around it give the vertex exactly.
+  const LightField lf(smallGeometry());
+  auto parabola = [](const LightField& shown) {
+    const double e = shownEpsilon(shown);
+    return cv::Mat(4, 4, CV_32FC1, cv::Scalar(100 - 2 * (e - 0.3) * (e - 0.3)));
+  };
+  const auto scan = calib::calibrateDisplayDistance(lf, parabola, {-2, -1, 0, 1, 2});
+  EXPECT_NEAR(scan.estimate_mm, 0.3, 1e-4);
+  ASSERT_EQ(scan.brightness.size(), 5u);
+  EXPECT_NEAR(scan.brightness[2], 100 - 2 * 0.09, 1e-4);
+  // A maximum at an end of the scan is not bracketed: an error that shows the scan, not that end as the answer.
+  EXPECT_TRUE(throwsError([&] { calib::calibrateDisplayDistance(lf, parabola, {-3, -2, -1}); }, Errc::InvalidArgument,
+                          {"last one of the scan", "-1 mm: 9", "scan further"}));
+  EXPECT_TRUE(throwsError([&] { calib::calibrateDisplayDistance(lf, parabola, {1, 2, 3}); }, Errc::InvalidArgument,
+                          {"first one of the scan"}));
+}
+
 TEST(DisplayDistance, RejectsBadCandidatesAndImages) {
   const LightField lf(smallGeometry());
   auto black = [](const LightField&) { return cv::Mat(8, 8, CV_32FC1, cv::Scalar(0)); };
@@ -159,6 +182,22 @@ TEST(DisplayDistance, RejectsBadCandidatesAndImages) {
       Errc::Device, {"no image"}));
   EXPECT_TRUE(throwsError([&] { calib::calibrateDisplayDistance(lf, black, {0, 1, 2}, cv::Mat::ones(4, 4, CV_8UC1)); },
                           Errc::InvalidArgument, {"ROI"}));
+  EXPECT_TRUE(throwsError([&] { calib::calibrateDisplayDistance(lf, black, {0, 1, 2}, cv::Mat::zeros(8, 8, CV_8UC1)); },
+                          Errc::InvalidArgument, {"ROI", "non-zero"}));
+  EXPECT_TRUE(throwsError([&] { calib::calibrateDisplayDistance(lf, black, {0, 1, 2}, cv::Mat::ones(8, 8, CV_32FC1)); },
+                          Errc::InvalidArgument, {"CV_8UC1"}));
+  EXPECT_TRUE(throwsError([&] { calib::calibrateDisplayDistance(lf, black, {0, NAN, 2}); }, Errc::InvalidArgument,
+                          {"finite"}));
+  // The light field was captured 30 mm from the part: the display cannot be 30 mm nearer.
+  EXPECT_TRUE(throwsError([&] { calib::calibrateDisplayDistance(lf, black, {-30, 0, 1}); }, Errc::InvalidArgument,
+                          {"-30 mm", "past the part"}));
+  EXPECT_TRUE(throwsError([&] { calib::propagateLightField(lf, 31); }, Errc::InvalidArgument, {"pass it"}));
+  // A dark (or saturated) image at every candidate has no maximum: not an answer.
+  EXPECT_TRUE(throwsError([&] { calib::calibrateDisplayDistance(lf, black, {0, 1, 2}); }, Errc::Device,
+                          {"does not change", "+1 mm: 0"}));
+  auto nan = [](const LightField&) { return cv::Mat(8, 8, CV_32FC1, cv::Scalar(NAN)); };
+  EXPECT_TRUE(throwsError([&] { calib::calibrateDisplayDistance(lf, nan, {0, 1, 2}); }, Errc::Device,
+                          {"non-finite", "+0 mm"}));
 }
 
 }  // namespace

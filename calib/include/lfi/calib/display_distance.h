@@ -26,7 +26,8 @@ namespace lfi::calib {
 // The light field on the plane moved by dz along the plane's +z (towards the
 // part for dz > 0): L'(q, d) = L(q - dz (dx/dz, dy/dz), d), sampled at every
 // element centre and angular pixel centre of the same geometry with `lookup`.
-// The result's distance_mm is the input's minus dz.
+// The result's distance_mm is the input's minus dz; Errc::InvalidArgument when
+// that would be negative (the plane past the part) or dz is not finite.
 LightField propagateLightField(const LightField& lightField, double dz_mm,
                                LightFieldLookup lookup = LightFieldLookup::Interpolated);
 
@@ -42,8 +43,17 @@ struct DisplayDistanceScan {
 
 // Scans the candidate errors and returns the estimate. `roi` selects the
 // part's pixels (CV_8UC1, non-zero = use; empty = the whole image); the figure
-// of merit is the mean image value there. Throws Errc::InvalidArgument for
-// fewer than three candidates or unsorted candidates.
+// of merit is the mean image value there. Throws, with the scan's brightness
+// per candidate where there is one:
+//   Errc::InvalidArgument  fewer than three candidates, candidates not finite and
+//                          strictly increasing, one that puts the display at or
+//                          past the part, an empty or non-CV_8UC1 ROI, an image of
+//                          another size or more than one channel, or the brightest
+//                          candidate at either end of the scan (the maximum is not
+//                          bracketed: scan further that way)
+//   Errc::Device           no image, non-finite values, or a brightness that does
+//                          not change across the scan (display dark, camera
+//                          saturated, ROI off the part)
 DisplayDistanceScan calibrateDisplayDistance(const LightField& captured, const InspectFunction& inspect,
                                              const std::vector<double>& candidates_mm, const cv::Mat& roi = {});
 
