@@ -41,6 +41,8 @@ void Controller::emit(const LightField& reference) {
     white_ = percentile(reference.lensletImage(), 0.999);
     if (!(white_ > 0)) white_ = 1.0;
   }
+  // From here on, frames the camera has exposed show the old panel: inspect() restarts the stream.
+  if (camera_.state() == Camera::State::Streaming) staleFrames_ = true;
   const PresentResult r = display_.show(reference, white_);
   if (r.status != PresentStatus::Presented)
     fail(Errc::Device, "emit: the display did not show the light field ({}{}{})", toString(r.status),
@@ -49,9 +51,16 @@ void Controller::emit(const LightField& reference) {
 }
 
 cv::Mat Controller::inspect() {
+  // Frames exposed before the last emit() wait in the camera's buffers (a
+  // free-running camera fills them; a late triggered frame may too): start a
+  // new acquisition, so that every frame averaged is exposed after it. The
+  // stream stays whoever's it was.
+  const bool restart = camera_.state() == Camera::State::Streaming && staleFrames_;
+  staleFrames_ = false;
+  if (restart) camera_.stop();
   if (camera_.state() == Camera::State::Configured) {
     camera_.start(std::max(4, options_.frames + 2));
-    startedCamera_ = true;
+    startedCamera_ = startedCamera_ || !restart;
   }
   if (camera_.state() != Camera::State::Streaming)
     fail(Errc::InvalidArgument, "inspect: the camera must be configured or streaming (it is {})",

@@ -32,6 +32,7 @@ SimBench::SimBench(const fs::path& sceneFile) : sceneFile_(sceneFile), descripti
   optics_ = emission.optics;
   levels_ = emission.levels;
   backlight_ = description_.display->info.brightnessMax;
+  state_ = std::make_shared<const DisplayState>(DisplayState{version_, emissionLocked()});
 }
 
 std::uint64_t SimBench::version() const {
@@ -51,36 +52,66 @@ PanelEmission SimBench::emission() const {
   return emissionLocked();
 }
 
-std::uint64_t SimBench::applyDisplay(Scene& scene) const {
+std::shared_ptr<const SimBench::DisplayState> SimBench::displayState() const {
   std::lock_guard lock(mutex_);
-  if (description_.display) scene.setEmission(description_.displayObject, emissionLocked());
-  return version_;
+  return state_ ? state_ : std::make_shared<const DisplayState>(DisplayState{version_, std::nullopt});
+}
+
+std::uint64_t SimBench::applyDisplay(Scene& scene) const {
+  return applyDisplay(scene, description_.displayObject, *displayState());
+}
+
+std::uint64_t SimBench::applyDisplay(Scene& scene, int displayObject, const DisplayState& state) {
+  if (state.emission) scene.setEmission(displayObject, *state.emission);
+  return state.version;
+}
+
+std::shared_ptr<void> SimBench::onDisplayChange(ChangeListener listener) {
+  std::lock_guard lock(listenersMutex_);
+  const std::uint64_t id = nextListener_++;
+  listeners_.emplace_back(id, std::move(listener));
+  // The handle removes the listener, after any change in progress (so the
+  // listener is not running once the handle is gone); it holds the bench.
+  return std::shared_ptr<void>(nullptr, [bench = shared_from_this(), id](void*) {
+    std::lock_guard changing(bench->changeMutex_);
+    std::lock_guard listening(bench->listenersMutex_);
+    std::erase_if(bench->listeners_, [id](const auto& l) { return l.first == id; });
+  });
+}
+
+void SimBench::change(const std::function<bool()>& mutate) {
+  std::lock_guard changing(changeMutex_);
+  std::vector<ChangeListener> listeners;
+  {
+    std::lock_guard lock(listenersMutex_);
+    for (const auto& [id, listener] : listeners_) listeners.push_back(listener);
+  }
+  for (const ChangeListener& listener : listeners) listener();
+  std::lock_guard lock(mutex_);
+  if (!mutate()) return;
+  ++version_;
+  state_ = std::make_shared<const DisplayState>(DisplayState{version_, emissionLocked()});
 }
 
 void SimBench::showPanel(const cv::Mat& panel) {
   if (!hasDisplay()) fail(Errc::InvalidArgument, "'{}': the scene has no [display]", sceneFile_.string());
   // Convert outside the lock: a 4K panel takes milliseconds.
   auto levels = std::make_shared<const cv::Mat>(panelLevels(description_.display->info, panel));
-  std::lock_guard lock(mutex_);
-  levels_ = std::move(levels);
-  lit_ = true;
-  ++version_;
+  change([&] {
+    levels_ = std::move(levels);
+    lit_ = true;
+    return true;
+  });
 }
 
 void SimBench::blankPanel() {
   if (!hasDisplay()) fail(Errc::InvalidArgument, "'{}': the scene has no [display]", sceneFile_.string());
-  std::lock_guard lock(mutex_);
-  if (!lit_) return;
-  lit_ = false;
-  ++version_;
+  change([&] { return std::exchange(lit_, false); });
 }
 
 void SimBench::setBacklight(int level) {
   if (!hasDisplay()) fail(Errc::InvalidArgument, "'{}': the scene has no [display]", sceneFile_.string());
-  std::lock_guard lock(mutex_);
-  if (level == backlight_) return;
-  backlight_ = level;
-  ++version_;
+  change([&] { return std::exchange(backlight_, level) != level; });
 }
 
 int SimBench::backlight() const {

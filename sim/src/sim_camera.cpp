@@ -20,6 +20,7 @@
 #include <cmath>
 #include <algorithm>
 #include <deque>
+#include <mutex>
 #include <thread>
 
 namespace lfi::sim {
@@ -112,13 +113,20 @@ CameraSensorModel SimImager::sensorModel(const CameraSettings& s) const {
   return model;
 }
 
-const cv::Mat& SimImager::radiance(int binning) {
-  if (bench_->version() != radianceVersion_) {
-    radianceByBinning_.clear();
-    radianceVersion_ = bench_->applyDisplay(*scene_);
-  }
-  auto it = radianceByBinning_.find(binning);
-  if (it != radianceByBinning_.end()) return it->second;
+const cv::Mat& SimImager::radiance(int binning, const SimBench::DisplayState* display) {
+  std::shared_ptr<const SimBench::DisplayState> now;
+  if (display == nullptr) display = (now = bench_->displayState()).get();
+  const auto key = std::make_pair(display->version, binning);
+  if (auto it = radiance_.find(key); it != radiance_.end()) return it->second;
+  // Keep this version's radiance and the newest other version's (the display
+  // now, or the frames exposed before it changed).
+  std::uint64_t kept = 0;
+  for (const auto& [k, image] : radiance_)
+    if (k.first != display->version) kept = std::max(kept, k.first);
+  std::erase_if(radiance_, [&](const auto& entry) {
+    return entry.first.first != display->version && entry.first.first != kept;
+  });
+  SimBench::applyDisplay(*scene_, description_.displayObject, *display);
   TelecentricCamera binned = camera_;
   binned.width = camera_.width / binning;
   binned.height = camera_.height / binning;
@@ -130,12 +138,13 @@ const cv::Mat& SimImager::radiance(int binning) {
   cv::Mat image = render(*scene_, binned, options);
   spdlog::debug("sim camera '{}': rendered {} x {} (binning {}) in {:.2f} s", sceneFile_.string(), binned.width,
                 binned.height, binning, std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
-  return radianceByBinning_.emplace(binning, std::move(image)).first->second;
+  return radiance_.emplace(key, std::move(image)).first->second;
 }
 
-void SimImager::capture(const CameraSettings& s, std::uint64_t frameId, cv::Mat& out) {
+void SimImager::capture(const CameraSettings& s, std::uint64_t frameId, cv::Mat& out,
+                        const SimBench::DisplayState* display) {
   const CameraSensorModel model = sensorModel(s);
-  const cv::Mat& full = radiance(s.binning);
+  const cv::Mat& full = radiance(s.binning, display);
   const cv::Mat roi = full(cv::Rect(s.roiX_px, s.roiY_px, s.roiWidth_px, s.roiHeight_px));
   const cv::Mat dn = model.capture(roi, frameNoiseSeed(seed(), frameId));
   // The ADC's bit_depth bits, aligned to the format's most significant bits.
@@ -186,6 +195,7 @@ class SimCamera final : public Camera {
   }
 
   void close() noexcept override {
+    displayChanges_.reset();
     queue_.clear();
     imager_.reset();
     state_ = State::Closed;
@@ -213,17 +223,28 @@ class SimCamera final : public Camera {
     if (bufferCount < 1 || bufferCount > 1024)
       fail(Errc::InvalidArgument, "camera '{}': start(bufferCount = {}) needs 1..1024 buffers", name(), bufferCount);
     imager_->radiance(settings_.binning);  // render now, not in the first grab
-    bufferCount_ = static_cast<std::size_t>(bufferCount);
-    queue_.clear();
-    statistics_ = {};
-    nextFrameId_ = 1;
-    produced_ = 0;
-    start_ = Clock::now();
+    {
+      std::lock_guard lock(mutex_);
+      bufferCount_ = static_cast<std::size_t>(bufferCount);
+      queue_.clear();
+      statistics_ = {};
+      nextFrameId_ = 1;
+      produced_ = 0;
+      start_ = Clock::now();
+      freeRun_ = settings_.trigger == TriggerMode::FreeRun;
+      frameRate_hz_ = settings_.frameRate_hz;
+    }
+    // Before the display changes, the frames exposed until then are taken with it as it was.
+    displayChanges_ = imager_->bench().onDisplayChange([this] {
+      std::lock_guard lock(mutex_);
+      produceDueFrames(Clock::now());
+    });
     state_ = State::Streaming;
   }
 
   void stop() override {
     requireCameraState(state_, {State::Streaming}, "stop", name());
+    displayChanges_.reset();
     queue_.clear();
     state_ = State::Configured;
   }
@@ -233,6 +254,7 @@ class SimCamera final : public Camera {
     if (settings_.trigger != TriggerMode::Software)
       fail(Errc::InvalidArgument, "camera '{}': softwareTrigger() needs TriggerMode::Software, the camera is in {}",
            name(), toString(settings_.trigger));
+    std::lock_guard lock(mutex_);
     enqueue(nextFrameId_++, Clock::now());
   }
 
@@ -240,15 +262,19 @@ class SimCamera final : public Camera {
     requireCameraState(state_, {State::Streaming}, "grab", name());
     if (timeout.count() < 0) fail(Errc::InvalidArgument, "camera '{}': grab timeout {} ms", name(), timeout.count());
     const Clock::time_point deadline = Clock::now() + timeout;
+    std::unique_lock lock(mutex_);
     produceDueFrames(Clock::now());
-    if (queue_.empty() && settings_.trigger == TriggerMode::FreeRun) {
+    if (queue_.empty() && freeRun_) {
       const Clock::time_point due = dueTime(produced_);
       if (due <= deadline) {
+        lock.unlock();
         std::this_thread::sleep_until(due);
+        lock.lock();
         produceDueFrames(due);
       }
     }
     if (queue_.empty()) {
+      lock.unlock();
       std::this_thread::sleep_until(deadline);
       frame.status = FrameStatus::Timeout;
       frame.frameId = 0;
@@ -257,16 +283,18 @@ class SimCamera final : public Camera {
     }
     const Queued next = queue_.front();
     queue_.pop_front();
-    imager_->capture(settings_, next.frameId, frame.image);
+    ++statistics_.completed;
+    lock.unlock();
+    imager_->capture(settings_, next.frameId, frame.image, next.display.get());
     frame.frameId = next.frameId;
     frame.timestamp_ns = static_cast<std::uint64_t>(
         std::chrono::duration_cast<std::chrono::nanoseconds>(next.time.time_since_epoch()).count());
     frame.status = FrameStatus::Complete;
-    ++statistics_.completed;
   }
 
   StreamStatistics statistics() const override {
     requireCameraState(state_, {State::Configured, State::Streaming}, "statistics", name());
+    std::lock_guard lock(mutex_);
     return statistics_;
   }
 
@@ -335,6 +363,7 @@ class SimCamera final : public Camera {
   struct Queued {
     std::uint64_t frameId;
     Clock::time_point time;
+    std::shared_ptr<const SimBench::DisplayState> display;  // as it was when the frame was exposed
   };
 
   std::string name() const { return "sim:" + sceneFile_.string(); }
@@ -355,27 +384,29 @@ class SimCamera final : public Camera {
 
   Clock::time_point dueTime(std::uint64_t index) const {
     return start_ + std::chrono::duration_cast<Clock::duration>(
-                        std::chrono::duration<double>(static_cast<double>(index) / settings_.frameRate_hz));
+                        std::chrono::duration<double>(static_cast<double>(index) / frameRate_hz_));
   }
 
-  // A frame the device produced: into a free buffer, or lost (underrun).
+  // A frame the device produced: into a free buffer, or lost (underrun). Under mutex_.
   void enqueue(std::uint64_t frameId, Clock::time_point time) {
     if (queue_.size() < bufferCount_)
-      queue_.push_back({frameId, time});
+      queue_.push_back({frameId, time, imager_->bench().displayState()});
     else
       ++statistics_.underruns;
   }
 
-  // The free-running clock: frame k is due at start + k / rate.
+  // The free-running clock: frame k is due at start + k / rate. Under mutex_;
+  // also called by the bench just before the display changes.
   void produceDueFrames(Clock::time_point now) {
-    if (settings_.trigger != TriggerMode::FreeRun || now < start_) return;
+    if (!freeRun_ || now < start_) return;
     const double elapsed = std::chrono::duration<double>(now - start_).count();
-    const auto due = static_cast<std::uint64_t>(std::floor(elapsed * settings_.frameRate_hz)) + 1;
+    const auto due = static_cast<std::uint64_t>(std::floor(elapsed * frameRate_hz_)) + 1;
     if (due <= produced_) return;
     const std::uint64_t count = due - produced_;
     const std::uint64_t room = bufferCount_ - queue_.size();
+    const auto display = imager_->bench().displayState();
     for (std::uint64_t k = 0; k < std::min(count, room); ++k)
-      queue_.push_back({nextFrameId_ + k, dueTime(produced_ + k)});
+      queue_.push_back({nextFrameId_ + k, dueTime(produced_ + k), display});
     if (count > room) statistics_.underruns += count - room;
     nextFrameId_ += count;
     produced_ = due;
@@ -386,12 +417,17 @@ class SimCamera final : public Camera {
   std::unique_ptr<SimImager> imager_;
   CameraInfo info_;
   CameraSettings settings_;
+  // The stream, shared with the bench's change listener (another thread): under mutex_.
+  mutable std::mutex mutex_;
   StreamStatistics statistics_;
   std::deque<Queued> queue_;
   std::size_t bufferCount_ = 1;
   std::uint64_t nextFrameId_ = 1;
   std::uint64_t produced_ = 0;  // free-running frames produced since start()
   Clock::time_point start_;
+  bool freeRun_ = false;      // settings_ at start(), for the listener
+  double frameRate_hz_ = 25;
+  std::shared_ptr<void> displayChanges_;  // the bench's change listener while streaming
 };
 
 }  // namespace

@@ -14,6 +14,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <thread>
 
 namespace {
 
@@ -133,6 +134,54 @@ TEST_F(ControllerTest, InverseSchlierenCycleLightsTheIntactLensAndDarkensThePart
   const auto [partLens, partCentre] = lensAndCentre(second.inspect());
   std::printf("particle: lens %.1f DN, centre %.1f DN\n", partLens, partCentre);
   EXPECT_LT(partCentre, 0.2 * litCentre);
+}
+
+// A free-running camera keeps exposing while the display changes: after an
+// emit(), inspect() must not average the frames it took of the old panel.
+TEST_F(ControllerTest, InspectionAfterAnEmitSeesOnlyTheNewPanel) {
+  auto capture = openLightFieldCapture(captureUri());
+  auto camera = openCamera(uri("intact.toml"));
+  auto display = openDisplay(uri("intact.toml"));
+  CameraSettings settings;
+  settings.exposure_us = 2000;
+  settings.pixelFormat = PixelFormat::Mono12;
+  settings.frameRate_hz = 100;
+  camera->configure(settings);
+  ControllerOptions options;
+  options.frames = 2;
+  Controller controller(*capture, *display, *camera, options);
+  const LightField reference = controller.captureReference();
+  const auto [darkLens, darkCentre] = lensAndCentre(controller.inspect());  // starts the camera: blank display
+  ASSERT_EQ(camera->state(), Camera::State::Streaming);
+  std::this_thread::sleep_for(std::chrono::milliseconds(100));  // the buffers fill with frames of the blank display
+  controller.emit(reference);
+  const auto [litLens, litCentre] = lensAndCentre(controller.inspect());
+  std::printf("blank %.1f DN, lit %.1f DN\n", darkLens, litLens);
+  EXPECT_GT(litLens, darkLens + 20) << "a frame of the blank display was averaged into the lit inspection";
+  EXPECT_EQ(camera->state(), Camera::State::Streaming);
+  // The stream is the controller's: it stops it when it goes.
+}
+
+// A camera the caller started stays the caller's after the controller restarted it.
+TEST_F(ControllerTest, ARestartedStreamStaysTheCallers) {
+  auto capture = openLightFieldCapture(captureUri());
+  auto camera = openCamera(uri("intact.toml"));
+  auto display = openDisplay(uri("intact.toml"));
+  CameraSettings settings;
+  settings.exposure_us = 2000;
+  camera->configure(settings);
+  camera->start(4);
+  {
+    Controller controller(*capture, *display, *camera);
+    controller.emit(controller.captureReference());
+    controller.inspect();
+  }
+  EXPECT_EQ(camera->state(), Camera::State::Streaming);
+  {
+    Controller controller(*capture, *display, *camera);
+    controller.inspect();
+  }
+  EXPECT_EQ(camera->state(), Camera::State::Streaming);
 }
 
 TEST_F(ControllerTest, ErrorsNameTheProblem) {

@@ -23,6 +23,7 @@
 #include <numbers>
 #include <random>
 #include <string>
+#include <thread>
 
 namespace lfi::sim {
 namespace {
@@ -354,6 +355,47 @@ TEST_F(SimDisplayTest, SimCameraSeesWhatTheSimDisplayShows) {
   EXPECT_NEAR(meanDn(), fullScale, 0.02 * fullScale) << "shown again";
   display->close();
   EXPECT_LT(meanDn(), 5) << "display closed";
+  camera->stop();
+}
+
+// A free-running camera's buffered frames were exposed when they were due: the
+// ones taken before a show() show the old panel, as on a real bench, and the
+// ones after it the new one. Software-triggered frames are exposed at the trigger.
+TEST_F(SimDisplayTest, FramesExposedBeforeAShowShowTheOldPanel) {
+  const fs::path file = write("bench.toml", sceneText("panel_width_px = 400\npanel_height_px = 300\n"
+                                                      "subpixels = \"mono\"\nbrightness = 1\n"));
+  auto camera = openCamera(uri(file));
+  auto display = openDisplay(uri(file));
+  CameraSettings settings;
+  settings.exposure_us = 5000;
+  settings.pixelFormat = PixelFormat::Mono16;
+  settings.frameRate_hz = 100;
+  camera->configure(settings);
+  camera->start(4);
+  std::this_thread::sleep_for(100ms);  // 10 frames due: the 4 buffers fill with the dark panel, 6 are underruns
+  display->show(cv::Mat(300, 400, CV_8UC1, cv::Scalar(255)));
+  const auto shown = std::chrono::steady_clock::now();
+  Frame frame;
+  auto meanDn = [&] {
+    camera->grabInto(frame, 2000ms);
+    EXPECT_EQ(frame.status, FrameStatus::Complete);
+    return cv::mean(frame.image)[0] / 16;
+  };
+  for (int i = 0; i < 4; ++i) EXPECT_LT(meanDn(), 5) << "buffered frame " << i << " was exposed before the show";
+  const double lit = meanDn();  // the next frame is due after the show
+  EXPECT_GT(std::chrono::nanoseconds(frame.timestamp_ns), shown.time_since_epoch());
+  EXPECT_GT(lit, 1000);
+  EXPECT_GE(camera->statistics().underruns, 6u);
+  camera->stop();
+
+  settings.trigger = TriggerMode::Software;
+  camera->configure(settings);
+  camera->start(4);
+  camera->softwareTrigger();
+  display->blank();
+  EXPECT_GT(meanDn(), 1000) << "triggered before the blank";
+  camera->softwareTrigger();
+  EXPECT_LT(meanDn(), 5) << "triggered after the blank";
   camera->stop();
 }
 

@@ -52,7 +52,10 @@ public:
   // throws Errc::Device with the device's reason.
   void emit(const LightField& reference);
   // Step 3. The camera must be Configured (it is started with a small buffer
-  // pool) or Streaming. Returns the mean of `frames` complete frames, CV_32FC1,
+  // pool) or Streaming. Every frame is exposed after the last emit(): a camera
+  // that was streaming when the display changed is stopped and started again,
+  // dropping the frames it had taken of the old panel. Returns the mean of
+  // `frames` complete frames, CV_32FC1,
   // in the camera's digital numbers. More than `retries` bad frames throw
   // Errc::Device (Errc::Timeout when nothing arrived at all).
   cv::Mat inspect();
@@ -68,6 +71,7 @@ private:
   Camera& camera_;
   ControllerOptions options_;
   bool startedCamera_ = false;
+  bool staleFrames_ = false;  // the display changed while the camera was streaming
   double white_ = 0;
 };
 

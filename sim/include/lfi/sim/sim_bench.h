@@ -8,7 +8,11 @@
 // device opens and again after the last one closed). It holds the parsed scene
 // and the display's state; every change of what the display emits (show, blank,
 // backlight level) bumps version(), and a renderer that cached radiance for an
-// older version renders again (SimImager does).
+// older version renders again (SimImager does). Each version's state is an
+// immutable DisplayState, so a frame exposed before a change can still be
+// rendered as it was: before every change the bench calls its change
+// listeners on the changing thread (a free-running SimCamera exposes the
+// frames due until then with the state about to end).
 //
 //   state          meaning
 //   panel          the last shown panel image as drive levels (PanelEmission), dark after open/blank
@@ -27,12 +31,16 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <memory>
 #include <mutex>
+#include <optional>
+#include <utility>
+#include <vector>
 
 namespace lfi::sim {
 
-class SimBench {
+class SimBench : public std::enable_shared_from_this<SimBench> {
  public:
   // The bench of `sceneFile` (shared while any holder keeps it). Throws
   // Errc::NotFound for a missing file, Errc::Config for a bad one; `device`
@@ -50,10 +58,24 @@ class SimBench {
 
   std::uint64_t version() const;
 
+  // What the display emits as of one version (immutable; the panel is shared).
+  struct DisplayState {
+    std::uint64_t version = 1;
+    std::optional<PanelEmission> emission;  // none without a [display]
+  };
+  std::shared_ptr<const DisplayState> displayState() const;
+
   // Sets the display object's emission in `scene` (built from description().objects)
-  // to the current display state and returns the version it reflects. No-op
-  // without a display.
+  // to the current display state, or to `state`, and returns the version it
+  // reflects. No-op without a display.
   std::uint64_t applyDisplay(Scene& scene) const;
+  static std::uint64_t applyDisplay(Scene& scene, int displayObject, const DisplayState& state);
+
+  // Calls `listener` just before each change of the display state, on the
+  // changing thread, until the returned handle is destroyed. A listener must
+  // not change the display; it may read displayState() (still the old one).
+  using ChangeListener = std::function<void()>;
+  [[nodiscard]] std::shared_ptr<void> onDisplayChange(ChangeListener listener);
 
   // Display side (require hasDisplay()). `panel` as makePanelEmission() takes it.
   void showPanel(const cv::Mat& panel);
@@ -66,6 +88,9 @@ class SimBench {
 
  private:
   PanelEmission emissionLocked() const;
+  // Runs `mutate` (under mutex_; returns whether it changed anything) after
+  // telling the listeners, then publishes the new state.
+  void change(const std::function<bool()>& mutate);
 
   std::filesystem::path sceneFile_;
   SceneDescription description_;
@@ -75,6 +100,11 @@ class SimBench {
   bool lit_ = false;
   int backlight_ = 0;
   std::uint64_t version_ = 1;
+  std::shared_ptr<const DisplayState> state_;
+  std::mutex changeMutex_;  // one change at a time: listeners see them in order
+  std::mutex listenersMutex_;
+  std::vector<std::pair<std::uint64_t, ChangeListener>> listeners_;
+  std::uint64_t nextListener_ = 0;
 };
 
 }  // namespace lfi::sim

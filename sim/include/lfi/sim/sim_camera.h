@@ -21,7 +21,10 @@
 // binning and per bench version (the expensive part, at the first frame after a
 // new binning or after a SimDisplay on the same scene file showed, blanked or
 // changed brightness: sim_bench.h) and every frame is a new noise draw on that
-// radiance; a ROI is a crop of the binned radiance. Frame ids start at 1
+// radiance; a ROI is a crop of the binned radiance. A frame shows the display
+// as it was when the frame was exposed (at its due time, or its software
+// trigger), as a real camera's buffered frames do: frames exposed before a
+// show() or blank() and grabbed after it show the old panel. Frame ids start at 1
 // after each start() and grow by 1 per frame the "device" produces (frames the
 // caller was too slow for count as underruns, and their ids are skipped).
 // Timestamps are the host's steady clock in ns at the frame's due time.
@@ -31,6 +34,7 @@
 #include "lfi/drivers/camera.h"
 #include "lfi/sim/camera_sensor_model.h"
 #include "lfi/sim/scene_file.h"
+#include "lfi/sim/sim_bench.h"
 
 #include <opencv2/core.hpp>
 
@@ -44,7 +48,6 @@
 namespace lfi::sim {
 
 class Scene;
-class SimBench;
 
 // The per-frame noise seed: a hash of the scene's render seed and the frame id.
 std::uint64_t frameNoiseSeed(std::uint64_t sceneSeed, std::uint64_t frameId);
@@ -82,13 +85,19 @@ class SimImager {
   // The sensor model for these (resolved) settings: exposure, gain and binning applied.
   CameraSensorModel sensorModel(const CameraSettings& settings) const;
 
-  // Relative radiance of the whole binned sensor (CV_32FC1), rendered at the first
-  // call per binning and bench version. The reference is valid until the next call.
-  const cv::Mat& radiance(int binning);
+  // Relative radiance of the whole binned sensor (CV_32FC1) with the display as
+  // it is now, or as `display` was, rendered at the first call per binning and
+  // display version (the two newest versions asked for stay cached). The
+  // reference is valid until the next call.
+  const cv::Mat& radiance(int binning, const SimBench::DisplayState* display = nullptr);
 
-  // Frame `frameId` for resolved `settings`: CV_8UC1 for Mono8, else CV_16UC1,
-  // ROI-sized. Reuses out's memory when it fits.
-  void capture(const CameraSettings& settings, std::uint64_t frameId, cv::Mat& out);
+  // Frame `frameId` for resolved `settings`, exposed while the display was in
+  // `display` (null: now): CV_8UC1 for Mono8, else CV_16UC1, ROI-sized. Reuses
+  // out's memory when it fits.
+  void capture(const CameraSettings& settings, std::uint64_t frameId, cv::Mat& out,
+               const SimBench::DisplayState* display = nullptr);
+
+  SimBench& bench() const { return *bench_; }
 
   // Render threads (0 = all cores) and a progress callback for the radiance renders.
   void setRenderOptions(int threads, std::function<void(double)> progress);
@@ -99,8 +108,7 @@ class SimImager {
   TelecentricCamera camera_;
   std::shared_ptr<SimBench> bench_;
   std::unique_ptr<Scene> scene_;
-  std::map<int, cv::Mat> radianceByBinning_;
-  std::uint64_t radianceVersion_ = 0;  // bench version the cached radiance shows
+  std::map<std::pair<std::uint64_t, int>, cv::Mat> radiance_;  // by display version and binning
   int renderThreads_ = 0;
   std::function<void(double)> renderProgress_;
 };
