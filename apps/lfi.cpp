@@ -2,6 +2,8 @@
 // work to stderr, prints results to stdout, and exits non-zero with one clear
 // message on error.
 
+#include "lfi/calib/display_distance.h"
+#include "lfi/core/atomic_file.h"
 #include "lfi/core/error.h"
 #include "lfi/core/exr_io.h"
 #include "lfi/core/log.h"
@@ -16,12 +18,14 @@
 
 #include <CLI/CLI.hpp>
 #include <fmt/format.h>
+#include <nlohmann/json.hpp>
 #include <unistd.h>
 
 
 #include <atomic>
 #include <charconv>
 #include <chrono>
+#include <cmath>
 #include <csignal>
 #include <functional>
 #include <pthread.h>
@@ -126,6 +130,151 @@ void serveCamera(const fs::path& sceneFile, lfi::GvCameraServerOptions options, 
   spdlog::info("serve-camera: {} received, stopping", signal == SIGINT ? "SIGINT" : "SIGTERM");
 }
 
+// The devices `lfi inspect` and `lfi calibrate-distance` drive, and how.
+struct BenchOptions {
+  std::string camera, display, capture;
+  fs::path lightField;
+  int frames = 1;
+  double exposure_us = 10'000, gain = 0;
+  std::string pixelFormat = "Mono12";
+};
+
+void addBenchOptions(CLI::App& command, BenchOptions& o) {
+  command.add_option("--camera", o.camera, "Camera URI (aravis:<id>, sim:<scene-file>)")->required();
+  command.add_option("--display", o.display, "Display URI (usb:<vid>:<pid>[/<serial>], sim:<scene-file>)")
+      ->required();
+  auto* capture = command.add_option("--capture", o.capture, "Light field capture URI (sim:<scene-file>[?...])");
+  command.add_option("--light-field", o.lightField, "Use this reference light field (EXR) instead of capturing")
+      ->check(CLI::ExistingFile)
+      ->excludes(capture);
+  command.add_option("--frames", o.frames, "Frames averaged per image")->check(wholeNumberFrom(1))
+      ->capture_default_str();
+  command.add_option("--exposure-us", o.exposure_us, "Exposure time (µs)")->capture_default_str();
+  command.add_option("--gain", o.gain, "Gain (device unit, dB for SFNC cameras)")->capture_default_str();
+  command.add_option("--pixel-format", o.pixelFormat, "Mono8 | Mono12 | Mono16")
+      ->check(CLI::IsMember({"Mono8", "Mono12", "Mono16"}))
+      ->capture_default_str();
+}
+
+// A reference from a file needs no capture device: step 1 is skipped.
+class FileCapture final : public lfi::LightFieldCapture {
+public:
+  explicit FileCapture(fs::path file) : file_(std::move(file)), lf_(lfi::readLightFieldExr(file_)) {}
+  lfi::LightFieldGeometry geometry() const override { return lf_.geometry(); }
+  lfi::LightField capture(const std::function<void(double)>&) override { return lf_; }
+  std::string description() const override { return "file " + file_.string(); }
+
+private:
+  fs::path file_;
+  lfi::LightField lf_;
+};
+
+// The devices opened and the camera configured.
+struct OpenBench {
+  std::unique_ptr<lfi::Camera> camera;
+  std::unique_ptr<lfi::Display> display;
+  std::unique_ptr<lfi::LightFieldCapture> capture;  // a device, or FileCapture
+  bool captured = false;                            // a device: the reference is a new capture
+};
+
+OpenBench openBench(const BenchOptions& o, const char* command) {
+  if (o.capture.empty() && o.lightField.empty())
+    lfi::fail(lfi::Errc::Config, "{}: give --capture <uri> or --light-field <file>", command);
+  lfi::registerBuiltinBackends();
+  lfi::registerBuiltinDisplayBackends();
+  lfi::sim::registerSimBackends();
+  OpenBench bench;
+  bench.camera = lfi::openCamera(o.camera);
+  lfi::CameraSettings settings;
+  settings.exposure_us = o.exposure_us;
+  settings.gain = o.gain;
+  settings.pixelFormat = o.pixelFormat == "Mono8"    ? lfi::PixelFormat::Mono8
+                         : o.pixelFormat == "Mono16" ? lfi::PixelFormat::Mono16
+                                                     : lfi::PixelFormat::Mono12;
+  bench.camera->configure(settings);
+  bench.display = lfi::openDisplay(o.display);
+  bench.captured = !o.capture.empty();
+  bench.capture = bench.captured ? lfi::openLightFieldCapture(o.capture) : std::make_unique<FileCapture>(o.lightField);
+  return bench;
+}
+
+// --from, --to and --step as the candidate errors; Errc::Config naming them.
+std::vector<double> scanCandidates(double from, double to, double step) {
+  const double count = std::isfinite(from) && std::isfinite(to) && step > 0 ? (to - from) / step : -1;
+  if (!(count >= 2 && count <= 1000) || std::abs(count - std::round(count)) > 1e-6)
+    lfi::fail(lfi::Errc::Config,
+              "calibrate-distance: --from {} --to {} --step {} must give 3 to 1001 candidates, the range a whole "
+              "number of steps", from, to, step);
+  std::vector<double> candidates;
+  for (int i = 0; i <= static_cast<int>(std::round(count)); ++i) candidates.push_back(from + i * step);
+  return candidates;
+}
+
+// lfi calibrate-distance: the display-to-part distance scan (docs/calibration.md).
+void calibrateDistance(const BenchOptions& o, const std::vector<double>& candidates, const std::vector<int>& roiBox,
+                       const fs::path& out, bool force, bool quiet) {
+  const auto overwrite = force ? lfi::Overwrite::Allow : lfi::Overwrite::Refuse;
+  if (!force && fs::exists(out))
+    lfi::fail(lfi::Errc::Exists, "'{}' exists; refusing to overwrite it (use --force to replace it)", out.string());
+  OpenBench bench = openBench(o, "calibrate-distance");
+  const lfi::CameraSettings settings = bench.camera->settings();
+  cv::Mat roi;
+  if (!roiBox.empty()) {
+    const cv::Rect box(roiBox[0], roiBox[1], roiBox[2], roiBox[3]);
+    if (box.x < 0 || box.y < 0 || box.width < 1 || box.height < 1 || box.x + box.width > settings.roiWidth_px ||
+        box.y + box.height > settings.roiHeight_px)
+      lfi::fail(lfi::Errc::Config, "calibrate-distance: --roi {},{},{},{} is not inside the camera's {} x {} image",
+                box.x, box.y, box.width, box.height, settings.roiWidth_px, settings.roiHeight_px);
+    roi = cv::Mat::zeros(settings.roiHeight_px, settings.roiWidth_px, CV_8UC1);
+    roi(box).setTo(255);
+  }
+  lfi::ControllerOptions options;
+  options.frames = o.frames;
+  lfi::Controller controller(*bench.capture, *bench.display, *bench.camera, options);
+  ProgressBar bar;
+  const lfi::LightField reference = controller.captureReference([&](const char* step, double f) {
+    if (!quiet) bar(step, f);
+  });
+  // One drive scale for every candidate: the brightness compares the display's position, not the fields' peaks.
+  const double white = lfi::Controller::defaultWhite(reference);
+  size_t done = 0;
+  const lfi::calib::DisplayDistanceScan scan = lfi::calib::calibrateDisplayDistance(
+      reference,
+      [&](const lfi::LightField& shown) {
+        if (!quiet) bar(fmt::format("candidate {} of {}", done + 1, candidates.size()),
+                        static_cast<double>(done) / static_cast<double>(candidates.size()));
+        ++done;
+        controller.emit(shown, white);
+        return controller.inspect();
+      },
+      candidates, roi);
+  if (!quiet) bar("scan", 1);
+  const lfi::CameraInfo camera = bench.camera->info();
+  nlohmann::ordered_json result;
+  result["format"] = "lfi-display-distance-scan";
+  result["version"] = 1;
+  result["units"] = "mm; brightness in the camera's digital numbers";
+  result["convention"] =
+      "epsilon > 0: the display is further from the part than the reference light field's distance_mm; the "
+      "estimate is the centre of the brightness peak, half-way between where it falls below `level` on either "
+      "side (docs/calibration.md)";
+  result["reference"] = {{"source", bench.capture->description()}, {"distance_mm", reference.geometry().distance_mm}};
+  result["camera"] = {{"uri", o.camera}, {"vendor", camera.vendor}, {"model", camera.model},
+                      {"serial", camera.serial}, {"exposure_us", settings.exposure_us}, {"frames", o.frames}};
+  result["display"] = {{"uri", o.display}, {"white", white}};
+  result["roi_px"] = roiBox.empty() ? nlohmann::ordered_json(nullptr) : nlohmann::ordered_json(roiBox);
+  result["candidates_mm"] = scan.candidates_mm;
+  result["brightness"] = scan.brightness;
+  result["level"] = scan.level;
+  result["estimate_mm"] = scan.estimate_mm;
+  result["peak_width_mm"] = scan.width_mm;
+  lfi::writeFileAtomically(out, overwrite, result.dump(2) + "\n");
+  for (size_t i = 0; i < scan.candidates_mm.size(); ++i)
+    fmt::print("{:+8.3f} mm  {:.6g}\n", scan.candidates_mm[i], scan.brightness[i]);
+  fmt::print("estimate {:+.3f} mm (display further from the part than the reference's {} mm)\n{}\n",
+             scan.estimate_mm, reference.geometry().distance_mm, out.string());
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -192,28 +341,31 @@ int main(int argc, char** argv) {
   // lfi inspect
   auto* inspect = app.add_subcommand(
       "inspect", "Capture the reference light field, emit it with the display, inspect through the camera");
-  std::string cameraUri, displayUri, captureUri;
-  fs::path referenceFile, inspectOut;
-  int frames = 1;
-  double exposure_us = 10'000, gain = 0;
-  std::string pixelFormat = "Mono12";
+  BenchOptions inspectBench;
+  fs::path inspectOut;
   bool inspectForce = false;
-  inspect->add_option("--camera", cameraUri, "Camera URI (aravis:<id>, sim:<scene-file>)")->required();
-  inspect->add_option("--display", displayUri, "Display URI (usb:<vid>:<pid>[/<serial>], sim:<scene-file>)")
-      ->required();
-  auto* captureOption =
-      inspect->add_option("--capture", captureUri, "Light field capture URI (sim:<scene-file>[?...])");
-  inspect->add_option("--light-field", referenceFile, "Use this reference light field (EXR) instead of capturing")
-      ->check(CLI::ExistingFile)
-      ->excludes(captureOption);
+  addBenchOptions(*inspect, inspectBench);
   inspect->add_option("--out", inspectOut, "Output folder (inspection.exr/.png, lightfield.exr)")->required();
-  inspect->add_option("--frames", frames, "Frames averaged")->check(wholeNumberFrom(1))->capture_default_str();
-  inspect->add_option("--exposure-us", exposure_us, "Exposure time (µs)")->capture_default_str();
-  inspect->add_option("--gain", gain, "Gain (device unit, dB for SFNC cameras)")->capture_default_str();
-  inspect->add_option("--pixel-format", pixelFormat, "Mono8 | Mono12 | Mono16")
-      ->check(CLI::IsMember({"Mono8", "Mono12", "Mono16"}))
-      ->capture_default_str();
   inspect->add_flag("--force", inspectForce, "Replace existing output files");
+
+  // lfi calibrate-distance
+  auto* calibrate = app.add_subcommand(
+      "calibrate-distance", "Scan the display-to-part distance error by showing the reference light field "
+      "propagated to candidate distances (docs/calibration.md)");
+  BenchOptions calibrateBench;
+  double scanFrom = -6, scanTo = 6, scanStep = 1;
+  std::vector<int> roiBox;
+  fs::path calibrateOut;
+  bool calibrateForce = false;
+  addBenchOptions(*calibrate, calibrateBench);
+  calibrate->add_option("--from", scanFrom, "First candidate error (mm)")->capture_default_str();
+  calibrate->add_option("--to", scanTo, "Last candidate error (mm)")->capture_default_str();
+  calibrate->add_option("--step", scanStep, "Candidate spacing (mm)")->capture_default_str();
+  calibrate->add_option("--roi", roiBox, "The part's pixels in the camera image: x,y,width,height (default: all)")
+      ->delimiter(',')
+      ->expected(4);
+  calibrate->add_option("--out", calibrateOut, "Result file (JSON)")->required();
+  calibrate->add_flag("--force", calibrateForce, "Replace an existing result file");
 
   // lfi lf-info
   auto* lfInfo = app.add_subcommand("lf-info", "Validate a light field EXR and print its parametrisation");
@@ -278,57 +430,28 @@ int main(int argc, char** argv) {
       const double samples = static_cast<double>(image.total()) * d.render.samplesPerPixel;
       spdlog::info("{:.0f} samples in {:.3f} s: {:.2f} M samples/s", samples, seconds, samples / seconds / 1e6);
     } else if (*inspect) {
-      if (captureUri.empty() && referenceFile.empty())
-        lfi::fail(lfi::Errc::Config, "inspect: give --capture <uri> or --light-field <file>");
-      lfi::registerBuiltinBackends();
-      lfi::registerBuiltinDisplayBackends();
-      lfi::sim::registerSimBackends();
       const auto overwrite = inspectForce ? lfi::Overwrite::Allow : lfi::Overwrite::Refuse;
       fs::create_directories(inspectOut);
       for (const char* name : {"inspection.exr", "inspection.png", "lightfield.exr"})
         if (!inspectForce && fs::exists(inspectOut / name))
           lfi::fail(lfi::Errc::Exists, "'{}' exists; refusing to overwrite it (use --force to replace it)",
                     (inspectOut / name).string());
-      auto camera = lfi::openCamera(cameraUri);
-      lfi::CameraSettings settings;
-      settings.exposure_us = exposure_us;
-      settings.gain = gain;
-      settings.pixelFormat = pixelFormat == "Mono8"    ? lfi::PixelFormat::Mono8
-                             : pixelFormat == "Mono16" ? lfi::PixelFormat::Mono16
-                                                       : lfi::PixelFormat::Mono12;
-      camera->configure(settings);
-      auto display = lfi::openDisplay(displayUri);
-      std::unique_ptr<lfi::LightFieldCapture> capture =
-          captureUri.empty() ? nullptr : lfi::openLightFieldCapture(captureUri);
+      OpenBench bench = openBench(inspectBench, "inspect");
       lfi::ControllerOptions options;
-      options.frames = frames;
+      options.frames = inspectBench.frames;
       ProgressBar bar;
-      // A reference from a file needs no capture device: step 1 is skipped.
-      class FileCapture final : public lfi::LightFieldCapture {
-      public:
-        explicit FileCapture(fs::path file) : file_(std::move(file)), lf_(lfi::readLightFieldExr(file_)) {}
-        lfi::LightFieldGeometry geometry() const override { return lf_.geometry(); }
-        lfi::LightField capture(const std::function<void(double)>&) override { return lf_; }
-        std::string description() const override { return "file " + file_.string(); }
-
-      private:
-        fs::path file_;
-        lfi::LightField lf_;
-      };
-      std::unique_ptr<lfi::LightFieldCapture> fromFile =
-          referenceFile.empty() ? nullptr : std::make_unique<FileCapture>(referenceFile);
-      lfi::Controller controller(capture ? *capture : *fromFile, *display, *camera, options);
+      lfi::Controller controller(*bench.capture, *bench.display, *bench.camera, options);
       const lfi::LightField reference = controller.captureReference([&](const char* step, double f) {
         if (!quiet) bar(step, f);
       });
       bar.finish();
-      if (capture) lfi::writeLightFieldExr(inspectOut / "lightfield.exr", reference, overwrite);
+      if (bench.captured) lfi::writeLightFieldExr(inspectOut / "lightfield.exr", reference, overwrite);
       controller.emit(reference);
       const cv::Mat image = controller.inspect();
-      const auto info = camera->info();
+      const auto info = bench.camera->info();
       lfi::writeRadianceExr(inspectOut / "inspection.exr", image,
-                            {0, fmt::format("inspection image (DN, mean of {} frames) from {} {} via {}", frames,
-                                            info.vendor, info.model, cameraUri)},
+                            {0, fmt::format("inspection image (DN, mean of {} frames) from {} {} via {}",
+                                            inspectBench.frames, info.vendor, info.model, inspectBench.camera)},
                             overwrite);
       double maxValue = 0;
       cv::minMaxLoc(image, nullptr, &maxValue);
@@ -336,6 +459,9 @@ int main(int argc, char** argv) {
       image.convertTo(png8, CV_8U, maxValue > 0 ? 255.0 / maxValue : 1.0);
       lfi::writePngAtomically(inspectOut / "inspection.png", png8, overwrite);
       fmt::print("{}\n{}\n", (inspectOut / "inspection.exr").string(), (inspectOut / "inspection.png").string());
+    } else if (*calibrate) {
+      calibrateDistance(calibrateBench, scanCandidates(scanFrom, scanTo, scanStep), roiBox, calibrateOut,
+                        calibrateForce, quiet);
     } else if (*serve) {
       serveCamera(serveScene, serveOptions, serveThreads, quiet);
     } else if (*lfInfo) {

@@ -38,6 +38,8 @@ LightField propagateLightField(const LightField& lightField, double dz, LightFie
 
 namespace {
 
+constexpr double kPeakLevel = 0.25;  // the flanks' level: this fraction of the way down from the peak
+
 std::string scanTable(const std::vector<double>& candidates, const std::vector<double>& brightness) {
   std::string table;
   for (size_t i = 0; i < brightness.size(); ++i)
@@ -82,18 +84,26 @@ DisplayDistanceScan calibrateDisplayDistance(const LightField& captured, const I
   if (*highest - *lowest <= 1e-9 * std::abs(*highest))
     fail(Errc::Device, "{}: the part's brightness does not change across the scan ({}): is the display showing, the "
          "camera unsaturated, the region on the part?", kWhat, scanTable(candidates, scan.brightness));
-  const auto best = static_cast<size_t>(highest - scan.brightness.begin());
-  if (best == 0 || best + 1 == candidates.size())
-    fail(Errc::InvalidArgument, "{}: the brightest candidate is the {} one of the scan ({}): the display's error may "
-         "lie beyond it; scan further that way", kWhat, best == 0 ? "first" : "last",
-         scanTable(candidates, scan.brightness));
-  // Vertex of the parabola through the best point and its neighbours (a < 0 unless the three are equal).
-  const double x0 = candidates[best - 1], x1 = candidates[best], x2 = candidates[best + 1];
-  const double y0 = scan.brightness[best - 1], y1 = scan.brightness[best], y2 = scan.brightness[best + 1];
-  const double denom = (x0 - x1) * (x0 - x2) * (x1 - x2);
-  const double a = (x2 * (y1 - y0) + x1 * (y0 - y2) + x0 * (y2 - y1)) / denom;
-  const double b = (x2 * x2 * (y0 - y1) + x1 * x1 * (y2 - y0) + x0 * x0 * (y1 - y2)) / denom;
-  scan.estimate_mm = a < 0 ? std::clamp(-b / (2 * a), x0, x2) : x1;
+  // The centre of the peak: half-way between where the brightness falls, on
+  // either side of the brightest candidate, below a quarter of the way down
+  // to the scan's lowest (linear between candidates). A display's finite depth
+  // of field makes the peak flat-topped, which only its flanks locate.
+  scan.level = *highest - kPeakLevel * (*highest - *lowest);
+  const auto best = highest - scan.brightness.begin();
+  const auto last = static_cast<std::ptrdiff_t>(candidates.size()) - 1;
+  auto crossing = [&](std::ptrdiff_t step) {
+    for (std::ptrdiff_t i = best; i + step >= 0 && i + step <= last; i += step) {
+      const auto k = static_cast<size_t>(i), j = static_cast<size_t>(i + step);
+      const double yk = scan.brightness[k], yj = scan.brightness[j];
+      if (yj < scan.level) return candidates[k] + (candidates[j] - candidates[k]) * (yk - scan.level) / (yk - yj);
+    }
+    fail(Errc::InvalidArgument, "{}: the brightness does not fall below {:.6g} on the {} side of the brightest "
+         "candidate within the scan ({}): the display's error may lie beyond it; scan further that way", kWhat,
+         scan.level, step < 0 ? "low" : "high", scanTable(candidates, scan.brightness));
+  };
+  const double low = crossing(-1), high = crossing(+1);
+  scan.estimate_mm = 0.5 * (low + high);
+  scan.width_mm = high - low;
   return scan;
 }
 

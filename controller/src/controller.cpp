@@ -5,6 +5,7 @@
 #include "lfi/core/log.h"
 
 #include <algorithm>
+#include <cmath>
 #include <vector>
 
 namespace lfi {
@@ -34,13 +35,20 @@ LightField Controller::captureReference(const Progress& progress) {
   });
 }
 
+double Controller::defaultWhite(const LightField& lightField) {
+  // The 99.9th percentile: a few hot samples must not darken the whole panel.
+  const double white = percentile(lightField.lensletImage(), 0.999);
+  return white > 0 ? white : 1.0;
+}
+
 void Controller::emit(const LightField& reference) {
-  white_ = options_.white;
-  if (white_ == 0) {
-    // The 99.9th percentile: a few hot samples must not darken the whole panel.
-    white_ = percentile(reference.lensletImage(), 0.999);
-    if (!(white_ > 0)) white_ = 1.0;
-  }
+  emit(reference, options_.white > 0 ? options_.white : defaultWhite(reference));
+}
+
+void Controller::emit(const LightField& reference, double white) {
+  if (!(white > 0) || !std::isfinite(white))
+    fail(Errc::InvalidArgument, "emit: white = {} must be positive and finite", white);
+  white_ = white;
   // From here on, frames the camera has exposed show the old panel: inspect() restarts the stream.
   if (camera_.state() == Camera::State::Streaming) staleFrames_ = true;
   const PresentResult r = display_.show(reference, white_);

@@ -121,9 +121,10 @@ struct Bench {
 };
 
 TEST(DisplayDistance, MeasuresHowFarTheDisplayMoved) {
-  // The brightest propagation is offset from the display's true error by a
-  // constant that the light field's sampling sets (its elements emit the
-  // radiance their centre recorded over their whole area; docs/calibration.md).
+  // With an ideal light field emitter (every element emitting its recorded
+  // radiance over its whole area) the peak's centre is offset from the
+  // display's true error by a constant that the light field's sampling sets
+  // (docs/calibration.md; a physical display's peak is not: lfi_cli_test).
   // So the calibration measures the display's position relative to a known
   // one: a scan with the display where the light field was captured gives the
   // offset, and scans at unknown positions must then return their error.
@@ -132,11 +133,11 @@ TEST(DisplayDistance, MeasuresHowFarTheDisplayMoved) {
   cv::Mat roi = cv::Mat::zeros(48, 48, CV_8UC1);
   cv::circle(roi, {24, 24}, 20, cv::Scalar(255), cv::FILLED);
   const LightField captured = bench.capture();
-  const std::vector<double> candidates = {-6, -5, -4, -3, -2, -1, 0, 1, 2, 3, 4, 5, 6};
+  const std::vector<double> candidates = {-6, -5, -4, -3, -2, -1, 0, 1, 2, 3, 4, 5, 6, 7, 8, 9};
   auto estimate = [&](double trueError) {
     const auto scan = calib::calibrateDisplayDistance(
         captured, [&](const LightField& lf) { return bench.inspect(lf, trueError); }, candidates, roi);
-    std::printf("display error %+.2f mm: brightest propagation %+.3f mm\n", trueError, scan.estimate_mm);
+    std::printf("display error %+.2f mm: the peak's centre at %+.3f mm\n", trueError, scan.estimate_mm);
     return scan.estimate_mm;
   };
   const double offset = estimate(0);
@@ -149,23 +150,33 @@ TEST(DisplayDistance, MeasuresHowFarTheDisplayMoved) {
 // plane it was captured on: the ε the calibration tried.
 double shownEpsilon(const LightField& shown) { return shown.geometry().distance_mm - smallGeometry().distance_mm; }
 
-TEST(DisplayDistance, APeakBetweenCandidatesIsFoundByTheParabola) {
-  // A brightness that is a parabola in ε with its vertex at 0.3 mm: the three
-  // points around it give the vertex exactly.
+TEST(DisplayDistance, TheCentreOfThePeakIsFoundBetweenCandidates) {
   const LightField lf(smallGeometry());
-  auto parabola = [](const LightField& shown) {
-    const double e = shownEpsilon(shown);
-    return cv::Mat(4, 4, CV_32FC1, cv::Scalar(100 - 2 * (e - 0.3) * (e - 0.3)));
+  // A tent with its apex at 0.3 mm: the flanks are straight, so the crossings
+  // of the level (a quarter down from 97 at ε = 0 to 77 at ε = -2: 92) are
+  // exact, at -0.5 and 1.1 mm, and so is their midpoint.
+  auto tent = [](const LightField& shown) {
+    return cv::Mat(4, 4, CV_32FC1, cv::Scalar(100 - 10 * std::abs(shownEpsilon(shown) - 0.3)));
   };
-  const auto scan = calib::calibrateDisplayDistance(lf, parabola, {-2, -1, 0, 1, 2});
-  EXPECT_NEAR(scan.estimate_mm, 0.3, 1e-4);
+  const auto scan = calib::calibrateDisplayDistance(lf, tent, {-2, -1, 0, 1, 2});
+  EXPECT_NEAR(scan.level, 92, 1e-4);
+  EXPECT_NEAR(scan.estimate_mm, 0.3, 1e-5);
+  EXPECT_NEAR(scan.width_mm, 1.6, 1e-5);
   ASSERT_EQ(scan.brightness.size(), 5u);
-  EXPECT_NEAR(scan.brightness[2], 100 - 2 * 0.09, 1e-4);
-  // A maximum at an end of the scan is not bracketed: an error that shows the scan, not that end as the answer.
-  EXPECT_TRUE(throwsError([&] { calib::calibrateDisplayDistance(lf, parabola, {-3, -2, -1}); }, Errc::InvalidArgument,
-                          {"last one of the scan", "-1 mm: 9", "scan further"}));
-  EXPECT_TRUE(throwsError([&] { calib::calibrateDisplayDistance(lf, parabola, {1, 2, 3}); }, Errc::InvalidArgument,
-                          {"first one of the scan"}));
+  EXPECT_NEAR(scan.brightness[2], 97, 1e-4);
+  // A flat top (a display's depth of field) from -1.6 to 2.4 mm, flanks down to 0 at -3.6 and 4.4 mm: its centre,
+  // 0.4 mm, within the interpolation's error (the right crossing's segment holds the top's corner), not the first
+  // of the equally bright candidates (-1 mm).
+  auto flatTop = [](const LightField& shown) {
+    return cv::Mat(4, 4, CV_32FC1, cv::Scalar(50 * std::clamp(4 - std::abs(shownEpsilon(shown) - 0.4), 0.0, 2.0)));
+  };
+  EXPECT_NEAR(calib::calibrateDisplayDistance(lf, flatTop, {-5, -4, -3, -2, -1, 0, 1, 2, 3, 4, 5}).estimate_mm, 0.4,
+              0.05);
+  // A peak whose flank is outside the scan is not located: an error that shows the scan, not an answer.
+  EXPECT_TRUE(throwsError([&] { calib::calibrateDisplayDistance(lf, tent, {-3, -2, -1, 0}); }, Errc::InvalidArgument,
+                          {"high side", "-1 mm: 87", "scan further"}));
+  EXPECT_TRUE(throwsError([&] { calib::calibrateDisplayDistance(lf, tent, {1, 2, 3}); }, Errc::InvalidArgument,
+                          {"low side"}));
 }
 
 TEST(DisplayDistance, RejectsBadCandidatesAndImages) {

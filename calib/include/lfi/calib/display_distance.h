@@ -9,8 +9,11 @@
 // propagated by -ε restores the field at the part, and the intact part appears
 // brightest. The calibration shows the light field propagated for a series of
 // candidate errors, measures the intact part's brightness through the
-// telecentric camera for each, and refines the best candidate with a parabola
-// through it and its neighbours.
+// telecentric camera for each, and takes the centre of the peak: half-way
+// between the two candidates' positions, interpolated, where the brightness
+// falls below a quarter of the way down from the brightest to the dimmest.
+// (The peak is flat-topped on a real display, whose angular sampling gives it
+// a depth of field: its top alone does not locate it.)
 //
 // Units: mm. Sign: ε > 0 means the display is further from the part than Δ.
 
@@ -38,7 +41,9 @@ using InspectFunction = std::function<cv::Mat(const LightField&)>;
 struct DisplayDistanceScan {
   std::vector<double> candidates_mm;  // the ε tried
   std::vector<double> brightness;     // figure of merit per candidate
-  double estimate_mm = 0;             // refined ε of the maximum
+  double level = 0;                   // the brightness at which the peak's flanks are located
+  double estimate_mm = 0;             // ε at the centre of the peak
+  double width_mm = 0;                // the peak's width at `level`
 };
 
 // Scans the candidate errors and returns the estimate. `roi` selects the
@@ -48,9 +53,9 @@ struct DisplayDistanceScan {
 //   Errc::InvalidArgument  fewer than three candidates, candidates not finite and
 //                          strictly increasing, one that puts the display at or
 //                          past the part, an empty or non-CV_8UC1 ROI, an image of
-//                          another size or more than one channel, or the brightest
-//                          candidate at either end of the scan (the maximum is not
-//                          bracketed: scan further that way)
+//                          another size or more than one channel, or a scan
+//                          whose brightness does not fall to the level on both
+//                          sides of the brightest candidate (scan further that way)
 //   Errc::Device           no image, non-finite values, or a brightness that does
 //                          not change across the scan (display dark, camera
 //                          saturated, ROI off the part)

@@ -49,8 +49,14 @@ public:
   // Step 1. The display must not be needed for it; the camera is untouched.
   LightField captureReference(const Progress& progress = {});
   // Step 2. The display must be Open or Showing; a rejected or timed-out frame
-  // throws Errc::Device with the device's reason.
+  // throws Errc::Device with the device's reason. `white` (radiance shown at
+  // full drive level) replaces the option's, e.g. to show several light fields
+  // on one scale.
   void emit(const LightField& reference);
+  void emit(const LightField& lightField, double white);
+  // The 99.9th percentile of the light field's radiance (1 when that is not
+  // positive): the drive scale emit() uses when the option's white is 0.
+  static double defaultWhite(const LightField& lightField);
   // Step 3. The camera must be Configured (it is started with a small buffer
   // pool) or Streaming. Every frame is exposed after the last emit(): a camera
   // that was streaming when the display changed is stopped and started again,
