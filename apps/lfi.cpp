@@ -88,13 +88,16 @@ fs::path defaultBench() {
 }
 
 // lfi serve-camera: SimImager frames through Aravis's device-side GigE Vision
-// implementation until SIGINT or SIGTERM. The radiance is rendered before the
-// device appears (a render inside a frame would stall its control channel).
+// implementation until SIGINT or SIGTERM. The radiance of every binning is
+// rendered before the device appears (a render inside a frame would stall the
+// device's only thread, which also answers control requests).
 void serveCamera(const fs::path& sceneFile, lfi::GvCameraServerOptions options, int threads, bool quiet) {
   lfi::sim::SimImager imager(sceneFile);
   ProgressBar bar;
   imager.setRenderOptions(threads, quiet ? std::function<void(double)>() : [&bar](double f) { bar("rendering", f); });
-  imager.radiance(1);
+  const int binnings = std::min({lfi::sim::SimImager::limits().maxBinning, imager.camera().width,
+                                 imager.camera().height});
+  for (int b = 1; b <= binnings; ++b) imager.radiance(b);
   bar.finish();
   imager.setRenderOptions(threads, {});
   options.sensorWidth_px = imager.camera().width;

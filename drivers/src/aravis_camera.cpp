@@ -19,6 +19,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <chrono>
 #include <atomic>
 #include <cerrno>
 #include <cmath>
@@ -353,10 +354,21 @@ class AravisCamera final : public Camera {
   void grabInto(Frame& frame, std::chrono::milliseconds timeout) override {
     requireCameraState(state_, {State::Streaming}, "grab", name());
     if (timeout.count() < 0) fail(Errc::InvalidArgument, "camera '{}': grab timeout {} ms", name(), timeout.count());
-    if (controlLost_) declareLost("Aravis reported the control channel lost (heartbeat)");
-    ArvBuffer* buffer =
-        arv_stream_timeout_pop_buffer(stream_, static_cast<guint64>(timeout.count()) * 1000);  // microseconds
+    // In slices, so that a lost control channel (the device stops streaming for
+    // good) ends the wait at once instead of after the whole timeout.
+    constexpr std::chrono::milliseconds kSlice{250};
+    const auto deadline = std::chrono::steady_clock::now() + timeout;
+    ArvBuffer* buffer = nullptr;
+    for (;;) {
+      if (controlLost_) declareLost("Aravis reported the control channel lost (heartbeat)");
+      const auto left =
+          std::chrono::duration_cast<std::chrono::microseconds>(deadline - std::chrono::steady_clock::now());
+      const auto wait = std::clamp(left, std::chrono::microseconds(0), std::chrono::microseconds(kSlice));
+      buffer = arv_stream_timeout_pop_buffer(stream_, static_cast<guint64>(wait.count()));
+      if (buffer != nullptr || left <= kSlice) break;
+    }
     if (buffer == nullptr) {
+      if (controlLost_) declareLost("Aravis reported the control channel lost (heartbeat)");
       frame.status = FrameStatus::Timeout;
       frame.frameId = 0;
       frame.timestamp_ns = 0;

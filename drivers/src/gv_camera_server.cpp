@@ -17,6 +17,13 @@ namespace {
 constexpr guint32 kManufacturerNameOffset = 0x0048;  // 32 bytes
 constexpr guint32 kModelNameOffset = 0x0068;         // 32 bytes
 constexpr std::size_t kNameSize = 32;
+// GigE Vision bootstrap register: how long the device keeps its controller
+// without a heartbeat (ms). Aravis's client never writes it and the device's
+// default is 3 s; a host stalled that long (a loaded CI machine) would lose
+// control for good and the stream would stop without a word. 10 s: a crashed
+// client still frees the device soon.
+constexpr guint32 kHeartbeatTimeoutOffset = 0x0938;
+constexpr guint32 kHeartbeatTimeout_ms = 10'000;
 
 guint32 readRegister(ArvFakeCamera* camera, guint32 address) {
   guint32 value = 0;
@@ -116,6 +123,7 @@ GvCameraServer::GvCameraServer(const GvCameraServerOptions& options, ServedFrame
   arv_fake_camera_write_register(camera, ARV_FAKE_CAMERA_REGISTER_SENSOR_HEIGHT, height);
   arv_fake_camera_write_register(camera, ARV_FAKE_CAMERA_REGISTER_WIDTH, width);
   arv_fake_camera_write_register(camera, ARV_FAKE_CAMERA_REGISTER_HEIGHT, height);
+  arv_fake_camera_write_register(camera, kHeartbeatTimeoutOffset, kHeartbeatTimeout_ms);
   arv_fake_camera_set_fill_pattern(camera, &Impl::fill, impl_.get());
 }
 

@@ -90,6 +90,13 @@ class FakeGvCamera {
   // SIGKILL: the device vanishes without a word, like a pulled cable.
   void kill() { process_.reset(); }
 
+  // SIGSTOP, then SIGCONT after `duration`: the device stalls and comes back.
+  void stall(std::chrono::milliseconds duration) {
+    ::kill(process_->pid(), SIGSTOP);
+    std::this_thread::sleep_for(duration);
+    ::kill(process_->pid(), SIGCONT);
+  }
+
  private:
   std::string serial_;
   std::unique_ptr<GigeDeviceProcess> process_;
@@ -489,6 +496,33 @@ TEST_F(AravisCameraTest, KilledDeviceIsReportedWithinTheTimeoutAndReopens) {
   const auto t2 = Clock::now();
   camera.reset();
   std::printf("[ info     ] destroyed after %.3f s\n", secondsSince(t2));
+}
+
+// A device that stalls longer than its heartbeat timeout (the fake device's
+// 3 s) drops its controller and stops streaming for good, though it answers
+// again: the grab waiting for the next frame must say so, not time out, and
+// open() takes control again.
+TEST_F(AravisCameraTest, AControlChannelLostWhileStreamingIsADeviceError) {
+  auto camera = openFake();
+  camera->configure(smallSettings());
+  camera->start(4);
+  ASSERT_EQ(camera->grab(2s).status, FrameStatus::Complete);
+  fake_->stall(3500ms);
+  const auto t0 = Clock::now();
+  // The frames already in the buffers come first; then the wait for the next one ends in the error.
+  int buffered = 0;
+  EXPECT_TRUE(throwsError(
+      [&] {
+        while (camera->grab(20s).status != FrameStatus::Timeout && buffered < 100) ++buffered;
+      },
+      Errc::Device, {"control channel lost"}));
+  std::printf("[ info     ] control loss reported %.2f s after the device came back, after %d buffered frames\n",
+              secondsSince(t0), buffered);
+  EXPECT_EQ(camera->state(), Camera::State::Closed);
+  camera->open();
+  camera->configure(smallSettings());
+  camera->start(4);
+  EXPECT_EQ(camera->grab(2s).status, FrameStatus::Complete);
 }
 
 TEST_F(AravisCameraTest, LostPacketsMakeIncompleteFramesNeverCompleteOnes) {
