@@ -30,6 +30,8 @@
 #include <functional>
 #include <pthread.h>
 #include <cstdio>
+#include <cerrno>
+#include <cstring>
 #include <filesystem>
 #include <mutex>
 
@@ -219,13 +221,20 @@ void calibrateDistance(const BenchOptions& o, const std::vector<double>& candida
   const auto overwrite = force ? lfi::Overwrite::Allow : lfi::Overwrite::Refuse;
   if (!force && fs::exists(out))
     lfi::fail(lfi::Errc::Exists, "'{}' exists; refusing to overwrite it (use --force to replace it)", out.string());
+  // Where the result goes must take it before the scan, not after.
+  const fs::path folder = out.parent_path().empty() ? fs::path(".") : out.parent_path();
+  std::error_code ec;
+  fs::create_directories(folder, ec);
+  if (ec || ::access(folder.c_str(), W_OK) != 0)
+    lfi::fail(lfi::Errc::Io, "calibrate-distance: cannot write into '{}' for --out: {}", folder.string(),
+              ec ? ec.message() : std::string(std::strerror(errno)));
   OpenBench bench = openBench(o, "calibrate-distance");
   const lfi::CameraSettings settings = bench.camera->settings();
   cv::Mat roi;
   if (!roiBox.empty()) {
     const cv::Rect box(roiBox[0], roiBox[1], roiBox[2], roiBox[3]);
-    if (box.x < 0 || box.y < 0 || box.width < 1 || box.height < 1 || box.x + box.width > settings.roiWidth_px ||
-        box.y + box.height > settings.roiHeight_px)
+    if (box.x < 0 || box.y < 0 || box.width < 1 || box.height < 1 || box.width > settings.roiWidth_px - box.x ||
+        box.height > settings.roiHeight_px - box.y)
       lfi::fail(lfi::Errc::Config, "calibrate-distance: --roi {},{},{},{} is not inside the camera's {} x {} image",
                 box.x, box.y, box.width, box.height, settings.roiWidth_px, settings.roiHeight_px);
     roi = cv::Mat::zeros(settings.roiHeight_px, settings.roiWidth_px, CV_8UC1);
@@ -241,17 +250,24 @@ void calibrateDistance(const BenchOptions& o, const std::vector<double>& candida
   // One drive scale for every candidate: the brightness compares the display's position, not the fields' peaks.
   const double white = lfi::Controller::defaultWhite(reference);
   size_t done = 0;
+  const size_t images = candidates.size() + 1;  // and one with the display dark
   const lfi::calib::DisplayDistanceScan scan = lfi::calib::calibrateDisplayDistance(
       reference,
       [&](const lfi::LightField& shown) {
-        if (!quiet) bar(fmt::format("candidate {} of {}", done + 1, candidates.size()),
-                        static_cast<double>(done) / static_cast<double>(candidates.size()));
+        if (!quiet) bar(fmt::format("image {} of {}", done + 1, images), static_cast<double>(done) / images);
         ++done;
         controller.emit(shown, white);
         return controller.inspect();
       },
       candidates, roi);
   if (!quiet) bar("scan", 1);
+  bar.finish();
+  // The table first: should the file fail to be written, the scan is not lost.
+  fmt::print("with the display dark: {:.6g}\n", scan.dark);
+  for (size_t i = 0; i < scan.candidates_mm.size(); ++i)
+    fmt::print("{:+8.3f} mm  {:.6g}\n", scan.candidates_mm[i], scan.brightness[i]);
+  fmt::print("estimate {:+.3f} mm (display further from the part than the reference's {} mm)\n", scan.estimate_mm,
+             reference.geometry().distance_mm);
   const lfi::CameraInfo camera = bench.camera->info();
   nlohmann::ordered_json result;
   result["format"] = "lfi-display-distance-scan";
@@ -266,16 +282,16 @@ void calibrateDistance(const BenchOptions& o, const std::vector<double>& candida
                       {"serial", camera.serial}, {"exposure_us", settings.exposure_us}, {"frames", o.frames}};
   result["display"] = {{"uri", o.display}, {"white", white}};
   result["roi_px"] = roiBox.empty() ? nlohmann::ordered_json(nullptr) : nlohmann::ordered_json(roiBox);
+  result["dark"] = scan.dark;
   result["candidates_mm"] = scan.candidates_mm;
   result["brightness"] = scan.brightness;
   result["level"] = scan.level;
   result["estimate_mm"] = scan.estimate_mm;
   result["peak_width_mm"] = scan.width_mm;
-  lfi::writeFileAtomically(out, overwrite, result.dump(2) + "\n");
-  for (size_t i = 0; i < scan.candidates_mm.size(); ++i)
-    fmt::print("{:+8.3f} mm  {:.6g}\n", scan.candidates_mm[i], scan.brightness[i]);
-  fmt::print("estimate {:+.3f} mm (display further from the part than the reference's {} mm)\n{}\n",
-             scan.estimate_mm, reference.geometry().distance_mm, out.string());
+  // Device strings and paths need not be UTF-8: replace what is not.
+  lfi::writeFileAtomically(out, overwrite,
+                           result.dump(2, ' ', false, nlohmann::ordered_json::error_handler_t::replace) + "\n");
+  fmt::print("{}\n", out.string());
 }
 
 }  // namespace

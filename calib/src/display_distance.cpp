@@ -38,7 +38,8 @@ LightField propagateLightField(const LightField& lightField, double dz, LightFie
 
 namespace {
 
-constexpr double kPeakLevel = 0.25;  // the flanks' level: this fraction of the way down from the peak
+constexpr double kPeakLevel = 0.25;        // the flanks' level: this fraction of the way down from the peak
+constexpr double kClearAboveNoise = 10.0;  // the scan's rise must exceed this many times the noise of a mean
 
 std::string scanTable(const std::vector<double>& candidates, const std::vector<double>& brightness) {
   std::string table;
@@ -60,30 +61,47 @@ DisplayDistanceScan calibrateDisplayDistance(const LightField& captured, const I
   if (const double distance = captured.geometry().distance_mm; distance + candidates.front() <= 0)
     fail(Errc::InvalidArgument, "{}: candidate {:+g} mm would put the display at or past the part ({} mm away)", kWhat,
          candidates.front(), distance);
-  if (!roi.empty() && (roi.type() != CV_8UC1 || cv::countNonZero(roi) == 0))
-    fail(Errc::InvalidArgument, "{}: the ROI must be a CV_8UC1 mask with at least one non-zero pixel", kWhat);
-  DisplayDistanceScan scan;
-  scan.candidates_mm = candidates;
-  for (double epsilon : candidates) {
-    // The display is ε further away: show the field as it is ε further away.
-    cv::Mat image = inspect(propagateLightField(captured, -epsilon));
-    if (image.empty()) fail(Errc::Device, "{}: the camera returned no image", kWhat);
-    if (image.channels() != 1) fail(Errc::InvalidArgument, "{} needs a single-channel image", kWhat);
+  if (!roi.empty() && roi.type() != CV_8UC1)
+    fail(Errc::InvalidArgument, "{}: the ROI must be a CV_8UC1 mask (it is of OpenCV type {})", kWhat, roi.type());
+  if (!roi.empty() && cv::countNonZero(roi) == 0)
+    fail(Errc::InvalidArgument, "{}: the ROI has no non-zero pixel", kWhat);
+  // The mean, the standard deviation and the count of the region's pixels in the image of `shown`.
+  struct Measured {
+    double mean, deviation, pixels;
+  };
+  auto measure = [&](const LightField& shown, const std::string& what) {
+    const cv::Mat image = inspect(shown);
+    if (image.empty()) fail(Errc::Device, "{}: the camera returned no image {}", kWhat, what);
+    if (image.channels() != 1)
+      fail(Errc::InvalidArgument, "{} needs a single-channel image; the one {} has {}", kWhat, what, image.channels());
     cv::Mat f;
     image.convertTo(f, CV_32F);
     if (!roi.empty() && roi.size() != f.size())
-      fail(Errc::InvalidArgument, "{}: ROI {}x{} does not match the image {}x{}", kWhat, roi.cols, roi.rows, f.cols,
+      fail(Errc::InvalidArgument, "{}: the ROI is {}x{}, the image {} {}x{}", kWhat, roi.cols, roi.rows, what, f.cols,
            f.rows);
-    const double mean = roi.empty() ? cv::mean(f)[0] : cv::mean(f, roi)[0];
-    if (!std::isfinite(mean))
-      fail(Errc::Device, "{}: the image for candidate {:+g} mm has non-finite values", kWhat, epsilon);
-    scan.brightness.push_back(mean);
-  }
+    cv::Scalar mean, deviation;
+    cv::meanStdDev(f, mean, deviation, roi);
+    if (!std::isfinite(mean[0]) || !std::isfinite(deviation[0]))
+      fail(Errc::Device, "{}: the image {} has non-finite values", kWhat, what);
+    return Measured{mean[0], deviation[0], roi.empty() ? static_cast<double>(f.total()) : cv::countNonZero(roi)};
+  };
+  DisplayDistanceScan scan;
+  scan.candidates_mm = candidates;
+  // The display dark first: the noise of a mean over the region is about the
+  // dark pixels' spread over the square root of their count (an upper bound
+  // when the dark image has structure).
+  const Measured dark = measure(LightField(captured.geometry()), "with the display dark");
+  scan.dark = dark.mean;
+  const double noise = dark.deviation / std::sqrt(dark.pixels);
+  for (double epsilon : candidates)  // the display is ε further away: show the field as it is ε further away
+    scan.brightness.push_back(
+        measure(propagateLightField(captured, -epsilon), fmt::format("for candidate {:+g} mm", epsilon)).mean);
   const auto lowest = std::min_element(scan.brightness.begin(), scan.brightness.end());
   const auto highest = std::max_element(scan.brightness.begin(), scan.brightness.end());
-  if (*highest - *lowest <= 1e-9 * std::abs(*highest))
-    fail(Errc::Device, "{}: the part's brightness does not change across the scan ({}): is the display showing, the "
-         "camera unsaturated, the region on the part?", kWhat, scanTable(candidates, scan.brightness));
+  if (*highest - *lowest <= kClearAboveNoise * noise || *highest == *lowest)
+    fail(Errc::Device, "{}: the part's brightness hardly changes across the scan ({}; with the display dark {:.6g}, "
+         "the noise of a mean about {:.2g}): is the display showing, the camera unsaturated, the region on the part?",
+         kWhat, scanTable(candidates, scan.brightness), dark.mean, noise);
   // The centre of the peak: half-way between where the brightness falls, on
   // either side of the brightest candidate, below a quarter of the way down
   // to the scan's lowest (linear between candidates). A display's finite depth

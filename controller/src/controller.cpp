@@ -63,13 +63,15 @@ cv::Mat Controller::inspect() {
   // free-running camera fills them; a late triggered frame may too): start a
   // new acquisition, so that every frame averaged is exposed after it. The
   // stream stays whoever's it was.
-  const bool restart = camera_.state() == Camera::State::Streaming && staleFrames_;
-  staleFrames_ = false;
-  if (restart) camera_.stop();
-  if (camera_.state() == Camera::State::Configured) {
-    camera_.start(std::max(4, options_.frames + 2));
-    startedCamera_ = startedCamera_ || !restart;
+  const int buffers = std::max(4, options_.frames + 2);
+  if (camera_.state() == Camera::State::Streaming && staleFrames_) {
+    camera_.stop();
+    camera_.start(buffers);
+  } else if (camera_.state() == Camera::State::Configured) {
+    camera_.start(buffers);
+    startedCamera_ = true;
   }
+  staleFrames_ = false;
   if (camera_.state() != Camera::State::Streaming)
     fail(Errc::InvalidArgument, "inspect: the camera must be configured or streaming (it is {})",
          toString(camera_.state()));

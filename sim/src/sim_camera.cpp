@@ -283,13 +283,14 @@ class SimCamera final : public Camera {
     }
     const Queued next = queue_.front();
     queue_.pop_front();
-    ++statistics_.completed;
     lock.unlock();
     imager_->capture(settings_, next.frameId, frame.image, next.display.get());
     frame.frameId = next.frameId;
     frame.timestamp_ns = static_cast<std::uint64_t>(
         std::chrono::duration_cast<std::chrono::nanoseconds>(next.time.time_since_epoch()).count());
     frame.status = FrameStatus::Complete;
+    lock.lock();
+    ++statistics_.completed;
   }
 
   StreamStatistics statistics() const override {

@@ -44,7 +44,7 @@ class SimDisplay final : public Display {
     if (bench_) {
       try {
         bench_->blankPanel();
-      } catch (...) {  // the bench has a display (checked at open): blankPanel() cannot throw
+      } catch (...) {  // close() does not throw; a change listener (a camera's) that failed is not its business
       }
     }
     bench_.reset();

@@ -205,7 +205,7 @@ TEST_F(LfiCli, CalibrateDistanceRefusesBadScansAndKeepsResults) {
   const fs::path scene = inspectionBench(dir_, 0), out = dir_ / "scan.json";
   const std::string devices = "--camera " + quoted("sim:" + scene.string()) + " --display " +
                               quoted("sim:" + scene.string()) + " --capture " +
-                              quoted("sim:" + scene.string() + "?spatial=8&angular=8&spp=4") + " --exposure-us 2000";
+                              quoted("sim:" + scene.string() + "?spatial=16&angular=16&spp=8") + " --exposure-us 2000";
   std::ofstream(out) << "an earlier result";
   Result run = lfi("calibrate-distance " + devices + " --out " + quoted(out));
   EXPECT_NE(run.status, 0);
@@ -216,6 +216,8 @@ TEST_F(LfiCli, CalibrateDistanceRefusesBadScansAndKeepsResults) {
         {"--from 1 --to 2", "3 to 1001 candidates"},
         {"--step 0", "3 to 1001 candidates"},
         {"--roi 50,50,10,10", "not inside the camera's 56 x 56 image"},
+        {"--roi 10,10,2147483647,10", "not inside the camera's 56 x 56 image"},
+        {"--roi 2147483647,0,1,1", "not inside the camera's 56 x 56 image"},
         // The peak's high flank is beyond a scan that ends at the display's true place.
         {"--from -6 --to 0", "scan further"},
         {"--from -40 --to -20 --step 10", "past the part"}}) {
@@ -224,6 +226,11 @@ TEST_F(LfiCli, CalibrateDistanceRefusesBadScansAndKeepsResults) {
     EXPECT_NE(run.output.find(message), std::string::npos) << arguments << ": " << run.output;
     EXPECT_FALSE(fs::exists(dir_ / "new.json")) << arguments;
   }
+  // A result that could not be written is known before the scan, not after it.
+  run = lfi("calibrate-distance " + devices + " --out /proc/lfi/scan.json");
+  EXPECT_NE(run.status, 0);
+  EXPECT_NE(run.output.find("cannot write into '/proc/lfi'"), std::string::npos) << run.output;
+  EXPECT_EQ(run.output.find("image 1 of"), std::string::npos) << run.output;
   run = lfi("calibrate-distance --camera sim:x --display sim:x --out " + quoted(dir_ / "new.json"));
   EXPECT_NE(run.output.find("give --capture <uri> or --light-field <file>"), std::string::npos) << run.output;
 }

@@ -205,10 +205,32 @@ TEST(DisplayDistance, RejectsBadCandidatesAndImages) {
   EXPECT_TRUE(throwsError([&] { calib::propagateLightField(lf, 31); }, Errc::InvalidArgument, {"pass it"}));
   // A dark (or saturated) image at every candidate has no maximum: not an answer.
   EXPECT_TRUE(throwsError([&] { calib::calibrateDisplayDistance(lf, black, {0, 1, 2}); }, Errc::Device,
-                          {"does not change", "+1 mm: 0"}));
+                          {"hardly changes", "+1 mm: 0"}));
   auto nan = [](const LightField&) { return cv::Mat(8, 8, CV_32FC1, cv::Scalar(NAN)); };
   EXPECT_TRUE(throwsError([&] { calib::calibrateDisplayDistance(lf, nan, {0, 1, 2}); }, Errc::Device,
-                          {"non-finite", "+0 mm"}));
+                          {"non-finite", "with the display dark"}));
+}
+
+// A display that shows nothing (or a camera that sees nothing of it) gives a
+// "peak" of noise: the scan refuses it, judging the noise of a mean from the
+// dark image's spread. The same noise on a real peak does not stop it.
+TEST(DisplayDistance, APeakOfNoiseIsNotAnAnswer) {
+  LightField lf(smallGeometry());
+  lf.lensletImage().setTo(1);  // shown fields are not dark; the dark one is all zeros
+  cv::RNG rng(7);
+  auto noisy = [&](double level) {
+    cv::Mat image(32, 32, CV_32FC1);  // 1024 pixels of noise 2: a mean's noise is 2 / 32 = 0.0625
+    rng.fill(image, cv::RNG::NORMAL, level, 2.0);
+    return image;
+  };
+  auto dark = [&](const LightField&) { return noisy(10); };
+  EXPECT_TRUE(throwsError([&] { calib::calibrateDisplayDistance(lf, dark, {-3, -2, -1, 0, 1, 2, 3}); }, Errc::Device,
+                          {"hardly changes", "the noise of a mean about 0.06"}));
+  auto peak = [&](const LightField& shown) {
+    const bool lit = cv::countNonZero(shown.lensletImage()) > 0;
+    return noisy(10 + (lit ? 20 - 5 * std::abs(shownEpsilon(shown) - 0.5) : 0));
+  };
+  EXPECT_NEAR(calib::calibrateDisplayDistance(lf, peak, {-3, -2, -1, 0, 1, 2, 3}).estimate_mm, 0.5, 0.05);
 }
 
 }  // namespace

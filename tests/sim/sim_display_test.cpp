@@ -17,6 +17,7 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <atomic>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -373,8 +374,8 @@ TEST_F(SimDisplayTest, FramesExposedBeforeAShowShowTheOldPanel) {
   camera->configure(settings);
   camera->start(4);
   std::this_thread::sleep_for(100ms);  // 10 frames due: the 4 buffers fill with the dark panel, 6 are underruns
+  const auto showing = std::chrono::steady_clock::now();
   display->show(cv::Mat(300, 400, CV_8UC1, cv::Scalar(255)));
-  const auto shown = std::chrono::steady_clock::now();
   Frame frame;
   auto meanDn = [&] {
     camera->grabInto(frame, 2000ms);
@@ -383,7 +384,7 @@ TEST_F(SimDisplayTest, FramesExposedBeforeAShowShowTheOldPanel) {
   };
   for (int i = 0; i < 4; ++i) EXPECT_LT(meanDn(), 5) << "buffered frame " << i << " was exposed before the show";
   const double lit = meanDn();  // the next frame is due after the show
-  EXPECT_GT(std::chrono::nanoseconds(frame.timestamp_ns), shown.time_since_epoch());
+  EXPECT_GT(std::chrono::nanoseconds(frame.timestamp_ns), showing.time_since_epoch());
   EXPECT_GT(lit, 1000);
   EXPECT_GE(camera->statistics().underruns, 6u);
   camera->stop();
@@ -397,6 +398,45 @@ TEST_F(SimDisplayTest, FramesExposedBeforeAShowShowTheOldPanel) {
   camera->softwareTrigger();
   EXPECT_LT(meanDn(), 5) << "triggered after the blank";
   camera->stop();
+}
+
+// The display driven from one thread while the camera streams on another (a
+// GUI thread and an acquisition thread): every frame shows one of the panels
+// whole, never a mix, and neither side blocks the other for good.
+TEST_F(SimDisplayTest, ADisplayDrivenFromAnotherThreadWhileTheCameraStreams) {
+  const fs::path file = write("bench.toml", sceneText("panel_width_px = 400\npanel_height_px = 300\n"
+                                                      "subpixels = \"mono\"\nbrightness = 1\n"));
+  auto camera = openCamera(uri(file));
+  auto display = openDisplay(uri(file));
+  CameraSettings settings;
+  settings.exposure_us = 5000;
+  settings.pixelFormat = PixelFormat::Mono16;
+  settings.frameRate_hz = 400;
+  camera->configure(settings);
+  camera->start(4);
+  const double fullScale = 4095 * 2.0 * 5000 / 20000;
+  std::atomic<bool> done{false};
+  std::thread driver([&] {
+    for (int i = 0; !done; ++i) {
+      display->show(cv::Mat(300, 400, CV_8UC1, cv::Scalar(i % 2 ? 255 : 0)));
+      std::this_thread::sleep_for(1ms);
+    }
+  });
+  int dark = 0, lit = 0, mixed = 0;
+  Frame frame;
+  for (int i = 0; i < 60; ++i) {
+    camera->grabInto(frame, 2000ms);
+    EXPECT_EQ(frame.status, FrameStatus::Complete);
+    if (frame.status != FrameStatus::Complete) break;  // (the driver thread is joined below)
+    const double dn = cv::mean(frame.image)[0] / 16;
+    (dn < 5 ? dark : std::abs(dn - fullScale) < 0.02 * fullScale ? lit : mixed) += 1;
+  }
+  done = true;
+  driver.join();
+  camera->stop();
+  EXPECT_EQ(mixed, 0);
+  EXPECT_GT(dark, 0);
+  EXPECT_GT(lit, 0);
 }
 
 }  // namespace

@@ -41,6 +41,7 @@ using InspectFunction = std::function<cv::Mat(const LightField&)>;
 struct DisplayDistanceScan {
   std::vector<double> candidates_mm;  // the ε tried
   std::vector<double> brightness;     // figure of merit per candidate
+  double dark = 0;                    // the same with the display dark (a light field of zeros)
   double level = 0;                   // the brightness at which the peak's flanks are located
   double estimate_mm = 0;             // ε at the centre of the peak
   double width_mm = 0;                // the peak's width at `level`
@@ -48,17 +49,18 @@ struct DisplayDistanceScan {
 
 // Scans the candidate errors and returns the estimate. `roi` selects the
 // part's pixels (CV_8UC1, non-zero = use; empty = the whole image); the figure
-// of merit is the mean image value there. Throws, with the scan's brightness
-// per candidate where there is one:
+// of merit is the mean image value there. A dark light field is shown first:
+// the spread of its image over the region sets the noise of a mean. Throws,
+// with the scan's brightness per candidate where there is one:
 //   Errc::InvalidArgument  fewer than three candidates, candidates not finite and
 //                          strictly increasing, one that puts the display at or
 //                          past the part, an empty or non-CV_8UC1 ROI, an image of
 //                          another size or more than one channel, or a scan
 //                          whose brightness does not fall to the level on both
 //                          sides of the brightest candidate (scan further that way)
-//   Errc::Device           no image, non-finite values, or a brightness that does
-//                          not change across the scan (display dark, camera
-//                          saturated, ROI off the part)
+//   Errc::Device           no image, non-finite values, or a brightness whose rise
+//                          across the scan is not ten times the noise of a mean
+//                          (display dark, camera saturated, ROI off the part)
 DisplayDistanceScan calibrateDisplayDistance(const LightField& captured, const InspectFunction& inspect,
                                              const std::vector<double>& candidates_mm, const cv::Mat& roi = {});
 

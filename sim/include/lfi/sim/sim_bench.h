@@ -71,9 +71,12 @@ class SimBench : public std::enable_shared_from_this<SimBench> {
   std::uint64_t applyDisplay(Scene& scene) const;
   static std::uint64_t applyDisplay(Scene& scene, int displayObject, const DisplayState& state);
 
-  // Calls `listener` just before each change of the display state, on the
-  // changing thread, until the returned handle is destroyed. A listener must
-  // not change the display; it may read displayState() (still the old one).
+  // Calls `listener` just before each change of the display state (and before
+  // show/blank/backlight calls that turn out to change nothing), on the
+  // changing thread, until the returned handle is destroyed; destroying it
+  // waits for a change in progress. A listener must not change the display or
+  // destroy a handle (that would deadlock); it may read displayState() (still
+  // the old one).
   using ChangeListener = std::function<void()>;
   [[nodiscard]] std::shared_ptr<void> onDisplayChange(ChangeListener listener);
 

@@ -87,7 +87,7 @@ class SimImager {
 
   // Relative radiance of the whole binned sensor (CV_32FC1) with the display as
   // it is now, or as `display` was, rendered at the first call per binning and
-  // display version (the two newest versions asked for stay cached). The
+  // display version (this version's and the newest other one's stay cached). The
   // reference is valid until the next call.
   const cv::Mat& radiance(int binning, const SimBench::DisplayState* display = nullptr);
 
