@@ -76,6 +76,12 @@ class SimDisplayTest : public ::testing::Test {
     return file;
   }
   static std::string uri(const fs::path& file) { return "sim:" + file.string(); }
+  // A camera and a 400 x 300 mono display of brightness 1 on one bench.
+  std::pair<std::unique_ptr<Camera>, std::unique_ptr<Display>> openMonoBench() {
+    const fs::path file = write("bench.toml", sceneText("panel_width_px = 400\npanel_height_px = 300\n"
+                                                        "subpixels = \"mono\"\nbrightness = 1\n"));
+    return {openCamera(uri(file)), openDisplay(uri(file))};
+  }
 
   fs::path dir_;
 };
@@ -359,18 +365,21 @@ TEST_F(SimDisplayTest, SimCameraSeesWhatTheSimDisplayShows) {
   camera->stop();
 }
 
+// Settings at which radiance 1 gives half the camera's 12-bit scale.
+CameraSettings streamingSettings(double frameRate_hz) {
+  CameraSettings settings;
+  settings.exposure_us = 5000;
+  settings.pixelFormat = PixelFormat::Mono16;
+  settings.frameRate_hz = frameRate_hz;
+  return settings;
+}
+
 // A free-running camera's buffered frames were exposed when they were due: the
 // ones taken before a show() show the old panel, as on a real bench, and the
 // ones after it the new one. Software-triggered frames are exposed at the trigger.
 TEST_F(SimDisplayTest, FramesExposedBeforeAShowShowTheOldPanel) {
-  const fs::path file = write("bench.toml", sceneText("panel_width_px = 400\npanel_height_px = 300\n"
-                                                      "subpixels = \"mono\"\nbrightness = 1\n"));
-  auto camera = openCamera(uri(file));
-  auto display = openDisplay(uri(file));
-  CameraSettings settings;
-  settings.exposure_us = 5000;
-  settings.pixelFormat = PixelFormat::Mono16;
-  settings.frameRate_hz = 100;
+  auto [camera, display] = openMonoBench();
+  CameraSettings settings = streamingSettings(100);
   camera->configure(settings);
   camera->start(4);
   std::this_thread::sleep_for(100ms);  // 10 frames due: the 4 buffers fill with the dark panel, 6 are underruns
@@ -404,15 +413,8 @@ TEST_F(SimDisplayTest, FramesExposedBeforeAShowShowTheOldPanel) {
 // GUI thread and an acquisition thread): every frame shows one of the panels
 // whole, never a mix, and neither side blocks the other for good.
 TEST_F(SimDisplayTest, ADisplayDrivenFromAnotherThreadWhileTheCameraStreams) {
-  const fs::path file = write("bench.toml", sceneText("panel_width_px = 400\npanel_height_px = 300\n"
-                                                      "subpixels = \"mono\"\nbrightness = 1\n"));
-  auto camera = openCamera(uri(file));
-  auto display = openDisplay(uri(file));
-  CameraSettings settings;
-  settings.exposure_us = 5000;
-  settings.pixelFormat = PixelFormat::Mono16;
-  settings.frameRate_hz = 400;
-  camera->configure(settings);
+  auto [camera, display] = openMonoBench();
+  camera->configure(streamingSettings(400));
   camera->start(4);
   const double fullScale = 4095 * 2.0 * 5000 / 20000;
   std::atomic<bool> done{false};
