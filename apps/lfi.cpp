@@ -142,6 +142,7 @@ struct BenchOptions {
   int frames = 1;
   double exposure_us = 10'000, gain = 0;
   std::string pixelFormat = "Mono12";
+  int settle_ms = 0;
 };
 
 void addBenchOptions(CLI::App& command, BenchOptions& o) {
@@ -158,6 +159,9 @@ void addBenchOptions(CLI::App& command, BenchOptions& o) {
   command.add_option("--gain", o.gain, "Gain (device unit, dB for SFNC cameras)")->capture_default_str();
   command.add_option("--pixel-format", o.pixelFormat, "Mono8 | Mono12 | Mono16")
       ->check(CLI::IsMember({"Mono8", "Mono12", "Mono16"}))
+      ->capture_default_str();
+  command.add_option("--settle-ms", o.settle_ms, "Wait after the display shows a light field before exposing (ms)")
+      ->check(wholeNumberFrom(0))
       ->capture_default_str();
 }
 
@@ -242,6 +246,7 @@ void calibrateDistance(const BenchOptions& o, const std::vector<double>& candida
   }
   lfi::ControllerOptions options;
   options.frames = o.frames;
+  options.settle = std::chrono::milliseconds(o.settle_ms);
   lfi::Controller controller(*bench.capture, *bench.display, *bench.camera, options);
   ProgressBar bar;
   const lfi::LightField reference = controller.captureReference([&](const char* step, double f) {
@@ -458,6 +463,7 @@ int main(int argc, char** argv) {
       OpenBench bench = openBench(inspectBench, "inspect");
       lfi::ControllerOptions options;
       options.frames = inspectBench.frames;
+      options.settle = std::chrono::milliseconds(inspectBench.settle_ms);
       ProgressBar bar;
       lfi::Controller controller(*bench.capture, *bench.display, *bench.camera, options);
       const lfi::LightField reference = controller.captureReference([&](const char* step, double f) {

@@ -5,7 +5,9 @@
 #include "lfi/core/log.h"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
+#include <thread>
 #include <vector>
 
 namespace lfi {
@@ -16,6 +18,8 @@ Controller::Controller(LightFieldCapture& capture, Display& display, Camera& cam
   if (options_.retries < 0) fail(Errc::InvalidArgument, "controller: retries = {} must be >= 0", options_.retries);
   if (options_.grabTimeout.count() <= 0) fail(Errc::InvalidArgument, "controller: grabTimeout must be positive");
   if (!(options_.white >= 0)) fail(Errc::InvalidArgument, "controller: white = {} must be >= 0", options_.white);
+  if (options_.settle.count() < 0)
+    fail(Errc::InvalidArgument, "controller: settle = {} ms must be >= 0", options_.settle.count());
 }
 
 Controller::~Controller() {
@@ -55,6 +59,7 @@ void Controller::emit(const LightField& reference, double white) {
   if (r.status != PresentStatus::Presented)
     fail(Errc::Device, "emit: the display did not show the light field ({}{}{})", toString(r.status),
          r.message.empty() ? "" : ": ", r.message);
+  shown_ = std::chrono::steady_clock::now();
   spdlog::info("emit: light field shown (sequence {}, white = {:.4g})", r.sequence, white_);
 }
 
@@ -64,7 +69,10 @@ cv::Mat Controller::inspect() {
   // new acquisition, so that every frame averaged is exposed after it. The
   // stream stays whoever's it was.
   const int buffers = std::max(4, options_.frames + 2);
-  if (camera_.state() == Camera::State::Streaming && staleFrames_) {
+  const bool restart = camera_.state() == Camera::State::Streaming && staleFrames_;
+  if (restart || camera_.state() == Camera::State::Configured)
+    std::this_thread::sleep_until(shown_ + options_.settle);  // the panel settles before the stream (re)starts
+  if (restart) {
     camera_.stop();
     camera_.start(buffers);
   } else if (camera_.state() == Camera::State::Configured) {

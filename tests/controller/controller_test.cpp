@@ -93,6 +93,23 @@ protected:
     return {cv::mean(image, lens)[0], cv::mean(image, centre)[0]};
   }
 
+  // The intact bench's capture, display and camera, the camera configured at
+  // 2 ms exposure and `frameRate_hz`.
+  struct Rig {
+    std::unique_ptr<LightFieldCapture> capture;
+    std::unique_ptr<Display> display;
+    std::unique_ptr<Camera> camera;
+  };
+  Rig intactRig(double frameRate_hz) const {
+    Rig rig{openLightFieldCapture(captureUri()), openDisplay(uri("intact.toml")), openCamera(uri("intact.toml"))};
+    CameraSettings settings;
+    settings.exposure_us = 2000;
+    settings.pixelFormat = PixelFormat::Mono12;
+    settings.frameRate_hz = frameRate_hz;
+    rig.camera->configure(settings);
+    return rig;
+  }
+
   fs::path dir_;
 };
 
@@ -139,49 +156,59 @@ TEST_F(ControllerTest, InverseSchlierenCycleLightsTheIntactLensAndDarkensThePart
 // A free-running camera keeps exposing while the display changes: after an
 // emit(), inspect() must not average the frames it took of the old panel.
 TEST_F(ControllerTest, InspectionAfterAnEmitSeesOnlyTheNewPanel) {
-  auto capture = openLightFieldCapture(captureUri());
-  auto camera = openCamera(uri("intact.toml"));
-  auto display = openDisplay(uri("intact.toml"));
-  CameraSettings settings;
-  settings.exposure_us = 2000;
-  settings.pixelFormat = PixelFormat::Mono12;
-  settings.frameRate_hz = 100;
-  camera->configure(settings);
+  const Rig rig = intactRig(100);
+  Camera& camera = *rig.camera;
   ControllerOptions options;
   options.frames = 2;
-  Controller controller(*capture, *display, *camera, options);
+  Controller controller(*rig.capture, *rig.display, camera, options);
   const LightField reference = controller.captureReference();
   const auto [darkLens, darkCentre] = lensAndCentre(controller.inspect());  // starts the camera: blank display
-  ASSERT_EQ(camera->state(), Camera::State::Streaming);
+  ASSERT_EQ(camera.state(), Camera::State::Streaming);
   std::this_thread::sleep_for(std::chrono::milliseconds(100));  // the buffers fill with frames of the blank display
   controller.emit(reference);
   const auto [litLens, litCentre] = lensAndCentre(controller.inspect());
   std::printf("blank %.1f DN, lit %.1f DN\n", darkLens, litLens);
   EXPECT_GT(litLens, darkLens + 20) << "a frame of the blank display was averaged into the lit inspection";
-  EXPECT_EQ(camera->state(), Camera::State::Streaming);
+  EXPECT_EQ(camera.state(), Camera::State::Streaming);
   // The stream is the controller's: it stops it when it goes.
+}
+
+// With a settle time, no frame that counts starts exposing before the panel has
+// had it (a physical panel's response time).
+TEST_F(ControllerTest, FramesAfterAnEmitStartOnlyAfterTheSettleTime) {
+  const Rig rig = intactRig(100);
+  ControllerOptions options;
+  options.settle = std::chrono::milliseconds(150);
+  Controller controller(*rig.capture, *rig.display, *rig.camera, options);
+  const LightField reference = controller.captureReference();
+  controller.inspect();  // starts the stream
+  const auto emitting = std::chrono::steady_clock::now();
+  controller.emit(reference);
+  controller.inspect();
+  // The stream that inspect() started again: its frames are due from then on.
+  const Frame frame = rig.camera->grab(std::chrono::milliseconds(2000));
+  ASSERT_EQ(frame.status, FrameStatus::Complete);
+  EXPECT_GE(std::chrono::nanoseconds(frame.timestamp_ns), (emitting + options.settle).time_since_epoch());
+  options.settle = std::chrono::milliseconds(-1);
+  EXPECT_TRUE(throwsError([&] { Controller(*rig.capture, *rig.display, *rig.camera, options); },
+                          Errc::InvalidArgument, {"settle"}));
 }
 
 // A camera the caller started stays the caller's after the controller restarted it.
 TEST_F(ControllerTest, ARestartedStreamStaysTheCallers) {
-  auto capture = openLightFieldCapture(captureUri());
-  auto camera = openCamera(uri("intact.toml"));
-  auto display = openDisplay(uri("intact.toml"));
-  CameraSettings settings;
-  settings.exposure_us = 2000;
-  camera->configure(settings);
-  camera->start(4);
+  const Rig rig = intactRig(25);
+  rig.camera->start(4);
   {
-    Controller controller(*capture, *display, *camera);
+    Controller controller(*rig.capture, *rig.display, *rig.camera);
     controller.emit(controller.captureReference());
     controller.inspect();
   }
-  EXPECT_EQ(camera->state(), Camera::State::Streaming);
+  EXPECT_EQ(rig.camera->state(), Camera::State::Streaming);
   {
-    Controller controller(*capture, *display, *camera);
+    Controller controller(*rig.capture, *rig.display, *rig.camera);
     controller.inspect();
   }
-  EXPECT_EQ(camera->state(), Camera::State::Streaming);
+  EXPECT_EQ(rig.camera->state(), Camera::State::Streaming);
 }
 
 TEST_F(ControllerTest, ErrorsNameTheProblem) {

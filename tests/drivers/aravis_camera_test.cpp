@@ -170,7 +170,9 @@ TEST_F(AravisCameraTest, OpensByIdAndByAddress) {
 // The fake device's own GenICam description with every node named after
 // `feature` renamed, so that the device no longer has that feature but keeps
 // its registers.
-std::filesystem::path genicamWithout(std::initializer_list<std::string> features, const std::filesystem::path& file) {
+// `extra` nodes go in before the description's end.
+std::filesystem::path genicamWithout(std::initializer_list<std::string> features, const std::filesystem::path& file,
+                                     const std::string& extra = {}) {
   ArvFakeCamera* fake = arv_fake_camera_new("genicam");
   std::size_t size = 0;
   const char* xml = arv_fake_camera_get_genicam_xml(fake, &size);
@@ -182,6 +184,9 @@ std::filesystem::path genicamWithout(std::initializer_list<std::string> features
       text.insert(at, "Hidden");
     EXPECT_GT(replaced, 0u) << feature << " is not in the fake device's description";
   }
+  const std::size_t end = text.rfind("</RegisterDescription>");
+  EXPECT_NE(end, std::string::npos);
+  if (end != std::string::npos) text.insert(end, extra);
   std::FILE* out = std::fopen(file.c_str(), "wb");
   EXPECT_NE(out, nullptr) << file;
   if (out != nullptr) {
@@ -210,6 +215,18 @@ TEST_F(AravisCameraTest, ADeviceWithoutSensorSizeFeaturesOpensWithItsLargestImag
   s.exposure_us = 1000;
   camera->configure(s);
   EXPECT_EQ(camera->getIntegerFeature("Width"), 2048);
+  camera.reset();
+
+  // With WidthMax and HeightMax (SFNC: the largest image at the binning in force), those.
+  genicamWithout({"SensorWidth", "SensorHeight"}, xml,
+                 "<Integer Name=\"WidthMax\" NameSpace=\"Standard\"><Value>1000</Value></Integer>\n"
+                 "<Integer Name=\"HeightMax\" NameSpace=\"Standard\"><Value>700</Value></Integer>\n");
+  fake_.reset();
+  fake_ = std::make_unique<FakeGvCamera>("LFIH" + std::to_string(::getpid()));
+  fake_->start(binary_, 0, xml.string());
+  camera = openFake();
+  EXPECT_EQ(camera->info().sensorWidth_px, 1000);
+  EXPECT_EQ(camera->info().sensorHeight_px, 700);
   camera.reset();
   std::filesystem::remove(xml);
 }

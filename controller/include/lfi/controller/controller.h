@@ -16,6 +16,9 @@
 //   retries        3        incomplete or timed-out frames tolerated per inspection
 //   white          0        radiance shown at full drive level; 0 = the light
 //                           field's 99.9th percentile (so the panel's range is used)
+//   settle         0 ms     after a show, before the first frame that counts may
+//                           start exposing (a panel's response time; the sim:
+//                           and usb: displays answer once the frame is shown)
 
 #include "lfi/core/light_field.h"
 #include "lfi/drivers/camera.h"
@@ -34,6 +37,7 @@ struct ControllerOptions {
   int frames = 1;
   int retries = 3;
   double white = 0;
+  std::chrono::milliseconds settle{0};
 };
 
 class Controller {
@@ -79,6 +83,7 @@ private:
   ControllerOptions options_;
   bool startedCamera_ = false;
   bool staleFrames_ = false;  // the display changed while the camera was streaming
+  std::chrono::steady_clock::time_point shown_;  // when the last emit() returned
   double white_ = 0;
 };
 
