@@ -234,9 +234,9 @@ void requireOutsideSolids(const std::vector<Object>& objects, const Rigid3& worl
     if (!solid) continue;
     const Rigid3 objectFromWorld = object.worldFromObject.inverse();
     for (int i = 0; i < kGrid; ++i)
-      for (int j = 0; j < kGrid; ++j)
+      for (int j = 0; j < kGrid; ++j) {
+        const double x = halfX * (2.0 * i / (kGrid - 1) - 1), y = halfY * (2.0 * j / (kGrid - 1) - 1);
         for (int k = 0; k <= (reach > 0 ? kDirections : 0); ++k) {  // k = 0: the grid point itself
-          const double x = halfX * (2.0 * i / (kGrid - 1) - 1), y = halfY * (2.0 * j / (kGrid - 1) - 1);
           const double a = 2 * std::numbers::pi * k / kDirections, r = k == 0 ? 0.0 : reach;
           const Vec3 p = worldFromPlane.point({x + r * std::cos(a), y + r * std::sin(a), 0});
           if ((*solid)->contains(objectFromWorld.point(p)))
@@ -244,6 +244,7 @@ void requireOutsideSolids(const std::vector<Object>& objects, const Rigid3& worl
                  "mm); the tracer starts them in air: move the sensor or the object", where, object.name, p.x, p.y,
                  p.z);
         }
+      }
   }
 }
 

@@ -32,12 +32,12 @@ SimBench::SimBench(const fs::path& sceneFile) : sceneFile_(sceneFile), descripti
   optics_ = emission.optics;
   levels_ = emission.levels;
   backlight_ = description_.display->info.brightnessMax;
-  state_ = std::make_shared<const DisplayState>(DisplayState{version_, emissionLocked()});
+  state_ = std::make_shared<const DisplayState>(DisplayState{1, emissionLocked()});
 }
 
 std::uint64_t SimBench::version() const {
   std::lock_guard lock(mutex_);
-  return version_;
+  return state_->version;
 }
 
 PanelEmission SimBench::emissionLocked() const {
@@ -54,7 +54,7 @@ PanelEmission SimBench::emission() const {
 
 std::shared_ptr<const SimBench::DisplayState> SimBench::displayState() const {
   std::lock_guard lock(mutex_);
-  return state_ ? state_ : std::make_shared<const DisplayState>(DisplayState{version_, std::nullopt});
+  return state_;
 }
 
 std::uint64_t SimBench::applyDisplay(Scene& scene) const {
@@ -89,8 +89,7 @@ void SimBench::change(const std::function<bool()>& mutate) {
   for (const ChangeListener& listener : listeners) listener();
   std::lock_guard lock(mutex_);
   if (!mutate()) return;
-  ++version_;
-  state_ = std::make_shared<const DisplayState>(DisplayState{version_, emissionLocked()});
+  state_ = std::make_shared<const DisplayState>(DisplayState{state_->version + 1, emissionLocked()});
 }
 
 void SimBench::showPanel(const cv::Mat& panel) {

@@ -102,8 +102,7 @@ class SimBench : public std::enable_shared_from_this<SimBench> {
   std::shared_ptr<const cv::Mat> levels_;
   bool lit_ = false;
   int backlight_ = 0;
-  std::uint64_t version_ = 1;
-  std::shared_ptr<const DisplayState> state_;
+  std::shared_ptr<const DisplayState> state_ = std::make_shared<const DisplayState>();  // version 1
   std::mutex changeMutex_;  // one change at a time: listeners see them in order
   std::mutex listenersMutex_;
   std::vector<std::pair<std::uint64_t, ChangeListener>> listeners_;
