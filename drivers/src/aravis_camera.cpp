@@ -9,6 +9,7 @@
 #include "lfi/drivers/pixel_unpack.h"
 
 #include <arpa/inet.h>
+#include <ifaddrs.h>
 #include <arv.h>
 #include <fmt/format.h>
 #include <fmt/ranges.h>
@@ -26,6 +27,7 @@
 #include <cstring>
 #include <mutex>
 #include <optional>
+#include <utility>
 
 namespace lfi {
 namespace {
@@ -132,6 +134,60 @@ std::string describe(const std::vector<AravisDeviceInfo>& devices) {
 // separate GVCP socket. Aravis's own register reads retry 5 × 500 ms; this one
 // gives up after `tries` × `timeout_ms`. Any answer, even an error ack, means
 // the device is there.
+// One of this host's own IPv4 addresses (any of 127/8 included).
+bool isOwnAddress(GInetAddress* address) {
+  if (g_inet_address_get_family(address) != G_SOCKET_FAMILY_IPV4) return false;
+  if (g_inet_address_get_is_loopback(address)) return true;
+  ifaddrs* list = nullptr;
+  if (::getifaddrs(&list) != 0) return false;
+  bool own = false;
+  for (const ifaddrs* a = list; a != nullptr && !own; a = a->ifa_next) {
+    if (a->ifa_addr == nullptr || a->ifa_addr->sa_family != AF_INET) continue;
+    const auto* in = reinterpret_cast<const sockaddr_in*>(a->ifa_addr);
+    own = std::memcmp(&in->sin_addr, g_inet_address_to_bytes(address), sizeof in->sin_addr) == 0;
+  }
+  ::freeifaddrs(list);
+  return own;
+}
+
+// A GigE Vision device at one of this host's own addresses (a served camera, a
+// simulator) sends its stream through the loopback interface, whatever the
+// address. Aravis receives streams on a packet socket bound to the interface it
+// found the device through. When that is not loopback (the device serves on
+// eth0's address, or its discovery answer came back through eth0) the socket
+// never sees a packet: control works and no frame ever arrives. Such a camera
+// is replaced by one reaching the same device through 127.0.0.1.
+ArvCamera* throughLoopbackIfOwnAddress(ArvCamera* camera, const std::string& name) {
+  if (!arv_camera_is_gv_device(camera)) return camera;
+  ArvGvDevice* gv = ARV_GV_DEVICE(arv_camera_get_device(camera));
+  GSocketAddress* device = arv_gv_device_get_device_address(gv);
+  GSocketAddress* interface = arv_gv_device_get_interface_address(gv);
+  if (!G_IS_INET_SOCKET_ADDRESS(device) || !G_IS_INET_SOCKET_ADDRESS(interface)) return camera;
+  GInetAddress* deviceIp = g_inet_socket_address_get_address(G_INET_SOCKET_ADDRESS(device));
+  GInetAddress* interfaceIp = g_inet_socket_address_get_address(G_INET_SOCKET_ADDRESS(interface));
+  if (g_inet_address_get_is_loopback(interfaceIp) || !isOwnAddress(deviceIp)) return camera;
+  GInetAddress* loopback = g_inet_address_new_loopback(G_SOCKET_FAMILY_IPV4);
+  g_object_ref(deviceIp);
+  gchar* ip = g_inet_address_to_string(deviceIp);
+  const std::string deviceIpText = ip != nullptr ? ip : "";
+  g_free(ip);
+  g_object_unref(camera);  // gives the control channel back before the new device asks for it
+  GError* error = nullptr;
+  ArvDevice* throughLoopback = arv_gv_device_new(loopback, deviceIp, &error);
+  g_object_unref(loopback);
+  g_object_unref(deviceIp);
+  ArvCamera* replaced = throughLoopback != nullptr ? arv_camera_new_with_device(throughLoopback, &error) : nullptr;
+  if (throughLoopback != nullptr) g_object_unref(throughLoopback);  // the camera holds its own reference
+  if (replaced == nullptr) {
+    const std::string message = error != nullptr ? error->message : "no error message";
+    if (error != nullptr) g_error_free(error);
+    fail(Errc::Device, "camera '{}': reaching the device at this host's address {} through 127.0.0.1 failed: {}", name,
+         deviceIpText, message);
+  }
+  spdlog::debug("camera '{}': device at this host's address {}: reached through 127.0.0.1", name, deviceIpText);
+  return replaced;
+}
+
 bool gvcpDeviceAnswers(const std::string& ip, std::uint16_t port, int tries, int timeout_ms) {
   const int fd = ::socket(AF_INET, SOCK_DGRAM | SOCK_CLOEXEC, 0);
   if (fd < 0) return true;  // cannot tell; do not declare the device lost
@@ -204,6 +260,7 @@ class AravisCamera final : public Camera {
         fail(notFound ? Errc::NotFound : Errc::Device, "camera '{}': arv_camera_new failed: {}; {}", name(), message,
              describe(devices));
       }
+      camera_ = throughLoopbackIfOwnAddress(std::exchange(camera_, nullptr), name());
     }
     try {
       connectDevice();

@@ -15,8 +15,12 @@
 #include <arv.h>
 #include "lfi_test_support.h"
 
+#include <arpa/inet.h>
 #include <fcntl.h>
 #include <gtest/gtest.h>
+#include <ifaddrs.h>
+#include <net/if.h>
+#include <netinet/in.h>
 #include <signal.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -72,8 +76,9 @@ class FakeGvCamera {
   // Starts the process and waits (up to 5 s) until it answers GVCP.
   // genicam: a GenICam description to serve instead of the built-in one (it
   // must address the fake device's registers).
-  void start(const std::string& binary, int lostPacketsPerThousand = 0, const std::string& genicam = {}) {
-    std::vector<std::string> args = {binary, "-i", "127.0.0.1", "-s", serial_};
+  void start(const std::string& binary, int lostPacketsPerThousand = 0, const std::string& genicam = {},
+             const std::string& address = "127.0.0.1") {
+    std::vector<std::string> args = {binary, "-i", address, "-s", serial_};
     if (lostPacketsPerThousand > 0) {
       args.push_back("-r");
       args.push_back(std::to_string(lostPacketsPerThousand));
@@ -82,7 +87,7 @@ class FakeGvCamera {
       args.push_back("-g");
       args.push_back(genicam);
     }
-    process_ = std::make_unique<GigeDeviceProcess>(args, 5s);
+    process_ = std::make_unique<GigeDeviceProcess>(args, 5s, /*quietStderr=*/true, address);
   }
 
   static bool answersGvcp() { return gigeDeviceAnswers(); }
@@ -377,6 +382,47 @@ TEST_F(AravisCameraTest, GenericFeatureAccess) {
   EXPECT_TRUE(
       throwsError([&] { camera->setFeature("PixelFormat", "Mono99"); }, Errc::NotFound, {"PixelFormat", "Mono99"}));
   EXPECT_ANY_THROW(camera->setIntegerFeature("Width", 1 << 20));
+}
+
+// This host's first IPv4 address outside 127/8 that is up, or "" if it has none.
+std::string ownNonLoopbackAddress() {
+  ifaddrs* list = nullptr;
+  if (::getifaddrs(&list) != 0) return {};
+  std::string found;
+  for (const ifaddrs* a = list; a != nullptr && found.empty(); a = a->ifa_next) {
+    if (a->ifa_addr == nullptr || a->ifa_addr->sa_family != AF_INET || (a->ifa_flags & IFF_UP) == 0 ||
+        (a->ifa_flags & IFF_LOOPBACK) != 0)
+      continue;
+    char text[INET_ADDRSTRLEN] = {};
+    if (::inet_ntop(AF_INET, &reinterpret_cast<const sockaddr_in*>(a->ifa_addr)->sin_addr, text, sizeof text))
+      found = text;
+  }
+  ::freeifaddrs(list);
+  return found;
+}
+
+// A device at one of this host's own addresses sends its stream through the
+// loopback interface, whatever the address. Aravis listens for the stream on
+// the interface it reached the device through: opened by its eth0 address, or
+// by an id whose discovery answer came back through eth0 first (a race; the
+// served camera tests timed out that way), control worked and no frame ever
+// came. Opening by address makes Aravis pick eth0 every time; the backend
+// reaches such a device through 127.0.0.1.
+TEST_F(AravisCameraTest, ADeviceAtAnotherOwnAddressStreams) {
+  const std::string address = ownNonLoopbackAddress();
+  if (address.empty()) GTEST_SKIP() << "this host has no IPv4 address outside 127/8";
+  FakeGvCamera other("LFIO" + std::to_string(::getpid()));
+  other.start(binary_, 0, {}, address);
+  auto camera = openCamera("aravis:" + address);
+  camera->configure(smallSettings());
+  camera->start(8);
+  for (int i = 0; i < 5; ++i) {
+    const Frame frame = camera->grab(2s);
+    const StreamStatistics st = camera->statistics();
+    ASSERT_EQ(frame.status, FrameStatus::Complete)
+        << "device at " << address << ", frame " << i << ": " << toString(frame.status) << "; stream: "
+        << st.completed << " completed, " << st.failed << " failed, " << st.missingPackets << " packets missing";
+  }
 }
 
 // A device that sends another pixel format than the one configured (its

@@ -262,7 +262,12 @@ TEST_F(ServedCameraTest, FramesStayEqualAcrossTheBlockIdWrap) {
   int afterWrap = 0;
   for (int i = 0; i < 3000 && afterWrap < 20; ++i) {
     camera->grabInto(frame, 2s);
-    ASSERT_EQ(frame.status, FrameStatus::Complete);
+    if (frame.status != FrameStatus::Complete) {
+      const StreamStatistics st = camera->statistics();
+      FAIL() << "frame " << i << " after id " << previous << ": " << toString(frame.status) << "; stream: "
+             << st.completed << " completed, " << st.failed << " failed, " << st.underruns << " underruns, "
+             << st.missingPackets << " packets missing";
+    }
     // 16-bit block ids: 65535 is followed by 1 (0 is never used).
     if (i > 0) gaps += missingBlockIds(previous, frame.frameId);
     if (afterWrap > 0 || (i > 0 && frame.frameId < previous)) ++afterWrap;

@@ -45,17 +45,20 @@ private:
 };
 
 // A GVCP READREG of the control channel privilege register (0x0A00) on
-// 127.0.0.1:3956 gets an answer within `timeoutMs`.
-inline bool gigeDeviceAnswers(int timeoutMs = 100) {
+// `address`:3956 gets an answer within `timeoutMs`.
+inline bool gigeDeviceAnswers(int timeoutMs = 100, const std::string& address = "127.0.0.1") {
   const int fd = ::socket(AF_INET, SOCK_DGRAM | SOCK_CLOEXEC, 0);
   if (fd < 0) return false;
-  sockaddr_in address{};
-  address.sin_family = AF_INET;
-  address.sin_port = htons(3956);
-  address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  sockaddr_in device{};
+  device.sin_family = AF_INET;
+  device.sin_port = htons(3956);
+  if (::inet_pton(AF_INET, address.c_str(), &device.sin_addr) != 1) {
+    ::close(fd);
+    return false;
+  }
   const std::uint8_t packet[12] = {0x42, 0x01, 0x00, 0x80, 0x00, 0x04, 0x00, 0x01, 0x00, 0x00, 0x0a, 0x00};
   bool answered = false;
-  if (::connect(fd, reinterpret_cast<const sockaddr*>(&address), sizeof address) == 0 &&
+  if (::connect(fd, reinterpret_cast<const sockaddr*>(&device), sizeof device) == 0 &&
       ::send(fd, packet, sizeof packet, 0) == sizeof packet) {
     pollfd pfd{.fd = fd, .events = POLLIN, .revents = 0};
     std::uint8_t reply[64];
@@ -67,10 +70,11 @@ inline bool gigeDeviceAnswers(int timeoutMs = 100) {
 
 // The device's process: started with `args` (args[0] is the executable's path),
 // stdout (and with quietStderr stderr) to /dev/null; waits until the device
-// answers GVCP or the process exits. Killed with SIGKILL on destruction.
+// answers GVCP on `address` or the process exits. Killed with SIGKILL on destruction.
 class GigeDeviceProcess {
 public:
-  GigeDeviceProcess(std::vector<std::string> args, std::chrono::milliseconds startTimeout, bool quietStderr = true) {
+  GigeDeviceProcess(std::vector<std::string> args, std::chrono::milliseconds startTimeout, bool quietStderr = true,
+                    const std::string& address = "127.0.0.1") {
     std::vector<char*> argv;
     for (std::string& a : args) argv.push_back(a.data());
     argv.push_back(nullptr);
@@ -82,7 +86,7 @@ public:
     posix_spawn_file_actions_destroy(&actions);
     if (rc != 0) throw std::runtime_error("posix_spawn " + args[0] + ": " + std::strerror(rc));
     const auto deadline = std::chrono::steady_clock::now() + startTimeout;
-    while (!gigeDeviceAnswers()) {
+    while (!gigeDeviceAnswers(100, address)) {
       int status = 0;
       if (::waitpid(pid_, &status, WNOHANG) == pid_) {
         pid_ = -1;
@@ -90,7 +94,7 @@ public:
       }
       if (std::chrono::steady_clock::now() > deadline) {
         signal(SIGKILL);
-        throw std::runtime_error(args[0] + " did not answer on 127.0.0.1:3956 in time");
+        throw std::runtime_error(args[0] + " did not answer on " + address + ":3956 in time");
       }
       std::this_thread::sleep_for(std::chrono::milliseconds(20));
     }
