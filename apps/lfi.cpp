@@ -255,7 +255,7 @@ void calibrateDistance(const BenchOptions& o, const std::vector<double>& candida
   // One drive scale for every candidate: the brightness compares the display's position, not the fields' peaks.
   const double white = lfi::Controller::defaultWhite(reference);
   size_t done = 0;
-  const size_t images = candidates.size() + 1;  // and one with the display dark
+  const size_t images = candidates.size() + 2;  // and two with the display dark
   const lfi::calib::DisplayDistanceScan scan = lfi::calib::calibrateDisplayDistance(
       reference,
       [&](const lfi::LightField& shown) {
@@ -268,7 +268,7 @@ void calibrateDistance(const BenchOptions& o, const std::vector<double>& candida
   if (!quiet) bar("scan", 1);
   bar.finish();
   // The table first: should the file fail to be written, the scan is not lost.
-  fmt::print("with the display dark: {:.6g}\n", scan.dark);
+  fmt::print("with the display dark: {:.6g} (noise of a mean {:.2g})\n", scan.dark, scan.noise);
   for (size_t i = 0; i < scan.candidates_mm.size(); ++i)
     fmt::print("{:+8.3f} mm  {:.6g}\n", scan.candidates_mm[i], scan.brightness[i]);
   fmt::print("estimate {:+.3f} mm (display further from the part than the reference's {} mm)\n", scan.estimate_mm,
@@ -288,6 +288,7 @@ void calibrateDistance(const BenchOptions& o, const std::vector<double>& candida
   result["display"] = {{"uri", o.display}, {"white", white}};
   result["roi_px"] = roiBox.empty() ? nlohmann::ordered_json(nullptr) : nlohmann::ordered_json(roiBox);
   result["dark"] = scan.dark;
+  result["noise"] = scan.noise;
   result["candidates_mm"] = scan.candidates_mm;
   result["brightness"] = scan.brightness;
   result["level"] = scan.level;

@@ -65,9 +65,10 @@ DisplayDistanceScan calibrateDisplayDistance(const LightField& captured, const I
     fail(Errc::InvalidArgument, "{}: the ROI must be a CV_8UC1 mask (it is of OpenCV type {})", kWhat, roi.type());
   if (!roi.empty() && cv::countNonZero(roi) == 0)
     fail(Errc::InvalidArgument, "{}: the ROI has no non-zero pixel", kWhat);
-  // The mean, the standard deviation and the count of the region's pixels in the image of `shown`.
+  // The image of `shown`, as float, checked against the region, and its mean over the region.
   struct Measured {
-    double mean, deviation, pixels;
+    cv::Mat image;
+    double mean;
   };
   auto measure = [&](const LightField& shown, const std::string& what) {
     const cv::Mat image = inspect(shown);
@@ -83,25 +84,35 @@ DisplayDistanceScan calibrateDisplayDistance(const LightField& captured, const I
     cv::meanStdDev(f, mean, deviation, roi);
     if (!std::isfinite(mean[0]) || !std::isfinite(deviation[0]))
       fail(Errc::Device, "{}: the image {} has non-finite values", kWhat, what);
-    return Measured{mean[0], deviation[0], roi.empty() ? static_cast<double>(f.total()) : cv::countNonZero(roi)};
+    return Measured{f, mean[0]};
   };
   DisplayDistanceScan scan;
   scan.candidates_mm = candidates;
-  // The display dark first: the noise of a mean over the region is about the
-  // dark pixels' spread over the square root of their count (an upper bound
-  // when the dark image has structure).
-  const Measured dark = measure(LightField(captured.geometry()), "with the display dark");
-  scan.dark = dark.mean;
-  const double noise = dark.deviation / std::sqrt(dark.pixels);
+  // The display dark first, twice: the spread of the difference of the two
+  // images over the region is the frame-to-frame noise alone (whatever does
+  // not change from one image to the next, stray light or a fixed pattern,
+  // cancels, and it cancels between candidates too); over √2 and the square
+  // root of the pixel count, it is the noise of a mean.
+  const LightField darkField(captured.geometry());
+  const std::string darkly = "with the display dark";
+  const Measured dark1 = measure(darkField, darkly), dark2 = measure(darkField, darkly);
+  if (dark2.image.size() != dark1.image.size())
+    fail(Errc::Device, "{}: the two images with the display dark are {}x{} and {}x{}", kWhat, dark1.image.cols,
+         dark1.image.rows, dark2.image.cols, dark2.image.rows);
+  scan.dark = 0.5 * (dark1.mean + dark2.mean);
+  cv::Scalar unused, spread;
+  cv::meanStdDev(dark1.image - dark2.image, unused, spread, roi);
+  const double pixels = roi.empty() ? static_cast<double>(dark1.image.total()) : cv::countNonZero(roi);
+  scan.noise = spread[0] / std::sqrt(2.0 * pixels);
   for (double epsilon : candidates)  // the display is ε further away: show the field as it is ε further away
     scan.brightness.push_back(
         measure(propagateLightField(captured, -epsilon), fmt::format("for candidate {:+g} mm", epsilon)).mean);
   const auto lowest = std::min_element(scan.brightness.begin(), scan.brightness.end());
   const auto highest = std::max_element(scan.brightness.begin(), scan.brightness.end());
-  if (*highest - *lowest <= kClearAboveNoise * noise || *highest == *lowest)
+  if (*highest - *lowest <= kClearAboveNoise * scan.noise || *highest == *lowest)
     fail(Errc::Device, "{}: the part's brightness hardly changes across the scan ({}; with the display dark {:.6g}, "
          "the noise of a mean about {:.2g}): is the display showing, the camera unsaturated, the region on the part?",
-         kWhat, scanTable(candidates, scan.brightness), dark.mean, noise);
+         kWhat, scanTable(candidates, scan.brightness), scan.dark, scan.noise);
   // The centre of the peak: half-way between where the brightness falls, on
   // either side of the brightest candidate, below a quarter of the way down
   // to the scan's lowest (linear between candidates). A display's finite depth
@@ -120,6 +131,14 @@ DisplayDistanceScan calibrateDisplayDistance(const LightField& captured, const I
          scan.level, step < 0 ? "low" : "high", scanTable(candidates, scan.brightness));
   };
   const double low = crossing(-1), high = crossing(+1);
+  // Outside the peak's flanks the brightness must stay below the level: a
+  // second peak as bright makes the answer a guess between the two.
+  for (size_t i = 0; i < candidates.size(); ++i)
+    if ((candidates[i] < low || candidates[i] > high) && scan.brightness[i] >= scan.level)
+      fail(Errc::InvalidArgument, "{}: two peaks: the brightness rises to {:.6g} again at {:+g} mm, above {:.6g}, "
+           "apart from the brightest one between {:+.3g} and {:+.3g} mm ({}); narrow the scan or the region to the "
+           "part", kWhat, scan.brightness[i], candidates[i], scan.level, low, high,
+           scanTable(candidates, scan.brightness));
   scan.estimate_mm = 0.5 * (low + high);
   scan.width_mm = high - low;
   return scan;

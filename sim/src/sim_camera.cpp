@@ -228,7 +228,6 @@ class SimCamera final : public Camera {
       bufferCount_ = static_cast<std::size_t>(bufferCount);
       queue_.clear();
       statistics_ = {};
-      nextFrameId_ = 1;
       produced_ = 0;
       start_ = Clock::now();
       freeRun_ = settings_.trigger == TriggerMode::FreeRun;

@@ -9,7 +9,10 @@
 #include <gtest/gtest.h>
 #include <opencv2/imgproc.hpp>
 
+#include <algorithm>
+#include <cmath>
 #include <numbers>
+#include <vector>
 
 namespace {
 
@@ -177,6 +180,53 @@ TEST(DisplayDistance, TheCentreOfThePeakIsFoundBetweenCandidates) {
                           {"high side", "-1 mm: 87", "scan further"}));
   EXPECT_TRUE(throwsError([&] { calib::calibrateDisplayDistance(lf, tent, {1, 2, 3}); }, Errc::InvalidArgument,
                           {"low side"}));
+}
+
+// What does not change from one image to the next (stray light, a sensor's
+// fixed pattern) is not noise: a dark image with a strong pattern does not
+// hide a small rise. The noise of a mean comes from the difference of two
+// dark images; the dark image's spread (the estimate before) was 2.3 DN here,
+// and ten times that refused this 1.5 DN rise.
+TEST(DisplayDistance, AFixedPatternInTheDarkIsNotNoise) {
+  LightField lf(smallGeometry());
+  lf.lensletImage().setTo(1);  // shown fields are not dark; the dark one is all zeros
+  cv::Mat pattern(32, 32, CV_32FC1);
+  for (int x = 0; x < 32; ++x) pattern.col(x).setTo(8.0 * x);  // 0..248 DN across the image
+  cv::RNG rng(11);
+  auto image = [&](const LightField& shown) {
+    const bool lit = cv::countNonZero(shown.lensletImage()) > 0;
+    cv::Mat noise(32, 32, CV_32FC1);
+    rng.fill(noise, cv::RNG::NORMAL, 0, 2.0);  // a mean's noise: 2 / 32 = 0.0625
+    return cv::Mat(pattern + noise + (lit ? 2 - 0.5 * std::abs(shownEpsilon(shown) - 0.5) : 0.0));
+  };
+  const auto scan = calib::calibrateDisplayDistance(lf, image, {-3, -2, -1, 0, 1, 2, 3});
+  EXPECT_NEAR(scan.noise, 0.0625, 0.01);
+  EXPECT_NEAR(scan.dark, 124, 0.1);
+  EXPECT_NEAR(scan.estimate_mm, 0.5, 0.2);
+}
+
+// Two peaks in one scan (a region over two features, a periodic display's
+// neighbouring view): when the second rises above the level, which one is the
+// display's is not known and the scan is refused; a lower second one is not a
+// peak of the display and the brightest peak's centre is the answer.
+TEST(DisplayDistance, TwoPeaksAsBrightAreRefused) {
+  const LightField lf(smallGeometry());
+  const std::vector<double> candidates = {-6, -5, -4, -3, -2, -1, 0, 1, 2, 3, 4, 5, 6};
+  auto twoTents = [](double second) {
+    return [second](const LightField& shown) {
+      const double e = shownEpsilon(shown);
+      return cv::Mat(4, 4, CV_32FC1,
+                     cv::Scalar(std::max({100 - 20 * std::abs(e + 3), second - 20 * std::abs(e - 3), 0.0})));
+    };
+  };
+  // Level 83.75 (a quarter down from 100 to the scan's lowest, 35 at +6 mm); the first peak's flanks cross it at
+  // -3.8125 and -2.1875 mm.
+  EXPECT_TRUE(throwsError([&] { calib::calibrateDisplayDistance(lf, twoTents(95), candidates); },
+                          Errc::InvalidArgument, {"two peaks", "95 again at +3 mm", "above 83.75", "-3.81", "-2.19"}));
+  // Level 75 (a quarter down from 100 to 0): crossings at -4.25 and -1.75 mm.
+  const auto scan = calib::calibrateDisplayDistance(lf, twoTents(60), candidates);
+  EXPECT_NEAR(scan.estimate_mm, -3, 1e-9);
+  EXPECT_NEAR(scan.width_mm, 2.5, 1e-9);
 }
 
 TEST(DisplayDistance, RejectsBadCandidatesAndImages) {

@@ -250,6 +250,14 @@ TEST_F(SimCameraTest, FramesAreReproduciblePerFrameId) {
   EXPECT_EQ(b1.frameId, 1u);
   EXPECT_EQ(cv::norm(a1.image, b1.image, cv::NORM_INF), 0) << "same id, same frame";
   EXPECT_GT(cv::norm(a1.image, a2.image, cv::NORM_INF), 0) << "a new noise draw per frame";
+  // A restarted stream goes on counting: its frames are new noise draws, not the last stream's again.
+  b->stop();
+  b->start(4);
+  b->softwareTrigger();
+  const Frame b2 = b->grab(1s);
+  ASSERT_EQ(b2.status, FrameStatus::Complete);
+  EXPECT_EQ(b2.frameId, 2u);
+  EXPECT_EQ(cv::norm(a2.image, b2.image, cv::NORM_INF), 0) << "same id, same frame";
   // And SimImager (what serve-camera uses) gives the same frame for the id.
   SimImager imager(scene_);
   cv::Mat expected;

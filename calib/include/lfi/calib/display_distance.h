@@ -42,6 +42,7 @@ struct DisplayDistanceScan {
   std::vector<double> candidates_mm;  // the ε tried
   std::vector<double> brightness;     // figure of merit per candidate
   double dark = 0;                    // the same with the display dark (a light field of zeros)
+  double noise = 0;                   // the frame-to-frame noise of a mean over the region, from two dark images
   double level = 0;                   // the brightness at which the peak's flanks are located
   double estimate_mm = 0;             // ε at the centre of the peak
   double width_mm = 0;                // the peak's width at `level`
@@ -49,8 +50,9 @@ struct DisplayDistanceScan {
 
 // Scans the candidate errors and returns the estimate. `roi` selects the
 // part's pixels (CV_8UC1, non-zero = use; empty = the whole image); the figure
-// of merit is the mean image value there. A dark light field is shown first:
-// the spread of its image over the region sets the noise of a mean. Throws,
+// of merit is the mean image value there. A dark light field is shown twice
+// first: the spread of the difference of its two images over the region sets
+// the noise of a mean. Throws,
 // with the scan's brightness per candidate where there is one:
 //   Errc::InvalidArgument  fewer than three candidates, candidates not finite and
 //                          strictly increasing, one that puts the display at or
@@ -58,6 +60,7 @@ struct DisplayDistanceScan {
 //                          another size or more than one channel, or a scan
 //                          whose brightness does not fall to the level on both
 //                          sides of the brightest candidate (scan further that way)
+//                          or rises to it again outside that peak (two peaks)
 //   Errc::Device           no image, non-finite values, or a brightness whose rise
 //                          across the scan is not ten times the noise of a mean
 //                          (display dark, camera saturated, ROI off the part)

@@ -25,8 +25,10 @@
 // as it was when the frame was exposed (at its due time, or its software
 // trigger), as a real camera's buffered frames do: frames exposed before a
 // show() or blank() and grabbed after it show the old panel. Frame ids start at 1
-// after each start() and grow by 1 per frame the "device" produces (frames the
-// caller was too slow for count as underruns, and their ids are skipped).
+// when the camera is opened and grow by 1 per frame the "device" produces, across
+// stop() and start() (frames the caller was too slow for count as underruns, and
+// their ids are skipped): a restarted stream draws new noise, as a real sensor's
+// does, instead of repeating the last stream's.
 // Timestamps are the host's steady clock in ns at the frame's due time.
 // Units and frames: the scene's (mm, world +z towards the camera); image row 0
 // is camera -y (sensors.h).
