@@ -264,7 +264,7 @@ void calibrateDistance(const BenchOptions& o, const std::vector<double>& candida
         controller.emit(shown, white);
         return controller.inspect();
       },
-      candidates, roi);
+      candidates, roi, 1 / std::sqrt(12.0 * o.frames));  // a digital number's quantisation, averaged
   if (!quiet) bar("scan", 1);
   bar.finish();
   // The table first: should the file fail to be written, the scan is not lost.

@@ -51,7 +51,8 @@ std::string scanTable(const std::vector<double>& candidates, const std::vector<d
 }  // namespace
 
 DisplayDistanceScan calibrateDisplayDistance(const LightField& captured, const InspectFunction& inspect,
-                                             const std::vector<double>& candidates, const cv::Mat& roi) {
+                                             const std::vector<double>& candidates, const cv::Mat& roi,
+                                             double pixelNoiseFloor) {
   constexpr const char* kWhat = "display distance calibration";
   if (candidates.size() < 3)
     fail(Errc::InvalidArgument, "{} needs at least 3 candidates (got {})", kWhat, candidates.size());
@@ -65,6 +66,8 @@ DisplayDistanceScan calibrateDisplayDistance(const LightField& captured, const I
     fail(Errc::InvalidArgument, "{}: the ROI must be a CV_8UC1 mask (it is of OpenCV type {})", kWhat, roi.type());
   if (!roi.empty() && cv::countNonZero(roi) == 0)
     fail(Errc::InvalidArgument, "{}: the ROI has no non-zero pixel", kWhat);
+  if (!(pixelNoiseFloor >= 0) || !std::isfinite(pixelNoiseFloor))
+    fail(Errc::InvalidArgument, "{}: pixel noise floor {} must be finite and >= 0", kWhat, pixelNoiseFloor);
   // The image of `shown`, as float, checked against the region, and its mean over the region.
   struct Measured {
     cv::Mat image;
@@ -103,7 +106,9 @@ DisplayDistanceScan calibrateDisplayDistance(const LightField& captured, const I
   cv::Scalar unused, spread;
   cv::meanStdDev(dark1.image - dark2.image, unused, spread, roi);
   const double pixels = roi.empty() ? static_cast<double>(dark1.image.total()) : cv::countNonZero(roi);
-  scan.noise = spread[0] / std::sqrt(2.0 * pixels);
+  // Never below the caller's floor: identical dark images (an 8-bit camera with little read noise) do not make
+  // every rise significant.
+  scan.noise = std::max(spread[0] / std::sqrt(2.0), pixelNoiseFloor) / std::sqrt(pixels);
   for (double epsilon : candidates)  // the display is ε further away: show the field as it is ε further away
     scan.brightness.push_back(
         measure(propagateLightField(captured, -epsilon), fmt::format("for candidate {:+g} mm", epsilon)).mean);

@@ -9,10 +9,10 @@
 #include "lfi/drivers/pixel_unpack.h"
 
 #include <arpa/inet.h>
-#include <ifaddrs.h>
 #include <arv.h>
 #include <fmt/format.h>
 #include <fmt/ranges.h>
+#include <ifaddrs.h>
 #include <netinet/in.h>
 #include <poll.h>
 #include <spdlog/spdlog.h>
@@ -130,10 +130,6 @@ std::string describe(const std::vector<AravisDeviceInfo>& devices) {
   return text;
 }
 
-// Asks a GigE Vision device for its control channel privilege register over a
-// separate GVCP socket. Aravis's own register reads retry 5 × 500 ms; this one
-// gives up after `tries` × `timeout_ms`. Any answer, even an error ack, means
-// the device is there.
 // One of this host's own IPv4 addresses (any of 127/8 included).
 bool isOwnAddress(GInetAddress* address) {
   if (g_inet_address_get_family(address) != G_SOCKET_FAMILY_IPV4) return false;
@@ -152,11 +148,12 @@ bool isOwnAddress(GInetAddress* address) {
 
 // A GigE Vision device at one of this host's own addresses (a served camera, a
 // simulator) sends its stream through the loopback interface, whatever the
-// address. Aravis receives streams on a packet socket bound to the interface it
-// found the device through. When that is not loopback (the device serves on
-// eth0's address, or its discovery answer came back through eth0) the socket
-// never sees a packet: control works and no frame ever arrives. Such a camera
-// is replaced by one reaching the same device through 127.0.0.1.
+// address. With CAP_NET_RAW (root, as in CI) Aravis receives streams on a
+// packet socket bound to the interface it found the device through. When that
+// is not loopback (the device serves on eth0's address, or its discovery answer
+// came back through eth0) the socket never sees a packet: control works and no
+// frame ever arrives. Such a camera is replaced by one reaching the same device
+// through 127.0.0.1, which works with either kind of socket.
 ArvCamera* throughLoopbackIfOwnAddress(ArvCamera* camera, const std::string& name) {
   if (!arv_camera_is_gv_device(camera)) return camera;
   ArvGvDevice* gv = ARV_GV_DEVICE(arv_camera_get_device(camera));
@@ -188,6 +185,10 @@ ArvCamera* throughLoopbackIfOwnAddress(ArvCamera* camera, const std::string& nam
   return replaced;
 }
 
+// Asks a GigE Vision device for its control channel privilege register over a
+// separate GVCP socket. Aravis's own register reads retry 5 × 500 ms; this one
+// gives up after `tries` × `timeout_ms`. Any answer, even an error ack, means
+// the device is there.
 bool gvcpDeviceAnswers(const std::string& ip, std::uint16_t port, int tries, int timeout_ms) {
   const int fd = ::socket(AF_INET, SOCK_DGRAM | SOCK_CLOEXEC, 0);
   if (fd < 0) return true;  // cannot tell; do not declare the device lost

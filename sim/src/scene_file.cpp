@@ -12,9 +12,13 @@
 #include "ply_mesh.h"
 
 #include <algorithm>
+#include <array>
 #include <cctype>
 #include <cmath>
+#include <cstdint>
 #include <fstream>
+#include <functional>
+#include <unordered_map>
 #include <numbers>
 
 namespace lfi::sim {
@@ -94,6 +98,100 @@ TriangleMesh loadMesh(const fs::path& path) {
 
 namespace {
 
+// The mesh's axis-aligned bounding box (low and high corners; the origin for no vertices).
+std::pair<Vec3, Vec3> bounds(const TriangleMesh& mesh) {
+  Vec3 low = mesh.vertices.empty() ? Vec3(0, 0, 0) : mesh.vertices.front(), high = low;
+  for (const Vec3& v : mesh.vertices) {
+    low = Vec3(std::min(low.x, v.x), std::min(low.y, v.y), std::min(low.z, v.z));
+    high = Vec3(std::max(high.x, v.x), std::max(high.y, v.y), std::max(high.z, v.z));
+  }
+  return {low, high};
+}
+
+}  // namespace
+
+std::optional<std::string> meshClosureFault(const TriangleMesh& mesh) {
+  // One id per position (within a float's precision of the mesh's size): formats that repeat a vertex per face
+  // (STL, seams) and rings of vertices at a sphere's pole still close. A grid of cells of that size; a vertex
+  // joins the first earlier one within it, looked for in its own and the 26 neighbouring cells.
+  const auto [low, high] = bounds(mesh);
+  const double extent = std::max({high.x - low.x, high.y - low.y, high.z - low.z});
+  const double tolerance = extent > 0 ? 1e-7 * extent : 1.0;
+  auto cellOf = [&](const Vec3& v) {
+    return std::array<std::int64_t, 3>{static_cast<std::int64_t>(std::floor((v.x - low.x) / tolerance)),
+                                       static_cast<std::int64_t>(std::floor((v.y - low.y) / tolerance)),
+                                       static_cast<std::int64_t>(std::floor((v.z - low.z) / tolerance))};
+  };
+  struct CellHash {
+    size_t operator()(const std::array<std::int64_t, 3>& c) const {
+      return static_cast<size_t>(c[0] * 73856093LL ^ c[1] * 19349663LL ^ c[2] * 83492791LL);
+    }
+  };
+  std::unordered_map<std::array<std::int64_t, 3>, std::vector<unsigned>, CellHash> cells(2 * mesh.vertices.size());
+  std::vector<unsigned> welded(mesh.vertices.size());
+  for (size_t v = 0; v < mesh.vertices.size(); ++v) {
+    const Vec3& p = mesh.vertices[v];
+    const auto cell = cellOf(p);
+    welded[v] = static_cast<unsigned>(v);
+    for (std::int64_t dx = -1; dx <= 1 && welded[v] == v; ++dx)
+      for (std::int64_t dy = -1; dy <= 1 && welded[v] == v; ++dy)
+        for (std::int64_t dz = -1; dz <= 1 && welded[v] == v; ++dz) {
+          const auto found = cells.find({cell[0] + dx, cell[1] + dy, cell[2] + dz});
+          if (found == cells.end()) continue;
+          for (unsigned w : found->second) {
+            const Vec3 d = mesh.vertices[w] - p;
+            if (std::max({std::abs(d.x), std::abs(d.y), std::abs(d.z)}) <= tolerance) {
+              welded[v] = welded[w];
+              break;
+            }
+          }
+        }
+    cells[cell].push_back(static_cast<unsigned>(v));
+  }
+  // Directed edges a -> b, and the first triangle and vertices behind each, to name them.
+  struct Use {
+    int count = 0;
+    size_t triangle = 0;
+    unsigned from = 0, to = 0;
+  };
+  std::unordered_map<std::uint64_t, Use> edges(6 * mesh.triangles.size());
+  auto key = [](unsigned from, unsigned to) { return std::uint64_t{from} << 32 | to; };
+  double volume6 = 0;  // six times the signed enclosed volume
+  for (size_t t = 0; t < mesh.triangles.size(); ++t) {
+    const auto& tri = mesh.triangles[t];
+    const unsigned a = welded[tri[0]], b = welded[tri[1]], c = welded[tri[2]];
+    if (a == b || b == c || c == a) continue;
+    volume6 += mesh.vertices[tri[0]].dot(mesh.vertices[tri[1]].cross(mesh.vertices[tri[2]]));
+    for (int k = 0; k < 3; ++k) {
+      Use& use = edges[key(welded[tri[k]], welded[tri[(k + 1) % 3]])];
+      if (use.count++ == 0) use = {1, t, tri[k], tri[(k + 1) % 3]};
+    }
+  }
+  auto at = [&](unsigned v) {
+    const Vec3& p = mesh.vertices[v];
+    return fmt::format("({:g}, {:g}, {:g})", p.x, p.y, p.z);
+  };
+  for (const auto& [edge, use] : edges) {
+    const auto back = edges.find(key(static_cast<unsigned>(edge), static_cast<unsigned>(edge >> 32)));
+    const int backCount = back == edges.end() ? 0 : back->second.count;
+    if (use.count == 1 && backCount == 1) continue;
+    const std::string which = fmt::format("the edge from {} to {} (triangle {}, counting from 0)", at(use.from),
+                                          at(use.to), use.triangle);
+    if (backCount == 0 && use.count == 1)
+      return fmt::format("not closed: {} borders no other triangle (a hole)", which);
+    return fmt::format("not closed or not consistently wound: {} is crossed {} time(s) this way and {} the other "
+                       "(a closed surface crosses each edge once each way)",
+                       which, use.count, backCount);
+  }
+  if (edges.empty()) return "no triangle of non-zero size";
+  if (!(volume6 > 0))
+    return fmt::format("wound inwards: its enclosed volume is {:.6g} mm^3 (reverse every triangle's vertex order)",
+                       volume6 / 6);
+  return std::nullopt;
+}
+
+namespace {
+
 Rigid3 readPlacement(ConfigTable& t) {
   return placement(t.numbers("position_mm", 3, std::vector<double>{0, 0, 0}),
                    t.numbers("rotation_deg", 3, std::vector<double>{0, 0, 0}));
@@ -159,8 +257,13 @@ Object readObject(ConfigTable& t) {
     obj.shape = solid;
   }
   const std::string material = t.string("material", "absorber", {"dielectric", "absorber", "diffuse"});
-  if (material == "dielectric")
+  if (material == "dielectric") {
     obj.material = Dielectric{t.number("ior", std::nullopt, 1.0, 5.0), t.number("absorption_per_mm", 0.0, 0, 1e3)};
+    if (const auto* mesh = std::get_if<TriangleMesh>(&obj.shape))  // rays enter and leave it: it must be closed
+      if (const auto fault = meshClosureFault(*mesh))
+        fail(Errc::Config, "{}: a dielectric mesh must bound a solid; '{}' is {}", t.where("file"), t.string("file"),
+             *fault);
+  }
   else if (material == "diffuse")
     obj.material = Diffuse{t.number("albedo", 0.8, 0, 1)};
   else
@@ -220,18 +323,49 @@ DisplayParameters readDisplay(ConfigTable& t) {
   return d;
 }
 
+// Whether `p` lies inside the closed mesh: the parity of the triangles a ray
+// from p crosses (a direction no axis-aligned or diagonal edge lies along).
+bool insideClosedMesh(const TriangleMesh& mesh, const Vec3& p) {
+  const Vec3 dir = Vec3(0.5164, 0.6331, 0.5766).normalized();
+  bool inside = false;
+  for (const auto& t : mesh.triangles) {  // Möller–Trumbore
+    const Vec3 &a = mesh.vertices[t[0]], e1 = mesh.vertices[t[1]] - a, e2 = mesh.vertices[t[2]] - a;
+    const Vec3 h = dir.cross(e2);
+    const double det = e1.dot(h);
+    if (det == 0) continue;
+    const Vec3 s = p - a;
+    const double u = s.dot(h) / det;
+    if (u < 0 || u > 1) continue;
+    const Vec3 q = s.cross(e1);
+    const double v = dir.dot(q) / det;
+    if (v < 0 || u + v > 1) continue;
+    if (e2.dot(q) / det > 0) inside = !inside;
+  }
+  return inside;
+}
+
 // Rays start in air: a sensor whose rays would start inside a solid gives a
 // wrong image without a word. Checks a sample of the points where the
 // sensor's rays start (a solid small enough to fit between them is missed),
 // a grid over a rectangle of half sizes halfX, halfY about the origin of its
 // plane, each moved by `reach` in eight directions (a stop's disc), against
-// every solid.
+// every solid and every closed mesh (an open one has no inside).
 void requireOutsideSolids(const std::vector<Object>& objects, const Rigid3& worldFromPlane, double halfX, double halfY,
                           double reach, const std::string& where) {
   constexpr int kGrid = 17, kDirections = 8;
   for (const Object& object : objects) {
-    const auto* solid = std::get_if<std::shared_ptr<const Solid>>(&object.shape);
-    if (!solid) continue;
+    std::function<bool(const Vec3&)> contains;  // in the object's frame
+    if (const auto* solid = std::get_if<std::shared_ptr<const Solid>>(&object.shape)) {
+      contains = [solid](const Vec3& p) { return (*solid)->contains(p); };
+    } else if (const auto* mesh = std::get_if<TriangleMesh>(&object.shape); mesh && !meshClosureFault(*mesh)) {
+      const auto [low, high] = bounds(*mesh);
+      contains = [mesh, low, high](const Vec3& p) {
+        return p.x >= low.x && p.y >= low.y && p.z >= low.z && p.x <= high.x && p.y <= high.y && p.z <= high.z &&
+               insideClosedMesh(*mesh, p);
+      };
+    } else {
+      continue;
+    }
     const Rigid3 objectFromWorld = object.worldFromObject.inverse();
     for (int i = 0; i < kGrid; ++i)
       for (int j = 0; j < kGrid; ++j) {
@@ -239,7 +373,7 @@ void requireOutsideSolids(const std::vector<Object>& objects, const Rigid3& worl
         for (int k = 0; k <= (reach > 0 ? kDirections : 0); ++k) {  // k = 0: the grid point itself
           const double a = 2 * std::numbers::pi * k / kDirections, r = k == 0 ? 0.0 : reach;
           const Vec3 p = worldFromPlane.point({x + r * std::cos(a), y + r * std::sin(a), 0});
-          if ((*solid)->contains(objectFromWorld.point(p)))
+          if (contains(objectFromWorld.point(p)))
             fail(Errc::Config, "{}: the sensor's rays would start inside object '{}' (at ({:.4g}, {:.4g}, {:.4g}) "
                  "mm); the tracer starts them in air: move the sensor or the object", where, object.name, p.x, p.y,
                  p.z);

@@ -180,6 +180,7 @@ class SimCamera final : public Camera {
   void open() override {
     requireCameraState(state_, {State::Closed}, "open", name());
     imager_ = std::make_unique<SimImager>(sceneFile_);
+    nextFrameId_ = 1;
     const TelecentricCamera& cam = imager_->camera();
     info_ = CameraInfo{
         .vendor = "lfi",

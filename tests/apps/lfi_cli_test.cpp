@@ -11,6 +11,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -193,6 +194,8 @@ TEST_F(LfiCli, CalibrateDistanceFindsHowFarTheDisplayMoved) {
     EXPECT_EQ(result["reference"]["distance_mm"], 30.0);
     ASSERT_EQ(result["candidates_mm"].size(), 13u);
     ASSERT_EQ(result["brightness"].size(), 13u);
+    // Two dark images of a noisy sensor differ: a noise above the quantisation floor (1/√12 DN over 56 px).
+    EXPECT_GT(result["noise"].get<double>(), 1 / std::sqrt(12.0) / 56) << "two identical dark images";
     const double estimate = result["estimate_mm"];
     std::printf("display moved %+.1f mm: estimate %+.3f mm, peak %.2f mm wide\n", error, estimate,
                 result["peak_width_mm"].get<double>());

@@ -281,6 +281,18 @@ TEST(DisplayDistance, APeakOfNoiseIsNotAnAnswer) {
     return noisy(10 + (lit ? 20 - 5 * std::abs(shownEpsilon(shown) - 0.5) : 0));
   };
   EXPECT_NEAR(calib::calibrateDisplayDistance(lf, peak, {-3, -2, -1, 0, 1, 2, 3}).estimate_mm, 0.5, 0.05);
+  // Identical dark images (no frame-to-frame noise at all): the caller's floor is the noise. A noise-free rise of
+  // 20 over 16 pixels is significant unless a pixel's noise is 8 or more.
+  auto tent = [](const LightField& shown) {
+    return cv::Mat(4, 4, CV_32FC1, cv::Scalar(100 - 10 * std::abs(shownEpsilon(shown) - 0.3)));
+  };
+  const std::vector<double> candidates = {-2, -1, 0, 1, 2};
+  const auto scan = calib::calibrateDisplayDistance(lf, tent, candidates, {}, 7.9);
+  EXPECT_NEAR(scan.noise, 7.9 / 4, 1e-12);
+  EXPECT_TRUE(throwsError([&] { calib::calibrateDisplayDistance(lf, tent, candidates, {}, 8.1); }, Errc::Device,
+                          {"hardly changes", "noise of a mean about 2"}));
+  EXPECT_TRUE(throwsError([&] { calib::calibrateDisplayDistance(lf, tent, candidates, {}, -1); },
+                          Errc::InvalidArgument, {"noise floor -1"}));
 }
 
 }  // namespace

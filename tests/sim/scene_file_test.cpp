@@ -6,6 +6,7 @@
 
 #include "lfi_test_support.h"
 
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 #include <unistd.h>
 
@@ -211,6 +212,70 @@ TEST_F(SceneFile, MeshesLoadWithOutwardSmoothNormals) {
   write("text.ply", "this is not a mesh\n");
   EXPECT_TRUE(throwsError([&] { loadMesh(dir_ / "text.ply"); }, Errc::InvalidFile, {"text.ply"}));
   EXPECT_TRUE(throwsError([&] { loadMesh(dir_ / "none.obj"); }, Errc::NotFound, {"none.obj"}));
+}
+
+// The tracer enters and leaves a dielectric through its surface: a mesh with
+// a hole, a face wound the wrong way, or all faces wound inwards would give
+// wrong refraction without a word. Such a dielectric is refused, naming the
+// file and an edge; an opaque mesh may be an open surface.
+TEST_F(SceneFile, ADielectricMeshMustBoundASolid) {
+  const std::string vertices = "v 1 0 0\nv -1 0 0\nv 0 1 0\nv 0 -1 0\nv 0 0 1\nv 0 0 -1\n";
+  const std::string faces[8] = {"1 3 5", "3 2 5", "2 4 5", "4 1 5", "3 1 6", "2 3 6", "4 2 6", "1 4 6"};
+  auto obj = [&](const std::string& name, auto&& face) {
+    std::string text = vertices;
+    for (int f = 0; f < 8; ++f) text += face(f);
+    return write(name, text);
+  };
+  auto scene = [&](const std::string& name, const fs::path& mesh, const std::string& material) {
+    return write(name, std::string("format = \"lfi-scene\"\nversion = 1\n") + kCamera +
+                           "[[object]]\nname='m'\nshape='mesh'\nfile='" + mesh.filename().string() +
+                           "'\nmaterial='" + material + "'\n" + (material == "dielectric" ? "ior=1.5\n" : ""));
+  };
+  obj("closed.obj", [&](int f) { return "f " + faces[f] + "\n"; });
+  EXPECT_NO_THROW(loadSceneFile(scene("closed.toml", dir_ / "closed.obj", "dielectric")));
+  EXPECT_EQ(meshClosureFault(loadMesh(dir_ / "closed.obj")), std::nullopt);
+
+  obj("holed.obj", [&](int f) { return f == 7 ? std::string() : "f " + faces[f] + "\n"; });
+  EXPECT_TRUE(throwsError([&] { loadSceneFile(scene("holed.toml", dir_ / "holed.obj", "dielectric")); },
+                          Errc::Config, {"holed.toml:", "object[0].file", "holed.obj", "not closed", "a hole"}));
+  EXPECT_NO_THROW(loadSceneFile(scene("screen.toml", dir_ / "holed.obj", "absorber")));
+
+  obj("flipped.obj", [&](int f) {  // one face's vertex order reversed
+    return f == 0 ? std::string("f 5 3 1\n") : "f " + faces[f] + "\n";
+  });
+  EXPECT_TRUE(throwsError([&] { loadSceneFile(scene("flipped.toml", dir_ / "flipped.obj", "dielectric")); },
+                          Errc::Config,
+                          {"flipped.obj", "not consistently wound", "2 time(s) this way and 0 the other"}));
+
+  obj("inwards.obj", [&](int f) {  // every face reversed: closed, enclosing -4/3 mm^3
+    const std::string& t = faces[f];
+    return "f " + t.substr(4, 1) + " " + t.substr(2, 1) + " " + t.substr(0, 1) + "\n";
+  });
+  EXPECT_TRUE(throwsError([&] { loadSceneFile(scene("inwards.toml", dir_ / "inwards.obj", "dielectric")); },
+                          Errc::Config, {"inwards.obj", "wound inwards", "-1.33333 mm^3"}));
+
+  // Every face with vertices of its own (as STL stores them): the same positions, one closed surface.
+  std::string ply = "ply\nformat ascii 1.0\nelement vertex 24\nproperty float x\nproperty float y\n"
+                    "property float z\nelement face 8\nproperty list uchar int vertex_indices\nend_header\n";
+  const char* corner[6] = {"1 0 0", "-1 0 0", "0 1 0", "0 -1 0", "0 0 1", "0 0 -1"};
+  for (const std::string& f : faces)
+    for (int k = 0; k < 3; ++k) ply += std::string(corner[f[2 * k] - '1']) + "\n";
+  for (int f = 0; f < 8; ++f) ply += fmt::format("3 {} {} {}\n", 3 * f, 3 * f + 1, 3 * f + 2);
+  write("unwelded.ply", ply);
+  EXPECT_EQ(loadMesh(dir_ / "unwelded.ply").vertices.size(), 24u);
+  EXPECT_NO_THROW(loadSceneFile(scene("unwelded.toml", dir_ / "unwelded.ply", "dielectric")));
+
+  // The camera's plane (z = 200) through the closed octahedron: its rays would start inside the mesh. An open
+  // surface there has no inside.
+  auto placed = [&](const std::string& name, const char* mesh, const char* material) {
+    return write(name, std::string("format = \"lfi-scene\"\nversion = 1\n") + kCamera +
+                           "[[object]]\nname='m'\nshape='mesh'\nfile='" + mesh + "'\nmaterial='" + material +
+                           "'\n" + (std::string(material) == "dielectric" ? "ior=1.5\n" : "") +
+                           "position_mm=[0.1, 0.2, 200]\n");
+  };
+  EXPECT_TRUE(throwsError([&] { loadSceneFile(placed("inside.toml", "closed.obj", "dielectric")); }, Errc::Config,
+                          {"inside.toml", "inside object 'm'"}));
+  EXPECT_NO_THROW(loadSceneFile(placed("open.toml", "holed.obj", "diffuse")));
 }
 
 // PLY bodies built byte by byte: values in either byte order.

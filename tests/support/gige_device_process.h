@@ -1,8 +1,9 @@
 #pragma once
 // A GigE Vision device served on 127.0.0.1 by a child process — Aravis's fake
 // camera (arv-fake-gv-camera-0.8) or `lfi serve-camera` — for the loopback
-// tests and the camera benchmark. Two devices on 127.0.0.1 answer each other's
-// GVCP requests (both listen on UDP 3956), so whoever runs one holds
+// tests and the camera benchmark (one test serves on eth0's address instead,
+// while its fixture's device runs on 127.0.0.1). Two devices on 127.0.0.1 answer
+// each other's GVCP requests (both listen on UDP 3956), so whoever runs one holds
 // LoopbackGigeLock for as long as it runs; that makes `ctest -j` safe.
 // No GoogleTest here: the benchmark uses it too. Failures throw std::runtime_error.
 

@@ -52,8 +52,10 @@ struct DisplayDistanceScan {
 // part's pixels (CV_8UC1, non-zero = use; empty = the whole image); the figure
 // of merit is the mean image value there. A dark light field is shown twice
 // first: the spread of the difference of its two images over the region sets
-// the noise of a mean. Throws,
-// with the scan's brightness per candidate where there is one:
+// the noise of a mean, a pixel's share of it never below `pixelNoiseFloor` (in
+// the image's units; for a camera's averaged digital numbers, a DN's
+// quantisation over the frames averaged, 1/√(12·frames)). Throws, with the
+// scan's brightness per candidate where there is one:
 //   Errc::InvalidArgument  fewer than three candidates, candidates not finite and
 //                          strictly increasing, one that puts the display at or
 //                          past the part, an empty or non-CV_8UC1 ROI, an image of
@@ -65,6 +67,7 @@ struct DisplayDistanceScan {
 //                          across the scan is not ten times the noise of a mean
 //                          (display dark, camera saturated, ROI off the part)
 DisplayDistanceScan calibrateDisplayDistance(const LightField& captured, const InspectFunction& inspect,
-                                             const std::vector<double>& candidates_mm, const cv::Mat& roi = {});
+                                             const std::vector<double>& candidates_mm, const cv::Mat& roi = {},
+                                             double pixelNoiseFloor = 0);
 
 }  // namespace lfi::calib

@@ -57,6 +57,13 @@ SceneDescription loadSceneFile(const std::filesystem::path& path);
 // file's units are taken as millimetres; faces must wind outwards.
 TriangleMesh loadMesh(const std::filesystem::path& path);
 
+// Why `mesh` does not bound a solid the tracer can enter and leave, or nothing:
+// every edge must be crossed once each way by the triangles around it (vertices
+// at the same position are one vertex; triangles with two such vertices are
+// skipped), and the enclosed volume must be positive (outward winding). A
+// dielectric mesh must pass; an opaque one may be an open surface.
+std::optional<std::string> meshClosureFault(const TriangleMesh& mesh);
+
 // position (mm) and rotation (degrees, applied about x, then y, then z).
 Rigid3 placement(const std::vector<double>& position_mm, const std::vector<double>& rotation_deg);
 
