@@ -108,86 +108,116 @@ std::pair<Vec3, Vec3> bounds(const TriangleMesh& mesh) {
   return {low, high};
 }
 
-}  // namespace
-
-std::optional<std::string> meshClosureFault(const TriangleMesh& mesh) {
-  // One id per position (within a float's precision of the mesh's size): formats that repeat a vertex per face
-  // (STL, seams) and rings of vertices at a sphere's pole still close. A grid of cells of that size; a vertex
-  // joins the first earlier one within it, looked for in its own and the 26 neighbouring cells.
-  const auto [low, high] = bounds(mesh);
-  const double extent = std::max({high.x - low.x, high.y - low.y, high.z - low.z});
-  const double tolerance = extent > 0 ? 1e-7 * extent : 1.0;
-  auto cellOf = [&](const Vec3& v) {
-    return std::array<std::int64_t, 3>{static_cast<std::int64_t>(std::floor((v.x - low.x) / tolerance)),
-                                       static_cast<std::int64_t>(std::floor((v.y - low.y) / tolerance)),
-                                       static_cast<std::int64_t>(std::floor((v.z - low.z) / tolerance))};
+// One id per position, within `tolerance` (Chebyshev) of each other, on a grid
+// of cells of that size (offset by an odd fraction of a cell, so that meshes
+// symmetric about 0 do not straddle a cell wall there). Any two vertices in one
+// cell are that close, so the cell's first vertex stands for it. With
+// `neighbours`, a vertex also joins the first one within the tolerance in the
+// 26 neighbouring cells (slower: a hash look-up each).
+std::vector<unsigned> weldVertices(const TriangleMesh& mesh, double tolerance, bool neighbours) {
+  const Vec3 low = bounds(mesh).first - Vec3(0.3183 * tolerance, 0.2719 * tolerance, 0.1415 * tolerance);
+  using Cell = std::array<std::int64_t, 3>;
+  auto cellOf = [&](const Vec3& p) {
+    return Cell{static_cast<std::int64_t>(std::floor((p.x - low.x) / tolerance)),
+                static_cast<std::int64_t>(std::floor((p.y - low.y) / tolerance)),
+                static_cast<std::int64_t>(std::floor((p.z - low.z) / tolerance))};
   };
+  std::vector<unsigned> welded(mesh.vertices.size());
+  if (!neighbours) {  // sorted by cell: a cell's vertices are adjacent
+    std::vector<std::pair<Cell, unsigned>> order(mesh.vertices.size());
+    for (size_t v = 0; v < mesh.vertices.size(); ++v) order[v] = {cellOf(mesh.vertices[v]), static_cast<unsigned>(v)};
+    std::sort(order.begin(), order.end());
+    for (size_t i = 0; i < order.size(); ++i)
+      welded[order[i].second] = i > 0 && order[i].first == order[i - 1].first ? welded[order[i - 1].second]
+                                                                              : order[i].second;
+    return welded;
+  }
   struct CellHash {
-    size_t operator()(const std::array<std::int64_t, 3>& c) const {
+    size_t operator()(const Cell& c) const {
       return static_cast<size_t>(c[0] * 73856093LL ^ c[1] * 19349663LL ^ c[2] * 83492791LL);
     }
   };
-  std::unordered_map<std::array<std::int64_t, 3>, std::vector<unsigned>, CellHash> cells(2 * mesh.vertices.size());
-  std::vector<unsigned> welded(mesh.vertices.size());
+  std::unordered_map<Cell, unsigned, CellHash> cells(2 * mesh.vertices.size());
   for (size_t v = 0; v < mesh.vertices.size(); ++v) {
     const Vec3& p = mesh.vertices[v];
-    const auto cell = cellOf(p);
+    const Cell cell = cellOf(p);
     welded[v] = static_cast<unsigned>(v);
-    for (std::int64_t dx = -1; dx <= 1 && welded[v] == v; ++dx)
-      for (std::int64_t dy = -1; dy <= 1 && welded[v] == v; ++dy)
-        for (std::int64_t dz = -1; dz <= 1 && welded[v] == v; ++dz) {
-          const auto found = cells.find({cell[0] + dx, cell[1] + dy, cell[2] + dz});
-          if (found == cells.end()) continue;
-          for (unsigned w : found->second) {
-            const Vec3 d = mesh.vertices[w] - p;
-            if (std::max({std::abs(d.x), std::abs(d.y), std::abs(d.z)}) <= tolerance) {
-              welded[v] = welded[w];
-              break;
-            }
-          }
-        }
-    cells[cell].push_back(static_cast<unsigned>(v));
+    for (int n = 0; n < 27 && welded[v] == v; ++n) {
+      const auto found = cells.find({cell[0] + n % 3 - 1, cell[1] + n / 3 % 3 - 1, cell[2] + n / 9 - 1});
+      if (found == cells.end()) continue;
+      const Vec3 d = mesh.vertices[found->second] - p;
+      if (std::max({std::abs(d.x), std::abs(d.y), std::abs(d.z)}) <= tolerance) welded[v] = welded[found->second];
+    }
+    cells.try_emplace(cell, static_cast<unsigned>(v));
   }
-  // Directed edges a -> b, and the first triangle and vertices behind each, to name them.
-  struct Use {
-    int count = 0;
-    size_t triangle = 0;
-    unsigned from = 0, to = 0;
+  return welded;
+}
+
+// meshClosureFault for vertices welded to `welded`.
+std::optional<std::string> closureFault(const TriangleMesh& mesh, const std::vector<unsigned>& welded) {
+  // Every edge of every triangle as its two welded ends, lower id first, and which way the triangle crosses it.
+  struct Crossing {
+    std::uint64_t edge;
+    unsigned triangle;
+    std::int8_t corner;  // the edge runs from the triangle's vertex `corner` to the next
+    bool forward;        // from the lower welded id to the higher
   };
-  std::unordered_map<std::uint64_t, Use> edges(6 * mesh.triangles.size());
-  auto key = [](unsigned from, unsigned to) { return std::uint64_t{from} << 32 | to; };
+  std::vector<Crossing> crossings;
+  crossings.reserve(3 * mesh.triangles.size());
   double volume6 = 0;  // six times the signed enclosed volume
   for (size_t t = 0; t < mesh.triangles.size(); ++t) {
     const auto& tri = mesh.triangles[t];
-    const unsigned a = welded[tri[0]], b = welded[tri[1]], c = welded[tri[2]];
-    if (a == b || b == c || c == a) continue;
+    const unsigned w[3] = {welded[tri[0]], welded[tri[1]], welded[tri[2]]};
+    if (w[0] == w[1] || w[1] == w[2] || w[2] == w[0]) continue;  // no area
     volume6 += mesh.vertices[tri[0]].dot(mesh.vertices[tri[1]].cross(mesh.vertices[tri[2]]));
     for (int k = 0; k < 3; ++k) {
-      Use& use = edges[key(welded[tri[k]], welded[tri[(k + 1) % 3]])];
-      if (use.count++ == 0) use = {1, t, tri[k], tri[(k + 1) % 3]};
+      const unsigned a = w[k], b = w[(k + 1) % 3];
+      crossings.push_back({std::uint64_t{std::min(a, b)} << 32 | std::max(a, b), static_cast<unsigned>(t),
+                           static_cast<std::int8_t>(k), a < b});
     }
   }
-  auto at = [&](unsigned v) {
-    const Vec3& p = mesh.vertices[v];
-    return fmt::format("({:g}, {:g}, {:g})", p.x, p.y, p.z);
-  };
-  for (const auto& [edge, use] : edges) {
-    const auto back = edges.find(key(static_cast<unsigned>(edge), static_cast<unsigned>(edge >> 32)));
-    const int backCount = back == edges.end() ? 0 : back->second.count;
-    if (use.count == 1 && backCount == 1) continue;
-    const std::string which = fmt::format("the edge from {} to {} (triangle {}, counting from 0)", at(use.from),
-                                          at(use.to), use.triangle);
-    if (backCount == 0 && use.count == 1)
-      return fmt::format("not closed: {} borders no other triangle (a hole)", which);
-    return fmt::format("not closed or not consistently wound: {} is crossed {} time(s) this way and {} the other "
-                       "(a closed surface crosses each edge once each way)",
-                       which, use.count, backCount);
+  if (crossings.empty()) return "no triangle of non-zero size";
+  std::sort(crossings.begin(), crossings.end(), [](const Crossing& x, const Crossing& y) {
+    return x.edge != y.edge ? x.edge < y.edge : x.triangle < y.triangle;
+  });
+  for (size_t i = 0; i < crossings.size();) {
+    size_t j = i, forward = 0;
+    for (; j < crossings.size() && crossings[j].edge == crossings[i].edge; ++j) forward += crossings[j].forward;
+    const size_t backward = j - i - forward;
+    if (forward != 1 || backward != 1) {
+      const Crossing& c = crossings[i];
+      const auto& tri = mesh.triangles[c.triangle];
+      auto at = [&](unsigned v) {
+        const Vec3& p = mesh.vertices[v];
+        return fmt::format("({:g}, {:g}, {:g})", p.x, p.y, p.z);
+      };
+      const std::string which = fmt::format("the edge from {} to {} (triangle {}, counting from 0)",
+                                            at(tri[c.corner]), at(tri[(c.corner + 1) % 3]), c.triangle);
+      const size_t thisWay = c.forward ? forward : backward, otherWay = j - i - thisWay;
+      if (j - i == 1) return fmt::format("not closed: {} borders no other triangle (a hole)", which);
+      return fmt::format("not closed or not consistently wound: {} is crossed {} time(s) this way and {} the "
+                         "other (a closed surface crosses each edge once each way)",
+                         which, thisWay, otherWay);
+    }
+    i = j;
   }
-  if (edges.empty()) return "no triangle of non-zero size";
   if (!(volume6 > 0))
     return fmt::format("wound inwards: its enclosed volume is {:.6g} mm^3 (reverse every triangle's vertex order)",
                        volume6 / 6);
   return std::nullopt;
+}
+
+}  // namespace
+
+std::optional<std::string> meshClosureFault(const TriangleMesh& mesh) {
+  // Vertices within a float's precision of the mesh's size are one: formats that repeat a vertex per face (STL,
+  // seams) and rings of vertices at a sphere's pole still close. The quick weld first; the thorough one when that
+  // leaves the mesh open (two such vertices on either side of a cell wall).
+  const auto [low, high] = bounds(mesh);
+  const double extent = std::max({high.x - low.x, high.y - low.y, high.z - low.z});
+  const double tolerance = extent > 0 ? 1e-7 * extent : 1.0;
+  if (!closureFault(mesh, weldVertices(mesh, tolerance, false))) return std::nullopt;
+  return closureFault(mesh, weldVertices(mesh, tolerance, true));
 }
 
 namespace {
@@ -357,11 +387,14 @@ void requireOutsideSolids(const std::vector<Object>& objects, const Rigid3& worl
     std::function<bool(const Vec3&)> contains;  // in the object's frame
     if (const auto* solid = std::get_if<std::shared_ptr<const Solid>>(&object.shape)) {
       contains = [solid](const Vec3& p) { return (*solid)->contains(p); };
-    } else if (const auto* mesh = std::get_if<TriangleMesh>(&object.shape); mesh && !meshClosureFault(*mesh)) {
+    } else if (const auto* mesh = std::get_if<TriangleMesh>(&object.shape)) {
+      // Whether it is closed is asked only once a point falls in its box (the closure check costs time).
       const auto [low, high] = bounds(*mesh);
-      contains = [mesh, low, high](const Vec3& p) {
-        return p.x >= low.x && p.y >= low.y && p.z >= low.z && p.x <= high.x && p.y <= high.y && p.z <= high.z &&
-               insideClosedMesh(*mesh, p);
+      contains = [mesh, low, high, closed = std::optional<bool>()](const Vec3& p) mutable {
+        if (!(p.x >= low.x && p.y >= low.y && p.z >= low.z && p.x <= high.x && p.y <= high.y && p.z <= high.z))
+          return false;
+        if (!closed) closed = !meshClosureFault(*mesh);
+        return *closed && insideClosedMesh(*mesh, p);
       };
     } else {
       continue;

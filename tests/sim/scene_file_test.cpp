@@ -278,6 +278,31 @@ TEST_F(SceneFile, ADielectricMeshMustBoundASolid) {
   EXPECT_NO_THROW(loadSceneFile(placed("open.toml", "holed.obj", "diffuse")));
 }
 
+// Vertices closer than 1e-7 of the mesh's size are one (a float's precision:
+// rings of vertices at a sphere's pole, seams written twice), wherever they
+// fall on the welding grid; farther apart, they leave a hole.
+TEST_F(SceneFile, NearlyCoincidentVerticesCloseAMesh) {
+  const Vec3 corner[6] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
+  const int faces[8][3] = {{0, 2, 4}, {2, 1, 4}, {1, 3, 4}, {3, 0, 4}, {2, 0, 5}, {1, 2, 5}, {3, 1, 5}, {0, 3, 5}};
+  // Every face with vertices of its own; the first face's copy of (1, 0, 0) moved by `offset` along x.
+  auto octahedron = [&](double offset) {
+    TriangleMesh mesh;
+    for (const auto& f : faces) {
+      const auto base = static_cast<unsigned>(mesh.vertices.size());
+      for (int k : f) mesh.vertices.push_back(corner[k]);
+      mesh.triangles.push_back({base, base + 1, base + 2});
+    }
+    mesh.vertices[0].x += offset;
+    return mesh;
+  };
+  const double tolerance = 1e-7 * 2;  // the octahedron is 2 mm across
+  for (double fraction : {0.0, 0.1, 0.3, 0.5, 0.7, 0.9, -0.5, -0.9})
+    EXPECT_EQ(meshClosureFault(octahedron(fraction * tolerance)), std::nullopt) << fraction;
+  const auto apart = meshClosureFault(octahedron(10 * tolerance));
+  ASSERT_TRUE(apart.has_value());
+  EXPECT_NE(apart->find("a hole"), std::string::npos) << *apart;
+}
+
 // PLY bodies built byte by byte: values in either byte order.
 class PlyBody {
  public:
