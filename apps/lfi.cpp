@@ -9,9 +9,11 @@
 #include "lfi/core/log.h"
 #include "lfi/core/image.h"
 #include "lfi/controller/controller.h"
+#include "lfi/drivers/aravis_camera.h"
 #include "lfi/drivers/display_registry.h"
 #include "lfi/drivers/gv_camera_server.h"
 #include "lfi/drivers/registry.h"
+#include "lfi/drivers/usb_display.h"
 #include "lfi/sim/sim_camera.h"
 #include "lfi/sim/scene_file.h"
 #include "lfi/study/study.h"
@@ -397,6 +399,9 @@ int main(int argc, char** argv) {
   fs::path lfFile;
   lfInfo->add_option("file", lfFile, "Light field EXR")->required();
 
+  // lfi devices
+  auto* devices = app.add_subcommand("devices", "List the GenICam cameras and USB displays attached, with their URIs");
+
   CLI11_PARSE(app, argc, argv);
   lfi::initLogging(quiet ? -1 : verbosity);
 
@@ -490,6 +495,22 @@ int main(int argc, char** argv) {
                         calibrateForce, quiet);
     } else if (*serve) {
       serveCamera(serveScene, serveOptions, serveThreads, quiet);
+    } else if (*devices) {
+      // Displays first: their listing is instant, the cameras' discovery waits about 1 s for answers.
+      try {  // a machine without USB still has cameras to list
+        const std::vector<lfi::UsbDisplayInfo> displays = lfi::listUsbDisplays();
+        fmt::print("USB displays: {}\n", displays.empty() ? "none" : std::to_string(displays.size()));
+        for (const lfi::UsbDisplayInfo& d : displays)
+          fmt::print("  {}  (bus {:03d} device {:03d}){}\n", d.selector.uri(), d.bus, d.address,
+                     d.problem.empty() ? "" : ": " + d.problem);
+      } catch (const lfi::Error& e) {
+        fmt::print("USB displays: cannot be listed ({})\n", e.what());
+      }
+      const std::vector<lfi::AravisDeviceInfo> cameras = lfi::listAravisDevices();
+      fmt::print("GenICam cameras: {}\n", cameras.empty() ? "none" : std::to_string(cameras.size()));
+      for (const lfi::AravisDeviceInfo& c : cameras)
+        fmt::print("  aravis:{}  ({} {}, serial {}, {} at {})\n", c.id, c.vendor, c.model, c.serial, c.protocol,
+                   c.address);
     } else if (*lfInfo) {
       const lfi::LightField lf = lfi::readLightFieldExr(lfFile);
       const auto& g = lf.geometry();

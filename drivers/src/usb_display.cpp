@@ -29,6 +29,17 @@ std::uint16_t parseHex16(std::string_view text, const char* what, const std::str
   return static_cast<std::uint16_t>(value);
 }
 
+// The device's serial number string (ASCII), or "" when it has none or it
+// cannot be read (then `error` is libusb's error code).
+std::string serialOf(libusb_device_handle* handle, const libusb_device_descriptor& desc, int& error) {
+  error = 0;
+  if (desc.iSerialNumber == 0) return {};
+  unsigned char text[256] = {};
+  const int n = libusb_get_string_descriptor_ascii(handle, desc.iSerialNumber, text, sizeof(text) - 1);
+  if (n < 0) error = n;
+  return n > 0 ? std::string(reinterpret_cast<char*>(text), static_cast<std::size_t>(n)) : std::string();
+}
+
 // A serial as it stands in a URI: bytes other than printable ASCII, and the
 // URI's own delimiters, percent-encoded.
 std::string serialInUri(std::string_view serial) {
@@ -240,12 +251,8 @@ private:
         lastOpenError = rc;
         continue;
       }
-      std::string serial;
-      if (desc.iSerialNumber != 0) {
-        unsigned char text[256] = {};
-        const int n = libusb_get_string_descriptor_ascii(handle, desc.iSerialNumber, text, sizeof(text) - 1);
-        if (n > 0) serial.assign(reinterpret_cast<char*>(text), static_cast<std::size_t>(n));
-      }
+      int unreadable = 0;
+      const std::string serial = serialOf(handle, desc, unreadable);
       if (!selector_.serial.empty() && serial != selector_.serial) {
         seen.back() += "/" + serialInUri(serial);  // as the URI would name it
         libusb_close(handle);
@@ -579,6 +586,50 @@ UsbDisplaySelector parseUsbDisplayPath(std::string_view path, const std::string&
            "'=' or a non-ASCII byte as %XX)", uri, text);
   }
   return s;
+}
+
+std::vector<UsbDisplayInfo> listUsbDisplays() {
+  libusb_context* ctx = nullptr;
+  if (const int rc = libusb_init(&ctx); rc != 0) fail(Errc::Device, "USB displays: libusb_init failed: {}",
+                                                      libusb_error_name(rc));
+  libusb_device** list = nullptr;
+  const ssize_t count = libusb_get_device_list(ctx, &list);
+  if (count < 0) {
+    libusb_exit(ctx);
+    fail(Errc::Device, "USB displays: cannot list USB devices: {}", libusb_error_name(int(count)));
+  }
+  std::vector<UsbDisplayInfo> displays;
+  for (ssize_t i = 0; i < count; ++i) {
+    libusb_device_descriptor desc{};
+    libusb_config_descriptor* config = nullptr;
+    if (libusb_get_device_descriptor(list[i], &desc) != 0 || libusb_get_active_config_descriptor(list[i], &config) != 0)
+      continue;
+    bool display = false;
+    for (int k = 0; k < config->bNumInterfaces && !display; ++k)
+      for (int a = 0; a < config->interface[k].num_altsetting && !display; ++a)
+        display = config->interface[k].altsetting[a].bInterfaceClass == proto::kInterfaceClass &&
+                  config->interface[k].altsetting[a].bInterfaceSubClass == proto::kInterfaceSubclass;
+    libusb_free_config_descriptor(config);
+    if (!display) continue;
+    UsbDisplayInfo info;
+    info.selector.vendorId = desc.idVendor;
+    info.selector.productId = desc.idProduct;
+    info.bus = libusb_get_bus_number(list[i]);
+    info.address = libusb_get_device_address(list[i]);
+    libusb_device_handle* handle = nullptr;
+    if (const int rc = libusb_open(list[i], &handle); rc != 0) {
+      info.problem = rc == LIBUSB_ERROR_ACCESS ? "permission denied (udev rules?)" : libusb_error_name(rc);
+    } else {
+      int unreadable = 0;
+      info.selector.serial = serialOf(handle, desc, unreadable);
+      if (unreadable != 0) info.problem = fmt::format("its serial cannot be read: {}", libusb_error_name(unreadable));
+      libusb_close(handle);
+    }
+    displays.push_back(std::move(info));
+  }
+  libusb_free_device_list(list, 1);
+  libusb_exit(ctx);
+  return displays;
 }
 
 std::unique_ptr<Display> openUsbDisplay(const UsbDisplaySelector& selector, const UsbDisplayOptions& options) {

@@ -336,6 +336,22 @@ TEST_F(ServedCameraTest, WrongIdIsNotFoundAndListsTheServedCamera) {
                           {"lfi-SimCamera-NOSUCH", "devices found", server_->id(), "127.0.0.1"}));
 }
 
+// `lfi devices` names the served camera by the URI that opens it.
+TEST_F(ServedCameraTest, TheDevicesCommandListsTheServedCamera) {
+  FILE* pipe = ::popen((std::string(LFI_EXECUTABLE) + " -q devices").c_str(), "r");
+  ASSERT_NE(pipe, nullptr);
+  std::string out;
+  char buffer[4096];
+  for (std::size_t n; (n = std::fread(buffer, 1, sizeof buffer, pipe)) > 0;) out.append(buffer, n);
+  const int status = ::pclose(pipe);
+  EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << out;
+  EXPECT_NE(out.find("USB displays:"), std::string::npos) << out;
+  EXPECT_NE(out.find("aravis:" + server_->id() + "  (lfi SimCamera"), std::string::npos) << out;
+  EXPECT_NE(out.find("GigEVision at 127.0.0.1"), std::string::npos) << out;
+  auto camera = openCamera("aravis:" + server_->id());  // the listed URI opens it
+  EXPECT_EQ(camera->info().deviceId, server_->id());
+}
+
 TEST_F(ServedCameraTest, SigtermStopsTheServerCleanly) {
   {
     auto camera = openServed();

@@ -109,6 +109,24 @@ TEST_F(UsbDisplayTest, ABenchFileOverridesTheOpticsTheDeviceReports) {
 
 // A serial with a space, a '/' and a '%' is named percent-encoded wherever a
 // URI shows it, and that URI opens the display.
+// The listing finds a display by the protocol's vendor interface and names the
+// URI that opens it; an unplugged one is gone from it.
+TEST_F(UsbDisplayTest, TheListingNamesTheUriThatOpensTheDisplay) {
+  EXPECT_TRUE(listUsbDisplays().empty()) << "nothing is plugged in yet";
+  EmulatedDisplayConfig config;
+  config.serial = "Bench A/2";
+  EmulatedUsbDisplay device(config);
+  device.plug();
+  const std::vector<UsbDisplayInfo> displays = listUsbDisplays();
+  ASSERT_EQ(displays.size(), 1u);
+  EXPECT_EQ(displays[0].selector.uri(), "usb:1209:4c46/Bench%20A%2F2");
+  EXPECT_EQ(displays[0].problem, "");
+  EXPECT_GT(displays[0].address, 0);
+  EXPECT_EQ(openDisplay(displays[0].selector.uri())->info().serial, config.serial);
+  device.unplug();
+  EXPECT_TRUE(listUsbDisplays().empty());
+}
+
 TEST_F(UsbDisplayTest, ASerialWithSpacesAndSlashesIsNamedPercentEncoded) {
   EmulatedDisplayConfig config;
   config.serial = "Bench A/2 50%";

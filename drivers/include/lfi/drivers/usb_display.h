@@ -26,6 +26,7 @@
 #include <memory>
 #include <string>
 #include <string_view>
+#include <vector>
 
 namespace lfi {
 
@@ -51,6 +52,19 @@ struct UsbDisplayOptions {
   // A bench file overriding the optics the device reports (display_calibration_file.h).
   std::filesystem::path opticsOverride;
 };
+
+// A USB device with the lfi display protocol's vendor interface (class 0xff,
+// subclass 0x4c), whatever its VID:PID, as listUsbDisplays() found it.
+struct UsbDisplayInfo {
+  UsbDisplaySelector selector;  // selector.uri() opens it ("usb:<vid>:<pid>/<serial>")
+  int bus = 0;                  // USB bus number and device address
+  int address = 0;
+  std::string problem;          // why its serial could not be read (e.g. permission denied), or empty
+};
+
+// Lists the displays on the USB buses (a fresh libusb context; opens each one
+// only to read its serial). Throws Errc::Device when libusb cannot list devices.
+std::vector<UsbDisplayInfo> listUsbDisplays();
 
 // Returns an Open display. Throws Errc::NotFound when no device matches,
 // Errc::Config when several match and no serial was given, Errc::Device when the
