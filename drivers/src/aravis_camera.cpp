@@ -539,9 +539,9 @@ class AravisCamera final : public Camera {
   void releaseDevice() noexcept {
     g_clear_object(&stream_);
     if (camera_ != nullptr) {
-      // Aravis 0.8 retries its last GVCP writes to a vanished device 5 x 500 ms each, with no way to shorten it:
-      // say why the program stops for a while before the error is reported.
-      if (lost_) spdlog::warn("camera '{}': the device is gone; Aravis takes 7.5 to 10 s to release it", name());
+      // Aravis 0.8 retries its last GVCP writes to a device that is gone (or no longer takes them from us) 5 x
+      // 500 ms each, with no way to shorten it: say why the program stops for a while.
+      if (lost_) spdlog::warn("camera '{}': releasing the lost device; Aravis may take up to 10 s", name());
       if (controlLostHandler_ != 0) g_signal_handler_disconnect(arv_camera_get_device(camera_), controlLostHandler_);
       controlLostHandler_ = 0;
       g_clear_object(&camera_);

@@ -585,7 +585,15 @@ TEST_F(AravisCameraTest, AControlChannelLostWhileStreamingIsADeviceError) {
   camera->open();
   camera->configure(smallSettings());
   camera->start(4);
-  EXPECT_EQ(camera->grab(2s).status, FrameStatus::Complete);
+  // It streams again. A frame may come out Incomplete on a loaded host (the fake device resends nothing; once in
+  // CI under ASan the first one did), never timed out.
+  int complete = 0, incomplete = 0;
+  for (int i = 0; i < 5 && complete == 0; ++i) {
+    const FrameStatus status = camera->grab(2s).status;
+    ASSERT_NE(status, FrameStatus::Timeout) << "frame " << i << " after the reopen";
+    ++(status == FrameStatus::Complete ? complete : incomplete);
+  }
+  EXPECT_EQ(complete, 1) << incomplete << " incomplete frames and no complete one after the reopen";
 }
 
 TEST_F(AravisCameraTest, LostPacketsMakeIncompleteFramesNeverCompleteOnes) {
