@@ -59,9 +59,9 @@ TriangleMesh loadMesh(const std::filesystem::path& path);
 
 // Why `mesh` does not bound a solid the tracer can enter and leave, or nothing:
 // every edge must be crossed once each way by the triangles around it (vertices
-// at the same position are one vertex; triangles with two such vertices are
-// skipped), and the enclosed volume must be positive (outward winding). A
-// dielectric mesh must pass; an opaque one may be an open surface.
+// closer than 1e-7 of the mesh's size are one vertex; triangles with two such
+// vertices are skipped), and the enclosed volume must be positive (outward
+// winding). A dielectric mesh must pass; an opaque one may be an open surface.
 std::optional<std::string> meshClosureFault(const TriangleMesh& mesh);
 
 // position (mm) and rotation (degrees, applied about x, then y, then z).
