@@ -87,18 +87,13 @@ Lerp lerpIndex(double coordinate, int count) {
 
 }  // namespace
 
-double LightField::angularSample(int ex, int ey, const Vec2& disc, LightFieldLookup mode) const {
+double LightField::nearestSample(int ex, int ey, const Vec2& disc) const {
   const int n = geometry_.angular;
   const double ax = 0.5 * (disc.x + 1) * n;  // in pixel units, 0..n across the element
   const double ay = 0.5 * (disc.y + 1) * n;
-  if (mode == LightFieldLookup::Nearest) {
-    const int u = std::clamp(static_cast<int>(std::floor(ax)), 0, n - 1);
-    const int v = std::clamp(static_cast<int>(std::floor(ay)), 0, n - 1);
-    return at(ex, ey, u, v);
-  }
-  const Lerp lu = lerpIndex(ax - 0.5, n), lv = lerpIndex(ay - 0.5, n);
-  return (1 - lv.t) * ((1 - lu.t) * at(ex, ey, lu.i0, lv.i0) + lu.t * at(ex, ey, lu.i1, lv.i0)) +
-         lv.t * ((1 - lu.t) * at(ex, ey, lu.i0, lv.i1) + lu.t * at(ex, ey, lu.i1, lv.i1));
+  const int u = std::clamp(static_cast<int>(std::floor(ax)), 0, n - 1);
+  const int v = std::clamp(static_cast<int>(std::floor(ay)), 0, n - 1);
+  return at(ex, ey, u, v);
 }
 
 double LightField::radiance(const Vec2& q, const Vec3& d, LightFieldLookup mode) const {
@@ -109,15 +104,24 @@ double LightField::radiance(const Vec2& q, const Vec3& d, LightFieldLookup mode)
 }
 
 double LightField::radianceAt(double sx, double sy, const Vec2& disc, LightFieldLookup mode) const {
-  if (lenslet_.empty()) return 0;
+  if (lenslet_.data == nullptr) return 0;  // (a geometry's image is never empty; Mat::empty() is a call)
   if (!(sx >= 0 && sx < geometry_.spatialX && sy >= 0 && sy < geometry_.spatialY)) return 0;
-  if (mode == LightFieldLookup::Nearest)
-    return angularSample(static_cast<int>(sx), static_cast<int>(sy), disc, mode);
+  if (mode == LightFieldLookup::Nearest) return nearestSample(static_cast<int>(sx), static_cast<int>(sy), disc);
+  // Bilinear in angle within each of the four elements around (sx, sy), then
+  // bilinear across them. The angular cell and weights are the same in every
+  // element: found once.
+  const int n = geometry_.angular;
+  const double ax = 0.5 * (disc.x + 1) * n, ay = 0.5 * (disc.y + 1) * n;  // pixel units, 0..n across an element
+  const Lerp lu = lerpIndex(ax - 0.5, n), lv = lerpIndex(ay - 0.5, n);
+  auto element = [&](int ex, int ey) {
+    const float* v0 = lenslet_.ptr<float>(ey * n + lv.i0) + ex * n;
+    const float* v1 = lenslet_.ptr<float>(ey * n + lv.i1) + ex * n;
+    return (1 - lv.t) * ((1 - lu.t) * v0[lu.i0] + lu.t * v0[lu.i1]) +
+           lv.t * ((1 - lu.t) * v1[lu.i0] + lu.t * v1[lu.i1]);
+  };
   const Lerp lx = lerpIndex(sx - 0.5, geometry_.spatialX), ly = lerpIndex(sy - 0.5, geometry_.spatialY);
-  return (1 - ly.t) * ((1 - lx.t) * angularSample(lx.i0, ly.i0, disc, mode) +
-                       lx.t * angularSample(lx.i1, ly.i0, disc, mode)) +
-         ly.t * ((1 - lx.t) * angularSample(lx.i0, ly.i1, disc, mode) +
-                 lx.t * angularSample(lx.i1, ly.i1, disc, mode));
+  return (1 - ly.t) * ((1 - lx.t) * element(lx.i0, ly.i0) + lx.t * element(lx.i1, ly.i0)) +
+         ly.t * ((1 - lx.t) * element(lx.i0, ly.i1) + lx.t * element(lx.i1, ly.i1));
 }
 
 }  // namespace lfi

@@ -153,6 +153,41 @@ TEST(DisplayOptics, EncodingADirectionOnlyLightFieldGivesTheAnalyticDirectionOfE
   EXPECT_GT(hi - lo, 255 * 0.8 * std::sin(0.3));
 }
 
+TEST(DisplayOptics, EncodingIsTheInterpolatedLookupAlongEachChiefRay) {
+  // encodeLightField takes each subpixel's ray straight to the light field's
+  // coordinates; it must give what rayFromPixel and LightField::radiance give,
+  // here for a light field that varies in position and angle at random (values
+  // past white and below 0 included, to be clamped), on a panel wider than it.
+  for (const SubpixelLayout layout : {SubpixelLayout::RgbStripe, SubpixelLayout::Mono}) {
+    const DisplayInfo info = smallLenticular(layout, 0.1826);
+    const DisplayOptics optics(info);
+    const int sub = info.subpixelsPerPixel();
+    LightFieldGeometry g{.spatialX = 5, .spatialY = 4, .angular = 8, .pixelPitch_mm = 0.12};
+    LightField lf(g);
+    cv::RNG rng(7);
+    rng.fill(lf.lensletImage(), cv::RNG::UNIFORM, -0.1, 1.1);
+    const double white = 0.9;
+    const cv::Mat panel = encodeLightField(lf, optics, white);
+    int differing = 0, maxError = 0, dark = 0;
+    for (int row = 0; row < info.panelHeight_px; ++row)
+      for (int col = 0; col < info.panelWidth_px; ++col)
+        for (int k = 0; k < sub; ++k) {
+          const DisplayRay ray = optics.rayFromPixel(col, row, k);
+          const double r = lf.radiance({ray.origin_mm.x, ray.origin_mm.y}, ray.direction, LightFieldLookup::Interpolated);
+          const long expected = std::clamp(std::lround(255 * r / white), 0L, 255L);
+          const int got = panel.ptr<std::uint8_t>(row)[col * sub + k];
+          differing += got != expected;
+          maxError = std::max(maxError, static_cast<int>(std::abs(got - expected)));
+          dark += r == 0;  // off the light field's plane
+        }
+    const int subpixels = info.panelWidth_px * info.panelHeight_px * sub;
+    EXPECT_LE(maxError, 1) << toString(layout);            // a level, where rounding meets a half-way value
+    EXPECT_LE(differing, subpixels / 1000) << toString(layout);
+    EXPECT_GT(dark, 0) << toString(layout);                 // the panel reaches past the light field
+    EXPECT_LT(dark, subpixels / 2) << toString(layout);
+  }
+}
+
 TEST(DisplayOptics, InvalidParametersNameTheField) {
   DisplayInfo info = defaultLenticularDisplay();
   info.optics.gap_mm = 0;

@@ -93,7 +93,7 @@ public:
   double radianceAt(double sx, double sy, const Vec2& disc, LightFieldLookup mode) const;
 
 private:
-  double angularSample(int ex, int ey, const Vec2& disc, LightFieldLookup mode) const;
+  double nearestSample(int ex, int ey, const Vec2& disc) const;
 
   LightFieldGeometry geometry_;
   cv::Mat lenslet_;

@@ -89,6 +89,10 @@ public:
   // (lenticular optics do not select it).
   std::optional<PanelSample> pixelFromRay(const Vec3& origin_mm, const Vec3& direction) const;
 
+  // Distance d across its lens (in [-P⊥/2, P⊥/2], along lensNormal()) of a
+  // point p of the panel or lens plane: p·n minus the nearest lens axis.
+  double acrossLens(const Vec2& p) const;
+
   // Perpendicular lens pitch P⊥ in mm and the full view cone angle in rad.
   double lensPitchPerp_mm() const { return perpPitch_; }
   double viewCone_rad() const;
@@ -99,6 +103,7 @@ private:
   DisplayInfo info_;
   Vec2 normal_;
   double perpPitch_ = 0;
+  double invPerpPitch_ = 0;
   double w0_ = 0;
 };
 
