@@ -192,16 +192,24 @@ class ServedCameraTest : public ::testing::Test {
 };
 
 TEST_F(ServedCameraTest, DiscoveryFindsTheServedCamera) {
+  // Discovery is a UDP broadcast answered within Aravis's fixed wait: on a
+  // loaded host (the whole suite on 2 cores) an answer can miss one round, as
+  // on a real network. Three rounds, as a user would list again.
   bool found = false;
-  for (const AravisDeviceInfo& d : listAravisDevices()) {
-    if (d.id != server_->id()) continue;
-    found = true;
-    EXPECT_EQ(d.vendor, "lfi");
-    EXPECT_EQ(d.model, "SimCamera");
-    EXPECT_EQ(d.address, "127.0.0.1");
-    EXPECT_EQ(d.protocol, "GigEVision");
+  int rounds = 0;
+  while (!found && rounds < 3) {
+    ++rounds;
+    for (const AravisDeviceInfo& d : listAravisDevices()) {
+      if (d.id != server_->id()) continue;
+      found = true;
+      EXPECT_EQ(d.vendor, "lfi");
+      EXPECT_EQ(d.model, "SimCamera");
+      EXPECT_EQ(d.address, "127.0.0.1");
+      EXPECT_EQ(d.protocol, "GigEVision");
+    }
   }
-  EXPECT_TRUE(found) << server_->id() << " not discovered";
+  EXPECT_TRUE(found) << server_->id() << " not discovered in " << rounds << " rounds";
+  if (rounds > 1) std::printf("[ info     ] discovered in round %d\n", rounds);
   auto camera = openServed();
   const CameraInfo info = camera->info();
   EXPECT_EQ(info.vendor, "lfi");
@@ -338,15 +346,19 @@ TEST_F(ServedCameraTest, WrongIdIsNotFoundAndListsTheServedCamera) {
 
 // `lfi devices` names the served camera by the URI that opens it.
 TEST_F(ServedCameraTest, TheDevicesCommandListsTheServedCamera) {
-  FILE* pipe = ::popen((std::string(LFI_EXECUTABLE) + " -q devices").c_str(), "r");
-  ASSERT_NE(pipe, nullptr);
+  const std::string listed = "aravis:" + server_->id() + "  (lfi SimCamera";
   std::string out;
-  char buffer[4096];
-  for (std::size_t n; (n = std::fread(buffer, 1, sizeof buffer, pipe)) > 0;) out.append(buffer, n);
-  const int status = ::pclose(pipe);
-  EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << out;
+  for (int round = 1; round <= 3 && out.find(listed) == std::string::npos; ++round) {  // (as DiscoveryFinds...)
+    FILE* pipe = ::popen((std::string(LFI_EXECUTABLE) + " -q devices").c_str(), "r");
+    ASSERT_NE(pipe, nullptr);
+    out.clear();
+    char buffer[4096];
+    for (std::size_t n; (n = std::fread(buffer, 1, sizeof buffer, pipe)) > 0;) out.append(buffer, n);
+    const int status = ::pclose(pipe);
+    EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << out;
+  }
   EXPECT_NE(out.find("USB displays:"), std::string::npos) << out;
-  EXPECT_NE(out.find("aravis:" + server_->id() + "  (lfi SimCamera"), std::string::npos) << out;
+  EXPECT_NE(out.find(listed), std::string::npos) << out;
   EXPECT_NE(out.find("GigEVision at 127.0.0.1"), std::string::npos) << out;
   auto camera = openCamera("aravis:" + server_->id());  // the listed URI opens it
   EXPECT_EQ(camera->info().deviceId, server_->id());
