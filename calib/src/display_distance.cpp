@@ -40,6 +40,7 @@ namespace {
 
 constexpr double kPeakLevel = 0.25;        // the flanks' level: this fraction of the way down from the peak
 constexpr double kClearAboveNoise = 10.0;  // the scan's rise must exceed this many times the noise of a mean
+constexpr double kSecondPeakAboveNoise = 3.0;  // a second peak: this many times the noise above the level
 
 std::string scanTable(const std::vector<double>& candidates, const std::vector<double>& brightness) {
   std::string table;
@@ -73,6 +74,7 @@ DisplayDistanceScan calibrateDisplayDistance(const LightField& captured, const I
     cv::Mat image;
     double mean;
   };
+  cv::Size size;  // the first image's: every other one must have it
   auto measure = [&](const LightField& shown, const std::string& what) {
     const cv::Mat image = inspect(shown);
     if (image.empty()) fail(Errc::Device, "{}: the camera returned no image {}", kWhat, what);
@@ -83,6 +85,10 @@ DisplayDistanceScan calibrateDisplayDistance(const LightField& captured, const I
     if (!roi.empty() && roi.size() != f.size())
       fail(Errc::InvalidArgument, "{}: the ROI is {}x{}, the image {} {}x{}", kWhat, roi.cols, roi.rows, what, f.cols,
            f.rows);
+    if (size.empty()) size = f.size();
+    if (f.size() != size)
+      fail(Errc::Device, "{}: the image {} is {}x{}, the first one (with the display dark) {}x{}: did the camera's "
+           "region or binning change during the scan?", kWhat, what, f.cols, f.rows, size.width, size.height);
     cv::Scalar mean, deviation;
     cv::meanStdDev(f, mean, deviation, roi);
     if (!std::isfinite(mean[0]) || !std::isfinite(deviation[0]))
@@ -99,9 +105,6 @@ DisplayDistanceScan calibrateDisplayDistance(const LightField& captured, const I
   const LightField darkField(captured.geometry());
   const std::string darkly = "with the display dark";
   const Measured dark1 = measure(darkField, darkly), dark2 = measure(darkField, darkly);
-  if (dark2.image.size() != dark1.image.size())
-    fail(Errc::Device, "{}: the two images with the display dark are {}x{} and {}x{}", kWhat, dark1.image.cols,
-         dark1.image.rows, dark2.image.cols, dark2.image.rows);
   scan.dark = 0.5 * (dark1.mean + dark2.mean);
   cv::Scalar unused, spread;
   cv::meanStdDev(dark1.image - dark2.image, unused, spread, roi);
@@ -137,9 +140,11 @@ DisplayDistanceScan calibrateDisplayDistance(const LightField& captured, const I
   };
   const double low = crossing(-1), high = crossing(+1);
   // Outside the peak's flanks the brightness must stay below the level: a
-  // second peak as bright makes the answer a guess between the two.
+  // second peak as bright makes the answer a guess between the two. A flank
+  // that wavers about the level by the noise is not a second peak.
   for (size_t i = 0; i < candidates.size(); ++i)
-    if ((candidates[i] < low || candidates[i] > high) && scan.brightness[i] >= scan.level)
+    if ((candidates[i] < low || candidates[i] > high) &&
+        scan.brightness[i] >= scan.level + kSecondPeakAboveNoise * scan.noise)
       fail(Errc::InvalidArgument, "{}: two peaks: the brightness rises to {:.6g} again at {:+g} mm, above {:.6g}, "
            "apart from the brightest one between {:+.3g} and {:+.3g} mm ({}); narrow the scan or the region to the "
            "part", kWhat, scan.brightness[i], candidates[i], scan.level, low, high,

@@ -249,10 +249,18 @@ class AravisCamera final : public Camera {
       // Opening an id Aravis has not discovered yet takes a shortcut that can bind the
       // device to the wrong network interface (seen on loopback: control works, the
       // stream goes nowhere). A full discovery first gives the right one.
-      const bool discovered = !deviceId_.empty() && !isIpv4Address(deviceId_) && !knownToAravis(deviceId_);
+      // "The first camera found" is found once and kept by its id: info(), the
+      // messages and a reopen after a loss then name this camera, not whichever
+      // comes first at the time.
+      if (deviceId_.empty()) {
+        const auto devices = listDevicesLocked(true);
+        if (devices.empty()) fail(Errc::NotFound, "camera '{}': no devices found", name());
+        deviceId_ = devices.front().id;
+      }
+      const bool discovered = !isIpv4Address(deviceId_) && !knownToAravis(deviceId_);
       if (discovered) arv_update_device_list();
       GError* error = nullptr;
-      camera_ = arv_camera_new(deviceId_.empty() ? nullptr : deviceId_.c_str(), &error);
+      camera_ = arv_camera_new(deviceId_.c_str(), &error);
       if (camera_ == nullptr) {
         const std::string message = error != nullptr ? orEmpty(error->message) : std::string("no error message");
         const bool notFound = error == nullptr || g_error_matches(error, ARV_DEVICE_ERROR, ARV_DEVICE_ERROR_NOT_FOUND);
@@ -367,6 +375,10 @@ class AravisCamera final : public Camera {
       g_clear_object(&stream_);
       check(error, name(), "arv_camera_get_region");
     }
+    if (width <= 0 || height <= 0) {  // nonsense: every frame would come out Incomplete
+      g_clear_object(&stream_);
+      fail(Errc::Device, "camera '{}': the device reports a {} x {} px region", name(), width, height);
+    }
     const std::uint64_t image = static_cast<std::uint64_t>(std::max(width, 0)) * static_cast<std::uint64_t>(
         std::max(height, 0)) * bitsOnTheWire(settings_.pixelFormat) / 8;
     if (const std::uint64_t most = 4 * image + (16u << 20); payload < image || payload > most) {
@@ -376,10 +388,11 @@ class AravisCamera final : public Camera {
     }
     for (int i = 0; i < bufferCount; ++i) arv_stream_push_buffer(stream_, arv_buffer_new_allocate(payload));
     arv_camera_set_acquisition_mode(camera_, ARV_ACQUISITION_MODE_CONTINUOUS, &error);
-    if (error == nullptr) arv_camera_start_acquisition(camera_, &error);
+    const char* call = "arv_camera_set_acquisition_mode";
+    if (error == nullptr) arv_camera_start_acquisition(camera_, &error), call = "arv_camera_start_acquisition";
     if (error != nullptr) {
       g_clear_object(&stream_);
-      check(error, name(), "arv_camera_start_acquisition");
+      check(error, name(), call);
     }
     statistics_ = {};
     state_ = State::Streaming;
@@ -412,6 +425,7 @@ class AravisCamera final : public Camera {
   void grabInto(Frame& frame, std::chrono::milliseconds timeout) override {
     requireCameraState(state_, {State::Streaming}, "grab", name());
     if (timeout.count() < 0) fail(Errc::InvalidArgument, "camera '{}': grab timeout {} ms", name(), timeout.count());
+    timeout = std::min(timeout, std::chrono::milliseconds(std::chrono::hours(24 * 365)));  // "forever" does not wrap
     // In slices, so that a lost control channel (the device stops streaming for
     // good) ends the wait at once instead of after the whole timeout.
     constexpr std::chrono::milliseconds kSlice{250};
@@ -534,7 +548,7 @@ class AravisCamera final : public Camera {
 
   static void onControlLost(ArvDevice*, gpointer flag) { static_cast<std::atomic<bool>*>(flag)->store(true); }
 
-  std::string name() const { return deviceId_.empty() ? std::string("aravis:(first device)") : deviceId_; }
+  std::string name() const { return deviceId_.empty() ? std::string("(the first camera found)") : deviceId_; }
 
   void releaseDevice() noexcept {
     g_clear_object(&stream_);
@@ -708,11 +722,14 @@ class AravisCamera final : public Camera {
     check(error, name(), "arv_camera_get_width_bounds");
     arv_camera_get_height_bounds(camera_, &hMin, &hMax, &error);
     check(error, name(), "arv_camera_get_height_bounds");
+    if (s.roiX_px >= wMax || s.roiY_px >= hMax)  // (before the sizes: a width past the sensor is the offset's fault)
+      fail(Errc::InvalidArgument, "camera '{}': ROI offset ({}, {}) lies outside the {} x {} (binned) sensor",
+           name(), s.roiX_px, s.roiY_px, wMax, hMax);
     const int width = s.roiWidth_px > 0 ? s.roiWidth_px : wMax - s.roiX_px;
     const int height = s.roiHeight_px > 0 ? s.roiHeight_px : hMax - s.roiY_px;
     checkIncrement("roiWidth_px", width, arv_camera_get_width_increment(camera_, nullptr), wMin, wMax);
     checkIncrement("roiHeight_px", height, arv_camera_get_height_increment(camera_, nullptr), hMin, hMax);
-    if (s.roiX_px + width > wMax || s.roiY_px + height > hMax)
+    if (std::int64_t{s.roiX_px} + width > wMax || std::int64_t{s.roiY_px} + height > hMax)
       fail(Errc::InvalidArgument, "camera '{}': ROI ({}, {}, {} x {}) does not fit the {} x {} (binned) sensor", name(),
            s.roiX_px, s.roiY_px, width, height, wMax, hMax);
     arv_camera_set_region(camera_, s.roiX_px, s.roiY_px, width, height, &error);

@@ -63,8 +63,11 @@ void DisplayInfo::validate() const {
         optics.lensPitch_px, "[1, 1000]");
   check(finite(optics.slant_rad) && std::abs(optics.slant_rad) < 0.786, "slant_rad", optics.slant_rad,
         "(-pi/4, pi/4)");
-  check(finite(optics.offset_px), "offset_px", optics.offset_px, "finite values");
-  check(finite(optics.gap_mm) && optics.gap_mm > 0 && optics.gap_mm <= 100, "gap_mm", optics.gap_mm, "(0, 100]");
+  check(finite(optics.offset_px) && std::abs(optics.offset_px) <= 1e6, "offset_px", optics.offset_px, "[-1e6, 1e6]");
+  // (A gap below a micrometre is no display; it would also put the rays' slopes
+  // past what double precision maps onto the light field's disc.)
+  check(finite(optics.gap_mm) && optics.gap_mm >= 1e-3 && optics.gap_mm <= 100, "gap_mm", optics.gap_mm,
+        "[0.001, 100]");
   if (optics.type == OpticsType::Lenslet)
     check(finite(optics.focalLength_mm) && optics.focalLength_mm > 0, "focalLength_mm", optics.focalLength_mm,
           "(0, inf) for a lenslet display");

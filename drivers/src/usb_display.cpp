@@ -240,7 +240,7 @@ private:
     if (count < 0) fail(Errc::Device, "{}: cannot list USB devices: {}", name_, libusb_error_name(int(count)));
     std::vector<std::string> seen;
     std::vector<std::pair<libusb_device_handle*, std::string>> matches;
-    int lastOpenError = 0;
+    int lastOpenError = 0, lastSerialError = 0;
     for (ssize_t i = 0; i < count; ++i) {
       libusb_device_descriptor desc{};
       if (libusb_get_device_descriptor(list[i], &desc) != 0) continue;
@@ -254,7 +254,8 @@ private:
       int unreadable = 0;
       const std::string serial = serialOf(handle, desc, unreadable);
       if (!selector_.serial.empty() && serial != selector_.serial) {
-        seen.back() += "/" + serialInUri(serial);  // as the URI would name it
+        if (unreadable != 0) lastSerialError = unreadable;
+        seen.back() += unreadable != 0 ? "/(serial unreadable)" : "/" + serialInUri(serial);  // as the URI names it
         libusb_close(handle);
         continue;
       }
@@ -267,6 +268,9 @@ private:
       if (lastOpenError != 0)
         fail(Errc::NotFound, "{}: the device is present but cannot be opened: {}", name_,
              libusb_error_name(lastOpenError));
+      if (lastSerialError != 0)
+        fail(Errc::NotFound, "{}: a device {:04x}:{:04x} is present but its serial cannot be read: {}", name_,
+             selector_.vendorId, selector_.productId, libusb_error_name(lastSerialError));
       fail(Errc::NotFound, "{}: no such USB device (present: {})", name_,
            seen.empty() ? std::string("none") : fmt::format("{}", fmt::join(seen, ", ")));
     }
@@ -286,6 +290,7 @@ private:
     if (const int rc = libusb_get_active_config_descriptor(libusb_get_device(handle_), &config); rc != 0)
       fail(Errc::Device, "{}: cannot read the configuration descriptor: {}", name_, libusb_error_name(rc));
     bool found = false;
+    int altSetting = 0;
     for (int i = 0; i < config->bNumInterfaces && !found; ++i) {
       for (int a = 0; a < config->interface[i].num_altsetting && !found; ++a) {
         const libusb_interface_descriptor& alt = config->interface[i].altsetting[a];
@@ -295,6 +300,7 @@ private:
           const libusb_endpoint_descriptor& ep = alt.endpoint[e];
           if ((ep.bmAttributes & 0x3) == LIBUSB_TRANSFER_TYPE_BULK && (ep.bEndpointAddress & 0x80) == 0) {
             interface_ = alt.bInterfaceNumber;
+            altSetting = alt.bAlternateSetting;
             endpoint_ = ep.bEndpointAddress;
             found = true;
             break;
@@ -315,6 +321,12 @@ private:
                      : " (another program has it)");
     }
     claimed_ = true;
+    if (altSetting != 0)  // the endpoint is in an alternate setting: select it
+      if (const int rc = libusb_set_interface_alt_setting(handle_, interface_, altSetting); rc != 0) {
+        if (rc == LIBUSB_ERROR_NO_DEVICE) vanished("SET_INTERFACE");
+        fail(Errc::Device, "{}: cannot select alternate setting {} of interface {}: {}", name_, altSetting,
+             interface_, libusb_error_name(rc));
+      }
   }
 
   void readIdentity() {
@@ -342,8 +354,11 @@ private:
     info.vendor = block.vendor;
     info.model = block.model;
     info.serial = block.serial;
-    info.deviceId = fmt::format("{:04x}:{:04x}/{}", selector_.vendorId, selector_.productId,
-                                serialInUri(serial_.empty() ? block.serial : serial_));
+    // The id that selects this device (display.h): by its USB serial, which
+    // openDevice() matches; the info block's serial cannot select it.
+    info.deviceId = serial_.empty() ? fmt::format("{:04x}:{:04x}", selector_.vendorId, selector_.productId)
+                                    : fmt::format("{:04x}:{:04x}/{}", selector_.vendorId, selector_.productId,
+                                                  serialInUri(serial_));
     info.panelWidth_px = block.panelWidth_px;
     info.panelHeight_px = block.panelHeight_px;
     info.pixelPitch_mm = cal.pixelPitch_mm;

@@ -20,6 +20,7 @@
 #include <functional>
 #include <unordered_map>
 #include <numbers>
+#include <numeric>
 
 namespace lfi::sim {
 
@@ -42,7 +43,8 @@ TriangleMesh importMesh(const fs::path& path) {
   // range, no empty meshes) before anything reads it.
   const aiScene* scene = importer.ReadFile(
       path.string(), aiProcess_Triangulate | aiProcess_JoinIdenticalVertices | aiProcess_ValidateDataStructure |
-                         aiProcess_FindDegenerates | aiProcess_SortByPType);
+                         aiProcess_FindDegenerates | aiProcess_SortByPType |
+                         aiProcess_PreTransformVertices);  // the file's node transforms (glTF, COLLADA) applied
   if (!scene || (scene->mFlags & AI_SCENE_FLAGS_INCOMPLETE) || !scene->HasMeshes())
     fail(Errc::InvalidFile, "'{}': not a readable mesh: {}", path.string(), importer.GetErrorString());
   TriangleMesh mesh;
@@ -72,9 +74,79 @@ std::string head(const fs::path& path, size_t n) {
   return bytes;
 }
 
+// Vertex normals, smooth across edges whose faces meet at less than the crease
+// angle and sharp across the others: around each vertex the faces fall into
+// groups joined through such edges, and each group gets its own copy of the
+// vertex (the first keeps the vertex's index, the others are appended), with
+// the area-weighted mean of the group's face normals.
+void smoothNormals(TriangleMesh& mesh, double creaseAngle) {
+  const size_t nv = mesh.vertices.size(), nt = mesh.triangles.size();
+  std::vector<Vec3> area(nt), unit(nt);  // each face's normal weighted by its area, and of unit length
+  for (size_t t = 0; t < nt; ++t) {
+    const auto& f = mesh.triangles[t];
+    area[t] = (mesh.vertices[f[1]] - mesh.vertices[f[0]]).cross(mesh.vertices[f[2]] - mesh.vertices[f[0]]);
+    unit[t] = area[t].length() > 0 ? area[t].normalized() : Vec3(0, 0, 0);
+  }
+  // The faces around each vertex (compressed rows).
+  std::vector<unsigned> first(nv + 1, 0), around(3 * nt);
+  for (const auto& f : mesh.triangles)
+    for (const unsigned v : f) ++first[v + 1];
+  std::partial_sum(first.begin(), first.end(), first.begin());
+  std::vector<unsigned> fill(first.begin(), first.end() - 1);
+  for (size_t t = 0; t < nt; ++t)
+    for (const unsigned v : mesh.triangles[t]) around[fill[v]++] = static_cast<unsigned>(t);
+  const double cosCrease = std::cos(creaseAngle);
+  mesh.normals.assign(nv, Vec3(0, 0, 1));  // (for a vertex no face uses)
+  std::vector<std::pair<unsigned, unsigned>> edges;  // (the edge's other end, the face's slot around v)
+  std::vector<unsigned> group, copyOf;
+  std::vector<Vec3> sum;
+  for (unsigned v = 0; v < nv; ++v) {
+    const unsigned begin = first[v], count = first[v + 1] - begin;
+    if (count == 0) continue;
+    // Faces sharing an edge from v (the same other end) join when they meet at less than the crease angle.
+    edges.clear();
+    for (unsigned s = 0; s < count; ++s)
+      for (const unsigned w : mesh.triangles[around[begin + s]])
+        if (w != v) edges.emplace_back(w, s);
+    std::sort(edges.begin(), edges.end());
+    group.resize(count);
+    std::iota(group.begin(), group.end(), 0u);
+    auto root = [&](unsigned s) {
+      while (group[s] != s) s = group[s] = group[group[s]];
+      return s;
+    };
+    for (size_t i = 0; i + 1 < edges.size(); ++i)
+      for (size_t j = i + 1; j < edges.size() && edges[j].first == edges[i].first; ++j)
+        if (unit[around[begin + edges[i].second]].dot(unit[around[begin + edges[j].second]]) >= cosCrease)
+          group[root(edges[i].second)] = root(edges[j].second);
+    // One normal per group, the sum of its faces'; the first group keeps v.
+    sum.assign(count, Vec3(0, 0, 0));
+    for (unsigned s = 0; s < count; ++s) sum[root(s)] += area[around[begin + s]];
+    copyOf.assign(count, ~0u);
+    for (unsigned s = 0; s < count; ++s) {
+      const unsigned r = root(s);
+      if (copyOf[r] == ~0u) {
+        const Vec3 n = sum[r].length() > 0 ? sum[r].normalized() : Vec3(0, 0, 1);
+        if (s == 0) {
+          copyOf[r] = v, mesh.normals[v] = n;
+        } else {
+          copyOf[r] = static_cast<unsigned>(mesh.vertices.size());
+          const Vec3 position = mesh.vertices[v];
+          mesh.vertices.push_back(position);
+          mesh.normals.push_back(n);
+        }
+      }
+      for (unsigned& corner : mesh.triangles[around[begin + s]])
+        if (corner == v) corner = copyOf[r];
+    }
+  }
+}
+
 }  // namespace
 
-TriangleMesh loadMesh(const fs::path& path) {
+TriangleMesh loadMesh(const fs::path& path, double creaseAngle_rad) {
+  if (!(creaseAngle_rad >= 0 && creaseAngle_rad <= std::numbers::pi))
+    fail(Errc::InvalidArgument, "'{}': crease angle {} rad is outside [0, pi]", path.string(), creaseAngle_rad);
   if (!fs::exists(path)) fail(Errc::NotFound, "'{}': no such mesh file", path.string());
   // PLY by its content, whatever the name; a .ply that is not PLY is not handed to Assimp either.
   std::string extension = path.extension().string();
@@ -84,27 +156,27 @@ TriangleMesh loadMesh(const fs::path& path) {
     const Vec3& p = mesh.vertices[v];
     if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
       fail(Errc::InvalidFile, "'{}': vertex {} (counting from 0) is not finite", path.string(), v);
+    if (constexpr double kFar = 1e9; std::max({std::abs(p.x), std::abs(p.y), std::abs(p.z)}) > kFar)
+      fail(Errc::InvalidFile, "'{}': vertex {} (counting from 0) at ({:g}, {:g}, {:g}) is more than {:g} mm from the "
+           "origin: not a part of a bench (wrong units?)", path.string(), v, p.x, p.y, p.z, kFar);
   }
   if (mesh.triangles.empty()) fail(Errc::InvalidFile, "'{}': the mesh has no faces", path.string());
-  // Smooth normals: the cross product's length weights each face by its area.
-  mesh.normals.assign(mesh.vertices.size(), Vec3(0, 0, 0));
-  for (const auto& t : mesh.triangles) {
-    const Vec3 n = (mesh.vertices[t[1]] - mesh.vertices[t[0]]).cross(mesh.vertices[t[2]] - mesh.vertices[t[0]]);
-    for (unsigned i : t) mesh.normals[i] += n;
-  }
-  for (Vec3& n : mesh.normals) n = n.length() > 0 ? n.normalized() : Vec3(0, 0, 1);
+  smoothNormals(mesh, creaseAngle_rad);
   return mesh;
 }
 
 namespace {
 
-// The mesh's axis-aligned bounding box (low and high corners; the origin for no vertices).
+// The axis-aligned bounding box (low and high corners; the origin for none)
+// of the vertices the triangles use: a stray unused vertex does not count.
 std::pair<Vec3, Vec3> bounds(const TriangleMesh& mesh) {
-  Vec3 low = mesh.vertices.empty() ? Vec3(0, 0, 0) : mesh.vertices.front(), high = low;
-  for (const Vec3& v : mesh.vertices) {
-    low = Vec3(std::min(low.x, v.x), std::min(low.y, v.y), std::min(low.z, v.z));
-    high = Vec3(std::max(high.x, v.x), std::max(high.y, v.y), std::max(high.z, v.z));
-  }
+  Vec3 low = mesh.triangles.empty() ? Vec3(0, 0, 0) : mesh.vertices[mesh.triangles.front()[0]], high = low;
+  for (const auto& t : mesh.triangles)
+    for (const unsigned i : t) {
+      const Vec3& v = mesh.vertices[i];
+      low = Vec3(std::min(low.x, v.x), std::min(low.y, v.y), std::min(low.z, v.z));
+      high = Vec3(std::max(high.x, v.x), std::max(high.y, v.y), std::max(high.z, v.z));
+    }
   return {low, high};
 }
 
@@ -153,16 +225,108 @@ std::vector<unsigned> weldVertices(const TriangleMesh& mesh, double tolerance, b
   return welded;
 }
 
+// Whether a ray from p in a fixed, unremarkable direction crosses triangle t
+// (Möller–Trumbore): the parity of such crossings over a closed surface says
+// whether p is inside it.
+bool parityRayCrosses(const TriangleMesh& mesh, const std::array<unsigned, 3>& t, const Vec3& p) {
+  static const Vec3 dir = Vec3(0.5164, 0.6331, 0.5766).normalized();
+  const Vec3 &a = mesh.vertices[t[0]], e1 = mesh.vertices[t[1]] - a, e2 = mesh.vertices[t[2]] - a;
+  const Vec3 h = dir.cross(e2);
+  const double det = e1.dot(h);
+  if (det == 0) return false;
+  const Vec3 s = p - a;
+  const double u = s.dot(h) / det;
+  if (u < 0 || u > 1) return false;
+  const Vec3 q = s.cross(e1);
+  const double v = dir.dot(q) / det;
+  if (v < 0 || u + v > 1) return false;
+  return e2.dot(q) / det > 0;
+}
+
+// Every edge of every triangle as its two welded ends, lower id first, and which way the triangle crosses it.
+struct EdgeCrossing {
+  std::uint64_t edge;
+  unsigned triangle;
+  std::int8_t corner;  // the edge runs from the triangle's vertex `corner` to the next
+  bool forward;        // from the lower welded id to the higher
+};
+
+// For a closed, consistently wound mesh of several parts (closed surfaces that
+// share no edge): each part must be wound outwards, or inwards where it is a
+// cavity. A part inside an even number of the others (none: a solid; two: an
+// island in a cavity) must enclose a positive volume, one inside an odd number
+// a negative one. The whole mesh's volume being positive does not show a part
+// wound the wrong way beside a larger one wound right.
+std::optional<std::string> partWindingFault(const TriangleMesh& mesh, const std::vector<EdgeCrossing>& crossings) {
+  // Parts: triangles joined through the edges they share (each edge's two crossings are adjacent, sorted).
+  std::vector<unsigned> parent(mesh.triangles.size());
+  std::iota(parent.begin(), parent.end(), 0u);
+  auto root = [&](unsigned t) {
+    while (parent[t] != t) t = parent[t] = parent[parent[t]];
+    return t;
+  };
+  for (size_t i = 0; i + 1 < crossings.size(); i += 2)
+    parent[root(crossings[i].triangle)] = root(crossings[i + 1].triangle);
+  std::vector<unsigned> partOfRoot(mesh.triangles.size(), ~0u), firstOf;  // (~0u: none yet)
+  std::vector<char> counted(mesh.triangles.size(), 0);
+  std::vector<std::vector<unsigned>> triangles;
+  std::vector<double> volume6;
+  std::vector<std::pair<Vec3, Vec3>> box;  // each part's bounding box: only parts whose box holds a point can hold it
+  for (const auto& c : crossings) {
+    if (counted[c.triangle]) continue;
+    counted[c.triangle] = 1;
+    const unsigned r = root(c.triangle);
+    if (partOfRoot[r] == ~0u) {
+      partOfRoot[r] = static_cast<unsigned>(triangles.size());
+      triangles.emplace_back();
+      volume6.push_back(0);
+      firstOf.push_back(c.triangle);
+      box.emplace_back(mesh.vertices[mesh.triangles[c.triangle][0]], mesh.vertices[mesh.triangles[c.triangle][0]]);
+    }
+    const unsigned k = partOfRoot[r];
+    triangles[k].push_back(c.triangle);
+    const auto& t = mesh.triangles[c.triangle];
+    volume6[k] += mesh.vertices[t[0]].dot(mesh.vertices[t[1]].cross(mesh.vertices[t[2]]));
+    for (const unsigned i : t) {
+      const Vec3& v = mesh.vertices[i];
+      auto& [low, high] = box[k];
+      low = Vec3(std::min(low.x, v.x), std::min(low.y, v.y), std::min(low.z, v.z));
+      high = Vec3(std::max(high.x, v.x), std::max(high.y, v.y), std::max(high.z, v.z));
+    }
+  }
+  if (triangles.size() < 2) return std::nullopt;
+  for (size_t k = 0; k < triangles.size(); ++k) {
+    // A point of part k: the centroid of one of its triangles, which lies off every other part's surface.
+    const auto& t = mesh.triangles[firstOf[k]];
+    const Vec3 p = (mesh.vertices[t[0]] + mesh.vertices[t[1]] + mesh.vertices[t[2]]) / 3.0;
+    int around = 0;
+    for (size_t other = 0; other < triangles.size(); ++other) {
+      const auto& [low, high] = box[other];
+      if (other == k || !(p.x >= low.x && p.y >= low.y && p.z >= low.z && p.x <= high.x && p.y <= high.y &&
+                          p.z <= high.z))
+        continue;
+      bool inside = false;
+      for (const unsigned i : triangles[other]) inside ^= parityRayCrosses(mesh, mesh.triangles[i], p);
+      around += inside;
+    }
+    if ((around % 2 == 0) != (volume6[k] > 0)) {
+      auto at = [&](unsigned v) {
+        const Vec3& q = mesh.vertices[v];
+        return fmt::format("({:g}, {:g}, {:g})", q.x, q.y, q.z);
+      };
+      return fmt::format("a part wound the wrong way: the closed surface through triangle {} (counting from 0; "
+                         "corners {}, {}, {}) encloses {:.6g} mm^3 and lies inside {} of the mesh's other {} parts: "
+                         "{} (reverse its triangles' vertex order)", firstOf[k], at(t[0]), at(t[1]), at(t[2]),
+                         volume6[k] / 6, around, triangles.size() - 1,
+                         around % 2 ? "a cavity must be wound inwards" : "a solid must be wound outwards");
+    }
+  }
+  return std::nullopt;
+}
+
 // meshClosureFault for vertices welded to `welded`.
 std::optional<std::string> closureFault(const TriangleMesh& mesh, const std::vector<unsigned>& welded) {
-  // Every edge of every triangle as its two welded ends, lower id first, and which way the triangle crosses it.
-  struct Crossing {
-    std::uint64_t edge;
-    unsigned triangle;
-    std::int8_t corner;  // the edge runs from the triangle's vertex `corner` to the next
-    bool forward;        // from the lower welded id to the higher
-  };
-  std::vector<Crossing> crossings;
+  std::vector<EdgeCrossing> crossings;
   crossings.reserve(3 * mesh.triangles.size());
   double volume6 = 0;  // six times the signed enclosed volume
   for (size_t t = 0; t < mesh.triangles.size(); ++t) {
@@ -177,7 +341,7 @@ std::optional<std::string> closureFault(const TriangleMesh& mesh, const std::vec
     }
   }
   if (crossings.empty()) return "no triangle of non-zero size";
-  std::sort(crossings.begin(), crossings.end(), [](const Crossing& x, const Crossing& y) {
+  std::sort(crossings.begin(), crossings.end(), [](const EdgeCrossing& x, const EdgeCrossing& y) {
     return x.edge != y.edge ? x.edge < y.edge : x.triangle < y.triangle;
   });
   for (size_t i = 0; i < crossings.size();) {
@@ -185,7 +349,7 @@ std::optional<std::string> closureFault(const TriangleMesh& mesh, const std::vec
     for (; j < crossings.size() && crossings[j].edge == crossings[i].edge; ++j) forward += crossings[j].forward;
     const size_t backward = j - i - forward;
     if (forward != 1 || backward != 1) {
-      const Crossing& c = crossings[i];
+      const EdgeCrossing& c = crossings[i];
       const auto& tri = mesh.triangles[c.triangle];
       auto at = [&](unsigned v) {
         const Vec3& p = mesh.vertices[v];
@@ -204,7 +368,7 @@ std::optional<std::string> closureFault(const TriangleMesh& mesh, const std::vec
   if (!(volume6 > 0))
     return fmt::format("wound inwards: its enclosed volume is {:.6g} mm^3 (reverse every triangle's vertex order)",
                        volume6 / 6);
-  return std::nullopt;
+  return partWindingFault(mesh, crossings);
 }
 
 }  // namespace
@@ -213,8 +377,13 @@ std::optional<std::string> meshClosureFault(const TriangleMesh& mesh) {
   // Vertices within a float's precision of the mesh's size are one: formats that repeat a vertex per face (STL,
   // seams) and rings of vertices at a sphere's pole still close. The quick weld first; the thorough one when that
   // leaves the mesh open (two such vertices on either side of a cell wall).
+  // (Of the size, or of the distance from the origin where that is larger: a float's step grows with it.)
   const auto [low, high] = bounds(mesh);
-  const double extent = std::max({high.x - low.x, high.y - low.y, high.z - low.z});
+  const double extent = std::max({high.x - low.x, high.y - low.y, high.z - low.z, std::abs(low.x), std::abs(low.y),
+                                  std::abs(low.z), std::abs(high.x), std::abs(high.y), std::abs(high.z)});
+  if (!std::isfinite(extent))
+    return fmt::format("not measurable: its vertices span from ({:g}, {:g}, {:g}) to ({:g}, {:g}, {:g})", low.x, low.y,
+                       low.z, high.x, high.y, high.z);
   const double tolerance = extent > 0 ? 1e-7 * extent : 1.0;
   if (!closureFault(mesh, weldVertices(mesh, tolerance, false))) return std::nullopt;
   return closureFault(mesh, weldVertices(mesh, tolerance, true));
@@ -273,7 +442,8 @@ Object readObject(ConfigTable& t) {
     if (!(size[0] > 0 && size[1] > 0)) fail(Errc::Config, "{} must be positive", t.where("size_mm"));
     obj.shape = Rectangle{size[0], size[1]};
   } else if (kind == "mesh") {
-    obj.shape = readNamedFile(t, "file", loadMesh);
+    const double crease = t.number("crease_angle_deg", kDefaultCreaseAngle_deg, 0, 180) * std::numbers::pi / 180;
+    obj.shape = readNamedFile(t, "file", [crease](const fs::path& file) { return loadMesh(file, crease); });
   } else {
     std::shared_ptr<const Solid> solid = readSolid(t, kind);
     // Cut-outs: spheres subtracted from the solid (object frame).
@@ -356,21 +526,8 @@ DisplayParameters readDisplay(ConfigTable& t) {
 // Whether `p` lies inside the closed mesh: the parity of the triangles a ray
 // from p crosses (a direction no axis-aligned or diagonal edge lies along).
 bool insideClosedMesh(const TriangleMesh& mesh, const Vec3& p) {
-  const Vec3 dir = Vec3(0.5164, 0.6331, 0.5766).normalized();
   bool inside = false;
-  for (const auto& t : mesh.triangles) {  // Möller–Trumbore
-    const Vec3 &a = mesh.vertices[t[0]], e1 = mesh.vertices[t[1]] - a, e2 = mesh.vertices[t[2]] - a;
-    const Vec3 h = dir.cross(e2);
-    const double det = e1.dot(h);
-    if (det == 0) continue;
-    const Vec3 s = p - a;
-    const double u = s.dot(h) / det;
-    if (u < 0 || u > 1) continue;
-    const Vec3 q = s.cross(e1);
-    const double v = dir.dot(q) / det;
-    if (v < 0 || u + v > 1) continue;
-    if (e2.dot(q) / det > 0) inside = !inside;
-  }
+  for (const auto& t : mesh.triangles) inside ^= parityRayCrosses(mesh, t, p);
   return inside;
 }
 

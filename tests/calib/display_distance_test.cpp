@@ -229,6 +229,33 @@ TEST(DisplayDistance, TwoPeaksAsBrightAreRefused) {
   EXPECT_NEAR(scan.width_mm, 2.5, 1e-9);
 }
 
+// A flank that wavers about the level by the noise is not a second peak: the
+// brightness {0, 50, 100, 100, 74.9, 75.1, 0} (level 75) with a mean's noise
+// of 0.5 falls through the level between 0 and +1 mm and is 0.1 above it at
+// +2 mm, well within the noise. The same scan without noise is refused.
+TEST(DisplayDistance, AFlankWaveringByTheNoiseIsNotASecondPeak) {
+  const std::vector<double> candidates = {-3, -2, -1, 0, 1, 2, 3}, brightness = {0, 50, 100, 100, 74.9, 75.1, 0};
+  cv::RNG rng(5);
+  auto scanWith = [&](double sigma) {
+    return [&, sigma](const LightField& shown) {
+      const bool lit = cv::countNonZero(shown.lensletImage()) > 0;
+      cv::Mat noise(64, 64, CV_32FC1);
+      rng.fill(noise, cv::RNG::NORMAL, 0, sigma);
+      noise -= cv::mean(noise);  // the noise of a mean is sigma / 64, but each mean is exact
+      const auto k = static_cast<size_t>(std::lround(shownEpsilon(shown) + 3));
+      return cv::Mat(noise + (lit ? brightness[k] : 0.0));
+    };
+  };
+  LightField shownLit(smallGeometry());
+  shownLit.lensletImage().setTo(1);
+  const auto scan = calib::calibrateDisplayDistance(shownLit, scanWith(32), candidates);
+  EXPECT_NEAR(scan.noise, 0.5, 0.05);
+  EXPECT_NEAR(scan.level, 75, 1e-4);
+  EXPECT_NEAR(scan.estimate_mm, 0.5 * ((-2 + 0.5) + (0 + 25 / 25.1)), 1e-3);  // crossings at -1.5 and +0.996 mm
+  EXPECT_TRUE(throwsError([&] { calib::calibrateDisplayDistance(shownLit, scanWith(0), candidates); },
+                          Errc::InvalidArgument, {"two peaks", "75.1 again at +2 mm"}));
+}
+
 TEST(DisplayDistance, RejectsBadCandidatesAndImages) {
   const LightField lf(smallGeometry());
   auto black = [](const LightField&) { return cv::Mat(8, 8, CV_32FC1, cv::Scalar(0)); };
@@ -249,6 +276,13 @@ TEST(DisplayDistance, RejectsBadCandidatesAndImages) {
                           Errc::InvalidArgument, {"CV_8UC1"}));
   EXPECT_TRUE(throwsError([&] { calib::calibrateDisplayDistance(lf, black, {0, NAN, 2}); }, Errc::InvalidArgument,
                           {"finite"}));
+  // A camera whose region changes during the scan, with or without a ROI.
+  auto smallerWhenLit = [](const LightField& shown) {
+    const int side = shownEpsilon(shown) == 0 ? 8 : 4;
+    return cv::Mat(side, side, CV_32FC1, cv::Scalar(0));
+  };
+  EXPECT_TRUE(throwsError([&] { calib::calibrateDisplayDistance(lf, smallerWhenLit, {-1, 1, 2}); }, Errc::Device,
+                          {"candidate -1 mm is 4x4", "the first one (with the display dark) 8x8"}));
   // The light field was captured 30 mm from the part: the display cannot be 30 mm nearer.
   EXPECT_TRUE(throwsError([&] { calib::calibrateDisplayDistance(lf, black, {-30, 0, 1}); }, Errc::InvalidArgument,
                           {"-30 mm", "past the part"}));

@@ -170,6 +170,14 @@ TEST_F(AravisCameraTest, OpensByIdAndByAddress) {
 
   auto byAddress = openCamera("aravis:127.0.0.1");
   EXPECT_EQ(byAddress->info().serial, fake_->serial());
+  byAddress.reset();
+
+  // "The first camera found" (the only one here) is kept by its id: info() names it, so does a reopen.
+  auto first = openCamera("aravis:");
+  EXPECT_EQ(first->info().deviceId, fake_->id());
+  first->close();
+  first->open();
+  EXPECT_EQ(first->info().deviceId, fake_->id());
 }
 
 // The fake device's own GenICam description with every node named after
@@ -358,6 +366,9 @@ TEST_F(AravisCameraTest, RefusedSettingsNameTheFieldAndTheLimits) {
   s = smallSettings();
   s.roiX_px = 2000;
   EXPECT_TRUE(throwsError([&] { camera->configure(s); }, Errc::InvalidArgument, {"ROI", "does not fit"}));
+  s.roiX_px = 5000;  // the offset itself past the sensor: named as such, whatever the width
+  EXPECT_TRUE(throwsError([&] { camera->configure(s); }, Errc::InvalidArgument,
+                          {"ROI offset (5000, 0) lies outside the 2048 x 2048"}));
   s = smallSettings();
   s.gain = 1000;
   EXPECT_TRUE(throwsError([&] { camera->configure(s); }, Errc::InvalidArgument, {"gain 1000", "outside"}));

@@ -160,7 +160,7 @@ struct EmulatedUsbDisplay::Impl {
     u16(config.vendorId);
     u16(config.productId);
     u16(0x0100);
-    d.insert(d.end(), {1, 2, 3, 1});
+    d.insert(d.end(), {1, 2, static_cast<std::uint8_t>(config.serialDescriptor ? 3 : 0), 1});
     // configuration, interface, bulk OUT endpoint (512 byte packets, high speed)
     d.insert(d.end(), {9, 2});
     u16(9 + 9 + 7);
@@ -484,7 +484,7 @@ struct EmulatedUsbDisplay::Impl {
       if (index == 0) reply = {4, 3, 0x09, 0x04};
       else if (index == 1) reply = utf16Descriptor(config.vendor);
       else if (index == 2) reply = utf16Descriptor(config.model);
-      else if (index == 3) reply = utf16Descriptor(config.serial);
+      else if (index == 3 && config.serialDescriptor) reply = utf16Descriptor(config.serial);
       else stall = true;
     } else if (type == proto::kRequestTypeIn) {
       switch (static_cast<proto::Request>(request)) {

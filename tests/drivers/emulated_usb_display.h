@@ -31,6 +31,7 @@ struct EmulatedDisplayConfig {
   std::string vendor = "lfi";
   std::string model = "emulated lenticular";
   std::string serial = "LFI-EMU-0001";
+  bool serialDescriptor = true;  // false: no USB serial string (iSerialNumber 0); the info block still has `serial`
   int busNumber = 1;
   int deviceNumber = 2;
   int panelWidth_px = 640;

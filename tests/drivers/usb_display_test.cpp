@@ -85,6 +85,24 @@ TEST_F(UsbDisplayTest, OpenReadsInfoAndCalibrationFromTheDevice) {
   EXPECT_TRUE(throwsError([] { openDisplay("usb:1209:0001"); }, Errc::NotFound, {"no such USB device", "1209:4c46"}));
 }
 
+// A device without a USB serial string is named by VID:PID alone: the serial
+// of its info block cannot select it (the backend matches the USB serial), so
+// an id carrying it would not reopen the display.
+TEST_F(UsbDisplayTest, ADisplayWithoutAUsbSerialIsNamedByItsIdsAlone) {
+  EmulatedDisplayConfig config;
+  config.serialDescriptor = false;
+  EmulatedUsbDisplay device(config);
+  device.plug();
+  auto display = openDisplay("usb:1209:4c46");
+  EXPECT_EQ(display->info().serial, config.serial);  // the info block's, for people
+  const std::string id = display->info().deviceId;
+  EXPECT_EQ(id, "1209:4c46");
+  display->close();
+  EXPECT_NO_THROW(openDisplay("usb:" + id));
+  EXPECT_TRUE(throwsError([&] { openDisplay("usb:1209:4c46/" + config.serial); }, Errc::NotFound,
+                          {"no such USB device", "1209:4c46/"}));
+}
+
 TEST_F(UsbDisplayTest, ABenchFileOverridesTheOpticsTheDeviceReports) {
   EmulatedUsbDisplay device;
   device.plug();

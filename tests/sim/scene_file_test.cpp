@@ -195,7 +195,7 @@ TEST_F(SceneFile, MeshesLoadWithOutwardSmoothNormals) {
         "3 0 2 4\n3 2 1 4\n3 1 3 4\n3 3 0 4\n3 2 0 5\n3 1 2 5\n3 3 1 5\n3 0 3 5\n");
   for (const char* file : {"octa.obj", "octa.ply"}) {
     SCOPED_TRACE(file);
-    const TriangleMesh mesh = loadMesh(dir_ / file);
+    const TriangleMesh mesh = loadMesh(dir_ / file, std::numbers::pi);  // smooth across every edge
     ASSERT_EQ(mesh.vertices.size(), 6u);
     ASSERT_EQ(mesh.triangles.size(), 8u);
     ASSERT_EQ(mesh.normals.size(), 6u);
@@ -212,6 +212,73 @@ TEST_F(SceneFile, MeshesLoadWithOutwardSmoothNormals) {
   write("text.ply", "this is not a mesh\n");
   EXPECT_TRUE(throwsError([&] { loadMesh(dir_ / "text.ply"); }, Errc::InvalidFile, {"text.ply"}));
   EXPECT_TRUE(throwsError([&] { loadMesh(dir_ / "none.obj"); }, Errc::NotFound, {"none.obj"}));
+}
+
+// Normals are smooth across gentle edges and sharp across creases (30 degrees
+// by default): a tessellated sphere shades smoothly, a glass cube's faces stay
+// flat. With smooth normals everywhere, a cube of 8 shared vertices bends a
+// ray that meets its face square on, as a lens would.
+TEST_F(SceneFile, MeshNormalsAreSharpAcrossCreases) {
+  write("octa.obj", "v 1 0 0\nv -1 0 0\nv 0 1 0\nv 0 -1 0\nv 0 0 1\nv 0 0 -1\n"
+                    "f 1 3 5\nf 3 2 5\nf 2 4 5\nf 4 1 5\nf 3 1 6\nf 2 3 6\nf 4 2 6\nf 1 4 6\n");
+  // The octahedron's face normals are 70.5 degrees apart across every edge.
+  const TriangleMesh smooth = loadMesh(dir_ / "octa.obj", std::numbers::pi), sharp = loadMesh(dir_ / "octa.obj");
+  EXPECT_EQ(smooth.vertices.size(), 6u);
+  ASSERT_EQ(sharp.vertices.size(), 24u);  // each vertex once per face around it
+  ASSERT_EQ(sharp.normals.size(), 24u);
+  for (size_t i = 0; i < 6; ++i) EXPECT_EQ(sharp.vertices[i], smooth.vertices[i]);  // the first copy keeps its index
+  for (const auto& t : sharp.triangles) {
+    const Vec3 n =
+        (sharp.vertices[t[1]] - sharp.vertices[t[0]]).cross(sharp.vertices[t[2]] - sharp.vertices[t[0]]).normalized();
+    for (const unsigned i : t) EXPECT_NEAR((sharp.normals[i] - n).length(), 0, 1e-12);
+  }
+  EXPECT_EQ(meshClosureFault(sharp), std::nullopt);  // the copies weld back: still one closed surface
+  EXPECT_EQ(loadMesh(dir_ / "octa.obj", 71 * std::numbers::pi / 180).vertices.size(), 6u);
+
+  // A UV sphere of 24 x 12 faces (neighbours 15 degrees apart) keeps every vertex once, its normals near radial.
+  const int segments = 24, rings = 12;
+  std::vector<Vec3> points{{0, 0, 1}};
+  for (int r = 1; r < rings; ++r)
+    for (int k = 0; k < segments; ++k) {
+      const double theta = std::numbers::pi * r / rings, phi = 2 * std::numbers::pi * k / segments;
+      points.push_back({std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi), std::cos(theta)});
+    }
+  points.push_back({0, 0, -1});
+  auto ring = [&](int r, int k) { return 1 + (r - 1) * segments + (k % segments); };
+  std::vector<std::array<int, 3>> faces;
+  for (int k = 0; k < segments; ++k) {
+    faces.push_back({0, ring(1, k), ring(1, k + 1)});
+    for (int r = 1; r + 1 < rings; ++r) {
+      faces.push_back({ring(r, k), ring(r + 1, k), ring(r + 1, k + 1)});
+      faces.push_back({ring(r, k), ring(r + 1, k + 1), ring(r, k + 1)});
+    }
+    faces.push_back({ring(rings - 1, k), static_cast<int>(points.size()) - 1, ring(rings - 1, k + 1)});
+  }
+  std::string ply = fmt::format("ply\nformat ascii 1.0\nelement vertex {}\nproperty double x\nproperty double y\n"
+                                "property double z\nelement face {}\nproperty list uchar int vertex_indices\n"
+                                "end_header\n", points.size(), faces.size());
+  for (const Vec3& q : points) ply += fmt::format("{} {} {}\n", q.x, q.y, q.z);
+  for (const auto& f : faces) ply += fmt::format("3 {} {} {}\n", f[0], f[1], f[2]);
+  write("sphere.ply", ply);
+  const TriangleMesh sphere = loadMesh(dir_ / "sphere.ply");
+  EXPECT_EQ(meshClosureFault(sphere), std::nullopt);  // (wound outwards)
+  ASSERT_EQ(sphere.vertices.size(), points.size());
+  for (size_t i = 0; i < points.size(); ++i) EXPECT_GT(sphere.normals[i].dot(points[i]), std::cos(0.05)) << i;
+
+  // A glass cube of 8 shared vertices (corners (+-1, +-1, +-1)); a ray along +z through (0.3, 0.4).
+  write("cube.ply", "ply\nformat ascii 1.0\nelement vertex 8\nproperty float x\nproperty float y\n"
+                    "property float z\nelement face 12\nproperty list uchar int vertex_indices\nend_header\n"
+                    "-1 -1 -1\n1 -1 -1\n-1 1 -1\n1 1 -1\n-1 -1 1\n1 -1 1\n-1 1 1\n1 1 1\n"
+                    "3 0 2 3\n3 0 3 1\n3 4 5 7\n3 4 7 6\n3 0 1 5\n3 0 5 4\n3 2 6 7\n3 2 7 3\n"
+                    "3 0 4 6\n3 0 6 2\n3 1 3 7\n3 1 7 5\n");
+  auto exitDirection = [&](double crease) {
+    const Scene scene({Object{"cube", loadMesh(dir_ / "cube.ply", crease), Rigid3{}, Dielectric{1.5, 0}}});
+    const std::vector<Vec3> path = refractionPath(scene, Ray{{0.3, 0.4, -5}, {0, 0, 1}}, 8, 100);
+    EXPECT_EQ(path.size(), 4u);  // in, through, out
+    return (path.back() - path[path.size() - 2]).normalized();
+  };
+  EXPECT_LT((exitDirection(30 * std::numbers::pi / 180) - Vec3(0, 0, 1)).length(), 1e-9);
+  EXPECT_GT((exitDirection(std::numbers::pi) - Vec3(0, 0, 1)).length(), 1e-2);  // smoothed: bent as by a lens
 }
 
 // The tracer enters and leaves a dielectric through its surface: a mesh with
@@ -276,6 +343,62 @@ TEST_F(SceneFile, ADielectricMeshMustBoundASolid) {
   EXPECT_TRUE(throwsError([&] { loadSceneFile(placed("inside.toml", "closed.obj", "dielectric")); }, Errc::Config,
                           {"inside.toml", "inside object 'm'"}));
   EXPECT_NO_THROW(loadSceneFile(placed("open.toml", "holed.obj", "diffuse")));
+}
+
+// A mesh of several closed parts: each is wound outwards, but a cavity (a part
+// inside another), which is wound inwards. The whole mesh's volume alone
+// passes a small part wound the wrong way beside a large one wound right.
+TEST_F(SceneFile, EachPartOfAMeshIsWoundOutwardsButCavities) {
+  const Vec3 corner[6] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
+  const unsigned faces[8][3] = {{0, 2, 4}, {2, 1, 4}, {1, 3, 4}, {3, 0, 4}, {2, 0, 5}, {1, 2, 5}, {3, 1, 5}, {0, 3, 5}};
+  // An octahedron of 2 mm across at the origin, and another of `scale` at `centre`, wound as `outwards` says.
+  auto twoParts = [&](double scale, const Vec3& centre, bool outwards) {
+    TriangleMesh mesh;
+    for (const Vec3& c : corner) mesh.vertices.push_back(c);
+    for (const Vec3& c : corner) mesh.vertices.push_back(centre + c * scale);
+    for (const auto& f : faces) mesh.triangles.push_back({f[0], f[1], f[2]});
+    for (const auto& f : faces)
+      mesh.triangles.push_back(outwards ? std::array<unsigned, 3>{f[0] + 6, f[1] + 6, f[2] + 6}
+                                        : std::array<unsigned, 3>{f[2] + 6, f[1] + 6, f[0] + 6});
+    return mesh;
+  };
+  EXPECT_EQ(meshClosureFault(twoParts(0.5, {5, 0, 0}, true)), std::nullopt);  // two solids
+  const auto wrong = meshClosureFault(twoParts(0.5, {5, 0, 0}, false));       // total volume 4/3 - 1/6 > 0
+  ASSERT_TRUE(wrong.has_value());
+  EXPECT_NE(wrong->find("a part wound the wrong way"), std::string::npos) << *wrong;
+  EXPECT_NE(wrong->find("triangle 8"), std::string::npos) << *wrong;
+  EXPECT_NE(wrong->find("-0.166667 mm^3"), std::string::npos) << *wrong;
+  EXPECT_NE(wrong->find("a solid must be wound outwards"), std::string::npos) << *wrong;
+  EXPECT_EQ(meshClosureFault(twoParts(0.5, {0.1, 0.05, 0}, false)), std::nullopt);  // a hollow: cavity wound inwards
+  const auto cavity = meshClosureFault(twoParts(0.5, {0.1, 0.05, 0}, true));
+  ASSERT_TRUE(cavity.has_value());
+  EXPECT_NE(cavity->find("a cavity must be wound inwards"), std::string::npos) << *cavity;
+}
+
+// Assimp's formats place meshes with node transforms (glTF, COLLADA): the
+// vertices come out where the file puts them. A vertex far beyond any bench
+// (wrong units, a corrupt number) is refused, naming it.
+TEST_F(SceneFile, MeshFilesArePlacedAsTheySayAndKeptNearTheBench) {
+  // One triangle (0,0,0), (1,0,0), (0,1,0) under a node scaled by 2 and moved 10 mm along z.
+  write("placed.gltf",
+        R"({"asset": {"version": "2.0"}, "scene": 0, "scenes": [{"nodes": [0]}],
+            "nodes": [{"mesh": 0, "translation": [0, 0, 10], "scale": [2, 2, 2]}],
+            "meshes": [{"primitives": [{"attributes": {"POSITION": 0}}]}],
+            "buffers": [{"byteLength": 36,
+                         "uri": "data:application/octet-stream;base64,AAAAAAAAAAAAAAAAAACAPwAAAAAAAAAAAAAAAAAAgD8AAAAA"}],
+            "bufferViews": [{"buffer": 0, "byteLength": 36}],
+            "accessors": [{"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3",
+                           "min": [0, 0, 0], "max": [1, 1, 0]}]})");
+  const TriangleMesh mesh = loadMesh(dir_ / "placed.gltf");
+  ASSERT_EQ(mesh.triangles.size(), 1u);
+  std::vector<Vec3> corners;
+  for (const unsigned i : mesh.triangles[0]) corners.push_back(mesh.vertices[i]);
+  std::sort(corners.begin(), corners.end(), [](const Vec3& a, const Vec3& b) { return a.x + 2 * a.y < b.x + 2 * b.y; });
+  EXPECT_EQ(corners, (std::vector<Vec3>{{0, 0, 10}, {2, 0, 10}, {0, 2, 10}}));
+
+  write("far.obj", "v 0 0 0\nv 1 0 0\nv 0 2e9 0\nf 1 2 3\n");
+  EXPECT_TRUE(throwsError([&] { loadMesh(dir_ / "far.obj"); }, Errc::InvalidFile,
+                          {"far.obj", "vertex 2", "more than 1e+09 mm from the origin"}));
 }
 
 // Vertices closer than 1e-7 of the mesh's size are one (a float's precision:
@@ -361,7 +484,7 @@ TEST_F(SceneFile, PlyReadsAsciiAndBothBinaryByteOrdersAlike) {
   write("big.ply", binaryOcta(true));
   for (const char* file : {"octa.ply", "little.ply", "big.ply"}) {
     SCOPED_TRACE(file);
-    const TriangleMesh mesh = loadMesh(dir_ / file);
+    const TriangleMesh mesh = loadMesh(dir_ / file, std::numbers::pi);  // (no vertex repeated at a crease)
     ASSERT_EQ(mesh.vertices.size(), 6u);
     for (size_t i = 0; i < 6; ++i) EXPECT_EQ(mesh.vertices[i], Vec3(kOcta[i][0], kOcta[i][1], kOcta[i][2]));
     ASSERT_EQ(mesh.triangles.size(), 8u);

@@ -58,14 +58,16 @@ struct DisplayDistanceScan {
 // scan's brightness per candidate where there is one:
 //   Errc::InvalidArgument  fewer than three candidates, candidates not finite and
 //                          strictly increasing, one that puts the display at or
-//                          past the part, an empty or non-CV_8UC1 ROI, an image of
-//                          another size or more than one channel, or a scan
-//                          whose brightness does not fall to the level on both
-//                          sides of the brightest candidate (scan further that way)
-//                          or rises to it again outside that peak (two peaks)
-//   Errc::Device           no image, non-finite values, or a brightness whose rise
-//                          across the scan is not ten times the noise of a mean
-//                          (display dark, camera saturated, ROI off the part)
+//                          past the part, an empty or non-CV_8UC1 ROI, a ROI of
+//                          another size than the images, an image of more than one
+//                          channel, or a scan whose brightness does not fall to the
+//                          level on both sides of the brightest candidate (scan
+//                          further that way) or rises again outside that peak to
+//                          three times the noise of a mean above the level (two peaks)
+//   Errc::Device           no image, non-finite values, an image of another size
+//                          than the first, or a brightness whose rise across the
+//                          scan is not ten times the noise of a mean (display
+//                          dark, camera saturated, ROI off the part)
 DisplayDistanceScan calibrateDisplayDistance(const LightField& captured, const InspectFunction& inspect,
                                              const std::vector<double>& candidates_mm, const cv::Mat& roi = {},
                                              double pixelNoiseFloor = 0);

@@ -2,7 +2,9 @@
 // The GenICam backend on Aravis 0.8: any GigE Vision or USB3 Vision camera.
 // URI: "aravis:<device-id>[?packetSize=<bytes>]" where <device-id> is what
 // listAravisDevices() reports (Aravis's "<vendor>-<model>-<serial>" form), a GigE
-// camera's IP address, or empty for the first camera found. packetSize fixes the
+// camera's IP address, or empty for the first camera found (found at the first
+// open() and kept by its id: a reopen after a loss reconnects that camera, and
+// info().deviceId names it). packetSize fixes the
 // GigE Vision stream packet size instead of negotiating the largest that passes
 // (arv_camera_gv_auto_packet_size). Aravis types stay inside the .cpp.
 //

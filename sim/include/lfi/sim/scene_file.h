@@ -8,6 +8,7 @@
 #include "lfi/sim/sensors.h"
 
 #include <filesystem>
+#include <numbers>
 #include <optional>
 #include <string>
 #include <vector>
@@ -52,16 +53,25 @@ SceneDescription loadSceneFile(const std::filesystem::path& path);
 // A triangle mesh from Stanford PLY (ASCII or binary; lfi's own reader, which
 // checks every count and index against the file) or any other format Assimp
 // reads (Wavefront OBJ, STL, ...; polygons are triangulated, identical
-// vertices joined), with smooth per-vertex
-// normals averaged from the faces around each vertex (area-weighted). The
-// file's units are taken as millimetres; faces must wind outwards.
-TriangleMesh loadMesh(const std::filesystem::path& path);
+// vertices joined, the file's node transforms applied), with per-vertex
+// normals: smooth (the area-weighted mean of the faces' normals) across edges
+// where faces meet at less than `creaseAngle_rad`, sharp across the others
+// (the vertex is then repeated, one copy per smooth group of faces around it),
+// so that a tessellated curved surface shades smoothly and a glass cube's faces
+// stay flat. The file's units are taken as millimetres (a vertex more than
+// 1e9 mm from the origin is refused); faces must wind outwards.
+inline constexpr double kDefaultCreaseAngle_deg = 30;
+TriangleMesh loadMesh(const std::filesystem::path& path,
+                      double creaseAngle_rad = kDefaultCreaseAngle_deg * std::numbers::pi / 180);
 
 // Why `mesh` does not bound a solid the tracer can enter and leave, or nothing:
 // every edge must be crossed once each way by the triangles around it (vertices
-// closer than 1e-7 of the mesh's size are one vertex; triangles with two such
-// vertices are skipped), and the enclosed volume must be positive (outward
-// winding). A dielectric mesh must pass; an opaque one may be an open surface.
+// closer than 1e-7 of the mesh's size, or of its distance from the origin where
+// that is larger, are one vertex; triangles with two such vertices are
+// skipped), the enclosed volume must be positive (outward winding), and so must
+// each closed part's, but for a cavity (a part inside an odd number of the
+// others), which must be wound inwards. A dielectric mesh must pass; an opaque
+// one may be an open surface.
 std::optional<std::string> meshClosureFault(const TriangleMesh& mesh);
 
 // position (mm) and rotation (degrees, applied about x, then y, then z).
