@@ -26,6 +26,7 @@
 
 #include <atomic>
 #include <charconv>
+#include <limits>
 #include <chrono>
 #include <cmath>
 #include <csignal>
@@ -71,24 +72,41 @@ private:
 std::atomic<bool> gCancel{false};
 extern "C" void onInterrupt(int) { gCancel = true; }
 
-// A whole-number option of at least `lowest`. (CLI11 2.1's PositiveNumber
-// would answer "--spp 0" with "Value 0 not in range 0.000000 to 1.797...e308".)
-CLI::Validator wholeNumberFrom(long long lowest) {
+// A whole-number option in [lowest, highest], in decimal. (CLI11 2.1's
+// PositiveNumber would answer "--spp 0" with "Value 0 not in range 0.000000 to
+// 1.797...e308", and its own conversion reads "010" as octal and "-1" as an
+// unsigned 2^64 - 1: the validator, a transform, hands it the value in plain
+// decimal.)
+template <typename T = long long>
+CLI::Validator wholeNumberIn(T lowest, T highest) {
   return CLI::Validator(
-      [lowest](std::string& input) -> std::string {
-        long long value = 0;
+      [lowest, highest](std::string& input) -> std::string {
+        T value = 0;
         const char* end = input.data() + input.size();
         const auto [at, ec] = std::from_chars(input.data(), end, value);
-        if (ec != std::errc() || at != end || value < lowest)
-          return fmt::format("'{}' is not a whole number >= {}", input, lowest);
+        if (ec != std::errc() || at != end || value < lowest || value > highest)
+          return fmt::format("'{}' is not a whole number in [{}, {}]", input, lowest, highest);
+        input = std::to_string(value);
         return {};
       },
-      fmt::format("INT>={}", lowest));
+      fmt::format("INT in [{}, {}]", lowest, highest));
 }
+constexpr long long kMostThreads = 4096, kMostFrames = 100000, kMostSpp = 1 << 20;  // (scene files' own bound)
+CLI::Validator threadCount() { return wholeNumberIn(0LL, kMostThreads); }
+CLI::Validator seedValue() { return wholeNumberIn<std::uint64_t>(0, std::numeric_limits<std::uint64_t>::max()); }
 
+// The reference bench: next to an installed `lfi` (<prefix>/bin/lfi and
+// <prefix>/share/lfi, as `cmake --install` lays them out), else in the source
+// tree of the build.
 fs::path defaultBench() {
-  const fs::path installed = fs::path(LFI_DATA_DIR) / "benches" / "reference.toml";
-  return installed;
+  const fs::path relative = fs::path("benches") / "reference.toml";
+  std::error_code ec;
+  const fs::path self = fs::read_symlink("/proc/self/exe", ec);
+  if (!ec)
+    if (const fs::path installed = self.parent_path().parent_path() / LFI_INSTALL_DATADIR / "lfi" / relative;
+        fs::exists(installed))
+      return installed;
+  return fs::path(LFI_DATA_DIR) / relative;
 }
 
 // lfi serve-camera: SimImager frames through Aravis's device-side GigE Vision
@@ -155,7 +173,7 @@ void addBenchOptions(CLI::App& command, BenchOptions& o) {
   command.add_option("--light-field", o.lightField, "Use this reference light field (EXR) instead of capturing")
       ->check(CLI::ExistingFile)
       ->excludes(capture);
-  command.add_option("--frames", o.frames, "Frames averaged per image")->check(wholeNumberFrom(1))
+  command.add_option("--frames", o.frames, "Frames averaged per image")->transform(wholeNumberIn(1LL, kMostFrames))
       ->capture_default_str();
   command.add_option("--exposure-us", o.exposure_us, "Exposure time (µs)")->capture_default_str();
   command.add_option("--gain", o.gain, "Gain (device unit, dB for SFNC cameras)")->capture_default_str();
@@ -163,7 +181,7 @@ void addBenchOptions(CLI::App& command, BenchOptions& o) {
       ->check(CLI::IsMember({"Mono8", "Mono12", "Mono16"}))
       ->capture_default_str();
   command.add_option("--settle-ms", o.settle_ms, "Wait after the display shows a light field before exposing (ms)")
-      ->check(wholeNumberFrom(0))
+      ->transform(wholeNumberIn(0LL, 24LL * 3600 * 1000))
       ->capture_default_str();
 }
 
@@ -225,6 +243,9 @@ std::vector<double> scanCandidates(double from, double to, double step) {
 void calibrateDistance(const BenchOptions& o, const std::vector<double>& candidates, const std::vector<int>& roiBox,
                        const fs::path& out, bool force, bool quiet) {
   const auto overwrite = force ? lfi::Overwrite::Allow : lfi::Overwrite::Refuse;
+  if (out.filename().empty() || fs::is_directory(out))
+    lfi::fail(lfi::Errc::InvalidArgument, "calibrate-distance: --out '{}' must name a file, not a folder",
+              out.string());
   if (!force && fs::exists(out))
     lfi::fail(lfi::Errc::Exists, "'{}' exists; refusing to overwrite it (use --force to replace it)", out.string());
   // Where the result goes must take it before the scan, not after.
@@ -326,8 +347,10 @@ int main(int argc, char** argv) {
   study->add_option("--quality", quality, "quick | default | high")
       ->check(CLI::IsMember({"quick", "default", "high"}))
       ->capture_default_str();
-  study->add_option("--threads", threads, "Worker threads (0 = all cores)")->check(wholeNumberFrom(0));
-  study->add_option("--seed", seed, "Random seed (renders and sensor noise)")->capture_default_str();
+  study->add_option("--threads", threads, "Worker threads (0 = all cores)")->transform(threadCount());
+  study->add_option("--seed", seed, "Random seed (renders and sensor noise)")
+      ->transform(seedValue())
+      ->capture_default_str();
   study->add_flag("--force", force, "Replace the results of an earlier study in --out");
   bool sweepOn = false, sweepOff = false;
   auto* sweepFlag =
@@ -344,10 +367,11 @@ int main(int argc, char** argv) {
       ->required()
       ->check(CLI::ExistingFile);
   render->add_option("--out", renderOut, "Output folder")->required();
-  render->add_option("--spp", spp, "Samples per pixel (overrides the scene file)")->check(wholeNumberFrom(1));
-  render->add_option("--threads", renderThreads, "Worker threads (0 = all cores)")->check(wholeNumberFrom(0));
+  render->add_option("--spp", spp, "Samples per pixel (overrides the scene file)")
+      ->transform(wholeNumberIn(1LL, kMostSpp));
+  render->add_option("--threads", renderThreads, "Worker threads (0 = all cores)")->transform(threadCount());
   std::optional<std::uint64_t> renderSeed;
-  render->add_option("--seed", renderSeed, "Random seed (overrides the scene file)");
+  render->add_option("--seed", renderSeed, "Random seed (overrides the scene file)")->transform(seedValue());
   render->add_flag("--force", renderForce, "Replace existing output files");
 
   // lfi serve-camera
@@ -363,7 +387,7 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   serve->add_option("--serial", serveOptions.serial, "Serial number (device id: lfi-SimCamera-<serial>)")
       ->capture_default_str();
-  serve->add_option("--threads", serveThreads, "Render threads (0 = all cores)")->check(wholeNumberFrom(0));
+  serve->add_option("--threads", serveThreads, "Render threads (0 = all cores)")->transform(threadCount());
 
   // lfi inspect
   auto* inspect = app.add_subcommand(
@@ -433,6 +457,21 @@ int main(int argc, char** argv) {
       ProgressBar bar;
       if (!quiet) d.render.progress = [&bar](double f) { bar("rendering", f); };
       std::signal(SIGINT, onInterrupt);
+      // Where the images go must take them before the render, not after.
+      const auto overwrite = renderForce ? lfi::Overwrite::Allow : lfi::Overwrite::Refuse;
+      const bool lightField = std::holds_alternative<lfi::sim::LightFieldSensor>(d.sensor);
+      const std::vector<fs::path> outputs =
+          lightField ? std::vector<fs::path>{renderOut / (d.name + "_lightfield.exr")}
+                     : std::vector<fs::path>{renderOut / (d.name + ".exr"), renderOut / (d.name + ".png")};
+      std::error_code made;
+      fs::create_directories(renderOut, made);
+      if (made || !fs::is_directory(renderOut))
+        lfi::fail(lfi::Errc::Io, "render: cannot make the folder '{}' for --out{}", renderOut.string(),
+                  made ? ": " + made.message() : std::string(": a file of that name is in the way"));
+      for (const fs::path& out : outputs)
+        if (!renderForce && fs::exists(out))
+          lfi::fail(lfi::Errc::Exists, "'{}' exists; refusing to overwrite it (use --force to replace it)",
+                    out.string());
       const lfi::sim::Scene scene(std::move(d.objects), d.ambientIor);
       const auto start = std::chrono::steady_clock::now();
       cv::Mat image;
@@ -444,25 +483,24 @@ int main(int argc, char** argv) {
       }
       const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
       bar.finish();
-      fs::create_directories(renderOut);
-      const auto overwrite = renderForce ? lfi::Overwrite::Allow : lfi::Overwrite::Refuse;
       if (const auto* lfs = std::get_if<lfi::sim::LightFieldSensor>(&d.sensor)) {
-        const fs::path out = renderOut / (d.name + "_lightfield.exr");
-        lfi::writeLightFieldExr(out, lfi::LightField(lfs->geometry, image), overwrite);
-        fmt::print("{}\n", out.string());
+        lfi::writeLightFieldExr(outputs[0], lfi::LightField(lfs->geometry, image), overwrite);
+        fmt::print("{}\n", outputs[0].string());
       } else {
         const auto& cam = std::get<lfi::sim::TelecentricCamera>(d.sensor);
-        const fs::path exr = renderOut / (d.name + ".exr"), png = renderOut / (d.name + ".png");
-        lfi::writeRadianceExr(exr, image, {cam.objectPixel_mm(), "rendered radiance of scene " + d.name}, overwrite);
-        lfi::writePngAtomically(png, lfi::toneMapForDisplay(image), overwrite);
-        fmt::print("{}\n{}\n", exr.string(), png.string());
+        lfi::writeRadianceExr(outputs[0], image, {cam.objectPixel_mm(), "rendered radiance of scene " + d.name},
+                              overwrite);
+        lfi::writePngAtomically(outputs[1], lfi::toneMapForDisplay(image), overwrite);
+        fmt::print("{}\n{}\n", outputs[0].string(), outputs[1].string());
       }
       const double samples = static_cast<double>(image.total()) * d.render.samplesPerPixel;
       spdlog::info("{:.0f} samples in {:.3f} s: {:.2f} M samples/s", samples, seconds, samples / seconds / 1e6);
     } else if (*inspect) {
       const auto overwrite = inspectForce ? lfi::Overwrite::Allow : lfi::Overwrite::Refuse;
       fs::create_directories(inspectOut);
-      for (const char* name : {"inspection.exr", "inspection.png", "lightfield.exr"})
+      std::vector<std::string> outputs{"inspection.exr", "inspection.png"};
+      if (!inspectBench.capture.empty()) outputs.push_back("lightfield.exr");  // (a given light field is not written)
+      for (const std::string& name : outputs)
         if (!inspectForce && fs::exists(inspectOut / name))
           lfi::fail(lfi::Errc::Exists, "'{}' exists; refusing to overwrite it (use --force to replace it)",
                     (inspectOut / name).string());

@@ -68,7 +68,10 @@ cv::Mat Controller::inspect() {
   // free-running camera fills them; a late triggered frame may too): start a
   // new acquisition, so that every frame averaged is exposed after it. The
   // stream stays whoever's it was.
-  const int buffers = std::max(4, options_.frames + 2);
+  // Frames are averaged as they arrive: a few buffers beyond them ride out a
+  // stall of this thread; more would only hold memory (a 4K Mono16 frame is
+  // 16 MB). A frame lost to a full pool is an underrun, not a bad frame.
+  const int buffers = std::clamp(options_.frames, 2, 14) + 2;
   const bool restart = camera_.state() == Camera::State::Streaming && staleFrames_;
   if (restart || camera_.state() == Camera::State::Configured)
     std::this_thread::sleep_until(shown_ + options_.settle);  // the panel settles before the stream (re)starts

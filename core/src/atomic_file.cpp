@@ -33,11 +33,26 @@ mode_t currentUmask() {
   return 022;
 }
 
-void syncPath(const fs::path& path, int flags) {
-  const int fd = ::open(path.c_str(), flags | O_CLOEXEC);
-  if (fd < 0) return;  // best effort: a directory may not be openable
+// Flushes a directory's entries to the disk (best effort: some file systems
+// cannot open or sync a directory).
+void syncDirectory(const fs::path& dir) {
+  const int fd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  if (fd < 0) return;
   ::fsync(fd);
   ::close(fd);
+}
+
+// Flushes a file's data to the disk; a failure (disk full, an I/O error on a
+// network file system) means the file is not what was written: it must not
+// replace the target.
+void syncFile(const fs::path& file, const fs::path& target) {
+  const int fd = ::open(file.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0)
+    fail(Errc::Io, "cannot write '{}': reopening its temporary file: {}", target.string(), std::strerror(errno));
+  const int rc = ::fsync(fd), err = errno;
+  ::close(fd);
+  if (rc != 0 && err != EINVAL)  // (EINVAL: a file system that does not sync, such as a pipe's)
+    fail(Errc::Io, "cannot write '{}': flushing it to the disk failed: {}", target.string(), std::strerror(err));
 }
 
 }  // namespace
@@ -63,7 +78,7 @@ void writeFileAtomically(const fs::path& target, Overwrite overwrite,
   const fs::path temporary = pattern;
   try {
     writeTo(temporary);
-    syncPath(temporary, O_RDONLY);
+    syncFile(temporary, target);
     if (overwrite == Overwrite::Allow) {
       if (::rename(temporary.c_str(), target.c_str()) != 0)
         fail(Errc::Io, "cannot rename '{}' to '{}': {}", temporary.string(), target.string(), std::strerror(errno));
@@ -84,7 +99,7 @@ void writeFileAtomically(const fs::path& target, Overwrite overwrite,
         ::unlink(temporary.c_str());
       }
     }
-    syncPath(dir, O_RDONLY | O_DIRECTORY);
+    syncDirectory(dir);
   } catch (...) {
     std::error_code ignored;
     fs::remove(temporary, ignored);
@@ -97,7 +112,9 @@ void writeFileAtomically(const fs::path& target, Overwrite overwrite, std::strin
     std::ofstream out(temporary, std::ios::binary | std::ios::trunc);
     out.write(content.data(), static_cast<std::streamsize>(content.size()));
     out.flush();
-    if (!out) fail(Errc::Io, "cannot write '{}': {}", temporary.string(), std::strerror(errno));
+    const int err = errno;
+    out.close();
+    if (!out) fail(Errc::Io, "cannot write '{}': {}", target.string(), std::strerror(err));
   });
 }
 

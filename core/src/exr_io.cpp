@@ -79,11 +79,19 @@ void writeExr(const fs::path& path, const cv::Mat& image, Imf::Header header, Ov
   header.insert(kChecksum, Imf::StringAttribute(checksumText(fileChecksum(canonicalAttributes(path, header), pixels))));
   writeFileAtomically(path, overwrite, [&](const fs::path& temporary) {
     try {
-      Imf::OutputFile file(temporary.c_str(), header);
-      Imf::FrameBuffer frame;
-      frame.insert("Y", Imf::Slice(Imf::FLOAT, const_cast<char*>(pixels.ptr<char>()), sizeof(float), pixels.step));
-      file.setFrameBuffer(frame);
-      file.writePixels(pixels.rows);
+      {
+        Imf::OutputFile file(temporary.c_str(), header);
+        Imf::FrameBuffer frame;
+        frame.insert("Y", Imf::Slice(Imf::FLOAT, const_cast<char*>(pixels.ptr<char>()), sizeof(float), pixels.step));
+        file.setFrameBuffer(frame);
+        file.writePixels(pixels.rows);
+      }
+      // OpenEXR writes the line offsets and flushes in the destructor, which
+      // swallows errors (a full disk): read the file back before it replaces anything.
+      if (!Imf::InputFile(temporary.c_str()).isComplete())
+        fail(Errc::Io, "cannot write '{}': the file came out incomplete (is the disk full?)", path.string());
+    } catch (const Error&) {
+      throw;
     } catch (const std::exception& e) {
       fail(Errc::Io, "cannot write '{}': {}", path.string(), e.what());
     }
@@ -161,8 +169,9 @@ LoadedExr loadExr(const fs::path& path, const char* expectedKind) {
       fail(Errc::InvalidFile, "'{}': expected one FLOAT channel 'Y'", path.string());
     const Imath::Box2i dw = out.header.dataWindow();
     const long width = static_cast<long>(dw.max.x) - dw.min.x + 1, height = static_cast<long>(dw.max.y) - dw.min.y + 1;
-    if (width < 1 || height < 1 || width > (1 << 17) || height > (1 << 17))
-      fail(Errc::InvalidFile, "'{}': data window {}x{} is out of range", path.string(), width, height);
+    if (width < 1 || height < 1 || width > (1 << 17) || height > (1 << 17) || width * height > (1L << 30))
+      fail(Errc::InvalidFile, "'{}': data window {}x{} is out of range (at most 2^17 a side and 2^30 pixels)",
+           path.string(), width, height);
     out.pixels.create(static_cast<int>(height), static_cast<int>(width), CV_32FC1);
     Imf::FrameBuffer frame;
     const std::ptrdiff_t origin = static_cast<std::ptrdiff_t>(dw.min.x) * static_cast<std::ptrdiff_t>(sizeof(float)) +

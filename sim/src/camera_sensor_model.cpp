@@ -34,13 +34,19 @@ cv::Mat CameraSensorModel::capture(const cv::Mat& radiance, std::uint64_t seed) 
   tbb::parallel_for(0, radiance.rows, [&](int r) {
     // One engine per row keyed by (seed, row): reproducible and independent of image width.
     std::mt19937_64 engine(seed * 0x9e3779b97f4a7c15ull + static_cast<std::uint64_t>(r));
-    std::normal_distribution<double> read(0.0, readNoise_e);
+    std::normal_distribution<double> read(0.0, readNoise_e > 0 ? readNoise_e : 1.0);  // (a deviation must be > 0)
+    // Far past the full well the draw is the full well: no draw (a mean past 2^63 electrons would not fit one).
+    const double surelyFull = fullWell_e + 20 * std::sqrt(fullWell_e) + 100;
     const float* in = radiance.ptr<float>(r);
     auto* o = out.ptr<std::uint16_t>(r);
     for (int c = 0; c < radiance.cols; ++c) {
       const double mean = std::max(0.0, static_cast<double>(in[c])) * electronsPerUnit;
-      std::poisson_distribution<long long> shot(mean > 0 ? mean : 1e-300);
-      const double electrons = std::min(static_cast<double>(shot(engine)), fullWell_e) + read(engine);
+      double electrons = fullWell_e;
+      if (mean < surelyFull) {
+        std::poisson_distribution<long long> shot(mean > 0 ? mean : 1e-300);
+        electrons = std::min(static_cast<double>(shot(engine)), fullWell_e);
+      }
+      if (readNoise_e > 0) electrons += read(engine);
       o[c] = static_cast<std::uint16_t>(std::clamp(std::round(electrons * scale), 0.0, maxDn));
     }
   });

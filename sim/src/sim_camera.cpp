@@ -85,8 +85,8 @@ CameraSettings SimImager::resolve(const CameraSettings& s, const std::string& de
          s.roiY_px, s.roiWidth_px, s.roiHeight_px);
   r.roiWidth_px = s.roiWidth_px > 0 ? s.roiWidth_px : width - s.roiX_px;
   r.roiHeight_px = s.roiHeight_px > 0 ? s.roiHeight_px : height - s.roiY_px;
-  if (r.roiWidth_px < 1 || r.roiHeight_px < 1 || s.roiX_px + r.roiWidth_px > width ||
-      s.roiY_px + r.roiHeight_px > height)
+  if (r.roiWidth_px < 1 || r.roiHeight_px < 1 || r.roiWidth_px > width - s.roiX_px ||
+      r.roiHeight_px > height - s.roiY_px)
     fail(Errc::InvalidArgument, "camera '{}': ROI ({}, {}, {} x {}) does not fit the {} x {} (binned) sensor", device,
          s.roiX_px, s.roiY_px, r.roiWidth_px, r.roiHeight_px, width, height);
   if (s.trigger == TriggerMode::Line)
@@ -261,6 +261,7 @@ class SimCamera final : public Camera {
   void grabInto(Frame& frame, std::chrono::milliseconds timeout) override {
     requireCameraState(state_, {State::Streaming}, "grab", name());
     if (timeout.count() < 0) fail(Errc::InvalidArgument, "camera '{}': grab timeout {} ms", name(), timeout.count());
+    timeout = std::min(timeout, std::chrono::milliseconds(std::chrono::hours(24 * 365)));  // "forever" does not wrap
     const Clock::time_point deadline = Clock::now() + timeout;
     std::unique_lock lock(mutex_);
     produceDueFrames(Clock::now());
@@ -400,8 +401,13 @@ class SimCamera final : public Camera {
   // also called by the bench just before the display changes.
   void produceDueFrames(Clock::time_point now) {
     if (!freeRun_ || now < start_) return;
+    // Frames 0 .. due - 1 are due: those with dueTime(k) <= now. The quotient
+    // only guesses `due`; dueTime, the one definition, settles it (it rounds
+    // to whole clock ticks, so a wait until dueTime(k) must produce frame k).
     const double elapsed = std::chrono::duration<double>(now - start_).count();
-    const auto due = static_cast<std::uint64_t>(std::floor(elapsed * frameRate_hz_)) + 1;
+    auto due = static_cast<std::uint64_t>(std::floor(elapsed * frameRate_hz_)) + 1;
+    while (due > 0 && dueTime(due - 1) > now) --due;
+    while (dueTime(due) <= now) ++due;
     if (due <= produced_) return;
     const std::uint64_t count = due - produced_;
     const std::uint64_t room = bufferCount_ - queue_.size();

@@ -22,9 +22,14 @@ public:
     if (!(settings_.beamDistance_mm > 0))
       fail(Errc::Config, "sim light field capture: beam_distance_mm = {} must be > 0", settings_.beamDistance_mm);
     if (settings_.samplesPerPixel < 1) fail(Errc::Config, "sim light field capture: spp must be >= 1");
+    // (0 means "not set" in a light field file; here it is where the sensor is.)
+    if (!(settings_.geometry.distance_mm > 0))
+      fail(Errc::Config, "sim light field capture: distance_mm = {} must be > 0: the sensor's plane lies Δ below the "
+           "part", settings_.geometry.distance_mm);
     // Load now, so that a bad scene file is reported at open.
     SceneDescription d = loadSceneFile(sceneFile_);
     seed_ = d.render.seed;
+    ambientIor_ = d.ambientIor;  // (a bench in a medium is captured in it)
     for (Object& o : d.objects)
       if (!o.emission) parts_.push_back(std::move(o));
     if (parts_.empty()) fail(Errc::Config, "'{}': no part to capture (every object emits)", sceneFile_.string());
@@ -46,7 +51,7 @@ public:
     facingDown.t = {0, 0, settings_.beamDistance_mm};
     objects.push_back({"collimated beam", Rectangle{size, size}, facingDown, Absorber{},
                        ParallelEmission{1.0, settings_.beamHalfAngle_rad}});
-    const Scene scene(std::move(objects));
+    const Scene scene(std::move(objects), ambientIor_);
     const LightFieldSensor sensor{settings_.geometry,
                                   Rigid3::translation({0, 0, -settings_.geometry.distance_mm})};
     RenderOptions ro;
@@ -62,6 +67,7 @@ private:
   SimCaptureSettings settings_;
   std::vector<Object> parts_;
   std::uint64_t seed_ = 1;
+  double ambientIor_ = 1;
 };
 
 template <typename T>

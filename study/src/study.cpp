@@ -491,8 +491,15 @@ nlohmann::ordered_json runStudy(const Bench& bench, const fs::path& outDir, cons
   const std::vector<SweepVariant> sweep = sweepVariants(
       bench,
       options.sweep ? *options.sweep : (options.quality == Quality::Quick ? std::vector<SweepPoint>{} : defaultSweep()));
-  if (!options.overwrite && fs::exists(outDir / "study.json"))
-    fail(Errc::Exists, "'{}' already holds a study; use --force to replace it", outDir.string());
+  // Any of the study's files (an interrupted run leaves some without study.json) stops it before the work.
+  if (!options.overwrite)
+    for (const fs::path& file : {outDir / "study.json", outDir / "report.html", outDir / "lightfield.exr"})
+      if (fs::exists(file))
+        fail(Errc::Exists, "'{}' already holds a study ('{}' is there); use --force to replace it", outDir.string(),
+             file.filename().string());
+  if (std::error_code ec; !options.overwrite && fs::is_directory(outDir / "images", ec) &&
+                          !fs::is_empty(outDir / "images", ec))
+    fail(Errc::Exists, "'{}' already holds a study's images; use --force to replace them", outDir.string());
   fs::create_directories(outDir / "images");
 
   const QualitySettings q = settingsFor(options.quality);

@@ -129,14 +129,32 @@ TEST_F(LfiCli, RenderGivesTheSameImageForAnyThreadCount) {
 TEST_F(LfiCli, BadArgumentsNameTheOptionAndTheValue) {
   const fs::path scene = smallScene(), out = dir_ / "out";
   for (const auto& [arguments, message] :
-       {std::pair<std::string, std::string>{"--spp 0", "--spp: '0' is not a whole number >= 1"},
-        {"--spp 2.5", "--spp: '2.5' is not a whole number >= 1"},
-        {"--threads -1", "--threads: '-1' is not a whole number >= 0"}}) {
+       {std::pair<std::string, std::string>{"--spp 0", "--spp: '0' is not a whole number in [1, 1048576]"},
+        {"--spp 2.5", "--spp: '2.5' is not a whole number in [1, 1048576]"},
+        {"--spp 2000000000", "--spp: '2000000000' is not a whole number in [1, 1048576]"},
+        {"--threads -1", "--threads: '-1' is not a whole number in [0, 4096]"},
+        {"--seed -1", "--seed: '-1' is not a whole number in [0, 18446744073709551615]"}}) {
     const Result run = lfi("render " + quoted(scene) + " --out " + quoted(out) + " " + arguments);
     EXPECT_NE(run.status, 0) << arguments;
     EXPECT_NE(run.output.find(message), std::string::npos) << arguments << ": " << run.output;
   }
   EXPECT_FALSE(fs::exists(out / "small.exr"));
+  // Decimal, whatever CLI11 would make of a leading zero (octal): --spp 010 renders 10 samples, as 10 does.
+  const Result ten = lfi("render " + quoted(scene) + " --out " + quoted(dir_ / "ten") + " --spp 010 --seed 3");
+  const Result plain = lfi("render " + quoted(scene) + " --out " + quoted(dir_ / "plain") + " --spp 10 --seed 3");
+  ASSERT_EQ(ten.status, 0) << ten.output;
+  ASSERT_EQ(plain.status, 0) << plain.output;
+  EXPECT_EQ(readBytes(dir_ / "ten" / "small.exr"), readBytes(dir_ / "plain" / "small.exr"));
+  // An image in the way is found before the render, and nothing is written.
+  fs::create_directories(out);
+  std::ofstream(out / "small.png") << "an earlier image";
+  const Result blocked = lfi("render " + quoted(scene) + " --out " + quoted(out) + " --spp 1");
+  EXPECT_NE(blocked.status, 0);
+  EXPECT_NE(blocked.output.find((out / "small.png").string() + "' exists"), std::string::npos) << blocked.output;
+  EXPECT_EQ(blocked.output.find("samples in"), std::string::npos) << "rendered first: " << blocked.output;
+  EXPECT_FALSE(fs::exists(out / "small.exr"));
+  const Result notAFolder = lfi("render " + quoted(scene) + " --out " + quoted(out / "small.png") + " --spp 1");
+  EXPECT_NE(notAFolder.output.find("cannot make the folder"), std::string::npos) << notAFolder.output;
 }
 
 TEST_F(LfiCli, BadSceneFilesAreNamedWithTheLineOrKey) {
@@ -229,6 +247,8 @@ TEST_F(LfiCli, CalibrateDistanceRefusesBadScansAndKeepsResults) {
     EXPECT_NE(run.output.find(message), std::string::npos) << arguments << ": " << run.output;
     EXPECT_FALSE(fs::exists(dir_ / "new.json")) << arguments;
   }
+  run = lfi("calibrate-distance " + devices + " --out " + quoted(dir_));
+  EXPECT_NE(run.output.find("must name a file, not a folder"), std::string::npos) << run.output;
   // A result that could not be written is known before the scan, not after it.
   run = lfi("calibrate-distance " + devices + " --out /proc/lfi/scan.json");
   EXPECT_NE(run.status, 0);
