@@ -114,6 +114,15 @@ fs::path defaultBench() {
 // rendered before the device appears (a render inside a frame would stall the
 // device's only thread, which also answers control requests).
 void serveCamera(const fs::path& sceneFile, lfi::GvCameraServerOptions options, int threads, bool quiet) {
+  // Blocked before any thread starts (the renders' workers, Aravis's device
+  // thread inherit the mask), so that SIGINT and SIGTERM reach sigwait() below
+  // and not a worker's default action. One that comes during the first
+  // renders stops the server as soon as it is up.
+  sigset_t signals;
+  sigemptyset(&signals);
+  sigaddset(&signals, SIGINT);
+  sigaddset(&signals, SIGTERM);
+  pthread_sigmask(SIG_BLOCK, &signals, nullptr);
   lfi::sim::SimImager imager(sceneFile);
   ProgressBar bar;
   imager.setRenderOptions(threads, quiet ? std::function<void(double)>() : [&bar](double f) { bar("rendering", f); });
@@ -124,12 +133,6 @@ void serveCamera(const fs::path& sceneFile, lfi::GvCameraServerOptions options, 
   imager.setRenderOptions(threads, {});
   options.sensorWidth_px = imager.camera().width;
   options.sensorHeight_px = imager.camera().height;
-  // Aravis's threads inherit this mask, so the signals reach sigwait() below.
-  sigset_t signals;
-  sigemptyset(&signals);
-  sigaddset(&signals, SIGINT);
-  sigaddset(&signals, SIGTERM);
-  pthread_sigmask(SIG_BLOCK, &signals, nullptr);
   const std::string device = "lfi-served:" + sceneFile.string();
   cv::Mat frame;
   lfi::GvCameraServer server(options, [&](const lfi::ServedFrameRequest& request, cv::Mat& image) {

@@ -24,7 +24,12 @@ std::unique_ptr<Display> openUsbFromUri(const DisplayUri& uri) {
     options.controlTimeout = std::chrono::milliseconds(value);
     options.transferTimeout = std::chrono::milliseconds(value);
   }
-  if (auto it = uri.query.find("calibration"); it != uri.query.end()) options.opticsOverride = it->second;
+  if (auto it = uri.query.find("calibration"); it != uri.query.end()) {
+    if (it->second.empty())
+      fail(Errc::Config, "display URI '{}': calibration= names no file (leave the key out to use the device's)",
+           uri.text);
+    options.opticsOverride = it->second;
+  }
   return openUsbDisplay(selector, options);
 }
 

@@ -38,7 +38,7 @@ struct GvCameraServer::Impl {
   ServedFrameFiller filler;
   ArvGvFakeCamera* gvCamera = nullptr;
   ArvFakeCamera* camera = nullptr;  // owned by gvCamera
-  std::uint32_t lastWarnedFormat = 0;
+  std::string lastWarning;  // (Aravis's device thread only)
 
   // Aravis's fill-pattern callback, on its device thread. Inside it
   // arv_buffer_get_data() reports size 0 (the buffer's parts are not set up
@@ -47,13 +47,34 @@ struct GvCameraServer::Impl {
   static void fill(ArvBuffer* buffer, void* data, guint32 exposure_us, guint32 gain, ArvPixelFormat format) {
     auto* self = static_cast<Impl*>(data);
     if (buffer == nullptr) return;
+    void* pixels = const_cast<void*>(arv_buffer_get_data(buffer, nullptr));
+    if (pixels == nullptr) return;
+    // The registers as a client left them. GVCP lets a client write any value
+    // (GenICam's ranges are the client's courtesy): an image that would not
+    // fit the sensor, or the buffer Aravis allocated for the payload it computes
+    // from the same registers, is not written at all.
+    const std::uint64_t width = readRegister(self->camera, ARV_FAKE_CAMERA_REGISTER_WIDTH),
+                        height = readRegister(self->camera, ARV_FAKE_CAMERA_REGISTER_HEIGHT),
+                        binning = readRegister(self->camera, ARV_FAKE_CAMERA_REGISTER_BINNING_HORIZONTAL),
+                        binningY = readRegister(self->camera, ARV_FAKE_CAMERA_REGISTER_BINNING_VERTICAL);
+    const std::uint64_t bytesPerPixel = (ARV_PIXEL_FORMAT_BIT_PER_PIXEL(format) + 7) / 8;
+    const std::uint64_t size = width * height * bytesPerPixel;
+    const auto& o = self->options;
+    if (width < 1 || height < 1 || width > static_cast<std::uint64_t>(o.sensorWidth_px) ||
+        height > static_cast<std::uint64_t>(o.sensorHeight_px) || size > arv_fake_camera_get_payload(self->camera)) {
+      self->warnOnce(fmt::format("a {} x {} image of {} bytes a pixel does not fit the {} x {} sensor or the "
+                                 "payload; the frame is not written", width, height, bytesPerPixel, o.sensorWidth_px,
+                                 o.sensorHeight_px));
+      return;
+    }
+    std::memset(pixels, 0, static_cast<std::size_t>(size));
     ServedFrameRequest request;
     request.frameId = arv_buffer_get_frame_id(buffer);
-    request.width_px = static_cast<int>(readRegister(self->camera, ARV_FAKE_CAMERA_REGISTER_WIDTH));
-    request.height_px = static_cast<int>(readRegister(self->camera, ARV_FAKE_CAMERA_REGISTER_HEIGHT));
+    request.width_px = static_cast<int>(width);
+    request.height_px = static_cast<int>(height);
     request.offsetX_px = static_cast<int>(readRegister(self->camera, ARV_FAKE_CAMERA_REGISTER_X_OFFSET));
     request.offsetY_px = static_cast<int>(readRegister(self->camera, ARV_FAKE_CAMERA_REGISTER_Y_OFFSET));
-    request.binning = static_cast<int>(readRegister(self->camera, ARV_FAKE_CAMERA_REGISTER_BINNING_HORIZONTAL));
+    request.binning = static_cast<int>(binning);
     request.exposure_us = exposure_us;
     request.gain = gain;
     int type = CV_8UC1;
@@ -63,24 +84,29 @@ struct GvCameraServer::Impl {
       request.pixelFormat = PixelFormat::Mono16;
       type = CV_16UC1;
     }
-    const std::size_t bytesPerPixel = (ARV_PIXEL_FORMAT_BIT_PER_PIXEL(format) + 7) / 8;
-    const std::size_t size = static_cast<std::size_t>(request.width_px) * request.height_px * bytesPerPixel;
-    void* pixels = const_cast<void*>(arv_buffer_get_data(buffer, nullptr));
-    if (pixels == nullptr || size == 0) return;
-    std::memset(pixels, 0, size);
     if (!request.pixelFormat) {
-      if (self->lastWarnedFormat != format)
-        spdlog::warn("served camera '{}': pixel format 0x{:08x} is not served (Mono8, Mono16); frames are black",
-                     self->deviceId(), static_cast<std::uint32_t>(format));
-      self->lastWarnedFormat = format;
+      self->warnOnce(fmt::format("pixel format 0x{:08x} is not served (Mono8, Mono16); frames are black",
+                                 static_cast<std::uint32_t>(format)));
       return;
     }
-    cv::Mat image(request.height_px, request.width_px, type, pixels);
+    if (binningY != binning) {
+      self->warnOnce(fmt::format("binning {} x {} (horizontal x vertical) is not served, only equal ones; frames "
+                                 "are black", binning, binningY));
+      return;
+    }
     try {
+      cv::Mat image(request.height_px, request.width_px, type, pixels);
       self->filler(request, image);
     } catch (const std::exception& e) {
       spdlog::warn("served camera '{}': frame {} goes out black: {}", self->deviceId(), request.frameId, e.what());
     }
+  }
+
+  // A warning about what a client asked, once until it asks something else.
+  void warnOnce(const std::string& what) {
+    if (what == lastWarning) return;
+    spdlog::warn("served camera '{}': {}", deviceId(), what);
+    lastWarning = what;
   }
 
   std::string deviceId() const { return options.vendor + "-" + options.model + "-" + options.serial; }
@@ -110,7 +136,9 @@ GvCameraServer::GvCameraServer(const GvCameraServerOptions& options, ServedFrame
   }
   ArvFakeCamera* camera = arv_gv_fake_camera_get_fake_camera(impl_->gvCamera);
   impl_->camera = camera;
-  // Identity and sensor size before any client can see the device.
+  // Identity and sensor size. Aravis's device thread answers from
+  // arv_gv_fake_camera_new() on: a client that looks in this instant sees
+  // Aravis's defaults; `lfi serve-camera` prints the device's id only after this.
   char name[kNameSize] = {};
   std::strncpy(name, options.vendor.c_str(), kNameSize - 1);
   arv_fake_camera_write_memory(camera, kManufacturerNameOffset, kNameSize, name);

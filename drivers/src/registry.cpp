@@ -3,6 +3,7 @@
 #include "lfi/core/error.h"
 #include "lfi/drivers/aravis_camera.h"
 
+#include <charconv>
 #include <string>
 
 namespace lfi {
@@ -17,13 +18,9 @@ std::unique_ptr<Camera> openAravisFromUri(const CameraUri& uri) {
   AravisOptions options;
   if (auto it = uri.query.find("packetSize"); it != uri.query.end()) {
     int value = 0;
-    try {
-      std::size_t used = 0;
-      value = std::stoi(it->second, &used);
-      if (used != it->second.size()) throw std::invalid_argument("trailing characters");
-    } catch (const std::exception&) {
+    const char* end = it->second.data() + it->second.size();
+    if (const auto [at, ec] = std::from_chars(it->second.data(), end, value); ec != std::errc() || at != end)
       fail(Errc::Config, "camera URI '{}': packetSize '{}' is not an integer number of bytes", uri.text, it->second);
-    }
     if (value < 576 || value > 65'000)
       fail(Errc::Config, "camera URI '{}': packetSize {} is outside 576..65000 bytes", uri.text, value);
     options.packetSize_bytes = value;

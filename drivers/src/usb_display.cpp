@@ -120,6 +120,7 @@ public:
 
   void open() override {
     requireDisplayState(state_, {State::Closed}, "open", name_);
+    sequence_ = 0;  // frames count from 1 after each open (docs/usb-display-protocol.md)
     if (const int rc = libusb_init(&ctx_); rc != 0)
       fail(Errc::Device, "{}: libusb_init failed: {}", name_, libusb_error_name(rc));
     try {

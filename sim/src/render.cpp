@@ -11,6 +11,7 @@
 #include <tbb/task_arena.h>
 
 #include <cmath>
+#include <mutex>
 #include <string>
 
 namespace lfi::sim {
@@ -74,6 +75,14 @@ public:
     return scene.ambientIor();
   }
   double absorption(const Scene& scene) const { return size_ ? scene.surface(top()).absorption_per_mm : 0.0; }
+  // The index on the inner side of `object`'s surface, for a path leaving it:
+  // the innermost medium when the path is inside `object` (its own, or that of
+  // a dielectric entered after it that overlaps it there), else the object's.
+  double iorInside(const Scene& scene, int object) const {
+    for (int i = 0; i < size_; ++i)
+      if (items_[i] == object) return scene.surface(top()).ior;
+    return scene.surface(object).ior;
+  }
 
 private:
   [[noreturn, gnu::cold, gnu::noinline]] void tooDeep(const Scene& scene, int object) const {
@@ -158,7 +167,7 @@ Step interact(const Scene& scene, const Hit& hit, PathState& p, PathState& branc
   // Entering: from the current medium into the glass. Leaving: from the
   // glass into whatever medium contains it (a bubble in glass exits to glass).
   // The packet renderer takes the same steps for its exact dielectrics.
-  const double n1 = entering ? p.media.ior(scene) : surface.ior;
+  const double n1 = entering ? p.media.ior(scene) : p.media.iorInside(scene, hit.object);
   const double n2 = entering ? surface.ior : p.media.ior(scene, hit.object);
   const detail::FresnelEvent e = detail::fresnelEvent(d, hit.normal, n1, n2);
   const Vec3 reflected(e.rx, e.ry, e.rz);
@@ -391,7 +400,7 @@ private:
         lanes_.throughput[k] *= transmittance(k);
         const MediumStack& media = lanes_.media[k];
         const bool entering = direction(k).dot(hits_.normal(k)) < 0;
-        fresnel_.n1[k] = entering ? media.ior(scene_) : surface.ior;
+        fresnel_.n1[k] = entering ? media.ior(scene_) : media.iorInside(scene_, object);
         fresnel_.n2[k] = entering ? surface.ior : media.ior(scene_, object);
         if (entering) enteringLanes |= bit;
         fresnel |= bit;
@@ -737,7 +746,7 @@ private:
   LaneMask insideIsolated_ = 0;  // lanes whose innermost medium is an isolated solid (Scene::isolated)
   std::vector<char> isolated_;   // Scene::isolated of object i at i + 1 (0: the ambient medium, false)
   bool absorbing_ = false;       // any medium absorbs (else every transmittance is 1)
-  Scene::HitPacket hits_;
+  Scene::HitPacket hits_{};  // (lanes without a hit are read by the lane-parallel passes, their results dropped)
   detail::FresnelLanes fresnel_;
   detail::LightFieldMapping lightFieldMapping_;
   // Per lane, its waiting split branches, at most one per split depth.
@@ -752,13 +761,18 @@ cv::Mat render(const Scene& scene, const Sensor& sensor, const RenderOptions& op
     fail(Errc::InvalidArgument, "render: splitDepth = {} is outside [0, {}]", options.splitDepth,
          RenderOptions::kMaxSplitDepth);
   if (options.tileSize < 1) fail(Errc::InvalidArgument, "render: tileSize must be >= 1");
+  if (options.maxDepth < 1) fail(Errc::InvalidArgument, "render: maxDepth = {} must be >= 1", options.maxDepth);
+  // A pixel's sample s has the random stream (pixel << 24) ^ s: more samples would share the next pixel's streams.
+  if (options.samplesPerPixel > (1 << 24))
+    fail(Errc::InvalidArgument, "render: samplesPerPixel = {} is above 2^24", options.samplesPerPixel);
   if (const auto* cam = std::get_if<TelecentricCamera>(&sensor)) cam->validate();
   if (const auto* lfs = std::get_if<LightFieldSensor>(&sensor)) lfs->geometry.validate();
   const int width = sensorWidth(sensor), height = sensorHeight(sensor);
   cv::Mat image(height, width, CV_32FC1, cv::Scalar(0));
   const int ts = options.tileSize;
   const int tilesX = (width + ts - 1) / ts, tilesY = (height + ts - 1) / ts, tiles = tilesX * tilesY;
-  std::atomic<int> done{0};
+  int done = 0;
+  std::mutex progressMutex;  // (fractions reported in order: a bar never steps back)
   std::atomic<bool> stopped{false};
 
   auto renderTile = [&](int tile) {
@@ -768,8 +782,9 @@ cv::Mat render(const Scene& scene, const Sensor& sensor, const RenderOptions& op
     }
     const int x0 = (tile % tilesX) * ts, y0 = (tile / tilesX) * ts;
     TileRenderer(scene, sensor, options).render(x0, y0, std::min(x0 + ts, width), std::min(y0 + ts, height), image);
-    const int finished = ++done;
-    if (options.progress) options.progress(static_cast<double>(finished) / tiles);
+    std::lock_guard lock(progressMutex);
+    ++done;
+    if (options.progress) options.progress(static_cast<double>(done) / tiles);
   };
 
   tbb::task_arena arena(options.threads > 0 ? options.threads : tbb::task_arena::automatic);

@@ -385,8 +385,8 @@ Hit Scene::intersect(const Ray& ray, double tMin, double tMax) const {
   rtcIntersect1(impl_->scene, &ctx.embree, &rh);
   resolveLanes(ctx);
   if (rh.hit.geomID != RTC_INVALID_GEOMETRY_ID)
-    meshHit(0, rh.hit.geomID, rh.hit.primID, rh.ray.tfar, {rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z}, rh.hit.u, rh.hit.v,
-            best);
+    meshHit(0, ray.direction, rh.hit.geomID, rh.hit.primID, rh.ray.tfar, {rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z},
+            rh.hit.u, rh.hit.v, best);
   Hit hit;
   if (best.object[0] < 0) return hit;
   hit.object = best.object[0];
@@ -402,6 +402,7 @@ void Scene::intersect(std::span<const Ray> rays, std::span<Hit> hits, double tMi
     fail(Errc::InvalidArgument, "Scene::intersect: {} rays for {} hits and {} starts (at most {} at once)", rays.size(),
          hits.size(), starts.size(), kPacket);
   const int n = static_cast<int>(rays.size());
+  if (n == 0) return;
   RayPacket packet;
   for (int k = 0; k < static_cast<int>(kPacket); ++k) {  // lanes past n: a harmless copy
     packet.rays.set(k, rays[static_cast<size_t>(k < n ? k : 0)]);
@@ -472,12 +473,12 @@ void Scene::intersect(const RayPacket& packet, std::uint32_t lanes, HitPacket& h
   if (!impl_->meshes) return;
   for (std::uint32_t bits = traced; bits; bits &= bits - 1)
     if (const int k = std::countr_zero(bits); rh.hit.geomID[k] != RTC_INVALID_GEOMETRY_ID)
-      meshHit(k, rh.hit.geomID[k], rh.hit.primID[k], rh.ray.tfar[k], {rh.hit.Ng_x[k], rh.hit.Ng_y[k], rh.hit.Ng_z[k]},
-              rh.hit.u[k], rh.hit.v[k], hits);
+      meshHit(k, {packet.rays.dx[k], packet.rays.dy[k], packet.rays.dz[k]}, rh.hit.geomID[k], rh.hit.primID[k],
+              rh.ray.tfar[k], {rh.hit.Ng_x[k], rh.hit.Ng_y[k], rh.hit.Ng_z[k]}, rh.hit.u[k], rh.hit.v[k], hits);
 }
 
-void Scene::meshHit(int k, unsigned geomID, unsigned primID, float tfar, const Vec3& ng, float u, float v,
-                    HitPacket& hits) const {
+void Scene::meshHit(int k, const Vec3& direction, unsigned geomID, unsigned primID, float tfar, const Vec3& ng,
+                    float u, float v, HitPacket& hits) const {
   if (!(tfar < hits.t[k])) return;  // an analytic object is as near (or tMax is nearer)
   Vec3 normal = ng.normalized();
   const Object& obj = objects_[geomID];
@@ -486,8 +487,11 @@ void Scene::meshHit(int k, unsigned geomID, unsigned primID, float tfar, const V
     const auto& tri = mesh.triangles[primID];
     const Vec3 n = mesh.normals[tri[0]] * (1.0 - u - v) + mesh.normals[tri[1]] * u + mesh.normals[tri[2]] * v;
     const Vec3 shading = obj.worldFromObject.vector(n).normalized();
-    // Keep the interpolated normal on the geometric normal's side.
-    if (shading.dot(normal) > 0) normal = shading;
+    // The interpolated normal where it is on the geometric normal's side and
+    // the ray meets both from the same side: whether a path enters or leaves
+    // the mesh is the surface's geometry (d·n), which a smoothed normal near a
+    // silhouette could turn round.
+    if (shading.dot(normal) > 0 && (shading.dot(direction) < 0) == (normal.dot(direction) < 0)) normal = shading;
   }
   keepNearest(hits, k, tfar, normal, static_cast<int>(geomID));
 }

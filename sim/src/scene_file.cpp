@@ -458,6 +458,9 @@ Object readObject(ConfigTable& t) {
   }
   const std::string material = t.string("material", "absorber", {"dielectric", "absorber", "diffuse"});
   if (material == "dielectric") {
+    if (std::holds_alternative<Rectangle>(obj.shape))  // a path would enter it and never leave
+      fail(Errc::Config, "{}: a rectangle has no inside: it cannot be a dielectric (make it a thin box, a solid or "
+           "a closed mesh)", t.where("material"));
     obj.material = Dielectric{t.number("ior", std::nullopt, 1.0, 5.0), t.number("absorption_per_mm", 0.0, 0, 1e3)};
     if (const auto* mesh = std::get_if<TriangleMesh>(&obj.shape))  // rays enter and leave it: it must be closed
       if (const auto fault = meshClosureFault(*mesh))

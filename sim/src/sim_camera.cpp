@@ -285,7 +285,9 @@ class SimCamera final : public Camera {
     const Queued next = queue_.front();
     queue_.pop_front();
     lock.unlock();
-    imager_->capture(settings_, next.frameId, frame.image, next.display.get());
+    CameraSettings exposed = settings_;
+    exposed.exposure_us = next.exposure_us, exposed.gain = next.gain;
+    imager_->capture(exposed, next.frameId, frame.image, next.display.get());
     frame.frameId = next.frameId;
     frame.timestamp_ns = static_cast<std::uint64_t>(
         std::chrono::duration_cast<std::chrono::nanoseconds>(next.time.time_since_epoch()).count());
@@ -327,6 +329,7 @@ class SimCamera final : public Camera {
 
   void setFeature(const std::string& feature, const std::string& value) override {
     requireFeatureState("setFeature");
+    if (feature != "ExposureTime" && feature != "Gain") setFloatFeature(feature, 0);  // NotFound, or read-only
     setFloatFeature(feature, parseNumber(feature, value));
   }
 
@@ -352,7 +355,12 @@ class SimCamera final : public Camera {
       fail(Errc::InvalidArgument, "camera '{}': feature '{}' is read-only on the sim camera (use configure())", name(),
            feature);
     }
-    settings_ = imager_->resolve(s, name());
+    s = imager_->resolve(s, name());
+    // The frames exposed until now keep the old exposure and gain (the bench's
+    // display-change listener reads settings_ too: under the lock).
+    std::lock_guard lock(mutex_);
+    if (state_ == State::Streaming) produceDueFrames(Clock::now());
+    settings_ = s;
   }
 
   void executeCommand(const std::string& feature) override {
@@ -366,6 +374,7 @@ class SimCamera final : public Camera {
     std::uint64_t frameId;
     Clock::time_point time;
     std::shared_ptr<const SimBench::DisplayState> display;  // as it was when the frame was exposed
+    double exposure_us, gain;  // likewise: a frame exposed before ExposureTime or Gain changed keeps the old ones
   };
 
   std::string name() const { return "sim:" + sceneFile_.string(); }
@@ -392,7 +401,7 @@ class SimCamera final : public Camera {
   // A frame the device produced: into a free buffer, or lost (underrun). Under mutex_.
   void enqueue(std::uint64_t frameId, Clock::time_point time) {
     if (queue_.size() < bufferCount_)
-      queue_.push_back({frameId, time, imager_->bench().displayState()});
+      queue_.push_back({frameId, time, imager_->bench().displayState(), settings_.exposure_us, settings_.gain});
     else
       ++statistics_.underruns;
   }
@@ -413,7 +422,7 @@ class SimCamera final : public Camera {
     const std::uint64_t room = bufferCount_ - queue_.size();
     const auto display = imager_->bench().displayState();
     for (std::uint64_t k = 0; k < std::min(count, room); ++k)
-      queue_.push_back({nextFrameId_ + k, dueTime(produced_ + k), display});
+      queue_.push_back({nextFrameId_ + k, dueTime(produced_ + k), display, settings_.exposure_us, settings_.gain});
     if (count > room) statistics_.underruns += count - room;
     nextFrameId_ += count;
     produced_ = due;

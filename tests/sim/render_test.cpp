@@ -177,6 +177,26 @@ TEST(NestedDielectrics, EightLevelsRefractAsTheOuterSlabAlone) {
   EXPECT_NEAR((out - d0).length(), 0, 1e-12);  // leaves parallel to how it came
 }
 
+// Overlapping dielectrics: the one entered last is the medium. A path inside
+// sphere B (n = 1.5) where it overlaps sphere A (n = 1.7) meets A's far surface
+// with B on both sides: no interface, the ray goes straight on (not bent from
+// 1.7 to 1.5). (The packet renderer takes its indices by the same rule, MediumStack::iorInside.)
+TEST(NestedDielectrics, OverlapsTakeTheMediumEnteredLast) {
+  std::vector<Object> objects;
+  objects.push_back(emitterBelow(-30, LambertianEmission{1.0}));
+  objects.push_back({.name = "A", .shape = Solid::sphere(10), .material = Dielectric{1.7, 0}});
+  objects.push_back({.name = "B", .shape = Solid::sphere(10, Rigid3::translation({0, 0, -12})),
+                     .material = Dielectric{1.5, 0}});
+  const Scene scene(std::move(objects));
+  // Down from above, off the axis: into A, into B (inside A), out of A (inside B), out of B, to the back light.
+  const std::vector<Vec3> path = refractionPath(scene, {{3, 1, 40}, Vec3(0.05, 0.02, -1).normalized()});
+  ASSERT_EQ(path.size(), 6u);
+  EXPECT_NEAR(path[3].length(), 10, 1e-9);  // A's surface, inside B
+  EXPECT_LT((path[3] - Vec3(0, 0, -12)).length(), 10);
+  const Vec3 before = (path[3] - path[2]).normalized(), after = (path[4] - path[3]).normalized();
+  EXPECT_NEAR((after - before).length(), 0, 1e-12);
+}
+
 TEST(NestedDielectrics, ANinthLevelIsAConfigErrorNamingTheObjects) {
   const Scene scene = nestedSlabs(kNesting + 1, 1.5);
   const std::vector<std::string> named{"slab 1", "slab 9", "at most 8"};

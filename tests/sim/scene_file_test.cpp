@@ -279,6 +279,17 @@ TEST_F(SceneFile, MeshNormalsAreSharpAcrossCreases) {
   };
   EXPECT_LT((exitDirection(30 * std::numbers::pi / 180) - Vec3(0, 0, 1)).length(), 1e-9);
   EXPECT_GT((exitDirection(std::numbers::pi) - Vec3(0, 0, 1)).length(), 1e-2);  // smoothed: bent as by a lens
+
+  // Smoothed, the normal near the cube's edge at x = -1 leans far out of the bottom face: a ray leaving through
+  // that face there (d.Ng > 0) would meet the smoothed normal from the inside (d.Ns < 0) and count as entering.
+  // The hit's normal keeps the side the geometry gives.
+  const Scene smoothCube(
+      {Object{"cube", loadMesh(dir_ / "cube.ply", std::numbers::pi), Rigid3{}, Dielectric{1.5, 0}}});
+  const Vec3 d = Vec3(0.9, 0, -0.3).normalized(), at(-0.95, 0, -1);
+  const Hit hit = smoothCube.intersect(Ray{at - d * 0.05, d});
+  ASSERT_TRUE(hit.valid());
+  EXPECT_NEAR(hit.point.z, -1, 1e-6);
+  EXPECT_GT(hit.normal.dot(d), 0) << "leaving the cube; normal " << hit.normal;
 }
 
 // The tracer enters and leaves a dielectric through its surface: a mesh with
@@ -343,6 +354,15 @@ TEST_F(SceneFile, ADielectricMeshMustBoundASolid) {
   EXPECT_TRUE(throwsError([&] { loadSceneFile(placed("inside.toml", "closed.obj", "dielectric")); }, Errc::Config,
                           {"inside.toml", "inside object 'm'"}));
   EXPECT_NO_THROW(loadSceneFile(placed("open.toml", "holed.obj", "diffuse")));
+
+  // A rectangle has no inside either: a dielectric one is refused, naming the key.
+  EXPECT_TRUE(throwsError(
+      [&] {
+        loadSceneFile(write("pane.toml", std::string("format = \"lfi-scene\"\nversion = 1\n") + kCamera +
+                                             "[[object]]\nname='pane'\nshape='rectangle'\nsize_mm=[10, 10]\n"
+                                             "material='dielectric'\nior=1.5\n"));
+      },
+      Errc::Config, {"pane.toml:", "object[0].material", "a rectangle has no inside"}));
 }
 
 // A mesh of several closed parts: each is wound outwards, but a cavity (a part

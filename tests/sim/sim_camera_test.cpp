@@ -73,6 +73,16 @@ class SimCameraTest : public ::testing::Test {
     return s;
   }
 
+  // The scene's camera free-running in Mono16 at `rate_hz` with `buffers` buffers.
+  std::unique_ptr<Camera> freeRunning(double exposure_us, double rate_hz, int buffers) const {
+    auto camera = openSimCamera(scene_);
+    CameraSettings s = mono16(exposure_us);
+    s.frameRate_hz = rate_hz;
+    camera->configure(s);
+    camera->start(buffers);
+    return camera;
+  }
+
   // Mean and standard deviation of one frame, in ADC units (12 bits).
   static std::pair<double, double> stats(const cv::Mat& frame16, int bitDepth) {
     cv::Mat adc;
@@ -218,6 +228,9 @@ TEST_F(SimCameraTest, StateMachine) {
   EXPECT_DOUBLE_EQ(camera->settings().exposure_us, 2000);
   EXPECT_TRUE(throwsError([&] { camera->getFeature("NoSuchFeature"); }, Errc::NotFound, {"NoSuchFeature"}));
   EXPECT_TRUE(throwsError([&] { camera->setIntegerFeature("Width", 8); }, Errc::InvalidArgument, {"read-only"}));
+  // The name first, then the value (camera.h: an unknown feature is NotFound, whatever the value).
+  EXPECT_TRUE(throwsError([&] { camera->setFeature("NoSuchFeature", "abc"); }, Errc::NotFound, {"NoSuchFeature"}));
+  EXPECT_TRUE(throwsError([&] { camera->setFeature("PixelFormat", "Mono8"); }, Errc::InvalidArgument, {"read-only"}));
 
   EXPECT_TRUE(throwsError([&] { openCamera("sim:" + (dir_ / "missing.toml").string()); }, Errc::NotFound,
                           {"missing.toml"}));
@@ -286,11 +299,7 @@ TEST_F(SimCameraTest, SoftwareTriggerDeliversExactlyOneFrame) {
 }
 
 TEST_F(SimCameraTest, FreeRunKeepsTheFrameRateAndCountsUnderruns) {
-  auto camera = openSimCamera(scene_);
-  CameraSettings s = mono16(1000);
-  s.frameRate_hz = 200;
-  camera->configure(s);
-  camera->start(3);
+  auto camera = freeRunning(1000, 200, 3);
   Frame frame;
   std::uint64_t previous = 0, previousTime = 0;
   for (int i = 0; i < 20; ++i) {
@@ -315,17 +324,31 @@ TEST_F(SimCameraTest, FreeRunKeepsTheFrameRateAndCountsUnderruns) {
   EXPECT_GT(frame.frameId, previous + 10) << "ids skip the frames that found no buffer";
 }
 
+// A frame exposed before ExposureTime changed keeps the exposure it was taken
+// with, as a real camera's would: the frames waiting in the buffers show the
+// old one, frames exposed after the change the new one.
+TEST_F(SimCameraTest, FramesKeepTheExposureTheyWereTakenWith) {
+  auto camera = freeRunning(1000, 200, 4);
+  std::this_thread::sleep_for(50ms);  // the four buffers fill at 1000 us
+  camera->setFloatFeature("ExposureTime", 3000);
+  Frame frame;
+  camera->grabInto(frame, 1s);
+  ASSERT_EQ(frame.status, FrameStatus::Complete);
+  const double before = cv::mean(frame.image)[0];
+  for (int i = 0; i < 3; ++i) camera->grabInto(frame, 1s);  // the rest of the old ones
+  camera->grabInto(frame, 1s);                               // exposed after the change
+  ASSERT_EQ(frame.status, FrameStatus::Complete);
+  const double after = cv::mean(frame.image)[0];
+  EXPECT_NEAR(after / before, 3.0, 0.3) << before << " DN, then " << after << " DN";
+}
+
 // A consumer faster than the frame rate waits for each frame: at rates whose
 // period is no whole number of clock ticks (30 Hz), the wait must end with the
 // frame, not with the grab's timeout (a due time rounded one way, the count
 // of due frames the other, once lost 134 of 199 frames so).
 TEST_F(SimCameraTest, AFastConsumerGetsEveryFrameAtAnyRate) {
   for (const double rate : {30.0, 24.0, 60.0}) {
-    auto camera = openSimCamera(scene_);
-    CameraSettings s = mono16(1000);
-    s.frameRate_hz = rate;
-    camera->configure(s);
-    camera->start(4);
+    auto camera = freeRunning(1000, rate, 4);
     Frame frame;
     for (int i = 0; i < 8; ++i) {
       camera->grabInto(frame, 2s);

@@ -231,9 +231,10 @@ public:
   double ambientIor() const { return ambientIor_; }
 
 private:
-  // A mesh's hit (Embree's, in float) where it is nearer than the analytic objects' in `hits`.
-  void meshHit(int k, unsigned geomID, unsigned primID, float tfar, const Vec3& ng, float u, float v,
-               HitPacket& hits) const;
+  // A mesh's hit (Embree's, in float) of a ray along `direction` where it is
+  // nearer than the analytic objects' in `hits`.
+  void meshHit(int k, const Vec3& direction, unsigned geomID, unsigned primID, float tfar, const Vec3& ng, float u,
+               float v, HitPacket& hits) const;
 
   struct Impl;
   std::unique_ptr<Impl> impl_;
