@@ -82,13 +82,13 @@ DisplayDistanceScan calibrateDisplayDistance(const LightField& captured, const I
       fail(Errc::InvalidArgument, "{} needs a single-channel image; the one {} has {}", kWhat, what, image.channels());
     cv::Mat f;
     image.convertTo(f, CV_32F);
-    if (!roi.empty() && roi.size() != f.size())
-      fail(Errc::InvalidArgument, "{}: the ROI is {}x{}, the image {} {}x{}", kWhat, roi.cols, roi.rows, what, f.cols,
-           f.rows);
     if (size.empty()) size = f.size();
     if (f.size() != size)
       fail(Errc::Device, "{}: the image {} is {}x{}, the first one (with the display dark) {}x{}: did the camera's "
            "region or binning change during the scan?", kWhat, what, f.cols, f.rows, size.width, size.height);
+    if (!roi.empty() && roi.size() != f.size())
+      fail(Errc::InvalidArgument, "{}: the ROI is {}x{}, the image {} {}x{}", kWhat, roi.cols, roi.rows, what, f.cols,
+           f.rows);
     cv::Scalar mean, deviation;
     cv::meanStdDev(f, mean, deviation, roi);
     if (!std::isfinite(mean[0]) || !std::isfinite(deviation[0]))

@@ -111,10 +111,8 @@ void writeFileAtomically(const fs::path& target, Overwrite overwrite, std::strin
   writeFileAtomically(target, overwrite, [&](const fs::path& temporary) {
     std::ofstream out(temporary, std::ios::binary | std::ios::trunc);
     out.write(content.data(), static_cast<std::streamsize>(content.size()));
-    out.flush();
-    const int err = errno;
-    out.close();
-    if (!out) fail(Errc::Io, "cannot write '{}': {}", target.string(), std::strerror(err));
+    out.close();  // (flushes; errno tells why when the stream failed)
+    if (!out) fail(Errc::Io, "cannot write '{}': {}", target.string(), std::strerror(errno));
   });
 }
 

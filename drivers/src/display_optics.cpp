@@ -51,6 +51,7 @@ DisplayRay DisplayOptics::rayFromPixel(int col, int row, int subpixel) const {
 
 std::optional<PanelSample> DisplayOptics::pixelFromRay(const Vec3& origin, const Vec3& direction) const {
   if (!(direction.z > 0) || !std::isfinite(direction.x) || !std::isfinite(direction.y)) return std::nullopt;
+  if (!(std::abs(origin.x) < 1e9 && std::abs(origin.y) < 1e9)) return std::nullopt;  // (NaN too): off any panel
   const double t = (direction.x * normal_.x + direction.y * normal_.y) / direction.z;
   const double d = -t * info_.optics.gap_mm;
   if (!(std::abs(d) <= 0.5 * perpPitch_)) return std::nullopt;

@@ -94,6 +94,7 @@ struct GvCameraServer::Impl {
                                  "are black", binning, binningY));
       return;
     }
+    self->lastWarning.clear();  // a frame as asked: the next refusal is news again
     try {
       cv::Mat image(request.height_px, request.width_px, type, pixels);
       self->filler(request, image);

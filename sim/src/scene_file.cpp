@@ -194,10 +194,16 @@ std::vector<unsigned> weldVertices(const TriangleMesh& mesh, double tolerance, b
                 static_cast<std::int64_t>(std::floor((p.y - low.y) / tolerance)),
                 static_cast<std::int64_t>(std::floor((p.z - low.z) / tolerance))};
   };
+  // Only the vertices the triangles use (as bounds() measures them); the others keep their own ids.
+  std::vector<char> used(mesh.vertices.size(), 0);
+  for (const auto& t : mesh.triangles)
+    for (const unsigned i : t) used[i] = 1;
   std::vector<unsigned> welded(mesh.vertices.size());
+  std::iota(welded.begin(), welded.end(), 0u);
   if (!neighbours) {  // sorted by cell: a cell's vertices are adjacent
-    std::vector<std::pair<Cell, unsigned>> order(mesh.vertices.size());
-    for (size_t v = 0; v < mesh.vertices.size(); ++v) order[v] = {cellOf(mesh.vertices[v]), static_cast<unsigned>(v)};
+    std::vector<std::pair<Cell, unsigned>> order;
+    for (size_t v = 0; v < mesh.vertices.size(); ++v)
+      if (used[v]) order.emplace_back(cellOf(mesh.vertices[v]), static_cast<unsigned>(v));
     std::sort(order.begin(), order.end());
     for (size_t i = 0; i < order.size(); ++i)
       welded[order[i].second] = i > 0 && order[i].first == order[i - 1].first ? welded[order[i - 1].second]
@@ -211,9 +217,9 @@ std::vector<unsigned> weldVertices(const TriangleMesh& mesh, double tolerance, b
   };
   std::unordered_map<Cell, unsigned, CellHash> cells(2 * mesh.vertices.size());
   for (size_t v = 0; v < mesh.vertices.size(); ++v) {
+    if (!used[v]) continue;
     const Vec3& p = mesh.vertices[v];
     const Cell cell = cellOf(p);
-    welded[v] = static_cast<unsigned>(v);
     for (int n = 0; n < 27 && welded[v] == v; ++n) {
       const auto found = cells.find({cell[0] + n % 3 - 1, cell[1] + n / 3 % 3 - 1, cell[2] + n / 9 - 1});
       if (found == cells.end()) continue;
@@ -295,9 +301,9 @@ std::optional<std::string> partWindingFault(const TriangleMesh& mesh, const std:
     }
   }
   if (triangles.size() < 2) return std::nullopt;
-  for (size_t k = 0; k < triangles.size(); ++k) {
-    // A point of part k: the centroid of one of its triangles, which lies off every other part's surface.
-    const auto& t = mesh.triangles[firstOf[k]];
+  // How many of the other parts hold the centroid of part k's triangle t.
+  auto partsAround = [&](size_t k, unsigned triangle) {
+    const auto& t = mesh.triangles[triangle];
     const Vec3 p = (mesh.vertices[t[0]] + mesh.vertices[t[1]] + mesh.vertices[t[2]]) / 3.0;
     int around = 0;
     for (size_t other = 0; other < triangles.size(); ++other) {
@@ -309,6 +315,19 @@ std::optional<std::string> partWindingFault(const TriangleMesh& mesh, const std:
       for (const unsigned i : triangles[other]) inside ^= parityRayCrosses(mesh, mesh.triangles[i], p);
       around += inside;
     }
+    return around;
+  };
+  for (size_t k = 0; k < triangles.size(); ++k) {
+    // Up to eight points of the part (centroids of triangles spread over it). Parts that cross each other
+    // (shells never merged into one solid) give points inside different numbers of the others: no verdict then.
+    const auto& list = triangles[k];
+    const int around = partsAround(k, list.front());
+    const size_t samples = std::min<size_t>(8, list.size());
+    bool agree = true;
+    for (size_t i = 1; i < samples && agree; ++i)
+      agree = partsAround(k, list[i * list.size() / samples]) % 2 == around % 2;
+    if (!agree) continue;
+    const auto& t = mesh.triangles[firstOf[k]];
     if ((around % 2 == 0) != (volume6[k] > 0)) {
       auto at = [&](unsigned v) {
         const Vec3& q = mesh.vertices[v];
@@ -385,7 +404,8 @@ std::optional<std::string> meshClosureFault(const TriangleMesh& mesh) {
     return fmt::format("not measurable: its vertices span from ({:g}, {:g}, {:g}) to ({:g}, {:g}, {:g})", low.x, low.y,
                        low.z, high.x, high.y, high.z);
   const double tolerance = extent > 0 ? 1e-7 * extent : 1.0;
-  if (!closureFault(mesh, weldVertices(mesh, tolerance, false))) return std::nullopt;
+  auto fault = closureFault(mesh, weldVertices(mesh, tolerance, false));
+  if (!fault || !fault->starts_with("not closed")) return fault;  // (winding faults do not depend on the weld)
   return closureFault(mesh, weldVertices(mesh, tolerance, true));
 }
 

@@ -303,8 +303,9 @@ class SimCamera final : public Camera {
   }
 
   // A few SFNC features, mapped on the settings. ExposureTime and Gain can be
-  // changed at any time (they act on the next frame, as on a real camera); the
-  // rest is read-only here (configure() sets it).
+  // changed at any time (they act on the frames exposed after the change, as
+  // on a real camera: frames waiting in the buffers keep theirs); the rest is
+  // read-only here (configure() sets it).
   std::string getFeature(const std::string& feature) override {
     requireFeatureState("getFeature");
     const CameraSettings& s = settings_;
@@ -329,7 +330,7 @@ class SimCamera final : public Camera {
 
   void setFeature(const std::string& feature, const std::string& value) override {
     requireFeatureState("setFeature");
-    if (feature != "ExposureTime" && feature != "Gain") setFloatFeature(feature, 0);  // NotFound, or read-only
+    requireWritable(feature);  // the name before the value
     setFloatFeature(feature, parseNumber(feature, value));
   }
 
@@ -345,16 +346,9 @@ class SimCamera final : public Camera {
 
   void setFloatFeature(const std::string& feature, double value) override {
     requireFeatureState("setFloatFeature");
+    requireWritable(feature);
     CameraSettings s = settings_;
-    if (feature == "ExposureTime")
-      s.exposure_us = value;
-    else if (feature == "Gain")
-      s.gain = value;
-    else {
-      getFeature(feature);  // NotFound for unknown names
-      fail(Errc::InvalidArgument, "camera '{}': feature '{}' is read-only on the sim camera (use configure())", name(),
-           feature);
-    }
+    (feature == "ExposureTime" ? s.exposure_us : s.gain) = value;
     s = imager_->resolve(s, name());
     // The frames exposed until now keep the old exposure and gain (the bench's
     // display-change listener reads settings_ too: under the lock).
@@ -378,6 +372,14 @@ class SimCamera final : public Camera {
   };
 
   std::string name() const { return "sim:" + sceneFile_.string(); }
+
+  // ExposureTime and Gain are written; other features are NotFound or read-only.
+  void requireWritable(const std::string& feature) {
+    if (feature == "ExposureTime" || feature == "Gain") return;
+    getFeature(feature);  // NotFound for unknown names
+    fail(Errc::InvalidArgument, "camera '{}': feature '{}' is read-only on the sim camera (use configure())", name(),
+         feature);
+  }
 
   void requireFeatureState(const char* method) const {
     requireCameraState(state_, {State::Open, State::Configured, State::Streaming}, method, name());

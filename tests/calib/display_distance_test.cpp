@@ -283,6 +283,9 @@ TEST(DisplayDistance, RejectsBadCandidatesAndImages) {
   };
   EXPECT_TRUE(throwsError([&] { calib::calibrateDisplayDistance(lf, smallerWhenLit, {-1, 1, 2}); }, Errc::Device,
                           {"candidate -1 mm is 4x4", "the first one (with the display dark) 8x8"}));
+  EXPECT_TRUE(throwsError(
+      [&] { calib::calibrateDisplayDistance(lf, smallerWhenLit, {-1, 1, 2}, cv::Mat::ones(8, 8, CV_8UC1)); },
+      Errc::Device, {"candidate -1 mm is 4x4", "region or binning change"}));
   // The light field was captured 30 mm from the part: the display cannot be 30 mm nearer.
   EXPECT_TRUE(throwsError([&] { calib::calibrateDisplayDistance(lf, black, {-30, 0, 1}); }, Errc::InvalidArgument,
                           {"-30 mm", "past the part"}));

@@ -300,6 +300,7 @@ TEST_F(SimCameraTest, SoftwareTriggerDeliversExactlyOneFrame) {
 
 TEST_F(SimCameraTest, FreeRunKeepsTheFrameRateAndCountsUnderruns) {
   auto camera = freeRunning(1000, 200, 3);
+  const auto t0 = std::chrono::steady_clock::now();
   Frame frame;
   std::uint64_t previous = 0, previousTime = 0;
   for (int i = 0; i < 20; ++i) {
@@ -313,6 +314,8 @@ TEST_F(SimCameraTest, FreeRunKeepsTheFrameRateAndCountsUnderruns) {
     previous = frame.frameId;
     previousTime = frame.timestamp_ns;
   }
+  // And the grabs waited for them: 20 frames take at least 19 periods (a lower bound, which no host load breaks).
+  EXPECT_GE(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), 19 / 200.0 - 1e-3);
   EXPECT_EQ(camera->statistics().underruns, 0u);
   std::this_thread::sleep_for(100ms);  // 20 frames due, 3 buffers
   camera->grabInto(frame, 1s);
