@@ -72,7 +72,8 @@ LFI_SIMD_CLONES void rectangleLanes(const WorldRectangle& r, const RayLanes& __r
     crossing[k] = hit ? t : kInf;
   }
   for (int k = 0; k < RayLanes::kSize; ++k) {
-    const bool nearer = (lanes >> k & 1) != 0 && crossing[k] < best.t[k];
+    const bool nearer = (lanes >> k & 1) != 0 && (crossing[k] < best.t[k] || (crossing[k] == best.t[k] &&
+                                                                             object < best.object[k]));
     best.t[k] = nearer ? crossing[k] : best.t[k];
     best.nx[k] = nearer ? n.x : best.nx[k];
     best.ny[k] = nearer ? n.y : best.ny[k];
@@ -101,9 +102,11 @@ struct HitContext {
 };
 static_assert(RayLanes::kSize == static_cast<int>(Scene::kPacket) && Scene::kPacket <= 32);
 
-// Keeps a crossing of lane k if it is the nearest so far.
+// Keeps a crossing of lane k if it is the nearest so far. Of two at the same
+// distance (coincident surfaces) the lower object index wins, whatever order
+// the objects were resolved in (which depends on the packet's other lanes).
 inline void keepNearest(Scene::HitPacket& best, int k, double t, const Vec3& normal, int object) {
-  if (!(t < best.t[k])) return;
+  if (!(t < best.t[k] || (t == best.t[k] && object < best.object[k]))) return;
   best.t[k] = t;
   best.nx[k] = normal.x, best.ny[k] = normal.y, best.nz[k] = normal.z;
   best.object[k] = object;
@@ -479,7 +482,7 @@ void Scene::intersect(const RayPacket& packet, std::uint32_t lanes, HitPacket& h
 
 void Scene::meshHit(int k, const Vec3& direction, unsigned geomID, unsigned primID, float tfar, const Vec3& ng,
                     float u, float v, HitPacket& hits) const {
-  if (!(tfar < hits.t[k])) return;  // an analytic object is as near (or tMax is nearer)
+  if (!(tfar <= hits.t[k])) return;  // an analytic object is nearer (or tMax is); a tie goes to keepNearest
   Vec3 normal = ng.normalized();
   const Object& obj = objects_[geomID];
   const auto& mesh = std::get<TriangleMesh>(obj.shape);

@@ -312,6 +312,31 @@ namespace {
 // Rectangles are exact: a ray meets one wherever it crosses the closed
 // rectangle, on its diagonal too (where a two-triangle quad may leak), at the
 // plane's distance to double precision, and misses it just beyond an edge.
+// Two surfaces in the same place (an emitter and a mask laid on it): the hit
+// is the lower object index's, in the one-ray and the packet query alike,
+// whichever order the scene lists them and whatever else the packet holds.
+TEST(Scene, CoincidentSurfacesGoToTheLowerObjectIndex) {
+  for (const bool maskFirst : {true, false}) {
+    const Object mask{.name = "mask", .shape = Rectangle{40, 40}, .material = Absorber{}};
+    const Object light{.name = "light", .shape = Rectangle{40, 40}, .material = Absorber{},
+                       .emission = LambertianEmission{1.0}};
+    const Object sphere{.name = "sphere", .shape = Solid::sphere(5, Rigid3::translation({0, 0, 20})),
+                        .material = Absorber{}};
+    const Scene scene(maskFirst ? std::vector<Object>{mask, light, sphere} : std::vector<Object>{light, mask, sphere});
+    std::vector<Ray> rays;
+    for (int k = 0; k < 16; ++k)  // down onto the plane, every other one past the sphere first
+      rays.push_back({{-15.0 + 2 * k, (k % 2) * 0.3, 50}, Vec3(0.01 * k, 0.02, -1).normalized()});
+    std::vector<Hit> hits(rays.size());
+    scene.intersect(rays, hits);
+    for (size_t k = 0; k < rays.size(); ++k) {
+      const Hit one = scene.intersect(rays[k]);
+      if (!one.valid() || one.object == 2) continue;  // the sphere's
+      EXPECT_EQ(one.object, 0) << "lane " << k << (maskFirst ? ", mask first" : ", light first");
+      EXPECT_EQ(hits[k].object, 0) << "lane " << k << (maskFirst ? ", mask first" : ", light first");
+    }
+  }
+}
+
 TEST(Scene, RectanglesAreExactAndWatertight) {
   const Rigid3 placed = Rigid3::translation({1, -2, -30}) * Rigid3::rotation({1, 1, 0}, 0.3);
   const Scene scene({{.name = "plate", .shape = Rectangle{40, 20}, .worldFromObject = placed, .material = Absorber{}}});
