@@ -26,7 +26,6 @@
 
 #include <atomic>
 #include <charconv>
-#include <limits>
 #include <chrono>
 #include <cmath>
 #include <csignal>
@@ -36,6 +35,7 @@
 #include <cerrno>
 #include <cstring>
 #include <filesystem>
+#include <limits>
 #include <mutex>
 
 namespace fs = std::filesystem;
