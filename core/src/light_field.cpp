@@ -99,8 +99,7 @@ double LightField::nearestSample(int ex, int ey, const Vec2& disc) const {
 double LightField::radiance(const Vec2& q, const Vec3& d, LightFieldLookup mode) const {
   Vec2 disc;
   if (!discFromDirection(d, disc) || disc.x * disc.x + disc.y * disc.y >= 1) return 0;
-  const double e = geometry_.elementPitch_mm();
-  return radianceAt(q.x / e + 0.5 * geometry_.spatialX, q.y / e + 0.5 * geometry_.spatialY, disc, mode);
+  return radianceFromDisc(q, disc, mode);
 }
 
 double LightField::radianceAt(double sx, double sy, const Vec2& disc, LightFieldLookup mode) const {

@@ -424,8 +424,7 @@ class AravisCamera final : public Camera {
 
   void grabInto(Frame& frame, std::chrono::milliseconds timeout) override {
     requireCameraState(state_, {State::Streaming}, "grab", name());
-    if (timeout.count() < 0) fail(Errc::InvalidArgument, "camera '{}': grab timeout {} ms", name(), timeout.count());
-    timeout = std::min(timeout, std::chrono::milliseconds(std::chrono::hours(24 * 365)));  // "forever" does not wrap
+    timeout = checkedGrabTimeout(timeout, name());
     // In slices, so that a lost control channel (the device stops streaming for
     // good) ends the wait at once instead of after the whole timeout.
     constexpr std::chrono::milliseconds kSlice{250};

@@ -68,4 +68,9 @@ void requireCameraState(Camera::State current, std::initializer_list<Camera::Sta
        toString(current), names);
 }
 
+std::chrono::milliseconds checkedGrabTimeout(std::chrono::milliseconds timeout, const std::string& device) {
+  if (timeout.count() < 0) fail(Errc::InvalidArgument, "camera '{}': grab timeout {} ms", device, timeout.count());
+  return std::min(timeout, std::chrono::milliseconds(std::chrono::hours(24 * 365)));
+}
+
 }  // namespace lfi

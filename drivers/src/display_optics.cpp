@@ -103,12 +103,9 @@ cv::Mat encodeLightField(const LightField& lightField, const DisplayOptics& opti
   const int sub = info.subpixelsPerPixel();
   cv::Mat panel(info.panelHeight_px, info.panelWidth_px, info.panelType());
   const double scale = 255.0 / white;
-  // rayFromPixel and LightField::radiance, with the ray taken straight to the
-  // light field's coordinates: the unit direction (-t n, 1) / sqrt(1 + t^2)
-  // lands on the disc at t n / sqrt(1 + t^2) (inside it: the cone is below
-  // 180 degrees), the origin p - d n at (sx, sy) in elements.
-  const LightFieldGeometry& g = lightField.geometry();
-  const double element = g.elementPitch_mm(), halfX = 0.5 * g.spatialX, halfY = 0.5 * g.spatialY;
+  // rayFromPixel and LightField::radiance, with the ray's direction taken
+  // straight to the disc: the unit direction (-t n, 1) / sqrt(1 + t^2) lands
+  // at t n / sqrt(1 + t^2) (inside it: the cone is below 180 degrees).
   const Vec2 n = optics.lensNormal();
   const double invGap = 1.0 / info.optics.gap_mm;
   cv::parallel_for_(cv::Range(0, info.panelHeight_px), [&](const cv::Range& rows) {
@@ -118,10 +115,8 @@ cv::Mat encodeLightField(const LightField& lightField, const DisplayOptics& opti
         for (int k = 0; k < sub; ++k) {
           const Vec2 p = optics.subpixelCentre(col, row, k);
           const double d = optics.acrossLens(p), t = d * invGap, s = t / std::sqrt(1 + t * t);
-          // (Divided as LightField::radiance divides: a ray at the plane's edge falls on the same side.)
-          const double r = lightField.radianceAt((p.x - d * n.x) / element + halfX,
-                                                 (p.y - d * n.y) / element + halfY, {s * n.x, s * n.y},
-                                                 LightFieldLookup::Interpolated);
+          const double r = lightField.radianceFromDisc({p.x - d * n.x, p.y - d * n.y}, {s * n.x, s * n.y},
+                                                       LightFieldLookup::Interpolated);
           const double level = r * scale + 0.5;  // rounded below; NaN gives 0
           out[col * sub + k] = !(level > 0) ? 0 : level >= 255 ? 255 : static_cast<std::uint8_t>(level);
         }

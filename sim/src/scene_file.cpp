@@ -18,6 +18,7 @@
 #include <cstdint>
 #include <fstream>
 #include <functional>
+#include <limits>
 #include <unordered_map>
 #include <numbers>
 #include <numeric>
@@ -167,17 +168,26 @@ TriangleMesh loadMesh(const fs::path& path, double creaseAngle_rad) {
 
 namespace {
 
-// The axis-aligned bounding box (low and high corners; the origin for none)
-// of the vertices the triangles use: a stray unused vertex does not count.
-std::pair<Vec3, Vec3> bounds(const TriangleMesh& mesh) {
-  Vec3 low = mesh.triangles.empty() ? Vec3(0, 0, 0) : mesh.vertices[mesh.triangles.front()[0]], high = low;
+// An axis-aligned box, grown point by point from an empty one.
+struct Box {
+  Vec3 low{std::numeric_limits<double>::infinity()}, high{-std::numeric_limits<double>::infinity()};
+  void add(const Vec3& v) {
+    low = Vec3(std::min(low.x, v.x), std::min(low.y, v.y), std::min(low.z, v.z));
+    high = Vec3(std::max(high.x, v.x), std::max(high.y, v.y), std::max(high.z, v.z));
+  }
+  bool holds(const Vec3& p) const {
+    return p.x >= low.x && p.y >= low.y && p.z >= low.z && p.x <= high.x && p.y <= high.y && p.z <= high.z;
+  }
+};
+
+// The bounding box of the vertices the triangles use (a stray unused vertex
+// does not count); the origin for no triangle.
+Box bounds(const TriangleMesh& mesh) {
+  Box box;
   for (const auto& t : mesh.triangles)
-    for (const unsigned i : t) {
-      const Vec3& v = mesh.vertices[i];
-      low = Vec3(std::min(low.x, v.x), std::min(low.y, v.y), std::min(low.z, v.z));
-      high = Vec3(std::max(high.x, v.x), std::max(high.y, v.y), std::max(high.z, v.z));
-    }
-  return {low, high};
+    for (const unsigned i : t) box.add(mesh.vertices[i]);
+  if (mesh.triangles.empty()) box.low = box.high = Vec3(0, 0, 0);
+  return box;
 }
 
 // One id per position, within `tolerance` (Chebyshev) of each other, on a grid
@@ -187,7 +197,7 @@ std::pair<Vec3, Vec3> bounds(const TriangleMesh& mesh) {
 // `neighbours`, a vertex also joins the first one within the tolerance in the
 // 26 neighbouring cells (slower: a hash look-up each).
 std::vector<unsigned> weldVertices(const TriangleMesh& mesh, double tolerance, bool neighbours) {
-  const Vec3 low = bounds(mesh).first - Vec3(0.3183 * tolerance, 0.2719 * tolerance, 0.1415 * tolerance);
+  const Vec3 low = bounds(mesh).low - Vec3(0.3183 * tolerance, 0.2719 * tolerance, 0.1415 * tolerance);
   using Cell = std::array<std::int64_t, 3>;
   auto cellOf = [&](const Vec3& p) {
     return Cell{static_cast<std::int64_t>(std::floor((p.x - low.x) / tolerance)),
@@ -273,11 +283,11 @@ std::optional<std::string> partWindingFault(const TriangleMesh& mesh, const std:
   };
   for (size_t i = 0; i + 1 < crossings.size(); i += 2)
     parent[root(crossings[i].triangle)] = root(crossings[i + 1].triangle);
-  std::vector<unsigned> partOfRoot(mesh.triangles.size(), ~0u), firstOf;  // (~0u: none yet)
+  std::vector<unsigned> partOfRoot(mesh.triangles.size(), ~0u);  // (~0u: none yet)
   std::vector<char> counted(mesh.triangles.size(), 0);
-  std::vector<std::vector<unsigned>> triangles;
+  std::vector<std::vector<unsigned>> triangles;  // each part's, the first one naming it
   std::vector<double> volume6;
-  std::vector<std::pair<Vec3, Vec3>> box;  // each part's bounding box: only parts whose box holds a point can hold it
+  std::vector<Box> box;  // each part's: only parts whose box holds a point can hold it
   for (const auto& c : crossings) {
     if (counted[c.triangle]) continue;
     counted[c.triangle] = 1;
@@ -286,19 +296,13 @@ std::optional<std::string> partWindingFault(const TriangleMesh& mesh, const std:
       partOfRoot[r] = static_cast<unsigned>(triangles.size());
       triangles.emplace_back();
       volume6.push_back(0);
-      firstOf.push_back(c.triangle);
-      box.emplace_back(mesh.vertices[mesh.triangles[c.triangle][0]], mesh.vertices[mesh.triangles[c.triangle][0]]);
+      box.emplace_back();
     }
     const unsigned k = partOfRoot[r];
     triangles[k].push_back(c.triangle);
     const auto& t = mesh.triangles[c.triangle];
     volume6[k] += mesh.vertices[t[0]].dot(mesh.vertices[t[1]].cross(mesh.vertices[t[2]]));
-    for (const unsigned i : t) {
-      const Vec3& v = mesh.vertices[i];
-      auto& [low, high] = box[k];
-      low = Vec3(std::min(low.x, v.x), std::min(low.y, v.y), std::min(low.z, v.z));
-      high = Vec3(std::max(high.x, v.x), std::max(high.y, v.y), std::max(high.z, v.z));
-    }
+    for (const unsigned i : t) box[k].add(mesh.vertices[i]);
   }
   if (triangles.size() < 2) return std::nullopt;
   // How many of the other parts hold the centroid of part k's triangle t.
@@ -307,10 +311,7 @@ std::optional<std::string> partWindingFault(const TriangleMesh& mesh, const std:
     const Vec3 p = (mesh.vertices[t[0]] + mesh.vertices[t[1]] + mesh.vertices[t[2]]) / 3.0;
     int around = 0;
     for (size_t other = 0; other < triangles.size(); ++other) {
-      const auto& [low, high] = box[other];
-      if (other == k || !(p.x >= low.x && p.y >= low.y && p.z >= low.z && p.x <= high.x && p.y <= high.y &&
-                          p.z <= high.z))
-        continue;
+      if (other == k || !box[other].holds(p)) continue;
       bool inside = false;
       for (const unsigned i : triangles[other]) inside ^= parityRayCrosses(mesh, mesh.triangles[i], p);
       around += inside;
@@ -327,7 +328,7 @@ std::optional<std::string> partWindingFault(const TriangleMesh& mesh, const std:
     for (size_t i = 1; i < samples && agree; ++i)
       agree = partsAround(k, list[i * list.size() / samples]) % 2 == around % 2;
     if (!agree) continue;
-    const auto& t = mesh.triangles[firstOf[k]];
+    const auto& t = mesh.triangles[list.front()];
     if ((around % 2 == 0) != (volume6[k] > 0)) {
       auto at = [&](unsigned v) {
         const Vec3& q = mesh.vertices[v];
@@ -335,7 +336,7 @@ std::optional<std::string> partWindingFault(const TriangleMesh& mesh, const std:
       };
       return fmt::format("a part wound the wrong way: the closed surface through triangle {} (counting from 0; "
                          "corners {}, {}, {}) encloses {:.6g} mm^3 and lies inside {} of the mesh's other {} parts: "
-                         "{} (reverse its triangles' vertex order)", firstOf[k], at(t[0]), at(t[1]), at(t[2]),
+                         "{} (reverse its triangles' vertex order)", list.front(), at(t[0]), at(t[1]), at(t[2]),
                          volume6[k] / 6, around, triangles.size() - 1,
                          around % 2 ? "a cavity must be wound inwards" : "a solid must be wound outwards");
     }
@@ -569,10 +570,8 @@ void requireOutsideSolids(const std::vector<Object>& objects, const Rigid3& worl
       contains = [solid](const Vec3& p) { return (*solid)->contains(p); };
     } else if (const auto* mesh = std::get_if<TriangleMesh>(&object.shape)) {
       // Whether it is closed is asked only once a point falls in its box (the closure check costs time).
-      const auto [low, high] = bounds(*mesh);
-      contains = [mesh, low, high, closed = std::optional<bool>()](const Vec3& p) mutable {
-        if (!(p.x >= low.x && p.y >= low.y && p.z >= low.z && p.x <= high.x && p.y <= high.y && p.z <= high.z))
-          return false;
+      contains = [mesh, box = bounds(*mesh), closed = std::optional<bool>()](const Vec3& p) mutable {
+        if (!box.holds(p)) return false;
         if (!closed) closed = !meshClosureFault(*mesh);
         return *closed && insideClosedMesh(*mesh, p);
       };

@@ -260,8 +260,7 @@ class SimCamera final : public Camera {
 
   void grabInto(Frame& frame, std::chrono::milliseconds timeout) override {
     requireCameraState(state_, {State::Streaming}, "grab", name());
-    if (timeout.count() < 0) fail(Errc::InvalidArgument, "camera '{}': grab timeout {} ms", name(), timeout.count());
-    timeout = std::min(timeout, std::chrono::milliseconds(std::chrono::hours(24 * 365)));  // "forever" does not wrap
+    timeout = checkedGrabTimeout(timeout, name());
     const Clock::time_point deadline = Clock::now() + timeout;
     std::unique_lock lock(mutex_);
     produceDueFrames(Clock::now());

@@ -87,6 +87,12 @@ public:
   // frame) with direction d (unit, plane frame). 0 outside the plane and for
   // directions that point away from the +z half space.
   double radiance(const Vec2& q, const Vec3& d, LightFieldLookup mode) const;
+  // radiance() once d is mapped to its disc position (discFromDirection,
+  // inside the unit disc): for callers that find the disc position directly.
+  double radianceFromDisc(const Vec2& q, const Vec2& disc, LightFieldLookup mode) const {
+    const double e = geometry_.elementPitch_mm();
+    return radianceAt(q.x / e + 0.5 * geometry_.spatialX, q.y / e + 0.5 * geometry_.spatialY, disc, mode);
+  }
   // radiance()'s lookup once q and d are mapped: (sx, sy) = q / elementPitch_mm
   // + (spatialX, spatialY) / 2, in elements; disc = discFromDirection(d), inside
   // the unit disc. 0 outside the plane. For callers that map many rays at once.

@@ -171,4 +171,9 @@ const char* toString(Camera::State state);
 void requireCameraState(Camera::State current, std::initializer_list<Camera::State> allowed, const char* method,
                         const std::string& device);
 
+// For backends' grabInto: throws Errc::InvalidArgument for a negative timeout;
+// returns it at most a year, so that "forever" (milliseconds::max()) added to
+// a clock does not overflow.
+std::chrono::milliseconds checkedGrabTimeout(std::chrono::milliseconds timeout, const std::string& device);
+
 }  // namespace lfi
