@@ -205,11 +205,7 @@ std::vector<const AnalyticGeometry*> isolatedSolids(const std::vector<Object>& o
     if (g->solid) solidOf[static_cast<size_t>(g->object)] = g.get();
   }
   for (size_t i = 0; i < objects.size(); ++i)
-    if (const auto* mesh = std::get_if<TriangleMesh>(&objects[i].shape))
-      for (const Vec3& v : mesh->vertices) {
-        const Vec3 p = objects[i].worldFromObject.point(v);
-        boxes[i] = boxes[i].unite({p, p});
-      }
+    if (std::holds_alternative<TriangleMesh>(objects[i].shape)) boxes[i] = worldBounds(objects[i]);
   std::vector<const AnalyticGeometry*> isolated(objects.size(), nullptr);
   for (size_t i = 0; i < objects.size(); ++i) {
     if (!solidOf[i]) continue;
@@ -250,6 +246,22 @@ void embreeError(void*, RTCError code, const char* message) {
 }
 
 }  // namespace
+
+Bounds worldBounds(const Object& object) {
+  if (const auto* mesh = std::get_if<TriangleMesh>(&object.shape)) {
+    Bounds box;
+    for (const Vec3& v : mesh->vertices) {
+      const Vec3 p = object.worldFromObject.point(v);
+      box = box.unite({p, p});
+    }
+    return box;
+  }
+  if (const auto* rect = std::get_if<Rectangle>(&object.shape))
+    return Bounds{{-rect->sizeX / 2, -rect->sizeY / 2, 0}, {rect->sizeX / 2, rect->sizeY / 2, 0}}.transformed(
+        object.worldFromObject);
+  const auto& solid = std::get<std::shared_ptr<const Solid>>(object.shape);
+  return solid ? solid->bounds().transformed(object.worldFromObject) : Bounds{};
+}
 
 struct Scene::Impl {
   RTCDevice device = nullptr;

@@ -33,6 +33,14 @@ public:
     for (Object& o : d.objects)
       if (!o.emission) parts_.push_back(std::move(o));
     if (parts_.empty()) fail(Errc::Config, "'{}': no part to capture (every object emits)", sceneFile_.string());
+    // The sensor looks up at the part from below it, the beam shines down from
+    // above it: a part reaching either plane would be captured from inside.
+    const double sensorZ = -settings_.geometry.distance_mm, beamZ = settings_.beamDistance_mm;
+    for (const Object& part : parts_)
+      if (const Bounds box = worldBounds(part); !(box.lo.z > sensorZ && box.hi.z < beamZ))
+        fail(Errc::Config, "'{}': part '{}' spans z = {} .. {} mm, which reaches the light field sensor's plane "
+             "(z = -distance_mm = {}) or the beam's (z = beam_distance_mm = {}): the part must lie between them",
+             sceneFile_.string(), part.name, box.lo.z, box.hi.z, sensorZ, beamZ);
   }
 
   LightFieldGeometry geometry() const override { return settings_.geometry; }

@@ -227,6 +227,12 @@ TEST_F(ControllerTest, ErrorsNameTheProblem) {
                           {"missing.toml"}));
   EXPECT_TRUE(throwsError([&] { openLightFieldCapture(uri("intact.toml") + "?angular=0"); }, Errc::Config,
                           {"angular"}));
+  // The lens spans z = -2.5 .. 2.5 mm: a sensor plane or a beam inside it is refused at open, naming both.
+  EXPECT_TRUE(throwsError([&] { openLightFieldCapture(uri("intact.toml") + "?distance_mm=2"); }, Errc::Config,
+                          {"intact.toml", "'lens'", "distance_mm", "-2"}));
+  EXPECT_TRUE(throwsError([&] { openLightFieldCapture(uri("intact.toml") + "?beam_distance_mm=2.4"); },
+                          Errc::Config, {"'lens'", "beam_distance_mm", "2.4"}));
+  EXPECT_NO_THROW(openLightFieldCapture(uri("intact.toml") + "?distance_mm=2.6&beam_distance_mm=2.6"));
 }
 
 }  // namespace

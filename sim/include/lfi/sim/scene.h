@@ -145,6 +145,10 @@ struct Object {
   std::optional<Emission> emission;
 };
 
+// The world-frame box of an object's surface: its solid's bounds (conservative
+// for CSG), its rectangle or its mesh's vertices, placed by worldFromObject.
+Bounds worldBounds(const Object& object);
+
 // What the tracer needs of an object where a path meets it, flattened from the
 // object's shape, material and emission variants (Scene keeps one per object).
 struct Surface {

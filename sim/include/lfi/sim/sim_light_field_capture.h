@@ -14,7 +14,8 @@
 //   spp                  64       -      samples per sensor pixel
 //
 // The scene's emitters (back lights, displays) are left out; its sensor and
-// render settings are not used (the seed is).
+// render settings are not used (the seed is). Every part's bounding box must
+// lie between the sensor's plane and the beam's (Errc::Config at open).
 
 #include "lfi/drivers/light_field_capture.h"
 
