@@ -43,6 +43,14 @@ LightField::LightField(const LightFieldGeometry& geometry, cv::Mat lensletImage)
     fail(Errc::InvalidArgument, "light field lenslet image is {}x{} but {}x{} elements of {}x{} need {}x{}",
          lenslet_.cols, lenslet_.rows, geometry_.spatialX, geometry_.spatialY, geometry_.angular,
          geometry_.angular, geometry_.width(), geometry_.height());
+  // (One NaN would spread to every interpolated lookup that weighs it, even by 0.)
+  // (cv::checkRange is not used: it refuses FLT_MAX.)
+  for (int r = 0; r < lenslet_.rows; ++r) {
+    const float* row = lenslet_.ptr<float>(r);
+    for (int c = 0; c < lenslet_.cols; ++c)
+      if (!std::isfinite(row[c]))
+        fail(Errc::InvalidArgument, "light field lenslet pixel ({}, {}) is {}; radiance must be finite", c, r, row[c]);
+  }
 }
 
 Vec2 LightField::elementCentre(int ex, int ey) const {

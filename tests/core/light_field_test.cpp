@@ -326,6 +326,12 @@ TEST(LightField, ConstructorRejectsMismatchedLensletImage) {
   EXPECT_TRUE(throwsError([&] { (void)LightField(g, cv::Mat(g.height(), g.width(), CV_32FC3)); }, Errc::InvalidArgument,
                           {"CV_32FC1"}));
   EXPECT_TRUE(throwsError([&] { (void)LightField(g, cv::Mat()); }, Errc::InvalidArgument, {"lenslet image"}));
+  // A radiance that is not finite, named by its pixel.
+  for (const float bad : {std::numeric_limits<float>::quiet_NaN(), std::numeric_limits<float>::infinity()}) {
+    cv::Mat image(g.height(), g.width(), CV_32FC1, cv::Scalar(1));
+    image.at<float>(5, 9) = bad;
+    EXPECT_TRUE(throwsError([&] { (void)LightField(g, image); }, Errc::InvalidArgument, {"(9, 5)", "finite"}));
+  }
 }
 
 TEST(LightFieldGeometry, ValidateNamesTheBadField) {

@@ -58,7 +58,8 @@ public:
   LightField() = default;
   // A zero light field with the given geometry (validated).
   explicit LightField(const LightFieldGeometry& geometry);
-  // Wraps a lenslet image; throws if its size or type does not match.
+  // Wraps a lenslet image; throws if its size or type does not match or a
+  // pixel is not finite (what at() and lensletImage() write is not checked).
   LightField(const LightFieldGeometry& geometry, cv::Mat lensletImage);
 
   const LightFieldGeometry& geometry() const { return geometry_; }
