@@ -344,8 +344,15 @@ std::optional<std::string> partWindingFault(const TriangleMesh& mesh, const std:
   return std::nullopt;
 }
 
+// What meshClosureFault found: `open` when an edge is not crossed once each way
+// (which a coarser weld may mend), else a winding fault (which no weld mends).
+struct ClosureFault {
+  bool open = false;
+  std::string why;
+};
+
 // meshClosureFault for vertices welded to `welded`.
-std::optional<std::string> closureFault(const TriangleMesh& mesh, const std::vector<unsigned>& welded) {
+std::optional<ClosureFault> closureFault(const TriangleMesh& mesh, const std::vector<unsigned>& welded) {
   std::vector<EdgeCrossing> crossings;
   crossings.reserve(3 * mesh.triangles.size());
   double volume6 = 0;  // six times the signed enclosed volume
@@ -360,7 +367,7 @@ std::optional<std::string> closureFault(const TriangleMesh& mesh, const std::vec
                            static_cast<std::int8_t>(k), a < b});
     }
   }
-  if (crossings.empty()) return "no triangle of non-zero size";
+  if (crossings.empty()) return ClosureFault{false, "no triangle of non-zero size"};
   std::sort(crossings.begin(), crossings.end(), [](const EdgeCrossing& x, const EdgeCrossing& y) {
     return x.edge != y.edge ? x.edge < y.edge : x.triangle < y.triangle;
   });
@@ -378,17 +385,19 @@ std::optional<std::string> closureFault(const TriangleMesh& mesh, const std::vec
       const std::string which = fmt::format("the edge from {} to {} (triangle {}, counting from 0)",
                                             at(tri[c.corner]), at(tri[(c.corner + 1) % 3]), c.triangle);
       const size_t thisWay = c.forward ? forward : backward, otherWay = j - i - thisWay;
-      if (j - i == 1) return fmt::format("not closed: {} borders no other triangle (a hole)", which);
-      return fmt::format("not closed or not consistently wound: {} is crossed {} time(s) this way and {} the "
-                         "other (a closed surface crosses each edge once each way)",
-                         which, thisWay, otherWay);
+      if (j - i == 1)
+        return ClosureFault{true, fmt::format("not closed: {} borders no other triangle (a hole)", which)};
+      return ClosureFault{true, fmt::format("not closed or not consistently wound: {} is crossed {} time(s) this way "
+                                            "and {} the other (a closed surface crosses each edge once each way)",
+                                            which, thisWay, otherWay)};
     }
     i = j;
   }
   if (!(volume6 > 0))
-    return fmt::format("wound inwards: its enclosed volume is {:.6g} mm^3 (reverse every triangle's vertex order)",
-                       volume6 / 6);
-  return partWindingFault(mesh, crossings);
+    return ClosureFault{false, fmt::format("wound inwards: its enclosed volume is {:.6g} mm^3 (reverse every "
+                                           "triangle's vertex order)", volume6 / 6)};
+  if (auto fault = partWindingFault(mesh, crossings)) return ClosureFault{false, std::move(*fault)};
+  return std::nullopt;
 }
 
 }  // namespace
@@ -406,8 +415,9 @@ std::optional<std::string> meshClosureFault(const TriangleMesh& mesh) {
                        low.z, high.x, high.y, high.z);
   const double tolerance = extent > 0 ? 1e-7 * extent : 1.0;
   auto fault = closureFault(mesh, weldVertices(mesh, tolerance, false));
-  if (!fault || !fault->starts_with("not closed")) return fault;  // (winding faults do not depend on the weld)
-  return closureFault(mesh, weldVertices(mesh, tolerance, true));
+  if (fault && fault->open) fault = closureFault(mesh, weldVertices(mesh, tolerance, true));
+  if (!fault) return std::nullopt;
+  return std::move(fault->why);
 }
 
 namespace {
