@@ -14,13 +14,13 @@ PACKAGES=(
   # display: USB
   libusb-1.0-0-dev
   # images, light fields, analysis
-  libopencv-dev libopencv-contrib-dev libopenexr-dev libimath-dev zlib1g-dev libpng-dev
+  libopencv-dev libopenexr-dev libimath-dev zlib1g-dev libpng-dev
   # meshes (OBJ, PLY, STL, ...)
   libassimp-dev
   # small libraries instead of hand-written code
   libcli11-dev libtomlplusplus-dev nlohmann-json3-dev libspdlog-dev libfmt-dev
-  # tests and benchmarks
-  libgtest-dev libgmock-dev libbenchmark-dev umockdev libumockdev-dev udev
+  # tests (the emulated USB display: umockdev)
+  libgtest-dev libgmock-dev umockdev libumockdev-dev udev
 )
 
 if [[ ! -r /etc/os-release ]] || ! grep -qE '^ID=debian' /etc/os-release \

@@ -21,7 +21,7 @@ DisplayOpticsParams readDisplayOpticsFile(const std::filesystem::path& path, con
   number("lens_pitch_px", p.lensPitch_px, 1, 1000);
   number("slant_rad", p.slant_rad, -0.785, 0.785);
   number("offset_px", p.offset_px, -1e6, 1e6);
-  number("gap_mm", p.gap_mm, 1e-4, 100);
+  number("gap_mm", p.gap_mm, 1e-3, 100);
   number("focal_length_mm", p.focalLength_mm, 1e-4, 1000);
   number("slit_width_mm", p.slitWidth_mm, 1e-5, 100);
   // What the chosen optics need, given here or by the device.

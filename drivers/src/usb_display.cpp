@@ -129,8 +129,8 @@ public:
       // Start from a known receive state: a host that died, or gave up, in the
       // middle of a frame left its bytes in the device.
       if (!clearHalt())
-        fail(Errc::Timeout, "{}: CLEAR_HALT of endpoint 0x{:02x} timed out (the device does not answer)", name_,
-             endpoint_);
+        fail(Errc::Device, "{}: CLEAR_HALT of endpoint 0x{:02x} failed ({}): the device does not take it", name_,
+             endpoint_, clearHaltError_);
     } catch (...) {
       close();
       throw;
@@ -166,7 +166,7 @@ public:
     if (resync_ && !clearHalt())
       return {PresentStatus::Timeout, sequence,
               fmt::format("{}: CLEAR_HALT of endpoint 0x{:02x}, sent to discard an earlier frame that failed, "
-                          "timed out", name_, endpoint_)};
+                          "failed ({}); the next frame tries again", name_, endpoint_, clearHaltError_)};
 
     for (int attempt = 0;; ++attempt) {
       std::size_t sent = 0;
@@ -185,8 +185,8 @@ public:
                endpoint_, sequence, options_.stallRetries);
         if (!clearHalt())
           return {PresentStatus::Timeout, sequence,
-                  fmt::format("{}: endpoint 0x{:02x} stalled on frame {} and CLEAR_HALT timed out", name_, endpoint_,
-                              sequence)};
+                  fmt::format("{}: endpoint 0x{:02x} stalled on frame {} and CLEAR_HALT failed ({})", name_, endpoint_,
+                              sequence, clearHaltError_)};
         ++stallsCleared_;
         continue;
       }
@@ -397,14 +397,16 @@ private:
   }
 
   // CLEAR_FEATURE(ENDPOINT_HALT) of the frame endpoint, which also resets the
-  // device's receive state; false when the device did not answer in time
-  // (then the next frame tries again).
+  // device's receive state. False, with the reason in clearHaltError_, when
+  // the device did not take it: until it does, it may hold part of a frame,
+  // so the next frame tries again first. (libusb has no timeout for it: on
+  // Linux the kernel gives up after 5 s, and a failure other than a vanished
+  // device comes back as LIBUSB_ERROR_OTHER, a refusal as LIBUSB_ERROR_PIPE.)
   bool clearHalt() {
     const int rc = libusb_clear_halt(handle_, endpoint_);
     if (rc == LIBUSB_ERROR_NO_DEVICE) vanished("CLEAR_HALT");
-    resync_ = rc == LIBUSB_ERROR_TIMEOUT;
-    if (rc != 0 && !resync_)
-      fail(Errc::Device, "{}: CLEAR_HALT on endpoint 0x{:02x} failed: {}", name_, endpoint_, libusb_error_name(rc));
+    resync_ = rc != 0;
+    if (resync_) clearHaltError_ = libusb_error_name(rc);
     return !resync_;
   }
 
@@ -574,6 +576,7 @@ private:
   std::uint32_t sequence_ = 0;
   std::uint64_t stallsCleared_ = 0;
   bool resync_ = false;  // a frame failed or timed out: clear the endpoint's halt before the next one
+  std::string clearHaltError_;  // why the last CLEAR_HALT failed (libusb's error name)
   bool wedged_ = false;  // given up with transfers libusb still owns (sendFrame's deadline)
   std::vector<std::uint8_t> frame_;
 };

@@ -539,7 +539,7 @@ DisplayParameters readDisplay(ConfigTable& t) {
   o.lensPitch_px = t.number("lens_pitch_px", defaults.optics.lensPitch_px, 1, 1000);
   o.slant_rad = t.number("slant_rad", defaults.optics.slant_rad, -0.785, 0.785);
   o.offset_px = t.number("offset_px", defaults.optics.offset_px, -1e6, 1e6);
-  o.gap_mm = t.number("gap_mm", defaults.optics.gap_mm, 1e-6, 100);
+  o.gap_mm = t.number("gap_mm", defaults.optics.gap_mm, 1e-3, 100);  // (DisplayInfo::validate's range)
   if (barrier)
     o.slitWidth_mm = t.number("slit_width_mm", std::nullopt, 1e-6, 1e3);
   else

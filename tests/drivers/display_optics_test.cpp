@@ -217,6 +217,7 @@ TEST(DisplayCalibrationFile, ValuesTheDisplayWouldRefuseAreNamedInTheFile) {
       {"lens_pitch_px = 0.5\n", "optics.lens_pitch_px", [](DisplayInfo& i) { i.optics.lensPitch_px = 0.5; }},
       {"slant_rad = 0.8\n", "optics.slant_rad", [](DisplayInfo& i) { i.optics.slant_rad = 0.8; }},
       {"optics = \"barrier\"\n", "optics.slit_width_mm", [](DisplayInfo& i) { i.optics.type = OpticsType::Barrier; }},
+      {"gap_mm = 0.0005\n", "optics.gap_mm", [](DisplayInfo& i) { i.optics.gap_mm = 0.0005; }},
   };
   for (const Case& c : cases) {
     EXPECT_TRUE(throwsError([&] { read(c.optics); }, Errc::Config, {file.string() + ":", c.key})) << c.optics;

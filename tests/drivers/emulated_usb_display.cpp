@@ -86,6 +86,7 @@ struct EmulatedUsbDisplay::Impl {
   std::size_t truncateNext = 0;
   int silentAfterUrbs = -1;  // bulk URBs to take before turning silent; -1: never
   bool silentAtPresent = false;
+  int clearHaltErrno = 0;  // CLEAR_HALT fails with this errno (0: it succeeds)
   // frame assembly
   std::vector<std::uint8_t> rx;
   std::size_t expected = 0;  // header + payload once the header is in
@@ -266,6 +267,10 @@ struct EmulatedUsbDisplay::Impl {
       case USBDEVFS_CLEAR_HALT: {
         UMockdevIoctlData* data = umockdev_ioctl_data_resolve(arg, 0, sizeof(unsigned), &error);
         if (!data) break;
+        if (clearHaltErrno != 0) {
+          finish(-1, clearHaltErrno);
+          return TRUE;
+        }
         halted = false;
         ++state.clearHalts;
         resetFrame();  // the firmware drops a partly received frame when its endpoint is reset
@@ -692,6 +697,10 @@ void EmulatedUsbDisplay::silentAfterBulkUrbs(int urbs) {
 void EmulatedUsbDisplay::silentAtNextPresent() {
   std::lock_guard lock(impl_->mutex);
   impl_->silentAtPresent = true;
+}
+void EmulatedUsbDisplay::failClearHalt(int errnoValue) {
+  std::lock_guard lock(impl_->mutex);
+  impl_->clearHaltErrno = errnoValue;
 }
 void EmulatedUsbDisplay::setAbsurdDeviceInfo(bool on) {
   std::lock_guard lock(impl_->mutex);

@@ -80,6 +80,7 @@ public:
   void setSilent(bool on);                // accept URBs but never complete them (a hung device)
   void silentAfterBulkUrbs(int urbs);     // take `urbs` more bulk URBs, then be silent (hangs mid-frame)
   void silentAtNextPresent();             // be silent from the next PRESENT request on (the frame stays held)
+  void failClearHalt(int errnoValue);     // CLEAR_HALT fails with this errno until set to 0 (the frame stays held)
   void setAbsurdDeviceInfo(bool on);      // GET_DEVICE_INFO announces a 4 GiB calibration blob
   void setBadCalibrationCrc(bool on);     // the calibration blob's CRC does not match
 

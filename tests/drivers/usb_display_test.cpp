@@ -12,6 +12,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cerrno>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -407,6 +408,34 @@ TEST_F(UsbDisplayTest, AFrameAfterATimeoutIsPresented) {
   next = display->show(first);
   EXPECT_EQ(next.status, PresentStatus::Presented) << next.message;
   EXPECT_TRUE(sameBytes(device.presented(), first));
+  EXPECT_EQ(device.state().clearHalts, halts + 1);
+}
+
+// A device that does not take the CLEAR_HALT meant to discard a failed frame
+// (Linux reports the kernel's timeout as LIBUSB_ERROR_OTHER): that frame is a
+// Timeout, and the next one clears the halt again before it is sent.
+TEST_F(UsbDisplayTest, AFailedClearHaltIsTriedAgainBeforeTheNextFrame) {
+  EmulatedUsbDisplay device;
+  device.plug();
+  UsbDisplayOptions options;
+  options.transferSize_bytes = 64 * 1024;
+  options.transferTimeout = options.controlTimeout = std::chrono::milliseconds(200);
+  const UsbDisplaySelector selector{usbdisplay::kDefaultVendorId, usbdisplay::kDefaultProductId, ""};
+  auto display = openUsbDisplay(selector, options);
+  const cv::Mat first = randomPanel(display->info(), 14), second = randomPanel(display->info(), 15);
+  device.silentAfterBulkUrbs(2);
+  EXPECT_EQ(display->show(first).status, PresentStatus::Timeout);
+  device.setSilent(false);
+  device.failClearHalt(ETIMEDOUT);
+  const PresentResult refused = display->show(second);
+  EXPECT_EQ(refused.status, PresentStatus::Timeout);
+  EXPECT_NE(refused.message.find("CLEAR_HALT"), std::string::npos) << refused.message;
+  EXPECT_NE(refused.message.find("LIBUSB_ERROR_OTHER"), std::string::npos) << refused.message;
+  device.failClearHalt(0);
+  const std::uint32_t halts = device.state().clearHalts;
+  const PresentResult next = display->show(second);
+  EXPECT_EQ(next.status, PresentStatus::Presented) << next.message;
+  EXPECT_TRUE(sameBytes(device.presented(), second));
   EXPECT_EQ(device.state().clearHalts, halts + 1);
 }
 

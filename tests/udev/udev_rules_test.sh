@@ -36,17 +36,20 @@ expect() {  # expect <name> <output> <regex> [present|absent]
 
 usb=/sys/devices/pci0000:00/0000:00:14.0
 display=$(run "$usb/usb1/1-3")
+display2=$(run "$usb/usb1/1-5")  # the same protocol under another VID:PID
 camera=$(run "$usb/usb2/2-1")
 other=$(run "$usb/usb1/1-4")
 
-for name in display camera; do
+for name in display display2 camera; do
   out=${!name}
   expect "$name: rules file read" "$out" "Reading rules file: /etc/udev/rules.d/70-lfi.rules"
   expect "$name: mode 0660" "$out" "70-lfi.rules:[0-9]+ MODE 0660"
   expect "$name: group plugdev" "$out" "70-lfi.rules:[0-9]+ GROUP $(getent group plugdev | cut -d: -f3)"
-  expect "$name: uaccess tag" "$out" "^TAGS=.*:uaccess:"
+  expect "$name: no uaccess tag (the group alone)" "$out" "^TAGS=.*:uaccess:" absent
 done
+expect "display: vendor interface seen" "$display" "^ID_USB_INTERFACES=.*:ff4c01:"
 expect "display: symlink by serial" "$display" "symlink '/dev/lfi/display-LFD0001'"
+expect "display2: symlink by serial" "$display2" "symlink '/dev/lfi/display-LFD0002'"
 expect "camera: USB3 Vision interfaces seen" "$camera" "^ID_USB_INTERFACES=.*:ef0500:"
 expect "camera: symlink by serial" "$camera" "symlink '/dev/lfi/u3v-U3V0001'"
 expect "other: rules file read" "$other" "Reading rules file: /etc/udev/rules.d/70-lfi.rules"
@@ -54,5 +57,7 @@ expect "other: no rule of ours applies" "$other" "70-lfi.rules:[0-9]+ (MODE|GROU
 expect "other: no uaccess tag" "$other" "^TAGS=.*:uaccess:" absent
 expect "other: no lfi symlink" "$other" "/dev/lfi/" absent
 
-echo "$((failures == 0 ? 15 : 15 - failures)) passed, $failures failed"
+total=$(grep -cE '^ *expect "' "$0")
+total=$((total + 3 * 4 - 4))  # the loop's four checks run for three devices
+echo "$((total - failures)) passed, $failures failed"
 [[ $failures -eq 0 ]]

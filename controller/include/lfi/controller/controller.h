@@ -64,7 +64,8 @@ public:
   // Step 3. The camera must be Configured (it is started with a small buffer
   // pool) or Streaming. Every frame is exposed after the last emit(): a camera
   // that was streaming when the display changed is stopped and started again
-  // (with the same small pool; its frame ids and statistics start again),
+  // (with the same small pool; its statistics start again, its frame ids go
+  // on as the backend numbers them),
   // dropping the frames it had taken of the old panel. Returns the mean of
   // `frames` complete frames, CV_32FC1,
   // in the camera's digital numbers. More than `retries` bad frames throw

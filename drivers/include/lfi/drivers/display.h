@@ -55,7 +55,8 @@ struct DisplayOpticsParams {
 };
 
 // What the display is. Everything except the identity strings comes from the
-// device's calibration at open (a bench file may override the optics).
+// device's calibration at open (a display calibration file named by the usb:
+// URI's calibration= key may override the optics: display_calibration_file.h).
 struct DisplayInfo {
   std::string vendor;
   std::string model;

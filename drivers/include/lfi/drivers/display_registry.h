@@ -4,8 +4,8 @@
 //
 //   <scheme>:<path>[?<key>=<value>[&<key>=<value>...]]
 //
-// e.g. "usb:1209:4c46", "usb:1209:4c46/LFI-0001?timeout_ms=500", later
-// "sim:data/benches/reference.toml". The path goes to the backend as is; each
+// e.g. "usb:1209:4c46", "usb:1209:4c46/LFI-0001?timeout_ms=500",
+// "sim:data/scenes/inspection_bench.toml". The path goes to the backend as is; each
 // backend declares the query keys it accepts and any other key is an error.
 // Backends are registered explicitly: registerBuiltinDisplayBackends() adds the
 // ones in lfi_drivers ("usb"); other libraries add theirs with

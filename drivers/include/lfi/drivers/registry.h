@@ -4,7 +4,7 @@
 //   <scheme>:<path>[?<key>=<value>[&<key>=<value>...]]
 //
 // e.g. "aravis:Aravis-Fake-GV01", "aravis:192.168.1.20?packetSize=1400",
-// "sim:data/benches/reference.toml". The path is passed to the backend as is
+// "sim:data/scenes/inspection_bench.toml". The path is passed to the backend as is
 // (no percent-decoding); each backend declares the query keys it accepts and
 // any other key is an error. Backends are registered explicitly:
 // registerBuiltinBackends() adds the ones in lfi_drivers ("aravis"), and other
