@@ -500,7 +500,6 @@ int main(int argc, char** argv) {
       spdlog::info("{:.0f} samples in {:.3f} s: {:.2f} M samples/s", samples, seconds, samples / seconds / 1e6);
     } else if (*inspect) {
       const auto overwrite = inspectForce ? lfi::Overwrite::Allow : lfi::Overwrite::Refuse;
-      fs::create_directories(inspectOut);
       std::vector<std::string> outputs{"inspection.exr", "inspection.png"};
       if (!inspectBench.capture.empty()) outputs.push_back("lightfield.exr");  // (a given light field is not written)
       for (const std::string& name : outputs)
@@ -513,13 +512,21 @@ int main(int argc, char** argv) {
       options.settle = std::chrono::milliseconds(inspectBench.settle_ms);
       ProgressBar bar;
       lfi::Controller controller(*bench.capture, *bench.display, *bench.camera, options);
+      fs::create_directories(inspectOut);  // (once the devices are open: a bad option leaves no empty folder)
       const lfi::LightField reference = controller.captureReference([&](const char* step, double f) {
         if (!quiet) bar(step, f);
       });
       bar.finish();
       if (bench.captured) lfi::writeLightFieldExr(inspectOut / "lightfield.exr", reference, overwrite);
-      controller.emit(reference);
-      const cv::Mat image = controller.inspect();
+      cv::Mat image;
+      try {
+        controller.emit(reference);
+        image = controller.inspect();
+      } catch (const lfi::Error& e) {
+        if (!bench.captured) throw;
+        throw lfi::Error(e.code(), fmt::format("{} (the captured light field is kept: rerun with --light-field {} to "
+                                               "skip the capture)", e.what(), (inspectOut / "lightfield.exr").string()));
+      }
       const auto info = bench.camera->info();
       lfi::writeRadianceExr(inspectOut / "inspection.exr", image,
                             {0, fmt::format("inspection image (DN, mean of {} frames) from {} {} via {}",

@@ -57,8 +57,8 @@ void Controller::emit(const LightField& reference, double white) {
   if (camera_.state() == Camera::State::Streaming) staleFrames_ = true;
   const PresentResult r = display_.show(reference, white_);
   if (r.status != PresentStatus::Presented)
-    fail(Errc::Device, "emit: the display did not show the light field ({}{}{})", toString(r.status),
-         r.message.empty() ? "" : ": ", r.message);
+    fail(Errc::Device, "emit: display '{}' did not show the light field ({}{}{})", display_.info().deviceId,
+         toString(r.status), r.message.empty() ? "" : ": ", r.message);  // (still open: a vanished one throws)
   shown_ = std::chrono::steady_clock::now();
   spdlog::info("emit: light field shown (sequence {}, white = {:.4g})", r.sequence, white_);
 }
@@ -86,35 +86,42 @@ cv::Mat Controller::inspect() {
   if (camera_.state() != Camera::State::Streaming)
     fail(Errc::InvalidArgument, "inspect: the camera must be configured or streaming (it is {})",
          toString(camera_.state()));
-  const bool software = camera_.settings().trigger == TriggerMode::Software;
-  cv::Mat sum;
+  const CameraSettings settings = camera_.settings();
+  const bool software = settings.trigger == TriggerMode::Software;
+  // A frame takes its exposure, and as long again for readout and transfer at most, beyond the option's wait.
+  const auto timeout = options_.grabTimeout + std::chrono::milliseconds(static_cast<std::int64_t>(
+                                                  std::ceil(2 * std::max(0.0, settings.exposure_us) / 1000)));
+  const std::string camera = camera_.info().deviceId;
+  cv::Mat sum;  // (in double: a float sum of 16-bit frames stops being exact past 256 of them)
   int good = 0, bad = 0, timeouts = 0;
   Frame frame;
   while (good < options_.frames) {
     if (software) camera_.softwareTrigger();
-    camera_.grabInto(frame, options_.grabTimeout);
+    camera_.grabInto(frame, timeout);
     if (frame.status != FrameStatus::Complete) {
       (frame.status == FrameStatus::Timeout ? timeouts : bad) += 1;
       if (bad + timeouts > options_.retries) {
         if (good == 0 && bad == 0)
-          fail(Errc::Timeout, "inspect: no frame from the camera in {} tries of {} ms", timeouts,
-               options_.grabTimeout.count());
-        fail(Errc::Device, "inspect: {} incomplete and {} timed-out frames (more than {} allowed)", bad, timeouts,
-             options_.retries);
+          fail(Errc::Timeout, "inspect: no frame from camera '{}' in {} tries of {} ms", camera, timeouts,
+               timeout.count());
+        fail(Errc::Device, "inspect: camera '{}' gave {} incomplete and {} timed-out frames (more than {} allowed)",
+             camera, bad, timeouts, options_.retries);
       }
       continue;
     }
     cv::Mat f;
-    frame.image.convertTo(f, CV_32F);
+    frame.image.convertTo(f, CV_64F);
     if (sum.empty())
       sum = f;
     else if (f.size() != sum.size())
-      fail(Errc::Device, "inspect: the camera changed its image size mid-inspection");
+      fail(Errc::Device, "inspect: camera '{}' changed its image size mid-inspection", camera);
     else
       sum += f;
     ++good;
   }
-  return sum / good;
+  cv::Mat mean;
+  sum.convertTo(mean, CV_32F, 1.0 / good);
+  return mean;
 }
 
 cv::Mat Controller::run(const Progress& progress) {

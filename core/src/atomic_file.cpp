@@ -57,28 +57,42 @@ void syncFile(const fs::path& file, const fs::path& target) {
 
 }  // namespace
 
-void writeFileAtomically(const fs::path& target, Overwrite overwrite,
+void writeFileAtomically(const fs::path& requested, Overwrite overwrite,
                          const std::function<void(const fs::path&)>& writeTo) {
-  if (target.filename().empty()) fail(Errc::InvalidArgument, "cannot write '{}': not a file name", target.string());
+  if (requested.filename().empty())
+    fail(Errc::InvalidArgument, "cannot write '{}': not a file name", requested.string());
+  std::error_code ec;
+  const fs::file_status status = fs::symlink_status(requested, ec);
+  if (ec && status.type() != fs::file_type::not_found)
+    fail(Errc::Io, "cannot write '{}': {}", requested.string(), ec.message());
+  if (overwrite == Overwrite::Refuse && status.type() != fs::file_type::not_found)
+    fail(Errc::Exists, "'{}' exists; refusing to overwrite it (use --force to replace it)", requested.string());
+  // Replacing a symbolic link's file replaces the file it points to, next to
+  // it, and keeps the link (a rename over the link would replace the link).
+  fs::path target = requested;
+  if (status.type() == fs::file_type::symlink) {
+    target = fs::weakly_canonical(requested, ec);
+    if (ec) fail(Errc::Io, "cannot write '{}': resolving its link: {}", requested.string(), ec.message());
+  }
   const fs::path dir = target.has_parent_path() ? target.parent_path() : fs::path(".");
-  if (overwrite == Overwrite::Refuse && fs::exists(target))
-    fail(Errc::Exists, "'{}' exists; refusing to overwrite it (use --force to replace it)", target.string());
 
   // mkstemp gives a unique name that nothing else writes to; the writer may
   // then reopen it by path (OpenEXR does).
   std::string pattern = (dir / ("." + target.filename().string() + ".tmp-XXXXXX")).string();
   const int fd = ::mkstemp(pattern.data());
   if (fd < 0) fail(Errc::Io, "cannot create a temporary file next to '{}': {}", target.string(), std::strerror(errno));
-  // mkstemp creates 0600; published files get the mode a plain create would
-  // give them, or keep the mode of the file they replace.
+  // mkstemp creates 0600, which the writer keeps while it writes; published
+  // files get the mode a plain create would give them, or keep the mode of
+  // the file they replace (even a read-only one: --force replaces it).
   struct stat old {};
   const mode_t mode = ::stat(target.c_str(), &old) == 0 ? (old.st_mode & 07777) : (0666 & ~currentUmask());
-  ::fchmod(fd, mode);
+  ::fchmod(fd, 0600);  // (mkstemp's 0600 less the umask: 0400 under umask 0222)
   ::close(fd);
   const fs::path temporary = pattern;
   try {
     writeTo(temporary);
     syncFile(temporary, target);
+    ::chmod(temporary.c_str(), mode);
     if (overwrite == Overwrite::Allow) {
       if (::rename(temporary.c_str(), target.c_str()) != 0)
         fail(Errc::Io, "cannot rename '{}' to '{}': {}", temporary.string(), target.string(), std::strerror(errno));

@@ -1,6 +1,7 @@
 #include "lfi/core/config.h"
 
 #include "lfi/core/error.h"
+#include "lfi/core/input_file.h"
 
 #include <fmt/ranges.h>
 
@@ -14,7 +15,7 @@ ConfigTable::ConfigTable(std::shared_ptr<const toml::table> root, const toml::ta
     : root_(std::move(root)), table_(table), file_(std::move(file)), path_(std::move(path)) {}
 
 ConfigTable ConfigTable::parseFile(const std::filesystem::path& path) {
-  if (!std::filesystem::exists(path)) fail(Errc::NotFound, "'{}': no such file", path.string());
+  requireInputFile(path);
   try {
     auto root = std::make_shared<const toml::table>(toml::parse_file(path.string()));
     return ConfigTable(root, root.get(), path.string(), "");

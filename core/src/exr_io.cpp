@@ -1,6 +1,7 @@
 #include "lfi/core/exr_io.h"
 
 #include "lfi/core/error.h"
+#include "lfi/core/input_file.h"
 #include "lfi/core/image.h"
 
 #include <Iex.h>
@@ -69,8 +70,20 @@ std::string canonicalAttributes(const fs::path& path, const Imf::Header& header)
   return text;
 }
 
+// What loadExr() refuses is refused here too, before anything is written: a
+// file that could not be read back must not replace a good one.
 void writeExr(const fs::path& path, const cv::Mat& image, Imf::Header header, Overwrite overwrite) {
   requireImageType(image, CV_32FC1, "EXR image '" + path.string() + "'");
+  if (image.cols > (1 << 17) || image.rows > (1 << 17) || image.total() > (std::size_t{1} << 30))
+    fail(Errc::InvalidArgument, "cannot write '{}': {}x{} pixels is more than an lfi file holds (2^17 a side, 2^30 "
+         "pixels)", path.string(), image.cols, image.rows);
+  for (int r = 0; r < image.rows; ++r) {
+    const float* row = image.ptr<float>(r);
+    for (int c = 0; c < image.cols; ++c)
+      if (!std::isfinite(row[c]))
+        fail(Errc::InvalidArgument, "cannot write '{}': pixel ({}, {}) is {}; radiance must be finite",
+             path.string(), c, r, row[c]);
+  }
   cv::Mat pixels = image.isContinuous() ? image : image.clone();
   header.compression() = Imf::ZIP_COMPRESSION;
   header.channels().insert("Y", Imf::Channel(Imf::FLOAT));
@@ -131,6 +144,11 @@ void checkHeaderSizes(const fs::path& path) {
   if (!in.read(reinterpret_cast<char*>(start), 8) || start[0] != 0x76 || start[1] != 0x2f || start[2] != 0x31 ||
       start[3] != 0x01)
     return;
+  // Version field bits 9 (tiled), 11 (deep) and 12 (multi-part): lfi writes single-part scanline files, and
+  // this walk would check only the first of several headers.
+  if (const unsigned flags = start[5]; (flags & 0x1a) != 0)
+    fail(Errc::InvalidFile, "'{}': a {} OpenEXR file; lfi files are single-part scanline images", path.string(),
+         (flags & 0x10) ? "multi-part" : (flags & 0x08) ? "deep" : "tiled");
   auto cString = [&](std::string& s) {  // names are at most 255 bytes
     s.clear();
     for (char c; in.get(c) && c != '\0';)
@@ -150,7 +168,7 @@ void checkHeaderSizes(const fs::path& path) {
 }
 
 LoadedExr loadExr(const fs::path& path, const char* expectedKind) {
-  if (!fs::exists(path)) fail(Errc::NotFound, "'{}': no such file", path.string());
+  requireInputFile(path);
   checkHeaderSizes(path);
   LoadedExr out;
   int version = 0;
@@ -165,8 +183,10 @@ LoadedExr loadExr(const fs::path& path, const char* expectedKind) {
       fail(Errc::InvalidFile, "'{}': attribute '{}' is {}, this build reads versions 1 to {}", path.string(), kVersion,
            version, kExrFormatVersion);
     const Imf::Channel* channel = out.header.channels().findChannel("Y");
-    if (!channel || channel->type != Imf::FLOAT)
-      fail(Errc::InvalidFile, "'{}': expected one FLOAT channel 'Y'", path.string());
+    int channels = 0;
+    for (auto it = out.header.channels().begin(); it != out.header.channels().end(); ++it) ++channels;
+    if (!channel || channel->type != Imf::FLOAT || channels != 1)
+      fail(Errc::InvalidFile, "'{}': expected one FLOAT channel 'Y' ({} channel(s))", path.string(), channels);
     const Imath::Box2i dw = out.header.dataWindow();
     const long width = static_cast<long>(dw.max.x) - dw.min.x + 1, height = static_cast<long>(dw.max.y) - dw.min.y + 1;
     if (width < 1 || height < 1 || width > (1 << 17) || height > (1 << 17) || width * height > (1L << 30))
@@ -192,12 +212,9 @@ LoadedExr loadExr(const fs::path& path, const char* expectedKind) {
   if (expected != actual)
     fail(Errc::Checksum, "'{}': {} do not match attribute '{}' (recorded {}, computed {})", path.string(),
          version == 1 ? "pixel data" : "lfi attributes or pixel data", kChecksum, shown(expected), actual);
-  for (int r = 0; r < out.pixels.rows; ++r) {
-    const float* row = out.pixels.ptr<float>(r);
-    for (int c = 0; c < out.pixels.cols; ++c)
-      if (!std::isfinite(row[c]))
-        fail(Errc::InvalidFile, "'{}': pixel ({}, {}) is {}; radiance must be finite", path.string(), c, r, row[c]);
-  }
+  if (const auto bad = firstNonFinite(out.pixels))
+    fail(Errc::InvalidFile, "'{}': pixel ({}, {}) is {}; radiance must be finite", path.string(), bad->x, bad->y,
+         out.pixels.at<float>(*bad));
   return out;
 }
 
@@ -222,6 +239,12 @@ unsigned long fileChecksum(std::string_view attributes, const cv::Mat& pixels) {
 void writeLightFieldExr(const fs::path& path, const LightField& lightField, Overwrite overwrite) {
   const LightFieldGeometry& g = lightField.geometry();
   g.validate();
+  // (at() and lensletImage() may have changed the image since it was checked)
+  if (lightField.lensletImage().type() != CV_32FC1 || lightField.lensletImage().cols != g.width() ||
+      lightField.lensletImage().rows != g.height())
+    fail(Errc::InvalidArgument, "cannot write '{}': the lenslet image is {}x{} (type {}); the geometry needs {}x{} "
+         "CV_32FC1", path.string(), lightField.lensletImage().cols, lightField.lensletImage().rows,
+         lightField.lensletImage().type(), g.width(), g.height());
   Imf::Header header(g.width(), g.height());
   header.insert(kKind, Imf::StringAttribute(kLightFieldKind));
   header.insert(kSpatialX, Imf::IntAttribute(g.spatialX));
@@ -262,6 +285,9 @@ LightField readLightFieldExr(const fs::path& path) {
 void writeRadianceExr(const fs::path& path, const cv::Mat& image, const RadianceImageInfo& info,
                       Overwrite overwrite) {
   requireImageType(image, CV_32FC1, "radiance image for '" + path.string() + "'");
+  if (!(info.objectPixel_mm >= 0) || !std::isfinite(info.objectPixel_mm))
+    fail(Errc::InvalidArgument, "cannot write '{}': objectPixel_mm = {} must be finite and >= 0", path.string(),
+         info.objectPixel_mm);
   Imf::Header header(image.cols, image.rows);
   header.insert(kKind, Imf::StringAttribute(kRadianceKind));
   header.insert(kObjectPixel, Imf::DoubleAttribute(info.objectPixel_mm));

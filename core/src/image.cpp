@@ -18,6 +18,17 @@ void requireImageType(const cv::Mat& image, int cvType, const std::string& what)
          cv::typeToString(cvType));
 }
 
+// (cv::checkRange would do, but it refuses FLT_MAX.)
+std::optional<cv::Point> firstNonFinite(const cv::Mat& image) {
+  requireImageType(image, CV_32FC1, "image to check for non-finite pixels");
+  for (int r = 0; r < image.rows; ++r) {
+    const float* row = image.ptr<float>(r);
+    for (int c = 0; c < image.cols; ++c)
+      if (!std::isfinite(row[c])) return cv::Point(c, r);
+  }
+  return std::nullopt;
+}
+
 double percentile(const cv::Mat& image, double fraction) {
   requireImageType(image, CV_32FC1, "image for a percentile");
   std::vector<float> values(image.begin<float>(), image.end<float>());

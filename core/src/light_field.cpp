@@ -1,9 +1,11 @@
 #include "lfi/core/light_field.h"
 
 #include "lfi/core/error.h"
+#include "lfi/core/image.h"
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace lfi {
 
@@ -44,13 +46,9 @@ LightField::LightField(const LightFieldGeometry& geometry, cv::Mat lensletImage)
          lenslet_.cols, lenslet_.rows, geometry_.spatialX, geometry_.spatialY, geometry_.angular,
          geometry_.angular, geometry_.width(), geometry_.height());
   // (One NaN would spread to every interpolated lookup that weighs it, even by 0.)
-  // (cv::checkRange is not used: it refuses FLT_MAX.)
-  for (int r = 0; r < lenslet_.rows; ++r) {
-    const float* row = lenslet_.ptr<float>(r);
-    for (int c = 0; c < lenslet_.cols; ++c)
-      if (!std::isfinite(row[c]))
-        fail(Errc::InvalidArgument, "light field lenslet pixel ({}, {}) is {}; radiance must be finite", c, r, row[c]);
-  }
+  if (const auto bad = firstNonFinite(lenslet_))
+    fail(Errc::InvalidArgument, "light field lenslet pixel ({}, {}) is {}; radiance must be finite", bad->x, bad->y,
+         lenslet_.at<float>(*bad));
 }
 
 Vec2 LightField::elementCentre(int ex, int ey) const {
@@ -70,7 +68,7 @@ Vec3 LightField::directionFromDisc(const Vec2& p) {
 
 bool LightField::discFromDirection(const Vec3& d, Vec2& p) {
   const double len = d.length();
-  if (!(len > 0) || d.z <= 0) return false;
+  if (!(len > 0 && len < std::numeric_limits<double>::infinity()) || !(d.z > 0)) return false;
   p = {-d.x / len, -d.y / len};
   return true;
 }
@@ -87,7 +85,7 @@ struct Lerp {
 };
 
 Lerp lerpIndex(double coordinate, int count) {
-  if (count == 1 || coordinate <= 0) return {0, 0, 0};
+  if (count == 1 || !(coordinate > 0)) return {0, 0, 0};  // (NaN too: no cast of it to int)
   if (coordinate >= count - 1) return {count - 1, count - 1, 0};
   const int i0 = static_cast<int>(coordinate);
   return {i0, i0 + 1, coordinate - i0};
@@ -99,8 +97,9 @@ double LightField::nearestSample(int ex, int ey, const Vec2& disc) const {
   const int n = geometry_.angular;
   const double ax = 0.5 * (disc.x + 1) * n;  // in pixel units, 0..n across the element
   const double ay = 0.5 * (disc.y + 1) * n;
-  const int u = std::clamp(static_cast<int>(std::floor(ax)), 0, n - 1);
-  const int v = std::clamp(static_cast<int>(std::floor(ay)), 0, n - 1);
+  // floor, clamped to the element; NaN and values past int's range never cast
+  const int u = ax > 0 ? (ax < n ? static_cast<int>(ax) : n - 1) : 0;
+  const int v = ay > 0 ? (ay < n ? static_cast<int>(ay) : n - 1) : 0;
   return at(ex, ey, u, v);
 }
 

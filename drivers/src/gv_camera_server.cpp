@@ -65,6 +65,9 @@ struct GvCameraServer::Impl {
       self->warnOnce(fmt::format("a {} x {} image of {} bytes a pixel does not fit the {} x {} sensor or the "
                                  "payload; the frame is not written", width, height, bytesPerPixel, o.sensorWidth_px,
                                  o.sensorHeight_px));
+      // A black frame, not the buffer's earlier contents: Aravis sends it as complete whatever we do. (It checked
+      // the buffer holds this payload before the call, on this same thread, the one that takes register writes.)
+      std::memset(pixels, 0, arv_fake_camera_get_payload(self->camera));
       return;
     }
     std::memset(pixels, 0, static_cast<std::size_t>(size));

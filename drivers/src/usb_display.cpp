@@ -479,8 +479,9 @@ private:
     bool outOfMemory = false;  // reported once the transfers in flight are drained, not while libusb holds `chunks`
     std::size_t next = 0, inFlight = 0;
     // A guard above libusb's own per-transfer timeouts, in case a cancellation never completes.
-    const auto deadline = Clock::now() + options_.transferTimeout * static_cast<int>(count + 1) +
-                          std::chrono::seconds(2);
+    const auto deadline =
+        Clock::now() + options_.transferTimeout * static_cast<int>(count + options_.transfersInFlight + 1) +
+        std::chrono::seconds(2);
     auto record = [&](BulkOutcome o) {
       if (outcome == BulkOutcome::Ok || o == BulkOutcome::NoDevice) outcome = o;
     };
@@ -495,8 +496,11 @@ private:
           record(BulkOutcome::Error);
           break;
         }
+        // libusb times a transfer from its submission, and the device takes the queued ones in turn: a chunk
+        // gets transferTimeout for itself and for each one queued before it.
+        const auto timeout = options_.transferTimeout * static_cast<int>(inFlight + 1);
         libusb_fill_bulk_transfer(c.transfer, handle_, endpoint_, frame_.data() + next * size, c.length, onChunkDone,
-                                  &c, static_cast<unsigned>(options_.transferTimeout.count()));
+                                  &c, static_cast<unsigned>(timeout.count()));
         const int rc = libusb_submit_transfer(c.transfer);
         ++next;
         if (rc != 0) {

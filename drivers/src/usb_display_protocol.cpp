@@ -174,11 +174,12 @@ DeviceInfoBlock decodeDeviceInfo(std::span<const std::uint8_t> bytes, const std:
   if (info.calibrationSize < kCalibrationSize || info.calibrationSize > kMaxCalibrationSize)
     fail(Errc::Device, "{}: device info calibration size {} bytes is outside {}..{}", device, info.calibrationSize,
          kCalibrationSize, kMaxCalibrationSize);
-  const std::uint64_t largestFrame = static_cast<std::uint64_t>(info.panelWidth_px) * info.panelHeight_px *
-                                     ((info.formats & 0x2) ? 3u : 1u);
-  if (info.maxPayloadSize < largestFrame || info.maxPayloadSize > kMaxPayloadSize)
+  // The host sends the panel's own format (Mono8 to a mono panel whatever else the device takes).
+  const std::uint64_t panelFrame = static_cast<std::uint64_t>(info.panelWidth_px) * info.panelHeight_px *
+                                   (info.subpixels == SubpixelCode::Mono ? 1u : 3u);
+  if (info.maxPayloadSize < panelFrame || info.maxPayloadSize > kMaxPayloadSize)
     fail(Errc::Device, "{}: device info maximum payload {} bytes is outside {}..{} for its panel", device,
-         info.maxPayloadSize, largestFrame, kMaxPayloadSize);
+         info.maxPayloadSize, panelFrame, kMaxPayloadSize);
   return info;
 }
 

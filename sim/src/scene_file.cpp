@@ -3,6 +3,7 @@
 #include "lfi/core/config.h"
 #include "lfi/core/error.h"
 #include "lfi/core/exr_io.h"
+#include "lfi/core/input_file.h"
 #include "lfi/drivers/display_optics.h"
 
 #include <assimp/Importer.hpp>
@@ -148,7 +149,7 @@ void smoothNormals(TriangleMesh& mesh, double creaseAngle) {
 TriangleMesh loadMesh(const fs::path& path, double creaseAngle_rad) {
   if (!(creaseAngle_rad >= 0 && creaseAngle_rad <= std::numbers::pi))
     fail(Errc::InvalidArgument, "'{}': crease angle {} rad is outside [0, pi]", path.string(), creaseAngle_rad);
-  if (!fs::exists(path)) fail(Errc::NotFound, "'{}': no such mesh file", path.string());
+  requireInputFile(path, "mesh file");
   // PLY by its content, whatever the name; a .ply that is not PLY is not handed to Assimp either.
   std::string extension = path.extension().string();
   for (char& c : extension) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));

@@ -59,6 +59,7 @@ Bench Bench::load(const std::filesystem::path& path) {
   root.string("format", std::nullopt, {"lfi-bench"});
   root.integer("version", std::nullopt, 1, 1);
   Bench b;
+  b.source = path.string();
   // Kept to name their keys in the checks across tables at the end.
   ConfigTable lensTable = root.table("lens"), cameraTable = root.table("camera");
   ConfigTable parallelTable = root.table("parallel"), areaTable = root.table("area");

@@ -162,8 +162,13 @@ cv::Mat defectMask(const sim::Scene& scene, const sim::TelecentricCamera& camera
         const double len = seg.length();
         if (len <= 0) continue;
         marker.intervals({path[k], seg / len}, list);
+        // A path that ends on the defect (an absorber) or turns on its surface
+        // (total internal reflection off a bubble) touches it only at a
+        // segment's end, where rounding decides: a touch within the tracer's
+        // own step off a surface counts.
+        constexpr double kTouch = sim::Scene::kTMin;
         for (int m = 0; m < list.size(); ++m)
-          if (list[m].exit.t > 0 && list[m].enter.t < len) mask.at<uchar>(j, i) = 255;
+          if (list[m].exit.t > -kTouch && list[m].enter.t < len + kTouch) mask.at<uchar>(j, i) = 255;
       }
     }
   return mask;
@@ -486,6 +491,17 @@ std::vector<SweepPoint> defaultSweep() {
   return points;
 }
 
+// Runs one step of the study; an lfi::Error from it says which step (a setup,
+// a sweep point) and keeps its code.
+template <typename Step>
+auto namingTheStep(const std::string& step, Step run) {
+  try {
+    return run();
+  } catch (const Error& e) {
+    throw Error(e.code(), fmt::format("study, {}: {}", step, e.what()));
+  }
+}
+
 nlohmann::ordered_json runStudy(const Bench& bench, const fs::path& outDir, const StudyOptions& options) {
   const Overwrite overwrite = options.overwrite ? Overwrite::Allow : Overwrite::Refuse;
   const std::vector<SweepVariant> sweep = sweepVariants(
@@ -501,6 +517,10 @@ nlohmann::ordered_json runStudy(const Bench& bench, const fs::path& outDir, cons
                           !fs::is_empty(outDir / "images", ec))
     fail(Errc::Exists, "'{}' already holds a study's images; use --force to replace them", outDir.string());
   fs::create_directories(outDir / "images");
+  // Replacing an earlier study: its results go first, so that a run that fails
+  // leaves no study.json of other inputs beside this run's files.
+  if (options.overwrite)
+    for (const fs::path& file : {outDir / "study.json", outDir / "report.html"}) fs::remove(file);
 
   const QualitySettings q = settingsFor(options.quality);
   auto binned = [&](int binning) {
@@ -539,6 +559,7 @@ nlohmann::ordered_json runStudy(const Bench& bench, const fs::path& outDir, cons
   study["quality"] = options.quality == Quality::Quick  ? "quick"
                      : options.quality == Quality::High ? "high"
                                                         : "default";
+  study["provenance"] = {{"bench", bench.source}, {"seed", options.seed}};  // (results do not depend on threads)
   study["camera"] = {{"width", camera.width}, {"height", camera.height}, {"object_pixel_mm", camera.objectPixel_mm()},
                      {"acceptance_half_angle_rad", camera.acceptanceHalfAngle_rad()},
                      {"samples_per_pixel", q.samplesPerPixel}};
@@ -565,8 +586,10 @@ nlohmann::ordered_json runStudy(const Bench& bench, const fs::path& outDir, cons
   const GroundTruth truth = traceGroundTruth(bench, specs, camera);
   for (size_t si = 0; si < kSetups.size(); ++si) {
     const Illumination light{kSetups[si], lightField, bench.inverseSchlieren.lookup, 0};
-    const Evaluation e = evaluate(bench, light, specs, truth, camera, bench.sensorModel(), ro,
-                                  options.seed * 1000 + si * 100, progress, 1.0, &imagesDir, overwrite);
+    const Evaluation e = namingTheStep(fmt::format("setup '{}' of '{}'", kSetups[si], bench.source), [&] {
+      return evaluate(bench, light, specs, truth, camera, bench.sensorModel(), ro, options.seed * 1000 + si * 100,
+                      progress, 1.0, &imagesDir, overwrite);
+    });
     study["noise"][kSetups[si]] = e.noise;
     for (const auto& [scene, result] : e.scenes.items()) {
       auto& out = study["scenes"][scene];
@@ -577,6 +600,12 @@ nlohmann::ordered_json runStudy(const Bench& bench, const fs::path& outDir, cons
     }
   }
 
+  // The setups' results are kept before the sweep's long run (written again with it).
+  auto writeResults = [&](Overwrite mode) {
+    writeFileAtomically(outDir / "report.html", mode, htmlReport(study));
+    writeFileAtomically(outDir / "study.json", mode, study.dump(2) + "\n");
+  };
+  writeResults(overwrite);
   if (!sweep.empty()) {
     // How good must the display be? Each variant captures its own light field
     // (only as large as the lens's footprint on the display plane needs) and
@@ -607,9 +636,11 @@ nlohmann::ordered_json runStudy(const Bench& bench, const fs::path& outDir, cons
       const std::vector<std::pair<std::string, LightFieldLookup>> lookups = {
           {"nearest", LightFieldLookup::Nearest}, {"interpolated", LightFieldLookup::Interpolated}};
       for (const auto& [name, lookup] : lookups) {
-        const Evaluation e =
-            evaluate(bench, Illumination{"inverse_schlieren", lf, lookup, displayError}, specs, sweepTruth, sweepCamera,
-                     bench.sensorModel(), sro, options.seed * 1000 + 777, progress, kSweepRender, nullptr, overwrite);
+        const Evaluation e = namingTheStep(fmt::format("{}, {} lookup", label, name), [&] {
+          return evaluate(bench, Illumination{"inverse_schlieren", lf, lookup, displayError}, specs, sweepTruth,
+                          sweepCamera, bench.sensorModel(), sro, options.seed * 1000 + 777, progress, kSweepRender,
+                          nullptr, overwrite);
+        });
         for (const auto& [scene, result] : e.scenes.items())
           for (const auto& [defect, cell] : result["defects"].items())
             entry["cnr"][name][scene + "/" + defect] = cell["cnr"];
@@ -619,9 +650,8 @@ nlohmann::ordered_json runStudy(const Bench& bench, const fs::path& outDir, cons
       out["points"].push_back(entry);
     }
     study["sweep"]["answers"] = sweepAnswers(study["sweep"]);
+    writeResults(Overwrite::Allow);  // (this run's own, written above)
   }
-  writeFileAtomically(outDir / "report.html", overwrite, htmlReport(study));
-  writeFileAtomically(outDir / "study.json", overwrite, study.dump(2) + "\n");
   return study;
 }
 

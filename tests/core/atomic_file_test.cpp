@@ -194,7 +194,49 @@ TEST_F(AtomicFile, PublishedFileHasUmaskModeAndReplacementKeepsMode) {
   lfi::writeFileAtomically(target, Overwrite::Allow, "b");
   ASSERT_EQ(::stat(target.c_str(), &st), 0);
   EXPECT_EQ(st.st_mode & 0777, 0604u);
+  // A read-only file replaced on request stays read-only; the writer writes
+  // the temporary while it is still its own 0600 (it failed with EACCES for a
+  // user other than root, after all the work).
+  ASSERT_EQ(::chmod(target.c_str(), 0444), 0);
+  lfi::writeFileAtomically(target, Overwrite::Allow, [](const fs::path& temporary) {
+    std::ofstream out(temporary, std::ios::binary | std::ios::trunc);
+    ASSERT_TRUE(out.good()) << "the temporary is not writable while it is written";
+    out << "c";
+  });
+  EXPECT_EQ(readAll(target), "c");
+  ASSERT_EQ(::stat(target.c_str(), &st), 0);
+  EXPECT_EQ(st.st_mode & 0777, 0444u);
+  // The same under a umask that takes the owner's write bit.
+  ::umask(0222);
+  const fs::path fresh = dir_ / "fresh.txt";
+  lfi::writeFileAtomically(fresh, Overwrite::Refuse, [](const fs::path& temporary) {
+    struct stat own {};
+    ASSERT_EQ(::stat(temporary.c_str(), &own), 0);
+    EXPECT_EQ(own.st_mode & 0777, 0600u);
+    std::ofstream(temporary, std::ios::binary) << "d";
+  });
+  ASSERT_EQ(::stat(fresh.c_str(), &st), 0);
+  EXPECT_EQ(st.st_mode & 0777, 0444u);
   ::umask(mask);
+}
+
+// A target that is a symbolic link: replacing it writes the file the link
+// points to and keeps the link; refusing counts the link, even a dangling one,
+// as something that exists.
+TEST_F(AtomicFile, ASymbolicLinkKeepsPointingAtTheReplacedFile) {
+  fs::create_directories(dir_ / "real");
+  writePlain(dir_ / "real" / "s.txt", "old");
+  fs::create_symlink(fs::path("real") / "s.txt", dir_ / "s.txt");
+  EXPECT_TRUE(throwsError([&] { lfi::writeFileAtomically(dir_ / "s.txt", Overwrite::Refuse, "new"); }, Errc::Exists,
+                          {"s.txt", "--force"}));
+  lfi::writeFileAtomically(dir_ / "s.txt", Overwrite::Allow, "new");
+  EXPECT_TRUE(fs::is_symlink(dir_ / "s.txt"));
+  EXPECT_EQ(readAll(dir_ / "real" / "s.txt"), "new");
+  EXPECT_EQ(entries(), (Names{"real", "s.txt"}));
+  fs::create_symlink("nowhere.txt", dir_ / "dangling.txt");
+  EXPECT_TRUE(throwsError([&] { lfi::writeFileAtomically(dir_ / "dangling.txt", Overwrite::Refuse, "x"); },
+                          Errc::Exists, {"dangling.txt"}));
+  EXPECT_FALSE(fs::exists(dir_ / "nowhere.txt"));
 }
 
 }  // namespace

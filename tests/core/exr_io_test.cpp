@@ -1,5 +1,6 @@
 #include "lfi/core/exr_io.h"
 
+#include "lfi/core/config.h"
 #include "lfi/core/error.h"
 
 #include <OpenEXR/ImfChannelList.h>
@@ -15,6 +16,7 @@
 #include "lfi_test_support.h"
 
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -95,6 +97,14 @@ cv::Mat specialFloats(int rows, int cols, unsigned seed) {
                             -1.0f,     L::epsilon(), -123.456f,       1e-30f,           -1e30f};
   for (int i = 0; i < static_cast<int>(std::size(specials)); ++i) m.at<float>(i / cols, i % cols) = specials[i];
   return m;
+}
+
+std::string readBytes(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  return {std::istreambuf_iterator<char>(in), {}};
+}
+void writeBytes(const fs::path& path, const std::string& bytes) {
+  std::ofstream(path, std::ios::binary | std::ios::trunc) << bytes;
 }
 
 bool bitIdentical(const cv::Mat& a, const cv::Mat& b) {
@@ -254,11 +264,7 @@ TEST_F(ExrIo, AttributeSizePastTheEndOfTheFileIsNamed) {
   // A few bytes can declare a huge attribute; OpenEXR would allocate it
   // (1.9 GB for a 2 KB file, found by fuzzing) before failing.
   lfi::writeRadianceExr(file("r.exr"), randomFloats(8, 8, 20), {0.01, "a description"});
-  std::string bytes;
-  {
-    std::ifstream in(file("r.exr"), std::ios::binary);
-    bytes.assign(std::istreambuf_iterator<char>(in), {});
-  }
+  std::string bytes = readBytes(file("r.exr"));
   const std::string field("lfi.description\0string\0", 23);
   const size_t at = bytes.find(field);
   ASSERT_NE(at, std::string::npos);
@@ -462,11 +468,7 @@ TEST_F(ExrIo, MutatedFilesAreRefusedOrReadBackUnchanged) {
   const LightFieldGeometry g = geometry();
   const LightField original(g, randomFloats(g.height(), g.width(), 19));
   lfi::writeLightFieldExr(file("seed.exr"), original);
-  std::string seed;
-  {
-    std::ifstream in(file("seed.exr"), std::ios::binary);
-    seed.assign(std::istreambuf_iterator<char>(in), {});
-  }
+  const std::string seed = readBytes(file("seed.exr"));
   std::mt19937 rng(20261122);
   int unchanged = 0, refused = 0;
   for (int n = 0; n < 400; ++n) {
@@ -539,6 +541,70 @@ TEST_F(ExrIo, WritingRejectsWrongImages) {
       throwsError([&] { lfi::writeRadianceExr(file("b.exr"), cv::Mat(), {}); }, Errc::InvalidArgument, {"b.exr"}));
   EXPECT_FALSE(fs::exists(file("a.exr")));
   EXPECT_FALSE(fs::exists(file("b.exr")));
+  // What the reader would refuse is not written, and does not replace a good file.
+  const cv::Mat good(4, 4, CV_32FC1, cv::Scalar(1));
+  lfi::writeRadianceExr(file("c.exr"), good, {});
+  cv::Mat bad = good.clone();
+  bad.at<float>(2, 3) = std::numeric_limits<float>::quiet_NaN();
+  EXPECT_TRUE(throwsError([&] { lfi::writeRadianceExr(file("c.exr"), bad, {}, lfi::Overwrite::Allow); },
+                          Errc::InvalidArgument, {"c.exr", "(3, 2)", "finite"}));
+  EXPECT_TRUE(throwsError(
+      [&] { lfi::writeRadianceExr(file("c.exr"), good, {.objectPixel_mm = -1}, lfi::Overwrite::Allow); },
+      Errc::InvalidArgument, {"c.exr", "objectPixel_mm"}));
+  EXPECT_TRUE(bitIdentical(lfi::readRadianceExr(file("c.exr")), good));
+  // A light field whose image was changed through lensletImage() after it was checked.
+  const LightFieldGeometry g = geometry();
+  LightField lf(g, randomFloats(g.height(), g.width(), 16));
+  lf.lensletImage().at<float>(1, 1) = std::numeric_limits<float>::infinity();
+  EXPECT_TRUE(throwsError([&] { lfi::writeLightFieldExr(file("lf.exr"), lf); }, Errc::InvalidArgument,
+                          {"lf.exr", "(1, 1)"}));
+  lf.lensletImage() = cv::Mat(3, 3, CV_32FC1, cv::Scalar(0));
+  EXPECT_TRUE(throwsError([&] { lfi::writeLightFieldExr(file("lf.exr"), lf); }, Errc::InvalidArgument,
+                          {"lf.exr", "3x3"}));
+  EXPECT_FALSE(fs::exists(file("lf.exr")));
+}
+
+// Not files: a FIFO (a reader would wait on it for ever) and a directory.
+TEST_F(ExrIo, WhatIsNotARegularFileIsNamed) {
+  const fs::path fifo = file("pipe.exr");
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  EXPECT_TRUE(throwsError([&] { lfi::readLightFieldExr(fifo); }, Errc::InvalidFile, {"pipe.exr", "regular file"}));
+  EXPECT_TRUE(throwsError([&] { lfi::ConfigTable::parseFile(fifo); }, Errc::InvalidFile, {"pipe.exr"}));
+  fs::create_directory(file("d.toml"));
+  EXPECT_TRUE(throwsError([&] { lfi::ConfigTable::parseFile(file("d.toml")); }, Errc::InvalidFile, {"d.toml"}));
+  EXPECT_TRUE(throwsError([&] { lfi::ConfigTable::parseFile(file("none.toml")); }, Errc::NotFound, {"none.toml"}));
+}
+
+// lfi writes single-part scanline files with one channel, Y. OpenEXR reads
+// others; lfi refuses them, naming what they are (a second part's header was
+// read unchecked, and a 1 KB file could ask for gigabytes).
+TEST_F(ExrIo, OtherKindsOfOpenExrFileAreRefused) {
+  const LightFieldGeometry g = geometry();
+  const fs::path path = file("lf.exr");
+  lfi::writeLightFieldExr(path, LightField(g, randomFloats(g.height(), g.width(), 17)));
+  const std::string original = readBytes(path);
+  for (const auto& [flag, name] : {std::pair{0x02, "tiled"}, std::pair{0x08, "deep"}, std::pair{0x10, "multi-part"}}) {
+    std::string bytes = original;
+    bytes[5] = static_cast<char>(bytes[5] | flag);
+    writeBytes(path, bytes);
+    EXPECT_TRUE(throwsError([&] { lfi::readLightFieldExr(path); }, Errc::InvalidFile, {"lf.exr", name})) << name;
+  }
+  // A second channel beside Y.
+  Imf::Header header(4, 4);
+  header.channels().insert("Y", Imf::Channel(Imf::FLOAT));
+  header.channels().insert("Z", Imf::Channel(Imf::FLOAT));
+  header.insert("lfi.kind", Imf::StringAttribute("radiance-image"));
+  header.insert("lfi.formatVersion", Imf::IntAttribute(2));
+  std::vector<float> pixels(16, 1.0f);
+  {
+    Imf::OutputFile out(file("yz.exr").c_str(), header);
+    Imf::FrameBuffer frame;
+    frame.insert("Y", Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(pixels.data()), sizeof(float), 4 * sizeof(float)));
+    frame.insert("Z", Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(pixels.data()), sizeof(float), 4 * sizeof(float)));
+    out.setFrameBuffer(frame);
+    out.writePixels(4);
+  }
+  EXPECT_TRUE(throwsError([&] { lfi::readRadianceExr(file("yz.exr")); }, Errc::InvalidFile, {"yz.exr", "2 channel"}));
 }
 
 TEST(PixelChecksum, IsCrc32OfPixelBytesRowByRow) {

@@ -292,6 +292,26 @@ TEST(LightField, DirectionsAwayFromPlaneGiveZero) {
   }
 }
 
+// Directions and disc positions that are not finite give 0 or the border's
+// value, never a cast of NaN or infinity to an index (undefined; it read out
+// of bounds). The sanitiser build checks the reads.
+TEST(LightField, NonFiniteDirectionsGiveZeroAndNonFiniteDiscsStayInTheElement) {
+  const LightFieldGeometry g = smallGeometry();
+  const LightField lf = codedLightField(g);
+  const double inf = std::numeric_limits<double>::infinity(), nan = std::numeric_limits<double>::quiet_NaN();
+  Vec2 disc;
+  for (const Vec3& d : {Vec3(inf, 0, 1), Vec3(0, -inf, 1), Vec3(0, 0, inf), Vec3(nan, 0, 1), Vec3(0, 0, nan)}) {
+    EXPECT_FALSE(LightField::discFromDirection(d, disc)) << d;
+    for (const auto mode : {LightFieldLookup::Nearest, LightFieldLookup::Interpolated})
+      EXPECT_EQ(lf.radiance({0, 0}, d, mode), 0.0) << d;
+  }
+  for (const Vec2& bad : {Vec2(nan, 0), Vec2(0, nan), Vec2(1e300, -1e300), Vec2(-inf, inf)})
+    for (const auto mode : {LightFieldLookup::Nearest, LightFieldLookup::Interpolated}) {
+      const double v = lf.radianceAt(1.5, 1.5, bad, mode);
+      EXPECT_TRUE(std::isfinite(v)) << bad;
+    }
+}
+
 TEST(LightField, PositionsOutsidePlaneGiveZero) {
   const LightFieldGeometry g = smallGeometry();
   LightField lf(g);

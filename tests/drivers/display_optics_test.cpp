@@ -5,6 +5,7 @@
 #include "lfi/drivers/display.h"
 #include "lfi/drivers/display_calibration_file.h"
 #include "lfi/drivers/display_optics.h"
+#include "lfi/drivers/usb_display_protocol.h"
 
 #include <gtest/gtest.h>
 #include <unistd.h>
@@ -197,6 +198,27 @@ TEST(DisplayOptics, InvalidParametersNameTheField) {
   EXPECT_TRUE(throwsError([&] { DisplayOptics optics(info); }, Errc::InvalidArgument, {"slitWidth_mm"}));
   info.optics.slitWidth_mm = 0.05;
   EXPECT_NO_THROW(DisplayOptics optics(info));
+}
+
+// The device's maximum payload must hold the panel's own frame: a mono panel
+// that also takes RGB888 needs only width x height bytes.
+TEST(UsbDisplayProtocol, TheMaximumPayloadIsCheckedAgainstThePanelsOwnFrame) {
+  usbdisplay::DeviceInfoBlock info;
+  info.vendor = "lfi", info.model = "mono", info.serial = "M1";
+  info.panelWidth_px = 640, info.panelHeight_px = 400;
+  info.subpixels = usbdisplay::SubpixelCode::Mono;
+  info.formats = 0x3;
+  info.brightnessMax = 255, info.viewCount = 1;
+  info.calibrationSize = 76;
+  info.maxPayloadSize = 640 * 400;
+  EXPECT_EQ(usbdisplay::decodeDeviceInfo(usbdisplay::encodeDeviceInfo(info), "dev").maxPayloadSize, 640u * 400u);
+  info.maxPayloadSize = 640 * 400 - 1;
+  EXPECT_TRUE(throwsError([&] { usbdisplay::decodeDeviceInfo(usbdisplay::encodeDeviceInfo(info), "dev"); },
+                          Errc::Device, {"dev", "maximum payload", "256000"}));
+  info.subpixels = usbdisplay::SubpixelCode::RgbStripe;
+  info.maxPayloadSize = 640 * 400;
+  EXPECT_TRUE(throwsError([&] { usbdisplay::decodeDeviceInfo(usbdisplay::encodeDeviceInfo(info), "dev"); },
+                          Errc::Device, {"768000"}));
 }
 
 TEST(DisplayCalibrationFile, ValuesTheDisplayWouldRefuseAreNamedInTheFile) {

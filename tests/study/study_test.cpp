@@ -132,6 +132,8 @@ TEST(QuickStudy, EndToEnd) {
   EXPECT_GE(r["sweep"]["points"][0]["cnr"]["nearest"]["absorbing/center"].get<double>(), 3.0);
   EXPECT_TRUE(r["sweep"]["answers"].contains("absorbing/center"));
   EXPECT_NE(readText(dir / "report.html").find("How good must the display be?"), std::string::npos);
+  EXPECT_EQ(r["provenance"]["bench"], kBench.string());
+  EXPECT_EQ(r["provenance"]["seed"], options.seed);
   // A second run into the same folder must not replace the first.
   try {
     lfi::study::runStudy(bench, dir, options);
@@ -140,6 +142,24 @@ TEST(QuickStudy, EndToEnd) {
     EXPECT_EQ(e.code(), Errc::Exists);
     EXPECT_NE(std::string(e.what()).find("--force"), std::string::npos);
   }
+  fs::remove_all(dir);
+}
+
+// An error in one setup says which, and the bench; a --force run that fails
+// leaves no study.json of the earlier inputs beside its own light field.
+TEST(QuickStudy, AnErrorNamesItsSetupAndLeavesNoOtherResults) {
+  const fs::path dir = freshDir("failing");
+  // A collimated beam far narrower than a pixel: its frame is black, which no exposure can fit.
+  const fs::path bench = dir / "dark.toml";
+  std::ofstream(bench) << replaceLine(readText(kBench), "size_mm = 60", "size_mm = 0.01");
+  std::ofstream(dir / "study.json") << "{}\n";  // an earlier study's
+  lfi::study::StudyOptions options;
+  options.quality = lfi::study::Quality::Quick;
+  options.overwrite = true;
+  EXPECT_TRUE(throwsError([&] { lfi::study::runStudy(lfi::study::Bench::load(bench), dir / ".", options); },
+                          Errc::InvalidArgument, {"setup 'parallel'", "dark.toml"}));
+  EXPECT_TRUE(fs::exists(dir / "lightfield.exr"));
+  EXPECT_FALSE(fs::exists(dir / "study.json"));
   fs::remove_all(dir);
 }
 

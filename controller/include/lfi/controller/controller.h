@@ -11,7 +11,7 @@
 // streaming after inspect() and stops it in its destructor only if it started it.
 //
 //   option         default  meaning
-//   grabTimeout    5 s      per frame
+//   grabTimeout    5 s      per frame, beyond twice the camera's exposure time
 //   frames         1        complete frames averaged into one inspection image
 //   retries        3        incomplete or timed-out frames tolerated per inspection
 //   white          0        radiance shown at full drive level; 0 = the light

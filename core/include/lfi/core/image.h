@@ -16,6 +16,7 @@
 #include <opencv2/core.hpp>
 
 #include <filesystem>
+#include <optional>
 #include <string>
 
 namespace lfi {
@@ -23,6 +24,10 @@ namespace lfi {
 // Throws Errc::InvalidArgument naming `what` unless `image` has type `cvType`
 // and is not empty.
 void requireImageType(const cv::Mat& image, int cvType, const std::string& what);
+
+// The first pixel (x = column, y = row, in row order) of a CV_32FC1 image
+// that is NaN or infinite; nullopt when every pixel is finite.
+std::optional<cv::Point> firstNonFinite(const cv::Mat& image);
 
 // The value below which `fraction` (0..1) of a CV_32FC1 image's pixels lie
 // (nearest rank). Throws Errc::InvalidArgument for an empty image.

@@ -9,7 +9,8 @@
 //     info and the calibration blob that lives on the device. Each open() uses a
 //     fresh libusb context, so a display that was unplugged and comes back is found.
 //   - show() sends header + payload as bulk OUT transfers of transferSize_bytes,
-//     transfersInFlight at a time (asynchronous, each with transferTimeout), then a
+//     transfersInFlight at a time (asynchronous; each may take transferTimeout once
+//     the ones queued before it are through), then a
 //     PRESENT control request with the frame's sequence number. A stalled endpoint is
 //     cleared (libusb_clear_halt) and the whole frame resent, up to stallRetries
 //     times. Device rejection (CRC, size, truncated) and transfer timeouts are
@@ -45,7 +46,7 @@ UsbDisplaySelector parseUsbDisplayPath(std::string_view path, const std::string&
 
 struct UsbDisplayOptions {
   std::chrono::milliseconds controlTimeout{1000};   // per control request
-  std::chrono::milliseconds transferTimeout{2000};  // per bulk transfer
+  std::chrono::milliseconds transferTimeout{2000};  // per bulk transfer, after those queued before it
   int transfersInFlight = 4;                        // 1..32
   std::size_t transferSize_bytes = 1 << 20;         // 512 B .. 16 MiB, a multiple of 512
   int stallRetries = 1;                             // frame resends after clearing a halt

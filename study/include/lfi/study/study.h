@@ -43,6 +43,7 @@ struct Bench {
     double inclusionRadius_mm, rimRadial_mm, cutLargeRadius_mm, cutLargeRadial_mm, cutSubpixelRadius_mm,
         cutSubpixelRadial_mm, indexFactor, misalignment_mm;
   } defects;
+  std::string source;  // the file load() read (recorded in study.json)
 
   // Reads a bench file. Errors name the file, line and key, also for values
   // in range that together make a bench that cannot exist (a part inside the
