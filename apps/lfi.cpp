@@ -249,8 +249,13 @@ void calibrateDistance(const BenchOptions& o, const std::vector<double>& candida
   if (out.filename().empty() || fs::is_directory(out))
     lfi::fail(lfi::Errc::InvalidArgument, "calibrate-distance: --out '{}' must name a file, not a folder",
               out.string());
-  if (!force && fs::exists(out))
-    lfi::fail(lfi::Errc::Exists, "'{}' exists; refusing to overwrite it (use --force to replace it)", out.string());
+  // A captured reference is kept beside the scan (scan.json: scan.lightfield.exr), as `inspect` keeps its own.
+  const fs::path referenceFile = fs::path(out).replace_extension(".lightfield.exr");
+  std::vector<fs::path> outputs{out};
+  if (!o.capture.empty()) outputs.push_back(referenceFile);
+  for (const fs::path& file : outputs)
+    if (!force && fs::exists(file))
+      lfi::fail(lfi::Errc::Exists, "'{}' exists; refusing to overwrite it (use --force to replace it)", file.string());
   // Where the result goes must take it before the scan, not after.
   const fs::path folder = out.parent_path().empty() ? fs::path(".") : out.parent_path();
   std::error_code ec;
@@ -278,19 +283,27 @@ void calibrateDistance(const BenchOptions& o, const std::vector<double>& candida
   const lfi::LightField reference = controller.captureReference([&](const char* step, double f) {
     if (!quiet) bar(step, f);
   });
+  if (bench.captured) lfi::writeLightFieldExr(referenceFile, reference, overwrite);
   // One drive scale for every candidate: the brightness compares the display's position, not the fields' peaks.
   const double white = lfi::Controller::defaultWhite(reference);
   size_t done = 0;
-  const size_t images = candidates.size() + 2;  // and two with the display dark
-  const lfi::calib::DisplayDistanceScan scan = lfi::calib::calibrateDisplayDistance(
-      reference,
-      [&](const lfi::LightField& shown) {
-        if (!quiet) bar(fmt::format("image {} of {}", done + 1, images), static_cast<double>(done) / images);
-        ++done;
-        controller.emit(shown, white);
-        return controller.inspect();
-      },
-      candidates, roi, 1 / std::sqrt(12.0 * o.frames));  // a digital number's quantisation, averaged
+  const size_t images = candidates.size() + 3;  // and two with the display dark, and the brightest again
+  lfi::calib::DisplayDistanceScan scan;
+  try {
+    scan = lfi::calib::calibrateDisplayDistance(
+        reference,
+        [&](const lfi::LightField& shown) {
+          if (!quiet) bar(fmt::format("image {} of {}", done + 1, images), static_cast<double>(done) / images);
+          ++done;
+          controller.emit(shown, white);
+          return controller.inspect();
+        },
+        candidates, roi, 1 / std::sqrt(12.0 * o.frames));  // a digital number's quantisation, averaged
+  } catch (const lfi::Error& e) {
+    if (!bench.captured) throw;
+    throw lfi::Error(e.code(), fmt::format("{} (the captured reference is kept: --light-field {} scans again "
+                                           "without capturing)", e.what(), referenceFile.string()));
+  }
   if (!quiet) bar("scan", 1);
   bar.finish();
   // The table first: should the file fail to be written, the scan is not lost.
@@ -308,9 +321,19 @@ void calibrateDistance(const BenchOptions& o, const std::vector<double>& candida
       "epsilon > 0: the display is further from the part than the reference light field's distance_mm; the "
       "estimate is the centre of the brightness peak, half-way between where it falls below `level` on either "
       "side (docs/calibration.md)";
-  result["reference"] = {{"source", bench.capture->description()}, {"distance_mm", reference.geometry().distance_mm}};
-  result["camera"] = {{"uri", o.camera}, {"vendor", camera.vendor}, {"model", camera.model},
-                      {"serial", camera.serial}, {"exposure_us", settings.exposure_us}, {"frames", o.frames}};
+  result["reference"] = {{"source", bench.capture->description()},
+                         {"file", bench.captured ? referenceFile.string() : o.lightField.string()},
+                         {"distance_mm", reference.geometry().distance_mm}};
+  result["camera"] = {{"uri", o.camera},
+                      {"vendor", camera.vendor},
+                      {"model", camera.model},
+                      {"serial", camera.serial},
+                      {"exposure_us", settings.exposure_us},
+                      {"gain", settings.gain},
+                      {"pixel_format", o.pixelFormat},
+                      {"binning", settings.binning},
+                      {"frames", o.frames},
+                      {"settle_ms", o.settle_ms}};
   result["display"] = {{"uri", o.display}, {"white", white}};
   result["roi_px"] = roiBox.empty() ? nlohmann::ordered_json(nullptr) : nlohmann::ordered_json(roiBox);
   result["dark"] = scan.dark;

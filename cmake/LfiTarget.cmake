@@ -5,7 +5,12 @@ target_compile_options(lfi_options INTERFACE -Wall -Wextra -Wpedantic -Wshadow -
                        # GCC 12 false positives inside libstdc++ at -O3 (GCC bug 105651)
                        -Wno-restrict
                        # designated initializers leave defaulted members out on purpose
-                       -Wno-missing-field-initializers)
+                       -Wno-missing-field-initializers
+                       # No contraction into fused multiply-adds (GCC's default for C++ even in ISO mode, on
+                       # -march builds with FMA): the tracer's vectorised kernels and the one-ray code, the
+                       # sensors and the light field lookups round alike, so a ray does not depend on which
+                       # path or instruction set computed it, nor a test's expected value on the build.
+                       -ffp-contract=off)
 if(LFI_WERROR)
   target_compile_options(lfi_options INTERFACE -Werror)
 endif()

@@ -41,6 +41,7 @@ namespace {
 constexpr double kPeakLevel = 0.25;        // the flanks' level: this fraction of the way down from the peak
 constexpr double kClearAboveNoise = 10.0;  // the scan's rise must exceed this many times the noise of a mean
 constexpr double kSecondPeakAboveNoise = 3.0;  // a second peak: this many times the noise above the level
+constexpr double kDriftAboveNoise = 5.0;  // the brightest candidate's two means may differ by this many noises
 
 std::string scanTable(const std::vector<double>& candidates, const std::vector<double>& brightness) {
   std::string table;
@@ -60,6 +61,9 @@ DisplayDistanceScan calibrateDisplayDistance(const LightField& captured, const I
   if (!std::all_of(candidates.begin(), candidates.end(), [](double c) { return std::isfinite(c); }) ||
       std::adjacent_find(candidates.begin(), candidates.end(), std::greater_equal<>()) != candidates.end())
     fail(Errc::InvalidArgument, "{}: candidates must be finite and strictly increasing", kWhat);
+  if (captured.geometry().distance_mm <= 0)
+    fail(Errc::InvalidArgument, "{}: the reference light field does not say how far from the part it was captured "
+         "(its distance_mm, the file's lfi.distance_mm, is 0: not set); the scan moves the display from there", kWhat);
   if (const double distance = captured.geometry().distance_mm; distance + candidates.front() <= 0)
     fail(Errc::InvalidArgument, "{}: candidate {:+g} mm would put the display at or past the part ({} mm away)", kWhat,
          candidates.front(), distance);
@@ -75,8 +79,17 @@ DisplayDistanceScan calibrateDisplayDistance(const LightField& captured, const I
     double mean;
   };
   cv::Size size;  // the first image's: every other one must have it
+  DisplayDistanceScan scan;
+  scan.candidates_mm = candidates;
   auto measure = [&](const LightField& shown, const std::string& what) {
-    const cv::Mat image = inspect(shown);
+    cv::Mat image;
+    try {
+      image = inspect(shown);
+    } catch (const Error& e) {  // (a camera that stalled, a display that vanished): what the scan had so far
+      throw Error(e.code(), fmt::format("{}: the image {} failed: {}{}{}", kWhat, what, e.what(),
+                                        scan.brightness.empty() ? "" : "; the scan so far: ",
+                                        scanTable(candidates, scan.brightness)));
+    }
     if (image.empty()) fail(Errc::Device, "{}: the camera returned no image {}", kWhat, what);
     if (image.channels() != 1)
       fail(Errc::InvalidArgument, "{} needs a single-channel image; the one {} has {}", kWhat, what, image.channels());
@@ -95,8 +108,6 @@ DisplayDistanceScan calibrateDisplayDistance(const LightField& captured, const I
       fail(Errc::Device, "{}: the image {} has non-finite values", kWhat, what);
     return Measured{f, mean[0]};
   };
-  DisplayDistanceScan scan;
-  scan.candidates_mm = candidates;
   // The display dark first, twice: the spread of the difference of the two
   // images over the region is the frame-to-frame noise alone (whatever does
   // not change from one image to the next, stray light or a fixed pattern,
@@ -112,11 +123,33 @@ DisplayDistanceScan calibrateDisplayDistance(const LightField& captured, const I
   // Never below the caller's floor: identical dark images (an 8-bit camera with little read noise) do not make
   // every rise significant.
   scan.noise = std::max(spread[0] / std::sqrt(2.0), pixelNoiseFloor) / std::sqrt(pixels);
-  for (double epsilon : candidates)  // the display is ε further away: show the field as it is ε further away
-    scan.brightness.push_back(
-        measure(propagateLightField(captured, -epsilon), fmt::format("for candidate {:+g} mm", epsilon)).mean);
+  // The display is ε further away: show the field as it is ε further away.
+  auto shownFor = [&](double epsilon) { return propagateLightField(captured, -epsilon); };
+  auto forCandidate = [](double epsilon) { return fmt::format("for candidate {:+g} mm", epsilon); };
+  cv::Mat brightestImage;  // the first image of the brightest candidate so far
+  for (double epsilon : candidates) {
+    Measured m = measure(shownFor(epsilon), forCandidate(epsilon));
+    if (scan.brightness.empty() || m.mean > *std::max_element(scan.brightness.begin(), scan.brightness.end()))
+      brightestImage = m.image;
+    scan.brightness.push_back(m.mean);
+  }
   const auto lowest = std::min_element(scan.brightness.begin(), scan.brightness.end());
   const auto highest = std::max_element(scan.brightness.begin(), scan.brightness.end());
+  // The brightest candidate again, last: the spread of the difference of its
+  // two images is the noise where the signal is (the dark images lack its
+  // shot noise, and a camera clips their noise at 0 DN), and its two means
+  // must agree within it: the display's or the room's light drifting during
+  // the scan would tilt the peak.
+  {
+    const double epsilon = candidates[static_cast<size_t>(highest - scan.brightness.begin())];
+    const Measured again = measure(shownFor(epsilon), forCandidate(epsilon) + " again, after the scan");
+    cv::meanStdDev(brightestImage - again.image, unused, spread, roi);
+    scan.noise = std::max(scan.noise, spread[0] / std::sqrt(2.0) / std::sqrt(pixels));
+    if (std::abs(again.mean - *highest) > kDriftAboveNoise * std::sqrt(2.0) * scan.noise)
+      fail(Errc::Device, "{}: candidate {:+g} mm gave {:.6g} at first and {:.6g} after the scan, apart by more than {} "
+           "times their noise ({:.2g} each): is the display's or the room's light drifting? ({})", kWhat, epsilon,
+           *highest, again.mean, kDriftAboveNoise, scan.noise, scanTable(candidates, scan.brightness));
+  }
   if (*highest - *lowest <= kClearAboveNoise * scan.noise || *highest == *lowest)
     fail(Errc::Device, "{}: the part's brightness hardly changes across the scan ({}; with the display dark {:.6g}, "
          "the noise of a mean about {:.2g}): is the display showing, the camera unsaturated, the region on the part?",

@@ -644,13 +644,15 @@ class AravisCamera final : public Camera {
   }
 
   void validate(const CameraSettings& s) const {
-    if (!(s.exposure_us > 0))
-      fail(Errc::InvalidArgument, "camera '{}': exposure_us {} must be > 0", name(), s.exposure_us);
+    if (!(s.exposure_us > 0) || !std::isfinite(s.exposure_us))
+      fail(Errc::InvalidArgument, "camera '{}': exposure_us {} must be finite and > 0", name(), s.exposure_us);
+    if (!std::isfinite(s.gain)) fail(Errc::InvalidArgument, "camera '{}': gain {} must be finite", name(), s.gain);
     if (s.binning < 1) fail(Errc::InvalidArgument, "camera '{}': binning {} must be >= 1", name(), s.binning);
     if (s.roiX_px < 0 || s.roiY_px < 0 || s.roiWidth_px < 0 || s.roiHeight_px < 0)
       fail(Errc::InvalidArgument, "camera '{}': ROI ({}, {}, {} x {}) has a negative value", name(), s.roiX_px,
            s.roiY_px, s.roiWidth_px, s.roiHeight_px);
-    if (s.frameRate_hz < 0) fail(Errc::InvalidArgument, "camera '{}': frameRate_hz {} < 0", name(), s.frameRate_hz);
+    if (!(s.frameRate_hz >= 0) || !std::isfinite(s.frameRate_hz))
+      fail(Errc::InvalidArgument, "camera '{}': frameRate_hz {} must be finite and >= 0", name(), s.frameRate_hz);
     if (s.trigger == TriggerMode::Line && s.triggerLine.empty())
       fail(Errc::InvalidArgument, "camera '{}': TriggerMode::Line needs triggerLine", name());
   }
@@ -721,6 +723,12 @@ class AravisCamera final : public Camera {
     check(error, name(), "arv_camera_get_width_bounds");
     arv_camera_get_height_bounds(camera_, &hMin, &hMax, &error);
     check(error, name(), "arv_camera_get_height_bounds");
+    // Binned, the image is at most the sensor over the binning: Aravis's fake camera (and some devices) keep the
+    // Width and Height bounds of the unbinned sensor, so that "to the end" asked for more than there is.
+    if (s.binning > 1 && info_.sensorWidth_px > 0 && info_.sensorHeight_px > 0) {
+      wMax = std::min(wMax, info_.sensorWidth_px / s.binning);
+      hMax = std::min(hMax, info_.sensorHeight_px / s.binning);
+    }
     if (s.roiX_px >= wMax || s.roiY_px >= hMax)  // (before the sizes: a width past the sensor is the offset's fault)
       fail(Errc::InvalidArgument, "camera '{}': ROI offset ({}, {}) lies outside the {} x {} (binned) sensor",
            name(), s.roiX_px, s.roiY_px, wMax, hMax);
@@ -839,6 +847,8 @@ class AravisCamera final : public Camera {
     const int type = format == ARV_PIXEL_FORMAT_MONO_8 ? CV_8UC1 : CV_16UC1;
     const std::size_t rowBytes = static_cast<std::size_t>(width) * (type == CV_8UC1 ? 1 : 2);
     const std::size_t stride = rowBytes + static_cast<std::size_t>(xPadding);
+    if (type == CV_16UC1 && stride % 2 != 0)  // (OpenCV takes no 16-bit rows at an odd byte step)
+      return fmt::format("its 16-bit lines are padded by an odd {} bytes", xPadding);
     if (size < stride * (rows - 1) + rowBytes)
       return fmt::format("its {} x {} px image ({} bytes per line) needs {} bytes, the payload has {}", width, height,
                          stride, stride * (rows - 1) + rowBytes, size);

@@ -97,12 +97,12 @@ struct GvCameraServer::Impl {
                                  "are black", binning, binningY));
       return;
     }
-    self->lastWarning.clear();  // a frame as asked: the next refusal is news again
     try {
       cv::Mat image(request.height_px, request.width_px, type, pixels);
       self->filler(request, image);
-    } catch (const std::exception& e) {
-      spdlog::warn("served camera '{}': frame {} goes out black: {}", self->deviceId(), request.frameId, e.what());
+      self->lastWarning.clear();  // a frame as asked: the next refusal is news again
+    } catch (const std::exception& e) {  // (the filler refused what the client asked: every frame alike)
+      self->warnOnce(fmt::format("frames go out black: {}", e.what()));
     }
   }
 

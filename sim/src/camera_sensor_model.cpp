@@ -4,6 +4,7 @@
 #include "lfi/core/image.h"
 
 #include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
 
 #include <cmath>
 #include <random>
@@ -24,14 +25,14 @@ void CameraSensorModel::exposeFor(double brightest, double fraction) {
   electronsPerUnit = fraction * fullWell_e / (gain * brightest);
 }
 
-cv::Mat CameraSensorModel::capture(const cv::Mat& radiance, std::uint64_t seed) const {
+cv::Mat CameraSensorModel::capture(const cv::Mat& radiance, std::uint64_t seed, int threads) const {
   validate();
   requireImageType(radiance, CV_32FC1, "radiance image for the camera sensor");
   cv::Mat out(radiance.size(), CV_16UC1);
   const double scale = gain / fullWell_e * maxDigitalNumber();
   const double maxDn = maxDigitalNumber();
   // Rows in parallel: each has its own engine, so the result does not depend on the threads.
-  tbb::parallel_for(0, radiance.rows, [&](int r) {
+  auto row = [&](int r) {
     // One engine per row keyed by (seed, row): reproducible and independent of image width.
     std::mt19937_64 engine(seed * 0x9e3779b97f4a7c15ull + static_cast<std::uint64_t>(r));
     std::normal_distribution<double> read(0.0, readNoise_e > 0 ? readNoise_e : 1.0);  // (a deviation must be > 0)
@@ -49,7 +50,9 @@ cv::Mat CameraSensorModel::capture(const cv::Mat& radiance, std::uint64_t seed) 
       if (readNoise_e > 0) electrons += read(engine);
       o[c] = static_cast<std::uint16_t>(std::clamp(std::round(electrons * scale), 0.0, maxDn));
     }
-  });
+  };
+  tbb::task_arena arena(threads > 0 ? threads : tbb::task_arena::automatic);
+  arena.execute([&] { tbb::parallel_for(0, radiance.rows, row); });
   return out;
 }
 

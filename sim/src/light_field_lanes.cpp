@@ -14,6 +14,7 @@ LFI_SIMD_CLONES void mapToLightField(const RayLanes& __restrict rays, const doub
   const Vec3 shift = objectFromWorld.t;
   const double e = g.elementPitch_mm(), halfX = 0.5 * g.spatialX, halfY = 0.5 * g.spatialY;
   constexpr double kTiny = 2 * std::numeric_limits<double>::min();  // below it Imath's length() rescales
+  constexpr double kHuge = std::numeric_limits<double>::infinity();  // (discFromDirection refuses it)
   for (int k = 0; k < LightFieldMapping::kSize; ++k) {
     const double dx = rays.dx[k], dy = rays.dy[k], dz = rays.dz[k];
     // The hit point, ray.at(t), and Rigid3::point / Rigid3::vector of it and of -d.
@@ -25,7 +26,7 @@ LFI_SIMD_CLONES void mapToLightField(const RayLanes& __restrict rays, const doub
     const double length2 = ux * ux + uy * uy + uz * uz, length = std::sqrt(length2);
     const double discX = -ux / length, discY = -uy / length;
     out.oneByOne[k] = length2 < kTiny;
-    out.seen[k] = length > 0 && uz > 0 && discX * discX + discY * discY < 1;
+    out.seen[k] = length > 0 && length < kHuge && uz > 0 && discX * discX + discY * discY < 1;
     out.discX[k] = discX, out.discY[k] = discY;
     out.sx[k] = qx / e + halfX, out.sy[k] = qy / e + halfY;
   }

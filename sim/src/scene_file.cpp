@@ -506,12 +506,23 @@ Object readObject(ConfigTable& t) {
   if (t.has("emitter")) {
     const std::string e = t.string("emitter", std::nullopt, {"parallel", "lambertian", "light_field"});
     if (e == "parallel") {
-      obj.emission =
-          ParallelEmission{t.number("radiance", 1.0, 0, 1e12), t.number("half_angle_rad", std::nullopt, 1e-9, 1.5708)};
+      obj.emission = ParallelEmission{t.number("radiance", 1.0, 0, 1e12),
+                                      t.number("half_angle_rad", std::nullopt, 1e-9, std::numbers::pi / 2)};
     } else if (e == "lambertian") {
       obj.emission = LambertianEmission{t.number("radiance", 1.0, 0, 1e12)};
     } else {
       auto lightField = std::make_shared<LightField>(readNamedFile(t, "light_field", readLightFieldExr));
+      // The display's plane is the light field's: a rectangle of its extent (SPEC §2: the emitter takes the
+      // sensor's parameters). Another size would cut off elements or add a dark border without a word.
+      const auto* rect = std::get_if<Rectangle>(&obj.shape);
+      if (!rect)
+        fail(Errc::Config, "{}: a light field emitter must be a rectangle (the display's plane)", t.where("emitter"));
+      const LightFieldGeometry& g = lightField->geometry();
+      if (std::abs(rect->sizeX - g.extentX_mm()) > 1e-9 * g.extentX_mm() ||
+          std::abs(rect->sizeY - g.extentY_mm()) > 1e-9 * g.extentY_mm())
+        fail(Errc::Config, "{} = [{}, {}] is not the light field's extent, [{}, {}] mm ({} x {} elements of {} mm)",
+             t.where("size_mm"), rect->sizeX, rect->sizeY, g.extentX_mm(), g.extentY_mm(), g.spatialX, g.spatialY,
+             g.elementPitch_mm());
       const bool nearest = t.string("lookup", "nearest", {"nearest", "interpolated"}) == "nearest";
       obj.emission = LightFieldEmission{std::move(lightField),
                                         nearest ? LightFieldLookup::Nearest : LightFieldLookup::Interpolated};

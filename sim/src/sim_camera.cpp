@@ -146,7 +146,7 @@ void SimImager::capture(const CameraSettings& s, std::uint64_t frameId, cv::Mat&
   const CameraSensorModel model = sensorModel(s);
   const cv::Mat& full = radiance(s.binning, display);
   const cv::Mat roi = full(cv::Rect(s.roiX_px, s.roiY_px, s.roiWidth_px, s.roiHeight_px));
-  const cv::Mat dn = model.capture(roi, frameNoiseSeed(seed(), frameId));
+  const cv::Mat dn = model.capture(roi, frameNoiseSeed(seed(), frameId), renderThreads_);
   // The ADC's bit_depth bits, aligned to the format's most significant bits.
   const int shift = model.bitDepth - formatBits(s.pixelFormat);
   const int type = s.pixelFormat == PixelFormat::Mono8 ? CV_8UC1 : CV_16UC1;

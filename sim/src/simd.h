@@ -3,8 +3,9 @@
 // several instruction sets, chosen at load time. The functions it marks run
 // the same arithmetic on every lane with selects instead of branches, so that
 // the compiler vectorises their loops; their source files are compiled with
-// -fno-math-errno -fno-trapping-math -ffp-contract=off (sim/CMakeLists.txt):
-// without fused multiply-adds every clone gives the same bits. Off under
+// -fno-math-errno -fno-trapping-math (sim/CMakeLists.txt), and the project
+// with -ffp-contract=off: without fused multiply-adds every clone gives the
+// same bits. Off under
 // AddressSanitizer, whose run time is not up yet when the loader runs the
 // clones' resolvers. Off too when the build itself targets AVX2 or better
 // (-march=native, -march=x86-64-v3): a clone's target("arch=x86-64-v4") then

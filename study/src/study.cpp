@@ -340,8 +340,8 @@ Evaluation evaluate(const Bench& bench, const Illumination& light, const std::ve
   double brightest = 0;
   cv::minMaxLoc(smooth, nullptr, &brightest);
   sensor.exposeFor(brightest, bench.camera.exposureFill);
-  const cv::Mat intactFrame = toFloat(sensor.capture(intact, seed * 7919 + 1));
-  const cv::Mat controlFrame = toFloat(sensor.capture(intact, seed * 7919 + 2));
+  const cv::Mat intactFrame = toFloat(sensor.capture(intact, seed * 7919 + 1, ro.threads));
+  const cv::Mat controlFrame = toFloat(sensor.capture(intact, seed * 7919 + 2, ro.threads));
 
   // Per-pixel noise expected from the sensor model for a difference of two
   // frames; differences are judged in units of it (z).
@@ -381,7 +381,8 @@ Evaluation evaluate(const Bench& bench, const Illumination& light, const std::ve
     const bool isIntact = spec.name == "intact";
     const cv::Mat radiance = isIntact ? intact : renderScene(spec, seed, spec.name);
     const auto index = static_cast<std::uint64_t>(&spec - specs.data());
-    const cv::Mat frame = isIntact ? controlFrame : toFloat(sensor.capture(radiance, seed * 7919 + 100 * (index + 1)));
+    const cv::Mat frame =
+        isIntact ? controlFrame : toFloat(sensor.capture(radiance, seed * 7919 + 100 * (index + 1), ro.threads));
     const cv::Mat diff = zScore(frame, radiance);
     const std::vector<cv::Mat>& masks = truth.masks[index];
     const cv::Mat& allDefects = truth.allDefects[index];

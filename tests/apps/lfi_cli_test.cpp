@@ -210,6 +210,8 @@ TEST_F(LfiCli, CalibrateDistanceFindsHowFarTheDisplayMoved) {
     const auto result = nlohmann::json::parse(readBytes(out));
     EXPECT_EQ(result["format"], "lfi-display-distance-scan");
     EXPECT_EQ(result["reference"]["distance_mm"], 30.0);
+    EXPECT_EQ(result["reference"]["file"], fs::path(out).replace_extension(".lightfield.exr").string());
+    EXPECT_TRUE(fs::exists(result["reference"]["file"].get<std::string>()));
     ASSERT_EQ(result["candidates_mm"].size(), 13u);
     ASSERT_EQ(result["brightness"].size(), 13u);
     // Two dark images of a noisy sensor differ: a noise above the quantisation floor (1/√12 DN over 56 px).
@@ -246,7 +248,18 @@ TEST_F(LfiCli, CalibrateDistanceRefusesBadScansAndKeepsResults) {
     EXPECT_NE(run.status, 0) << arguments;
     EXPECT_NE(run.output.find(message), std::string::npos) << arguments << ": " << run.output;
     EXPECT_FALSE(fs::exists(dir_ / "new.json")) << arguments;
+    // A scan refused after the capture keeps the captured reference and says how to scan it again.
+    if (fs::exists(dir_ / "new.lightfield.exr")) {
+      EXPECT_NE(run.output.find("--light-field " + (dir_ / "new.lightfield.exr").string()), std::string::npos)
+          << arguments << ": " << run.output;
+      fs::remove(dir_ / "new.lightfield.exr");
+    }
   }
+  EXPECT_TRUE(lfi("calibrate-distance " + devices + " --from -6 --to 0 --out " + quoted(dir_ / "new.json"))
+                  .output.find("scan further") != std::string::npos);
+  ASSERT_TRUE(fs::exists(dir_ / "new.lightfield.exr"));
+  run = lfi("calibrate-distance " + devices + " --from -6 --to 0 --out " + quoted(dir_ / "new.json"));
+  EXPECT_NE(run.output.find("new.lightfield.exr' exists"), std::string::npos) << run.output;
   run = lfi("calibrate-distance " + devices + " --out " + quoted(dir_));
   EXPECT_NE(run.output.find("must name a file, not a folder"), std::string::npos) << run.output;
   // A result that could not be written is known before the scan, not after it.

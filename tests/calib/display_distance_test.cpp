@@ -296,6 +296,60 @@ TEST(DisplayDistance, RejectsBadCandidatesAndImages) {
   auto nan = [](const LightField&) { return cv::Mat(8, 8, CV_32FC1, cv::Scalar(NAN)); };
   EXPECT_TRUE(throwsError([&] { calib::calibrateDisplayDistance(lf, nan, {0, 1, 2}); }, Errc::Device,
                           {"non-finite", "with the display dark"}));
+  // A reference that does not say how far from the part it was captured.
+  LightFieldGeometry unset = smallGeometry();
+  unset.distance_mm = 0;
+  EXPECT_TRUE(throwsError([&] { calib::calibrateDisplayDistance(LightField(unset), black, {0, 1, 2}); },
+                          Errc::InvalidArgument, {"distance_mm", "not set"}));
+  // A camera that fails mid-scan: its error, its code, the candidate and what the scan had so far.
+  auto stallsAtOne = [](const LightField& shown) {
+    if (shownEpsilon(shown) == 1) lfi::fail(Errc::Timeout, "camera 'x': no frame");
+    return cv::Mat(8, 8, CV_32FC1, cv::Scalar(10 - std::abs(shownEpsilon(shown))));
+  };
+  EXPECT_TRUE(throwsError([&] { calib::calibrateDisplayDistance(lf, stallsAtOne, {-1, 0, 1, 2}); }, Errc::Timeout,
+                          {"candidate +1 mm", "camera 'x': no frame", "-1 mm: 9", "+0 mm: 10"}));
+}
+
+// The noise where the signal is: a camera's shot noise grows with the light,
+// which two dark images cannot show. A rise of 120 times the dark images' noise
+// of a mean, but only 4 times the noise at the part's brightness, is refused;
+// the same rise with the noise as small in the light as in the dark is not.
+TEST(DisplayDistance, TheNoiseIsMeasuredWhereTheSignalIs) {
+  LightField lf(smallGeometry());
+  lf.lensletImage().setTo(1);  // shown fields are not dark; the dark one is all zeros
+  cv::RNG rng(3);
+  auto camera = [&](double litSigma) {
+    return [&, litSigma](const LightField& shown) {
+      const bool lit = cv::countNonZero(shown.lensletImage()) > 0;
+      cv::Mat image(32, 32, CV_32FC1);  // 1024 pixels: a mean's noise is sigma / 32
+      rng.fill(image, cv::RNG::NORMAL, 0, lit ? litSigma : 0.32);
+      return cv::Mat(image + (lit ? 100 + 0.4 * (3 - std::abs(shownEpsilon(shown))) : 5.0));  // a rise of 1.2
+    };
+  };
+  const std::vector<double> candidates = {-3, -2, -1, 0, 1, 2, 3};
+  EXPECT_TRUE(throwsError([&] { calib::calibrateDisplayDistance(lf, camera(9.6), candidates); }, Errc::Device,
+                          {"hardly changes"}));
+  const auto scan = calib::calibrateDisplayDistance(lf, camera(0.32), candidates);
+  EXPECT_NEAR(scan.noise, 0.01, 0.002);
+  EXPECT_NEAR(scan.estimate_mm, 0, 0.1);
+}
+
+// Light that drifts during the scan tilts the peak: the brightest candidate,
+// measured again at the end, must agree with itself.
+TEST(DisplayDistance, DriftDuringTheScanIsRefused) {
+  LightField lf(smallGeometry());
+  lf.lensletImage().setTo(1);
+  int shows = 0;
+  auto drifting = [&](const LightField& shown) {
+    const bool lit = cv::countNonZero(shown.lensletImage()) > 0;
+    const double value = lit ? 100 - 10 * std::abs(shownEpsilon(shown)) + 0.5 * shows : 0.0;
+    ++shows;
+    cv::Mat image(16, 16, CV_32FC1);
+    cv::RNG(shows).fill(image, cv::RNG::NORMAL, value, 0.16);  // a mean's noise 0.01
+    return image;
+  };
+  EXPECT_TRUE(throwsError([&] { calib::calibrateDisplayDistance(lf, drifting, {-3, -2, -1, 0, 1, 2, 3}); },
+                          Errc::Device, {"candidate +0 mm", "after the scan", "drifting"}));
 }
 
 // A display that shows nothing (or a camera that sees nothing of it) gives a

@@ -232,9 +232,13 @@ TEST_F(ServedCameraTest, BinnedFramesEqualTheLocalRender) {
   s.binning = 2;
   s.roiX_px = 0;
   s.roiY_px = 0;
-  s.roiWidth_px = 48;  // the served device's Width range does not shrink with binning: explicit ROI
-  s.roiHeight_px = 32;
+  // "To the end": the binned sensor, 48 x 32, although the served device's Width and Height bounds do not shrink
+  // with binning (asking for them gave black frames marked complete).
+  s.roiWidth_px = 0;
+  s.roiHeight_px = 0;
   camera->configure(s);
+  EXPECT_EQ(camera->settings().roiWidth_px, 48);
+  EXPECT_EQ(camera->settings().roiHeight_px, 32);
   sim::SimImager local(scene_);
   const CameraSettings resolved = local.resolve(s, "local");
   camera->start(4);

@@ -155,6 +155,17 @@ TEST_F(SceneFile, BadValuesAreErrors) {
   EXPECT_TRUE(throwsError(
       [&] { loadSceneFile(write("h.toml", head + "[[object]]\nname='m'\nshape='mesh'\nfile='none.ply'\n")); },
       Errc::NotFound, {"h.toml:", "object[0].file", "none.ply"}));
+  // A light field emitter is a rectangle of the light field's extent: 4 x 3 elements of 2 x 0.5 mm.
+  writeLightFieldExr(dir_ / "good.exr", LightField({.spatialX = 4, .spatialY = 3, .angular = 2, .pixelPitch_mm = 0.5,
+                                                    .distance_mm = 30}));
+  auto display = [&](const std::string& shape) {
+    return head + "[[object]]\nname='d'\n" + shape + "emitter='light_field'\nlight_field='good.exr'\n";
+  };
+  EXPECT_NO_THROW(loadSceneFile(write("i.toml", display("shape='rectangle'\nsize_mm=[4,3]\n"))));
+  EXPECT_TRUE(throwsError([&] { loadSceneFile(write("j.toml", display("shape='rectangle'\nsize_mm=[4,4]\n"))); },
+                          Errc::Config, {"j.toml:", "object[0].size_mm", "[4, 3] mm"}));
+  EXPECT_TRUE(throwsError([&] { loadSceneFile(write("k.toml", display("shape='sphere'\nradius_mm=2\n"))); },
+                          Errc::Config, {"k.toml:", "object[0].emitter", "rectangle"}));
 }
 
 // The tracer starts a sensor's rays in air; rays that would start inside a

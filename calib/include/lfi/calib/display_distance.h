@@ -42,7 +42,8 @@ struct DisplayDistanceScan {
   std::vector<double> candidates_mm;  // the ε tried
   std::vector<double> brightness;     // figure of merit per candidate
   double dark = 0;                    // the same with the display dark (a light field of zeros)
-  double noise = 0;                   // the frame-to-frame noise of a mean over the region, from two dark images
+  double noise = 0;  // the frame-to-frame noise of a mean over the region: the larger from two dark images and
+                     // from the brightest candidate's two images
   double level = 0;                   // the brightness at which the peak's flanks are located
   double estimate_mm = 0;             // ε at the centre of the peak
   double width_mm = 0;                // the peak's width at `level`
@@ -51,12 +52,14 @@ struct DisplayDistanceScan {
 // Scans the candidate errors and returns the estimate. `roi` selects the
 // part's pixels (CV_8UC1, non-zero = use; empty = the whole image); the figure
 // of merit is the mean image value there. A dark light field is shown twice
-// first: the spread of the difference of its two images over the region sets
-// the noise of a mean, a pixel's share of it never below `pixelNoiseFloor` (in
-// the image's units; for a camera's averaged digital numbers, a DN's
-// quantisation over the frames averaged, 1/√(12·frames)). Throws, with the
-// scan's brightness per candidate where there is one:
-//   Errc::InvalidArgument  fewer than three candidates, candidates not finite and
+// first, and the brightest candidate again after the scan: the spread of the
+// difference of each pair over the region sets the noise of a mean (the larger;
+// the dark pair's, a pixel's share of it, never below `pixelNoiseFloor`, in the
+// image's units; for a camera's averaged digital numbers, a DN's quantisation
+// over the frames averaged, 1/√(12·frames)). Throws, with the scan's brightness
+// per candidate where there is one:
+//   Errc::InvalidArgument  a reference without its distance (0: not set), fewer
+//                          than three candidates, candidates not finite and
 //                          strictly increasing, one that puts the display at or
 //                          past the part, an empty or non-CV_8UC1 ROI, a ROI of
 //                          another size than the images, an image of more than one
@@ -65,9 +68,12 @@ struct DisplayDistanceScan {
 //                          further that way) or rises again outside that peak to
 //                          three times the noise of a mean above the level (two peaks)
 //   Errc::Device           no image, non-finite values, an image of another size
-//                          than the first, or a brightness whose rise across the
+//                          than the first, a brightness whose rise across the
 //                          scan is not ten times the noise of a mean (display
-//                          dark, camera saturated, ROI off the part)
+//                          dark, camera saturated, ROI off the part), or a
+//                          brightest candidate whose two means differ by more
+//                          than five times the noise of their difference (drift)
+//   (and whatever `inspect` throws, with its code, naming the candidate)
 DisplayDistanceScan calibrateDisplayDistance(const LightField& captured, const InspectFunction& inspect,
                                              const std::vector<double>& candidates_mm, const cv::Mat& roi = {},
                                              double pixelNoiseFloor = 0);

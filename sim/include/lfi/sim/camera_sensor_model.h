@@ -29,8 +29,9 @@ struct CameraSensorModel {
   int maxDigitalNumber() const { return (1 << bitDepth) - 1; }
   // Sets electronsPerUnit so that radiance `brightest` fills `fraction` of the well.
   void exposeFor(double brightest, double fraction = 0.7);
-  // CV_32FC1 radiance -> CV_16UC1 digital numbers, with a reproducible noise draw.
-  cv::Mat capture(const cv::Mat& radiance, std::uint64_t seed) const;
+  // CV_32FC1 radiance -> CV_16UC1 digital numbers, with a reproducible noise draw
+  // (the same for any number of worker threads; 0 = all cores).
+  cv::Mat capture(const cv::Mat& radiance, std::uint64_t seed, int threads = 0) const;
   // Expected noise (DN rms) of a pixel whose mean signal is `dn` DN.
   double noiseDn(double dn) const;
   void validate() const;

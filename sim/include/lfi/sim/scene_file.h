@@ -22,7 +22,7 @@ struct CameraSensorParameters {
   double fullWell_e = 10500;           // e-
   double readNoise_e = 2.4;            // e- rms
   int bitDepth = 12;                   // ADC bits
-  double electronsPerUnitPerUs = 0.7;  // e- per unit radiance per µs: 10 ms fills 70 % of the well at radiance 1
+  double electronsPerUnitPerUs = 0.7;  // e- per unit radiance per µs: 10 ms gives 7000 e- (2/3 of the well)
 };
 
 // [display]: the simulated light field display (the `sim:` display backend,
