@@ -442,7 +442,9 @@ int main(int argc, char** argv) {
       ->delimiter(',')
       ->expected(4);
   calibrate->add_option("--out", calibrateOut, "Result file (JSON)")->required();
-  calibrate->add_flag("--force", calibrateForce, "Replace an existing result file");
+  calibrate->add_flag("--force", calibrateForce,
+                      "Replace an existing result file, and the captured reference kept beside it (scan.json: "
+                      "scan.lightfield.exr)");
 
   // lfi lf-info
   auto* lfInfo = app.add_subcommand("lf-info", "Validate a light field EXR and print its parametrisation");
@@ -547,8 +549,9 @@ int main(int argc, char** argv) {
         image = controller.inspect();
       } catch (const lfi::Error& e) {
         if (!bench.captured) throw;
-        throw lfi::Error(e.code(), fmt::format("{} (the captured light field is kept: rerun with --light-field {} to "
-                                               "skip the capture)", e.what(), (inspectOut / "lightfield.exr").string()));
+        throw lfi::Error(e.code(),
+                         fmt::format("{} (the captured light field is kept: rerun with --light-field {} to skip the "
+                                     "capture)", e.what(), (inspectOut / "lightfield.exr").string()));
       }
       const auto info = bench.camera->info();
       lfi::writeRadianceExr(inspectOut / "inspection.exr", image,

@@ -11,6 +11,18 @@
 #include <vector>
 
 namespace lfi {
+namespace {
+
+// The display's id for a message (its info() has a state of its own to refuse in).
+std::string displayName(const Display& display) {
+  try {
+    return display.info().deviceId;
+  } catch (const Error&) {
+    return "(its id unknown)";
+  }
+}
+
+}  // namespace
 
 Controller::Controller(LightFieldCapture& capture, Display& display, Camera& camera, ControllerOptions options)
     : capture_(capture), display_(display), camera_(camera), options_(options) {
@@ -57,8 +69,8 @@ void Controller::emit(const LightField& reference, double white) {
   if (camera_.state() == Camera::State::Streaming) staleFrames_ = true;
   const PresentResult r = display_.show(reference, white_);
   if (r.status != PresentStatus::Presented)
-    fail(Errc::Device, "emit: display '{}' did not show the light field ({}{}{})", display_.info().deviceId,
-         toString(r.status), r.message.empty() ? "" : ": ", r.message);  // (still open: a vanished one throws)
+    fail(Errc::Device, "emit: display '{}' did not show the light field ({}{}{})", displayName(display_),
+         toString(r.status), r.message.empty() ? "" : ": ", r.message);
   shown_ = std::chrono::steady_clock::now();
   spdlog::info("emit: light field shown (sequence {}, white = {:.4g})", r.sequence, white_);
 }

@@ -57,23 +57,31 @@ void syncFile(const fs::path& file, const fs::path& target) {
 
 }  // namespace
 
+fs::path resolvedTarget(const fs::path& path) {
+  fs::path target = path;
+  for (int links = 0;; ++links) {
+    std::error_code ec;
+    const fs::file_status status = fs::symlink_status(target, ec);
+    if (ec && status.type() != fs::file_type::not_found)
+      fail(Errc::Io, "cannot write '{}': {}", path.string(), ec.message());
+    if (status.type() != fs::file_type::symlink) return target;
+    if (links == 40) fail(Errc::Io, "cannot write '{}': too many levels of symbolic links", path.string());
+    const fs::path next = fs::read_symlink(target, ec);
+    if (ec) fail(Errc::Io, "cannot write '{}': reading its link: {}", path.string(), ec.message());
+    target = next.is_absolute() ? next : target.parent_path() / next;
+  }
+}
+
 void writeFileAtomically(const fs::path& requested, Overwrite overwrite,
                          const std::function<void(const fs::path&)>& writeTo) {
   if (requested.filename().empty())
     fail(Errc::InvalidArgument, "cannot write '{}': not a file name", requested.string());
+  // Through a symbolic link the file it points to is written (a rename over
+  // the link would replace the link), even when it is not there yet.
+  const fs::path target = resolvedTarget(requested);
   std::error_code ec;
-  const fs::file_status status = fs::symlink_status(requested, ec);
-  if (ec && status.type() != fs::file_type::not_found)
-    fail(Errc::Io, "cannot write '{}': {}", requested.string(), ec.message());
-  if (overwrite == Overwrite::Refuse && status.type() != fs::file_type::not_found)
+  if (overwrite == Overwrite::Refuse && fs::symlink_status(target, ec).type() != fs::file_type::not_found)
     fail(Errc::Exists, "'{}' exists; refusing to overwrite it (use --force to replace it)", requested.string());
-  // Replacing a symbolic link's file replaces the file it points to, next to
-  // it, and keeps the link (a rename over the link would replace the link).
-  fs::path target = requested;
-  if (status.type() == fs::file_type::symlink) {
-    target = fs::weakly_canonical(requested, ec);
-    if (ec) fail(Errc::Io, "cannot write '{}': resolving its link: {}", requested.string(), ec.message());
-  }
   const fs::path dir = target.has_parent_path() ? target.parent_path() : fs::path(".");
 
   // mkstemp gives a unique name that nothing else writes to; the writer may

@@ -77,13 +77,9 @@ void writeExr(const fs::path& path, const cv::Mat& image, Imf::Header header, Ov
   if (image.cols > (1 << 17) || image.rows > (1 << 17) || image.total() > (std::size_t{1} << 30))
     fail(Errc::InvalidArgument, "cannot write '{}': {}x{} pixels is more than an lfi file holds (2^17 a side, 2^30 "
          "pixels)", path.string(), image.cols, image.rows);
-  for (int r = 0; r < image.rows; ++r) {
-    const float* row = image.ptr<float>(r);
-    for (int c = 0; c < image.cols; ++c)
-      if (!std::isfinite(row[c]))
-        fail(Errc::InvalidArgument, "cannot write '{}': pixel ({}, {}) is {}; radiance must be finite",
-             path.string(), c, r, row[c]);
-  }
+  if (const auto bad = firstNonFinite(image))
+    fail(Errc::InvalidArgument, "cannot write '{}': pixel ({}, {}) is {}; radiance must be finite", path.string(),
+         bad->x, bad->y, image.at<float>(*bad));
   cv::Mat pixels = image.isContinuous() ? image : image.clone();
   header.compression() = Imf::ZIP_COMPRESSION;
   header.channels().insert("Y", Imf::Channel(Imf::FLOAT));

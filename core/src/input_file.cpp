@@ -12,8 +12,15 @@ void requireInputFile(const std::filesystem::path& path, std::string_view what) 
   if (status.type() == std::filesystem::file_type::not_found)
     fail(Errc::NotFound, "'{}': no such {}", path.string(), what);
   if (ec) fail(Errc::Io, "'{}': cannot look at it: {}", path.string(), ec.message());
-  if (status.type() != std::filesystem::file_type::regular)
-    fail(Errc::InvalidFile, "'{}': not a regular file (a directory, FIFO, socket or device)", path.string());
+  using std::filesystem::file_type;
+  const file_type type = status.type();
+  if (type != file_type::regular)
+    fail(Errc::InvalidFile, "'{}': a {}, not a {}", path.string(),
+         type == file_type::directory ? "directory"
+         : type == file_type::fifo    ? "FIFO (a reader would wait on it)"
+         : type == file_type::socket  ? "socket"
+                                      : "device or special file",
+         what);
 }
 
 }  // namespace lfi

@@ -102,6 +102,7 @@ struct GvCameraServer::Impl {
       self->filler(request, image);
       self->lastWarning.clear();  // a frame as asked: the next refusal is news again
     } catch (const std::exception& e) {  // (the filler refused what the client asked: every frame alike)
+      std::memset(pixels, 0, static_cast<std::size_t>(size));  // (it may have written part of the image)
       self->warnOnce(fmt::format("frames go out black: {}", e.what()));
     }
   }

@@ -129,8 +129,8 @@ public:
       // Start from a known receive state: a host that died, or gave up, in the
       // middle of a frame left its bytes in the device.
       if (!clearHalt())
-        fail(Errc::Device, "{}: CLEAR_HALT of endpoint 0x{:02x} failed ({}): the device does not take it", name_,
-             endpoint_, clearHaltError_);
+        fail(Errc::Timeout, "{}: CLEAR_HALT of endpoint 0x{:02x} got no answer ({}): the device does not answer",
+             name_, endpoint_, clearHaltError_);
     } catch (...) {
       close();
       throw;
@@ -176,9 +176,10 @@ public:
       if (outcome == BulkOutcome::NoDevice) vanished(fmt::format("bulk OUT of frame {}", sequence));
       if (outcome == BulkOutcome::Timeout)
         return {PresentStatus::Timeout, sequence,
-                fmt::format("{}: bulk OUT of frame {} to endpoint 0x{:02x} timed out ({} ms per transfer; {} of {} "
-                            "bytes acknowledged)",
-                            name_, sequence, endpoint_, options_.transferTimeout.count(), sent, frame_.size())};
+                fmt::format("{}: bulk OUT of frame {} to endpoint 0x{:02x} timed out ({} ms per transfer after those "
+                            "queued before it, up to {} queued; {} of {} bytes acknowledged)",
+                            name_, sequence, endpoint_, options_.transferTimeout.count(), options_.transfersInFlight,
+                            sent, frame_.size())};
       if (outcome == BulkOutcome::Stall) {
         if (attempt >= options_.stallRetries)
           fail(Errc::Device, "{}: endpoint 0x{:02x} stalled again on frame {} after {} clear-halt retries", name_,
@@ -398,16 +399,19 @@ private:
 
   // CLEAR_FEATURE(ENDPOINT_HALT) of the frame endpoint, which also resets the
   // device's receive state. False, with the reason in clearHaltError_, when
-  // the device did not take it: until it does, it may hold part of a frame,
-  // so the next frame tries again first. (libusb has no timeout for it: on
-  // Linux the kernel gives up after 5 s, and a failure other than a vanished
-  // device comes back as LIBUSB_ERROR_OTHER, a refusal as LIBUSB_ERROR_PIPE.)
+  // the device did not answer: until it does, it may hold part of a frame, so
+  // the next frame tries again first. (libusb has no timeout for it: on Linux
+  // the kernel gives up after 5 s and that comes back as LIBUSB_ERROR_OTHER.)
+  // A refusal (LIBUSB_ERROR_PIPE and the like) is Errc::Device.
   bool clearHalt() {
     const int rc = libusb_clear_halt(handle_, endpoint_);
     if (rc == LIBUSB_ERROR_NO_DEVICE) vanished("CLEAR_HALT");
     resync_ = rc != 0;
-    if (resync_) clearHaltError_ = libusb_error_name(rc);
-    return !resync_;
+    if (rc == 0) return true;
+    clearHaltError_ = libusb_error_name(rc);
+    if (rc != LIBUSB_ERROR_TIMEOUT && rc != LIBUSB_ERROR_OTHER)  // a refusal: trying again would not help
+      fail(Errc::Device, "{}: CLEAR_HALT on endpoint 0x{:02x} refused: {}", name_, endpoint_, clearHaltError_);
+    return false;
   }
 
   void requireOk(int rc, proto::Request request) {

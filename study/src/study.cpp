@@ -521,7 +521,9 @@ nlohmann::ordered_json runStudy(const Bench& bench, const fs::path& outDir, cons
   // Replacing an earlier study: its results go first, so that a run that fails
   // leaves no study.json of other inputs beside this run's files.
   if (options.overwrite)
-    for (const fs::path& file : {outDir / "study.json", outDir / "report.html"}) fs::remove(file);
+    for (const fs::path& file : {outDir / "study.json", outDir / "report.html"})
+      if (std::error_code ec; !fs::remove(resolvedTarget(file), ec) && ec)
+        fail(Errc::Io, "cannot remove the earlier study's '{}': {}", file.string(), ec.message());
 
   const QualitySettings q = settingsFor(options.quality);
   auto binned = [&](int binning) {
@@ -601,12 +603,13 @@ nlohmann::ordered_json runStudy(const Bench& bench, const fs::path& outDir, cons
     }
   }
 
-  // The setups' results are kept before the sweep's long run (written again with it).
-  auto writeResults = [&](Overwrite mode) {
+  // The setups' results are kept before the sweep's long run (written again with it); "complete" says which.
+  auto writeResults = [&](Overwrite mode, bool complete) {
+    study["complete"] = complete;
     writeFileAtomically(outDir / "report.html", mode, htmlReport(study));
     writeFileAtomically(outDir / "study.json", mode, study.dump(2) + "\n");
   };
-  writeResults(overwrite);
+  writeResults(overwrite, sweep.empty());
   if (!sweep.empty()) {
     // How good must the display be? Each variant captures its own light field
     // (only as large as the lens's footprint on the display plane needs) and
@@ -651,7 +654,7 @@ nlohmann::ordered_json runStudy(const Bench& bench, const fs::path& outDir, cons
       out["points"].push_back(entry);
     }
     study["sweep"]["answers"] = sweepAnswers(study["sweep"]);
-    writeResults(Overwrite::Allow);  // (this run's own, written above)
+    writeResults(Overwrite::Allow, true);  // (this run's own, written above)
   }
   return study;
 }

@@ -220,23 +220,36 @@ TEST_F(AtomicFile, PublishedFileHasUmaskModeAndReplacementKeepsMode) {
   ::umask(mask);
 }
 
-// A target that is a symbolic link: replacing it writes the file the link
-// points to and keeps the link; refusing counts the link, even a dangling one,
-// as something that exists.
-TEST_F(AtomicFile, ASymbolicLinkKeepsPointingAtTheReplacedFile) {
+// A target that is a symbolic link: the file it points to is written (a
+// file that exists only with --force), next to it, and the link stays; a
+// dangling link's file is created where it points.
+TEST_F(AtomicFile, ASymbolicLinkKeepsPointingAtTheWrittenFile) {
   fs::create_directories(dir_ / "real");
   writePlain(dir_ / "real" / "s.txt", "old");
   fs::create_symlink(fs::path("real") / "s.txt", dir_ / "s.txt");
-  EXPECT_TRUE(throwsError([&] { lfi::writeFileAtomically(dir_ / "s.txt", Overwrite::Refuse, "new"); }, Errc::Exists,
-                          {"s.txt", "--force"}));
-  lfi::writeFileAtomically(dir_ / "s.txt", Overwrite::Allow, "new");
+  fs::create_symlink("s.txt", dir_ / "link-to-link.txt");
+  EXPECT_TRUE(throwsError([&] { lfi::writeFileAtomically(dir_ / "link-to-link.txt", Overwrite::Refuse, "new"); },
+                          Errc::Exists, {"link-to-link.txt", "--force"}));
+  lfi::writeFileAtomically(dir_ / "link-to-link.txt", Overwrite::Allow, "new");
   EXPECT_TRUE(fs::is_symlink(dir_ / "s.txt"));
+  EXPECT_TRUE(fs::is_symlink(dir_ / "link-to-link.txt"));
   EXPECT_EQ(readAll(dir_ / "real" / "s.txt"), "new");
-  EXPECT_EQ(entries(), (Names{"real", "s.txt"}));
-  fs::create_symlink("nowhere.txt", dir_ / "dangling.txt");
-  EXPECT_TRUE(throwsError([&] { lfi::writeFileAtomically(dir_ / "dangling.txt", Overwrite::Refuse, "x"); },
-                          Errc::Exists, {"dangling.txt"}));
-  EXPECT_FALSE(fs::exists(dir_ / "nowhere.txt"));
+  for (const bool force : {false, true}) {
+    const std::string name = force ? "forced.txt" : "dangling.txt";
+    fs::create_symlink(fs::path("real") / ("to-" + name), dir_ / name);
+    lfi::writeFileAtomically(dir_ / name, force ? Overwrite::Allow : Overwrite::Refuse, "x");
+    EXPECT_TRUE(fs::is_symlink(dir_ / name)) << name;
+    EXPECT_EQ(readAll(dir_ / "real" / ("to-" + name)), "x") << name;
+  }
+  EXPECT_EQ(entries(), (Names{"dangling.txt", "forced.txt", "link-to-link.txt", "real", "s.txt"}));
+  std::vector<std::string> real;
+  for (const auto& entry : fs::directory_iterator(dir_ / "real")) real.push_back(entry.path().filename().string());
+  std::sort(real.begin(), real.end());
+  EXPECT_EQ(real, (Names{"s.txt", "to-dangling.txt", "to-forced.txt"}));  // no temporary left beside them
+  fs::create_symlink("loop-b", dir_ / "loop-a");
+  fs::create_symlink("loop-a", dir_ / "loop-b");
+  EXPECT_TRUE(throwsError([&] { lfi::writeFileAtomically(dir_ / "loop-a", Overwrite::Allow, "x"); }, Errc::Io,
+                          {"loop-a", "symbolic links"}));
 }
 
 }  // namespace

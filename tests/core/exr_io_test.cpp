@@ -568,7 +568,7 @@ TEST_F(ExrIo, WritingRejectsWrongImages) {
 TEST_F(ExrIo, WhatIsNotARegularFileIsNamed) {
   const fs::path fifo = file("pipe.exr");
   ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
-  EXPECT_TRUE(throwsError([&] { lfi::readLightFieldExr(fifo); }, Errc::InvalidFile, {"pipe.exr", "regular file"}));
+  EXPECT_TRUE(throwsError([&] { lfi::readLightFieldExr(fifo); }, Errc::InvalidFile, {"pipe.exr", "a FIFO"}));
   EXPECT_TRUE(throwsError([&] { lfi::ConfigTable::parseFile(fifo); }, Errc::InvalidFile, {"pipe.exr"}));
   fs::create_directory(file("d.toml"));
   EXPECT_TRUE(throwsError([&] { lfi::ConfigTable::parseFile(file("d.toml")); }, Errc::InvalidFile, {"d.toml"}));

@@ -134,6 +134,7 @@ TEST(QuickStudy, EndToEnd) {
   EXPECT_NE(readText(dir / "report.html").find("How good must the display be?"), std::string::npos);
   EXPECT_EQ(r["provenance"]["bench"], kBench.string());
   EXPECT_EQ(r["provenance"]["seed"], options.seed);
+  EXPECT_EQ(r["complete"], true);
   // A second run into the same folder must not replace the first.
   try {
     lfi::study::runStudy(bench, dir, options);

@@ -4,7 +4,8 @@
 // file in the target's directory, flushed to disk, and renamed over the target
 // in one step; a failure at any point leaves the old file untouched and removes
 // the temporary. Without Overwrite::Allow an existing target is never replaced
-// (checked atomically by the rename itself, not by a racy stat).
+// (checked atomically by the rename itself, not by a racy stat). A target that
+// is a symbolic link is written where the link points; the link stays.
 
 #include <filesystem>
 #include <functional>
@@ -19,6 +20,10 @@ enum class Overwrite { Refuse, Allow };
 // exception thrown by writeTo propagates after the temporary is removed.
 void writeFileAtomically(const std::filesystem::path& target, Overwrite overwrite,
                          const std::function<void(const std::filesystem::path& temporary)>& writeTo);
+
+// Where writeFileAtomically writes for `path`: the path itself, or the file
+// its symbolic links end at (which need not exist yet). Errc::Io for a loop.
+std::filesystem::path resolvedTarget(const std::filesystem::path& path);
 
 // Convenience for text and small binary files.
 void writeFileAtomically(const std::filesystem::path& target, Overwrite overwrite, std::string_view content);
