@@ -42,6 +42,19 @@ Vec2 TelecentricCamera::project(const Vec3& worldPoint) const {
   return {c.x * m / pixelPitch_mm + 0.5 * width, c.y * m / pixelPitch_mm + 0.5 * height};
 }
 
+TelecentricCamera TelecentricCamera::binned(int b) const {
+  if (b < 1) fail(Errc::InvalidArgument, "telecentric camera: binning {} must be >= 1", b);
+  TelecentricCamera c = *this;
+  c.width = width / b, c.height = height / b;
+  c.pixelPitch_mm = pixelPitch_mm * b;
+  // The grid is centred on the axis: with a remainder its centre would sit half
+  // the dropped pixels off the blocks' centre. Moved sideways in its own frame
+  // by that much (object side; a telecentric camera images the same then).
+  const double dx = 0.5 * (width % b) * objectPixel_mm(), dy = 0.5 * (height % b) * objectPixel_mm();
+  c.worldFromCamera.t = worldFromCamera.point({-dx, -dy, 0});
+  return c;
+}
+
 Rigid3 TelecentricCamera::lookingDownFrom(double lensZ) {
   Rigid3 x = Rigid3::rotation({1, 0, 0}, std::numbers::pi);  // x -> x, y -> -y, z -> -z
   x.t = {0, 0, lensZ};

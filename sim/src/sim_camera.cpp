@@ -127,10 +127,7 @@ const cv::Mat& SimImager::radiance(int binning, const SimBench::DisplayState* di
     return entry.first.first != display->version && entry.first.first != kept;
   });
   SimBench::applyDisplay(*scene_, description_.displayObject, *display);
-  TelecentricCamera binned = camera_;
-  binned.width = camera_.width / binning;
-  binned.height = camera_.height / binning;
-  binned.pixelPitch_mm = camera_.pixelPitch_mm * binning;
+  const TelecentricCamera binned = camera_.binned(binning);
   RenderOptions options = description_.render;
   options.threads = renderThreads_;
   options.progress = renderProgress_;

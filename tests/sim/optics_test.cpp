@@ -15,6 +15,7 @@
 
 #include <algorithm>
 #include <random>
+#include <tuple>
 
 #include <cmath>
 #include <numbers>
@@ -25,6 +26,7 @@ using namespace lfi;
 using namespace lfi::sim;
 
 using lfi::testing_support::expectNear;
+using lfi::testing_support::throwsError;
 
 // A direction at angle theta from -n (travelling into the surface) in the x-z plane.
 Vec3 incoming(double theta) {
@@ -298,6 +300,29 @@ TEST(TelecentricCamera, ChiefRaysAreParallelToTheAxisAndProjectBack) {
         EXPECT_NEAR(p.y, j + 0.5, 1e-9);
       }
     }
+}
+
+// Binning b x b: binned pixel (i, j) sees what the unbinned block b i .., b j ..
+// sees, its chief ray the mean of theirs, also when the size is no multiple of
+// b (the remainder is dropped on the right and bottom, as a sensor drops it).
+TEST(TelecentricCamera, ABinnedPixelSeesItsBlock) {
+  TelecentricCamera cam = testCamera(someCameraPose());
+  for (const auto& [width, height, b] : {std::tuple{40, 30, 2}, std::tuple{41, 31, 2}, std::tuple{41, 32, 3}}) {
+    cam.width = width, cam.height = height;
+    const TelecentricCamera binned = cam.binned(b);
+    EXPECT_EQ(binned.width, width / b);
+    EXPECT_EQ(binned.height, height / b);
+    EXPECT_NEAR(binned.objectPixel_mm(), b * cam.objectPixel_mm(), 1e-12);
+    for (const auto& [i, j] : {std::pair{0, 0}, std::pair{binned.width - 1, binned.height - 1}, std::pair{3, 5}}) {
+      Vec3 mean(0, 0, 0);
+      for (int v = 0; v < b; ++v)
+        for (int u = 0; u < b; ++u) mean += cam.ray(b * i + u, b * j + v, {0.5, 0.5}, {0, 0}).origin / (b * b);
+      const Ray chief = binned.ray(i, j, {0.5, 0.5}, {0, 0});
+      expectNear(chief.origin, mean, 1e-9);
+      expectNear(chief.direction, cam.ray(0, 0, {0.5, 0.5}, {0, 0}).direction, 1e-12);
+    }
+  }
+  EXPECT_TRUE(throwsError([&] { (void)cam.binned(0); }, Errc::InvalidArgument, {"binning 0"}));
 }
 
 TEST(TelecentricCamera, AllApertureSamplesOfAPixelMeetAtTheFocusedPoint) {

@@ -87,6 +87,10 @@ struct TelecentricCamera {
   Vec2 project(const Vec3& worldPoint) const;
   // A camera looking down -z from z = lensZ, focused at world z = lensZ - wz.
   static Rigid3 lookingDownFrom(double lensZ);
+  // The same camera binned b x b, as a sensor bins: pixel (i, j) covers the
+  // block of pixels b i .. b i + b - 1, b j .. b j + b - 1; a remainder of
+  // width or height that makes no whole block is dropped (right, bottom).
+  TelecentricCamera binned(int b) const;
 };
 
 struct LightFieldSensor {
