@@ -230,6 +230,19 @@ OpenBench openBench(const BenchOptions& o, const char* command) {
   return bench;
 }
 
+// Makes the folder that --out names (or holds) and checks that files can be
+// written into it, before any work: Errc::Io naming the option and the reason.
+void requireOutputFolder(const fs::path& folder, const char* command) {
+  std::error_code made;
+  fs::create_directories(folder, made);
+  if (made || !fs::is_directory(folder))
+    lfi::fail(lfi::Errc::Io, "{}: cannot make the folder '{}' for --out: {}", command, folder.string(),
+              made ? made.message() : std::string("a file of that name is in the way"));
+  if (::access(folder.c_str(), W_OK) != 0)
+    lfi::fail(lfi::Errc::Io, "{}: cannot write into '{}' for --out: {}", command, folder.string(),
+              std::strerror(errno));
+}
+
 // --from, --to and --step as the candidate errors; Errc::Config naming them.
 std::vector<double> scanCandidates(double from, double to, double step) {
   const double count = std::isfinite(from) && std::isfinite(to) && step > 0 ? (to - from) / step : -1;
@@ -256,14 +269,9 @@ void calibrateDistance(const BenchOptions& o, const std::vector<double>& candida
   for (const fs::path& file : outputs)
     if (!force && fs::exists(file))
       lfi::fail(lfi::Errc::Exists, "'{}' exists; refusing to overwrite it (use --force to replace it)", file.string());
-  // Where the result goes must take it before the scan, not after.
-  const fs::path folder = out.parent_path().empty() ? fs::path(".") : out.parent_path();
-  std::error_code ec;
-  fs::create_directories(folder, ec);
-  if (ec || ::access(folder.c_str(), W_OK) != 0)
-    lfi::fail(lfi::Errc::Io, "calibrate-distance: cannot write into '{}' for --out: {}", folder.string(),
-              ec ? ec.message() : std::string(std::strerror(errno)));
   OpenBench bench = openBench(o, "calibrate-distance");
+  // Where the result goes must take it before the scan, not after (and a bad device leaves no folder behind).
+  requireOutputFolder(out.parent_path().empty() ? fs::path(".") : out.parent_path(), "calibrate-distance");
   const lfi::CameraSettings settings = bench.camera->settings();
   cv::Mat roi;
   if (!roiBox.empty()) {
@@ -310,7 +318,8 @@ void calibrateDistance(const BenchOptions& o, const std::vector<double>& candida
   fmt::print("with the display dark: {:.6g} (noise of a mean {:.2g})\n", scan.dark, scan.noise);
   for (size_t i = 0; i < scan.candidates_mm.size(); ++i)
     fmt::print("{:+8.3f} mm  {:.6g}\n", scan.candidates_mm[i], scan.brightness[i]);
-  fmt::print("estimate {:+.3f} mm (display further from the part than the reference's {} mm)\n", scan.estimate_mm,
+  fmt::print("estimate {:+.3f} mm (the display {:.3f} mm {} the part than the reference's {} mm)\n",
+             scan.estimate_mm, std::abs(scan.estimate_mm), scan.estimate_mm >= 0 ? "further from" : "nearer to",
              reference.geometry().distance_mm);
   const lfi::CameraInfo camera = bench.camera->info();
   nlohmann::ordered_json result;
@@ -322,7 +331,7 @@ void calibrateDistance(const BenchOptions& o, const std::vector<double>& candida
       "estimate is the centre of the brightness peak, half-way between where it falls below `level` on either "
       "side (docs/calibration.md)";
   result["reference"] = {{"source", bench.capture->description()},
-                         {"file", bench.captured ? referenceFile.string() : o.lightField.string()},
+                         {"file", fs::absolute(bench.captured ? referenceFile : o.lightField).string()},
                          {"distance_mm", reference.geometry().distance_mm}};
   result["camera"] = {{"uri", o.camera},
                       {"vendor", camera.vendor},
@@ -491,11 +500,7 @@ int main(int argc, char** argv) {
       const std::vector<fs::path> outputs =
           lightField ? std::vector<fs::path>{renderOut / (d.name + "_lightfield.exr")}
                      : std::vector<fs::path>{renderOut / (d.name + ".exr"), renderOut / (d.name + ".png")};
-      std::error_code made;
-      fs::create_directories(renderOut, made);
-      if (made || !fs::is_directory(renderOut))
-        lfi::fail(lfi::Errc::Io, "render: cannot make the folder '{}' for --out{}", renderOut.string(),
-                  made ? ": " + made.message() : std::string(": a file of that name is in the way"));
+      requireOutputFolder(renderOut, "render");
       for (const fs::path& out : outputs)
         if (!renderForce && fs::exists(out))
           lfi::fail(lfi::Errc::Exists, "'{}' exists; refusing to overwrite it (use --force to replace it)",
@@ -537,7 +542,7 @@ int main(int argc, char** argv) {
       options.settle = std::chrono::milliseconds(inspectBench.settle_ms);
       ProgressBar bar;
       lfi::Controller controller(*bench.capture, *bench.display, *bench.camera, options);
-      fs::create_directories(inspectOut);  // (once the devices are open: a bad option leaves no empty folder)
+      requireOutputFolder(inspectOut, "inspect");  // (once the devices are open: a bad one leaves no folder)
       const lfi::LightField reference = controller.captureReference([&](const char* step, double f) {
         if (!quiet) bar(step, f);
       });
@@ -563,6 +568,7 @@ int main(int argc, char** argv) {
       cv::Mat png8;
       image.convertTo(png8, CV_8U, maxValue > 0 ? 255.0 / maxValue : 1.0);
       lfi::writePngAtomically(inspectOut / "inspection.png", png8, overwrite);
+      if (bench.captured) fmt::print("{}\n", (inspectOut / "lightfield.exr").string());
       fmt::print("{}\n{}\n", (inspectOut / "inspection.exr").string(), (inspectOut / "inspection.png").string());
     } else if (*calibrate) {
       calibrateDistance(calibrateBench, scanCandidates(scanFrom, scanTo, scanStep), roiBox, calibrateOut,

@@ -203,7 +203,11 @@ int rmse(const char* a, const char* b) {
 
 static int run(int argc, char** argv) {
   if (argc == 4 && std::strcmp(argv[1], "--rmse") == 0) return rmse(argv[2], argv[3]);
-  const bool quick = argc > 1 && std::strcmp(argv[1], "--quick") == 0;
+  const bool quick = argc == 2 && std::strcmp(argv[1], "--quick") == 0;
+  if (argc > 1 && !quick) {  // (anything else, --help or a typo, used to start the 20-s run)
+    std::fprintf(stderr, "usage: lfi-bench [--quick]\n       lfi-bench --rmse A.exr B.exr\n");
+    return 2;
+  }
   const int threads = tbb::info::default_concurrency();
   SceneDescription d = loadSceneFile(std::filesystem::path(LFI_SOURCE_DIR) / "data" / "scenes" / "reference.toml");
   auto cam = std::get<TelecentricCamera>(d.sensor);

@@ -8,6 +8,7 @@
 // Run through the umockdev launcher:
 //   tests/drivers/run_with_umockdev.sh build/release/bench/lfi-usb-display-bench [frames]
 
+#include "lfi/core/error.h"
 #include "lfi/drivers/display_registry.h"
 #include "lfi/drivers/usb_display.h"
 
@@ -52,7 +53,9 @@ static int run(int argc, char** argv) {
     auto display = lfi::openUsbDisplay(lfi::parseUsbDisplayPath("1209:4c46", "usb:1209:4c46"), options);
     const double seconds = bestSeconds(frames, [&] {
       const auto r = display->show(panel);
-      if (r.status != lfi::PresentStatus::Presented) fmt::print(stderr, "frame not presented: {}\n", r.message);
+      // (a frame that failed fast must not pass for a fast upload)
+      if (r.status != lfi::PresentStatus::Presented)
+        lfi::fail(lfi::Errc::Device, "frame not presented ({}): {}", lfi::toString(r.status), r.message);
     });
     fmt::print("  upload, {} transfer(s) in flight: {:8.2f} ms  ({:.0f} MB/s, {:.0f}x memcpy)\n", inFlight,
                seconds * 1e3, megabytes / seconds, seconds / copySeconds);

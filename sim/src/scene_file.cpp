@@ -478,8 +478,13 @@ Object readObject(ConfigTable& t) {
     obj.shape = readNamedFile(t, "file", [crease](const fs::path& file) { return loadMesh(file, crease); });
   } else {
     std::shared_ptr<const Solid> solid = readSolid(t, kind);
-    // Cut-outs: spheres subtracted from the solid (object frame).
-    for (ConfigTable& cut : t.tables("cut")) {
+    // Cut-outs: spheres subtracted from the solid (object frame). Each can split
+    // the part once along a ray; the tracer holds IntervalList::kCapacity pieces.
+    auto cuts = t.tables("cut");
+    if (constexpr auto kMaxCuts = static_cast<size_t>(IntervalList::kCapacity) - 2; cuts.size() > kMaxCuts)
+      fail(Errc::Config, "{}: {} cut-outs; at most {} per object (a ray through all of them would cross more "
+           "pieces than the tracer follows): make the part a mesh", t.where("cut"), cuts.size(), kMaxCuts);
+    for (ConfigTable& cut : cuts) {
       const auto c = cut.numbers("position_mm", 3);
       solid = Solid::combine(Solid::Kind::Difference, solid,
                              Solid::sphere(cut.number("radius_mm", std::nullopt, 1e-9, 1e6),

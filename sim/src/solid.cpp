@@ -201,6 +201,25 @@ double sphericalFaceZ(double radius, double z0, double r) {
   return z0 + radius - std::copysign(std::sqrt(radius * radius - r * r), radius);
 }
 
+namespace {
+
+// Whether a convex face's whole ball would cut into the glass from behind: its
+// far side reaches past the other face somewhere inside the diameter (a steep
+// dome on a thick lens). Such a face is then its ball joined with the half
+// space beyond its rim's plane, which is the glass above (below) the cap.
+bool farSideCutsGlass(double r1, double r2, double tc, double semi, bool front) {
+  const double r = front ? r1 : r2;
+  if (front ? !(r > 0) : !(r < 0)) return false;  // flat or concave
+  for (int i = 0; i <= 64; ++i) {
+    const double x = semi * i / 64, far = std::sqrt(r * r - x * x);
+    if (front ? sphericalFaceZ(r2, tc / 2, x) > -tc / 2 + r + far : sphericalFaceZ(r1, -tc / 2, x) < tc / 2 + r - far)
+      return true;
+  }
+  return false;
+}
+
+}  // namespace
+
 std::optional<LensFault> sphericalLensFault(double r1, double r2, double tc, double diameter) {
   using Part = LensFault::Part;
   if (!(tc > 0) || !std::isfinite(tc))
@@ -228,8 +247,10 @@ bool sphericalLensHolds(double r1, double r2, double tc, double diameter, const 
     const double side = glassUp ? 1 : -1;  // the glass is where side * (z - plane) > 0
     if (r == 0) return side * (c.z - z0) > radius;
     const double d = (c - Vec3(0, 0, z0 + r)).length();
-    if (glassUp ? r > 0 : r < 0) return d + radius < std::abs(r);  // convex: inside the face's sphere
     const double sag = std::abs(r) - std::sqrt(r * r - diameter * diameter / 4);
+    if (glassUp ? r > 0 : r < 0)  // convex: inside the face's sphere (or beyond the rim's plane, if it is joined)
+      return d + radius < std::abs(r) ||
+             (farSideCutsGlass(r1, r2, tc, diameter / 2, glassUp) && side * (c.z - (z0 + side * sag)) > radius);
     // Concave: outside the face's sphere, and on the glass side of the rim's plane.
     return d - radius > std::abs(r) && side * (c.z - (z0 - side * sag)) > radius;
   };
@@ -253,12 +274,16 @@ std::shared_ptr<Solid> Solid::sphericalLens(double r1, double r2, double tc, dou
     }
     auto ball = sphere(std::abs(radius), Rigid3::translation({0, 0, z0 + radius}));
     const bool convex = glassTowardsPlusZ ? radius > 0 : radius < 0;
-    if (convex) {
-      body = combine(Kind::Intersection, body, ball);
+    const double sag = std::abs(radius) - std::sqrt(radius * radius - diameter * diameter / 4);
+    if (convex) {  // (a ball that would cut the glass from behind is joined with the space beyond its rim)
+      body = combine(Kind::Intersection, body,
+                     farSideCutsGlass(r1, r2, tc, diameter / 2, glassTowardsPlusZ)
+                         ? combine(Kind::Union, ball, glassSide(glassTowardsPlusZ ? z0 + sag : z0 - sag,
+                                                               glassTowardsPlusZ))
+                         : ball);
       return;
     }
     // Concave: the glass is outside the ball, bounded by the plane of the rim.
-    const double sag = std::abs(radius) - std::sqrt(radius * radius - diameter * diameter / 4);
     body = combine(Kind::Difference, body, ball);
     body = combine(Kind::Intersection, body, glassSide(glassTowardsPlusZ ? z0 - sag : z0 + sag, glassTowardsPlusZ));
   };

@@ -517,7 +517,9 @@ nlohmann::ordered_json runStudy(const Bench& bench, const fs::path& outDir, cons
   if (std::error_code ec; !options.overwrite && fs::is_directory(outDir / "images", ec) &&
                           !fs::is_empty(outDir / "images", ec))
     fail(Errc::Exists, "'{}' already holds a study's images; use --force to replace them", outDir.string());
-  fs::create_directories(outDir / "images");
+  if (std::error_code ec; !fs::create_directories(outDir / "images", ec) && ec)
+    fail(Errc::Io, "study: cannot make the folder '{}' for its results: {}", (outDir / "images").string(),
+         ec.message());
   // Replacing an earlier study: its results go first, so that a run that fails
   // leaves no study.json of other inputs beside this run's files.
   if (options.overwrite)

@@ -155,6 +155,11 @@ TEST_F(SceneFile, BadValuesAreErrors) {
   EXPECT_TRUE(throwsError(
       [&] { loadSceneFile(write("h.toml", head + "[[object]]\nname='m'\nshape='mesh'\nfile='none.ply'\n")); },
       Errc::NotFound, {"h.toml:", "object[0].file", "none.ply"}));
+  // More cut-outs than the tracer can follow along one ray: refused at load, not mid-render without a name.
+  std::string cuts = head + "[[object]]\nname='holes'\nshape='cylinder'\nradius_mm=2\nlength_mm=100\n";
+  for (int i = 0; i < 15; ++i) cuts += fmt::format("[[object.cut]]\nposition_mm=[0, 0, {}]\nradius_mm=1\n", 6 * i - 45);
+  EXPECT_TRUE(throwsError([&] { loadSceneFile(write("cuts.toml", cuts)); }, Errc::Config,
+                          {"cuts.toml:", "object[0].cut", "15 cut-outs", "at most 14"}));
   // A light field emitter is a rectangle of the light field's extent: 4 x 3 elements of 2 x 0.5 mm.
   writeLightFieldExr(dir_ / "good.exr", LightField({.spatialX = 4, .spatialY = 3, .angular = 2, .pixelPitch_mm = 0.5,
                                                     .distance_mm = 30}));

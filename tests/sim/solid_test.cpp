@@ -123,6 +123,27 @@ TEST(Solid, ConcaveFrontFaceIsThickerAtTheRim) {
   EXPECT_TRUE(lens->contains({0, 24, -tc / 2 - 0.5}));
 }
 
+// A steep dome (R 5 on Ø10, vertex at z = -5) on a 10 mm thick lens with a
+// flat back at z = 5: the dome's ball (centre z = 0) ends at z = 5 on the axis
+// but at z = 1 at 4.9 mm from it, so the ball alone cut away the glass behind
+// the dome (the lens came out a sphere). The face is its ball joined with the
+// space beyond the rim's plane: a ray down the side meets the flat back.
+TEST(Solid, ASteepConvexFaceKeepsTheGlassBehindIt) {
+  const auto lens = Solid::sphericalLens(5, 0, 10, 10);  // front vertex at z = -5, rim plane at z = 0, back at z = 5
+  EXPECT_TRUE(lens->contains({4.9, 0, 3}));
+  EXPECT_TRUE(lens->contains({0, 0, 4.9}));
+  EXPECT_FALSE(lens->contains({4.9, 0, -4}));  // in front of the dome near its rim: air
+  IntervalList list;
+  lens->intervals({{4.9, 0, 20}, {0, 0, -1}}, list);
+  ASSERT_GE(list.size(), 1);
+  EXPECT_NEAR(list[0].enter.t, 15, 1e-9);  // the flat back at z = 5
+  expectNear(list[0].enter.normal, Vec3(0, 0, 1), 1e-12);
+  EXPECT_TRUE(sphericalLensHolds(5, 0, 10, 10, {2, 0, 2.5}, 1));
+  EXPECT_FALSE(sphericalLensHolds(5, 0, 10, 10, {4.5, 0, -4}, 0.2));
+  // The reference lens keeps its plain convex faces (its balls reach nowhere near the other face).
+  EXPECT_TRUE(Solid::sphericalLens(100, -100, 7, 50)->convex());
+}
+
 // A lens whose faces meet inside its diameter would silently be a narrower
 // lens; one with a face flatter than a hemisphere cannot be made at all.
 TEST(Solid, LensShapesThatCannotBeMadeAreNamed) {
