@@ -28,6 +28,9 @@ namespace fs = std::filesystem;
 
 namespace {
 
+// The largest image an lfi file holds (a 60 MB file could otherwise ask for 64 GiB).
+constexpr long kMaxSide = 1L << 17, kMaxPixels = 1L << 30;
+
 constexpr const char* kKind = "lfi.kind";
 constexpr const char* kVersion = "lfi.formatVersion";
 constexpr const char* kChecksum = "lfi.checksum";
@@ -74,7 +77,7 @@ std::string canonicalAttributes(const fs::path& path, const Imf::Header& header)
 // file that could not be read back must not replace a good one.
 void writeExr(const fs::path& path, const cv::Mat& image, Imf::Header header, Overwrite overwrite) {
   requireImageType(image, CV_32FC1, "EXR image '" + path.string() + "'");
-  if (image.cols > (1 << 17) || image.rows > (1 << 17) || image.total() > (std::size_t{1} << 30))
+  if (image.cols > kMaxSide || image.rows > kMaxSide || static_cast<long>(image.total()) > kMaxPixels)
     fail(Errc::InvalidArgument, "cannot write '{}': {}x{} pixels is more than an lfi file holds (2^17 a side, 2^30 "
          "pixels)", path.string(), image.cols, image.rows);
   if (const auto bad = firstNonFinite(image))
@@ -185,7 +188,7 @@ LoadedExr loadExr(const fs::path& path, const char* expectedKind) {
       fail(Errc::InvalidFile, "'{}': expected one FLOAT channel 'Y' ({} channel(s))", path.string(), channels);
     const Imath::Box2i dw = out.header.dataWindow();
     const long width = static_cast<long>(dw.max.x) - dw.min.x + 1, height = static_cast<long>(dw.max.y) - dw.min.y + 1;
-    if (width < 1 || height < 1 || width > (1 << 17) || height > (1 << 17) || width * height > (1L << 30))
+    if (width < 1 || height < 1 || width > kMaxSide || height > kMaxSide || width * height > kMaxPixels)
       fail(Errc::InvalidFile, "'{}': data window {}x{} is out of range (at most 2^17 a side and 2^30 pixels)",
            path.string(), width, height);
     out.pixels.create(static_cast<int>(height), static_cast<int>(width), CV_32FC1);

@@ -36,6 +36,9 @@ struct AnalyticGeometry {
 
 // World bounds of an object's local bounds, padded so that Embree's float
 // traversal never culls a real hit.
+// A rectangle's box in its own frame: centred, in the xy plane.
+Bounds rectangleBounds(const Rectangle& r) { return {{-r.sizeX / 2, -r.sizeY / 2, 0}, {r.sizeX / 2, r.sizeY / 2, 0}}; }
+
 Bounds paddedWorldBounds(const Bounds& local, const Rigid3& worldFromObject) {
   Bounds b = local.transformed(worldFromObject);
   const double pad = 1e-3 + 1e-6 * std::max({std::abs(b.lo.x), std::abs(b.lo.y), std::abs(b.lo.z),
@@ -257,8 +260,7 @@ Bounds worldBounds(const Object& object) {
     return box;
   }
   if (const auto* rect = std::get_if<Rectangle>(&object.shape))
-    return Bounds{{-rect->sizeX / 2, -rect->sizeY / 2, 0}, {rect->sizeX / 2, rect->sizeY / 2, 0}}.transformed(
-        object.worldFromObject);
+    return rectangleBounds(*rect).transformed(object.worldFromObject);
   const auto& solid = std::get<std::shared_ptr<const Solid>>(object.shape);
   return solid ? solid->bounds().transformed(object.worldFromObject) : Bounds{};
 }
@@ -314,7 +316,7 @@ Scene::Scene(std::vector<Object> objects, double ambientIor)
       } else {
         if (!(rect->sizeX > 0) || !(rect->sizeY > 0) || !std::isfinite(rect->sizeX) || !std::isfinite(rect->sizeY))
           fail(Errc::InvalidArgument, "scene object '{}': rectangle size must be finite and > 0", obj.name);
-        local = {{-rect->sizeX / 2, -rect->sizeY / 2, 0}, {rect->sizeX / 2, rect->sizeY / 2, 0}};
+        local = rectangleBounds(*rect);
       }
       WorldRectangle world;
       if (rect)
