@@ -62,7 +62,7 @@ LFI_SIMD_CLONES void makeCameraSamples(const TelecentricCamera::RayMap& camera, 
   }
 }
 
-LFI_SIMD_CLONES std::uint32_t makeLightFieldSamples(const LightFieldSensor& sensor, std::uint64_t seed, int side, int n,
+LFI_SIMD_CLONES std::uint64_t makeLightFieldSamples(const LightFieldSensor& sensor, std::uint64_t seed, int side, int n,
                                                    CameraSampleBatch& b) {
   constexpr std::uint64_t kGolden = 0x9e3779b97f4a7c15ull;  // Sampler's increment
   const std::uint64_t seedHash = splitMix64(seed);
@@ -99,8 +99,8 @@ LFI_SIMD_CLONES std::uint32_t makeLightFieldSamples(const LightFieldSensor& sens
     b.dy[k] = r[3] * dx + r[4] * dy + r[5] * dz;
     b.dz[k] = r[6] * dx + r[7] * dy + r[8] * dz;
   }
-  std::uint32_t withRay = 0;
-  for (int k = 0; k < n; ++k) withRay |= seen[k] << k;
+  std::uint64_t withRay = 0;
+  for (int k = 0; k < n; ++k) withRay |= std::uint64_t{seen[k]} << k;
   return withRay;
 }
 

@@ -45,7 +45,7 @@ inline void concentricDisc(double u1, double u2, double& x, double& y) {
 
 // What the samples are (filled by the renderer) and what they give.
 struct CameraSampleBatch {
-  static constexpr int kSize = 16;
+  static constexpr int kSize = 64;
   // In: each sample's random stream (Sampler(seed, stream)), pixel, index in
   // the pixel and the key of its pixel's stop permutation. The first side^2
   // samples of a pixel are stratified: sample s's pixel-area draw falls in
@@ -69,7 +69,7 @@ void makeCameraSamples(const TelecentricCamera::RayMap& camera, std::uint64_t se
 // the pixel, jittered in stratum `sample` of side x side when sample < side^2,
 // and LightFieldSensor::ray. Returns the samples that have a ray (bit k);
 // the others fall outside the hemisphere mapping.
-std::uint32_t makeLightFieldSamples(const LightFieldSensor& sensor, std::uint64_t seed, int side, int n,
+std::uint64_t makeLightFieldSamples(const LightFieldSensor& sensor, std::uint64_t seed, int side, int n,
                                     CameraSampleBatch& batch);
 
 // The first kStratifiedChoices Fresnel choices of a pixel's samples are drawn

@@ -214,14 +214,15 @@ double walk(const Scene& scene, PathState p, Policy& policy) {
 // hypercube over its pixel's samples (camera_samples.h). The packet renderer
 // makes the first kBatchedChoices for many lanes at once when their paths
 // first need one (`batched`); otherwise each is made when it is needed. Both
-// give the same values.
+// give the same values. The pixel's keys (one per choice) and its number of
+// samples are the pixel's, passed in.
+using ChoiceKeys = std::array<std::uint32_t, detail::kStratifiedChoices>;
 struct StratifiedChoices {
-  std::array<double, detail::kBatchedChoices> u;                // when batched
-  std::array<std::uint32_t, detail::kStratifiedChoices> key;  // the pixel's key of each choice
-  std::uint32_t spp = 0, sample = 0;
+  std::array<double, detail::kBatchedChoices> u;  // when batched
+  std::uint32_t sample = 0;
   int used = detail::kStratifiedChoices;  // none left
   bool batched = false;
-  bool next(double& value) {
+  bool next(double& value, const ChoiceKeys& key, std::uint32_t spp) {
     if (used == detail::kStratifiedChoices) return false;
     const auto d = static_cast<size_t>(used++);
     value = batched && d < detail::kBatchedChoices ? u[d] : detail::stratifiedChoice(spp, sample, key[d]);
@@ -234,11 +235,13 @@ struct SampledPolicy {
   int maxDepth;
   int splitDepth;
   StratifiedChoices* choices = nullptr;  // then random choices
+  const ChoiceKeys* keys = nullptr;      // with choices: the pixel's
+  std::uint32_t spp = 0;                 // with choices: the pixel's samples
   bool diffuse = true;
   void visit(const Hit&, const Ray&) {}
   bool chooseReflection(double reflectance) {
     double u;
-    if (!choices || !choices->next(u)) u = sampler.next();
+    if (!choices || !choices->next(u, *keys, spp)) u = sampler.next();
     return u < reflectance;
   }
   Vec3 bounce(const Vec3& n) {
@@ -282,7 +285,7 @@ struct PixelWork {
   std::vector<double> values;  // each sample's radiance, summed in sample order at the end
   std::uint64_t streams = 0;   // sample s's random stream is streams ^ s
   std::uint32_t stopKey = 0;   // permutes the stop strata against the pixel-area strata
-  std::array<std::uint32_t, detail::kStratifiedChoices> choiceKeys{};
+  ChoiceKeys choiceKeys{};
 };
 
 // Where a path goes on: its state, random stream and stratified choices (a
@@ -346,11 +349,10 @@ public:
     nextI_ = x0, nextJ_ = y0, x0_ = x0, x1_ = x1, y1_ = y1;
     image_ = &image;
     issuing_ = -1;
+    prepared_ = nextPrepared_ = 0;
     LaneMask active = 0, free = (1u << kLanes) - 1;
     for (;;) {
-      // Fill the free lanes with new samples: plan them, then make their rays in one pass.
-      for (size_t planned; free && (planned = planSamples(static_cast<size_t>(std::popcount(free)))) > 0;)
-        active |= startSamples(planned, free);
+      if (free) active |= startSamples(free);  // new samples in the free lanes
       if (active == 0) break;
       active = step(active, free);
       // Paths that went into an isolated solid (a lens) meet only its surface
@@ -425,7 +427,7 @@ private:
       }
       // Anything else (absorbers, diffuse surfaces, meshes), one lane at a time.
       Walker w = walker(k);
-      SampledPolicy policy{w.sampler, options_.maxDepth, options_.splitDepth, &w.choices};
+      SampledPolicy policy{w.sampler, options_.maxDepth, options_.splitDepth, &w.choices, &keys(k), spp()};
       const Ray ray = lanes_.ray.rays.ray(k);
       const Hit hit{object, hits_.t[k], ray.at(hits_.t[k]), hits_.normal(k)};
       double radiance;
@@ -508,7 +510,7 @@ private:
         lanes_.throughput[k] *= 1 - f.reflectance[k];
       } else if (refract) {
         double u;
-        if (!lanes_.choices[k].next(u)) {
+        if (!lanes_.choices[k].next(u, keys(k), spp())) {
           Sampler sampler(0, 0);
           sampler.state = lanes_.sampler[k];
           u = sampler.next();
@@ -545,12 +547,12 @@ private:
       // (A batched lane has made its first choice in the same event: used > 0.)
       if (c.used != 0 || fresnel_.cosT[k] < 0 || lanes_.depth[k] < options_.splitDepth) continue;
       choices_.sample[n] = c.sample;
-      for (size_t d = 0; d < detail::kBatchedChoices; ++d) choices_.key[d][n] = c.key[d];
+      for (size_t d = 0; d < detail::kBatchedChoices; ++d) choices_.key[d][n] = keys(k)[d];
       batch |= 1u << k;
       ++n;
     }
     if (n <= kFewChoices) return;
-    detail::makeStratifiedChoices(static_cast<std::uint32_t>(options_.samplesPerPixel), n, choices_);
+    detail::makeStratifiedChoices(spp(), n, choices_);
     for (int i = 0; batch; batch &= batch - 1, ++i) {
       StratifiedChoices& c = lanes_.choices[static_cast<size_t>(std::countr_zero(batch))];
       for (size_t d = 0; d < detail::kBatchedChoices; ++d) c.u[d] = choices_.u[d][i];
@@ -585,6 +587,10 @@ private:
     branches_[static_cast<size_t>(k)][static_cast<size_t>(lanes_.waiting[k]++)] = {
         branch, Sampler(parent.state, static_cast<std::uint64_t>(branch.depth)), choices};
   }
+
+  // The stratified choices' keys of lane k's pixel, and the samples per pixel.
+  const ChoiceKeys& keys(int k) const { return pixels_[static_cast<size_t>(lanes_.pixel[k])].choiceKeys; }
+  std::uint32_t spp() const { return static_cast<std::uint32_t>(options_.samplesPerPixel); }
 
   Vec3 direction(int k) const { return {lanes_.ray.rays.dx[k], lanes_.ray.rays.dy[k], lanes_.ray.rays.dz[k]}; }
 
@@ -652,14 +658,18 @@ private:
     return slot;
   }
 
-  // Starts the m planned samples in free lanes (taken from `free`); returns
-  // the lanes they took. Each sample gets its random stream, its stratified
-  // choices and its ray of sight. One random stream per sample: two scenes
-  // that differ only where a path can reach (a defect) give identical samples
-  // everywhere else. Jittered strata for the pixel area and, independently
-  // permuted, for the stop: the first m^2 samples cover both evenly; the rest
-  // are random.
-  LaneMask startSamples(size_t m, LaneMask& free) {
+  // Plans the next samples (a batch of CameraSampleBatch::kSize, more than a
+  // packet holds, so that the pass runs on whole vectors) and makes their rays
+  // in one vectorised pass, ready for startSamples(). Returns false when the tile
+  // has no samples left to start. Each sample gets its random stream, its
+  // stratified choices and its ray of sight. One random stream per sample:
+  // two scenes that differ only where a path can reach (a defect) give
+  // identical samples everywhere else. Jittered strata for the pixel area
+  // and, independently permuted, for the stop: the first m^2 samples cover
+  // both evenly; the rest are random.
+  bool prepareSamples() {
+    const size_t m = planSamples(static_cast<size_t>(detail::CameraSampleBatch::kSize));
+    if (m == 0) return false;
     for (size_t k = 0; k < m; ++k) {
       const PixelWork& px = pixels_[static_cast<size_t>(starts_[k].slot)];
       const auto s = static_cast<std::uint32_t>(starts_[k].sample);
@@ -668,17 +678,26 @@ private:
       batch_.sample[k] = s;
       batch_.stopKey[k] = px.stopKey;
     }
-    LaneMask hasRay = (1u << m) - 1;  // all but a light field sensor's samples outside its disc
+    // Every sample has a ray but a light field sensor's outside its disc.
+    hasRay_ = m == 64 ? ~std::uint64_t{0} : (std::uint64_t{1} << m) - 1;
     if (cameraRays_)
       detail::makeCameraSamples(*cameraRays_, options_.seed, side_, static_cast<int>(m), batch_);
     else
-      hasRay = detail::makeLightFieldSamples(std::get<LightFieldSensor>(sensor_), options_.seed, side_,
-                                             static_cast<int>(m), batch_);
+      hasRay_ = detail::makeLightFieldSamples(std::get<LightFieldSensor>(sensor_), options_.seed, side_,
+                                              static_cast<int>(m), batch_);
+    prepared_ = m, nextPrepared_ = 0;
+    return true;
+  }
+
+  // Starts prepared samples in the free lanes (taken from `free`) while
+  // there are samples; returns the lanes they took.
+  LaneMask startSamples(LaneMask& free) {
     LaneMask started = 0;
-    for (size_t k = 0; k < m; ++k) {
+    while (free && (nextPrepared_ < prepared_ || prepareSamples())) {
+      const size_t k = nextPrepared_++;
       const Start& start = starts_[k];
       PixelWork& px = pixels_[static_cast<size_t>(start.slot)];
-      if (!(hasRay >> k & 1)) {  // no ray (outside a light field sensor's disc): the sample is 0
+      if (!(hasRay_ >> k & 1)) {  // no ray (outside a light field sensor's disc): the sample is 0
         px.values[static_cast<size_t>(start.sample)] = 0;
         --px.inFlight;
         if (start.slot != issuing_) finishIfDone(start.slot);
@@ -699,8 +718,6 @@ private:
       lanes_.sample[lane] = start.sample;
       lanes_.waiting[lane] = 0;
       StratifiedChoices& choices = lanes_.choices[static_cast<size_t>(lane)];
-      choices.key = px.choiceKeys;
-      choices.spp = static_cast<std::uint32_t>(options_.samplesPerPixel);
       choices.sample = static_cast<std::uint32_t>(start.sample);
       choices.used = 0;
       choices.batched = false;
@@ -738,10 +755,12 @@ private:
   cv::Mat* image_ = nullptr;
   std::vector<PixelWork> pixels_;
   std::vector<int> freeSlots_;
-  std::array<Start, Scene::kPacket> starts_;
+  std::array<Start, detail::CameraSampleBatch::kSize> starts_;  // the prepared samples, in batch_
   detail::CameraSampleBatch batch_;
+  std::uint64_t hasRay_ = 0;  // bit k: prepared sample k has a ray
+  size_t prepared_ = 0, nextPrepared_ = 0;
   detail::ChoiceBatch choices_;
-  static_assert(detail::CameraSampleBatch::kSize >= kLanes && detail::ChoiceBatch::kSize >= kLanes);
+  static_assert(detail::CameraSampleBatch::kSize == 64 && detail::ChoiceBatch::kSize >= kLanes);  // (hasRay_)
   Lanes lanes_;
   LaneMask insideIsolated_ = 0;  // lanes whose innermost medium is an isolated solid (Scene::isolated)
   std::vector<char> isolated_;   // Scene::isolated of object i at i + 1 (0: the ambient medium, false)

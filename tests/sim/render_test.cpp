@@ -523,7 +523,7 @@ TEST(CameraSamples, LightFieldPassEqualsOneSampleAtATime) {
         batch.pixelY[k] = rng() % static_cast<unsigned>(sensor.geometry.height());
         batch.sample[k] = rng() % static_cast<unsigned>(side * side + 3);  // also past the strata
       }
-      const std::uint32_t hasRay = detail::makeLightFieldSamples(sensor, seed, side, n, batch);
+      const std::uint64_t hasRay = detail::makeLightFieldSamples(sensor, seed, side, n, batch);
       for (int k = 0; k < n; ++k) {
         Sampler sampler(seed, batch.stream[k]);
         const double first = sampler.next();
