@@ -124,6 +124,17 @@ struct PathState {
   int on = -1;  // the dielectric whose surface the ray leaves from (-1: none)
 };
 
+// How far a path leaving a triangle mesh's surface at p starts off it, so
+// that its next query cannot meet the same face again: 1e-4 mm, or, far from
+// the origin, 4 units in the last place of p's largest coordinate in float.
+// Embree takes the new ray's origin in float (rounded by up to half a unit
+// there) and meets the face with an error of a few units: a fixed 1e-4 mm is
+// under one unit past 2 m, and paths turned back into a part they had left.
+double meshOffset(const Vec3& p) {
+  const double largest = std::max({std::abs(p.x), std::abs(p.y), std::abs(p.z)});
+  return std::max(1e-4, 4 * std::numeric_limits<float>::epsilon() * largest);
+}
+
 // What one interaction did to a path.
 enum class Step {
   Done,      // ended (an emitter, an absorber, left the scene): `radiance` is its contribution
@@ -150,7 +161,7 @@ Step interact(const Scene& scene, const Hit& hit, PathState& p, PathState& branc
   const Vec3 facing = entering ? hit.normal : -hit.normal;  // towards the incoming side
   // Meshes are intersected in float: step off the surface to avoid re-hits.
   auto leave = [&](const Vec3& dir) {
-    const double offset = surface.exact ? 0.0 : 1e-4 * (dir.dot(facing) > 0 ? 1 : -1);
+    const double offset = surface.exact ? 0.0 : meshOffset(hit.point) * (dir.dot(facing) > 0 ? 1 : -1);
     return Ray{hit.point + facing * offset, dir};
   };
   const int depth = p.depth++;

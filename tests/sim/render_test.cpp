@@ -644,4 +644,57 @@ TEST(Render, RejectsInvalidOptions) {
   EXPECT_THROW(render(s.scene, s.cam, opt), Error);
 }
 
+// A glass box as a mesh, tilted so that no face lies on a float grid plane,
+// placed 3 m and 10 m out along (1, 1, 1), and rays crossing it as they
+// cross it at the origin. A mesh is met in float, so a path leaving a face
+// must start off it by more than float rounding there: a fixed 1e-4 mm is
+// under one unit in the last place past 2 m, and at 3 m a quarter of these
+// paths met the face they had left again (at 10 m the box stacked inside
+// itself until the tracer refused the path).
+TEST(MeshPaths, AMeshFarFromTheOriginIsCrossedAsNearIt) {
+  TriangleMesh box;
+  for (const double z : {-2.5, 2.5})
+    for (const auto& [x, y] : {std::pair{-10.0, -10.0}, {10.0, -10.0}, {10.0, 10.0}, {-10.0, 10.0}})
+      box.vertices.push_back({x, y, z});
+  box.triangles = {{0, 2, 1}, {0, 3, 2}, {4, 5, 6}, {4, 6, 7}, {0, 1, 5}, {0, 5, 4},
+                   {3, 7, 6}, {3, 6, 2}, {0, 4, 7}, {0, 7, 3}, {1, 2, 6}, {1, 6, 5}};  // outward
+  const Rigid3 tilt = Rigid3::rotation(Vec3(1, 1, 0).normalized(), 0.3);
+  auto paths = [&](double far) {
+    const Vec3 shift(far, far, far);
+    const Scene scene({{.name = "box", .shape = box, .worldFromObject = Rigid3::translation(shift) * tilt,
+                        .material = Dielectric{1.5, 0}}});
+    std::vector<std::vector<Vec3>> out;
+    for (int i = 0; i < 1000; ++i) {
+      const double a = 0.1 + 0.2 * i / 1000, b = 0.1 * ((i * 7919) % 1000) / 1000;
+      const Vec3 d(std::sin(a) * std::cos(b), std::sin(a) * std::sin(b), std::cos(a));
+      const Vec3 o((i % 37) * 0.2 - 3.7, (i % 23) * 0.3 - 3.4, -20);
+      std::vector<Vec3> path = refractionPath(scene, {o + shift, d.normalized()}, 64, 100);
+      for (Vec3& v : path) v = v - shift;
+      out.push_back(std::move(path));
+    }
+    return out;
+  };
+  const auto nearOrigin = paths(0);
+  for (const double far : {3000.0, 10000.0}) {
+    const auto farOut = paths(far);
+    // The box's own float rounding and the step off each face move a vertex
+    // by a few units in the last place at `far`.
+    const double tolerance = 16 * std::numeric_limits<float>::epsilon() * far;
+    int differ = 0;
+    double worst = 0;
+    for (size_t i = 0; i < nearOrigin.size(); ++i) {
+      if (farOut[i].size() != nearOrigin[i].size()) {
+        ++differ;
+        continue;
+      }
+      for (size_t k = 0; k < farOut[i].size(); ++k) worst = std::max(worst, (farOut[i][k] - nearOrigin[i][k]).length());
+    }
+    EXPECT_EQ(differ, 0) << "at " << far << " mm";
+    EXPECT_LT(worst, tolerance) << "at " << far << " mm";
+  }
+  size_t crossed = 0;  // most paths enter and leave the box (origin, 2 crossings, escape)
+  for (const auto& path : nearOrigin) crossed += path.size() == 4;
+  EXPECT_GT(crossed, 900u);
+}
+
 }  // namespace
