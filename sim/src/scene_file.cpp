@@ -484,11 +484,29 @@ Object readObject(ConfigTable& t) {
     if (constexpr auto kMaxCuts = static_cast<size_t>(IntervalList::kCapacity) - 2; cuts.size() > kMaxCuts)
       fail(Errc::Config, "{}: {} cut-outs; at most {} per object (a ray through all of them would cross more "
            "pieces than the tracer follows): make the part a mesh", t.where("cut"), cuts.size(), kMaxCuts);
+    // A cut that misses the part's box changes nothing, and one holding the
+    // whole box leaves nothing: both are a wrong position, radius or unit.
+    const Bounds box = solid->bounds();  // (conservative: a box around the part)
     for (ConfigTable& cut : cuts) {
       const auto c = cut.numbers("position_mm", 3);
-      solid = Solid::combine(Solid::Kind::Difference, solid,
-                             Solid::sphere(cut.number("radius_mm", std::nullopt, 1e-9, 1e6),
-                                           Rigid3::translation({c[0], c[1], c[2]})));
+      const double r = cut.number("radius_mm", std::nullopt, 1e-9, 1e6);
+      double near2 = 0, far2 = 0;  // squared distances from the centre to the box's nearest and farthest points
+      for (int axis = 0; axis < 3; ++axis) {
+        const double lo = box.lo[axis] - c[static_cast<size_t>(axis)], hi = box.hi[axis] - c[static_cast<size_t>(axis)];
+        const double gap = lo > 0 ? lo : hi < 0 ? -hi : 0;
+        near2 += gap * gap;
+        far2 += std::max(lo * lo, hi * hi);
+      }
+      const auto boxText = fmt::format("[{:g}, {:g}, {:g}] to [{:g}, {:g}, {:g}] mm", box.lo.x, box.lo.y, box.lo.z,
+                                       box.hi.x, box.hi.y, box.hi.z);
+      if (near2 >= r * r)
+        fail(Errc::Config, "{}: the cut-out (radius {:g} mm) does not meet the part, which lies within {} in the "
+             "object's frame: position_mm is in the object's frame, in millimetres", cut.where("position_mm"), r,
+             boxText);
+      if (far2 <= r * r)
+        fail(Errc::Config, "{}: the cut-out (radius {:g} mm) holds the whole part ({} in the object's frame): "
+             "nothing would be left", cut.where("radius_mm"), r, boxText);
+      solid = Solid::combine(Solid::Kind::Difference, solid, Solid::sphere(r, Rigid3::translation({c[0], c[1], c[2]})));
       cut.finish();
     }
     obj.shape = solid;

@@ -160,6 +160,22 @@ TEST_F(SceneFile, BadValuesAreErrors) {
   for (int i = 0; i < 15; ++i) cuts += fmt::format("[[object.cut]]\nposition_mm=[0, 0, {}]\nradius_mm=1\n", 6 * i - 45);
   EXPECT_TRUE(throwsError([&] { loadSceneFile(write("cuts.toml", cuts)); }, Errc::Config,
                           {"cuts.toml:", "object[0].cut", "15 cut-outs", "at most 14"}));
+  // A cut-out that misses the part (here, a position in the world's frame where the object's was meant) or
+  // holds all of it.
+  const std::string part =
+      head + "[[object]]\nname='lens'\nshape='sphere'\nradius_mm=5\nposition_mm=[0, 0, -30]\n[[object.cut]]\n";
+  EXPECT_TRUE(throwsError(
+      [&] { loadSceneFile(write("far-cut.toml", part + "position_mm=[0, 1, -30]\nradius_mm=0.5\n")); },
+      Errc::Config, {"far-cut.toml:", "object[0].cut[0].position_mm", "does not meet the part", "[-5, -5, -5]"}));
+  EXPECT_TRUE(throwsError(
+      [&] { loadSceneFile(write("off-cut.toml", part + "position_mm=[0, 5.5, 5.5]\nradius_mm=0.5\n")); },
+      Errc::Config, {"off-cut.toml:", "does not meet the part"}));
+  EXPECT_TRUE(throwsError(
+      [&] { loadSceneFile(write("big-cut.toml", part + "position_mm=[0, 0, 0]\nradius_mm=9\n")); },
+      Errc::Config, {"big-cut.toml:", "object[0].cut[0].radius_mm", "holds the whole part"}));
+  // A bubble inside, and a nick at the box's corner region that only just reaches the box, are kept.
+  EXPECT_NO_THROW(loadSceneFile(write("bubble.toml", part + "position_mm=[0, 1, 2]\nradius_mm=0.5\n")));
+  EXPECT_NO_THROW(loadSceneFile(write("nick.toml", part + "position_mm=[0, 0, 5.4]\nradius_mm=0.5\n")));
   // A light field emitter is a rectangle of the light field's extent: 4 x 3 elements of 2 x 0.5 mm.
   writeLightFieldExr(dir_ / "good.exr", LightField({.spatialX = 4, .spatialY = 3, .angular = 2, .pixelPitch_mm = 0.5,
                                                     .distance_mm = 30}));
