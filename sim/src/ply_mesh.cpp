@@ -119,6 +119,34 @@ class BodyReader {
     element_ = &element, instance_ = instance, property_ = &property;
   }
 
+  // ASCII: an instance is one line (the format's rule), so a row short of a
+  // value, or with one too many, is an error at that row rather than a shift
+  // of every value after it. beginInstance() before an instance's values,
+  // endInstance() after them.
+  void beginInstance() { rowLine_ = -1; }
+  void endInstance() {
+    if (!ascii()) return;
+    size_t i = at_;
+    while (i < body_.size() && body_[i] != '\n' && std::isspace(static_cast<unsigned char>(body_[i]))) ++i;
+    if (i == body_.size() || body_[i] == '\n') return;
+    size_t end = i;
+    while (end < body_.size() && !std::isspace(static_cast<unsigned char>(body_[end]))) ++end;
+    lfi::fail(Errc::InvalidFile, "'{}': line {}: {} {} has a value more than its {} properties: '{}' (a line "
+              "holds one instance)", path_.string(), line_, shown(element_->name), instance_,
+              element_->properties.size(), shown(body_.substr(i, end - i)));
+  }
+  // ASCII: anything but white space after the last element is an error (a
+  // count short of the rows that follow).
+  void end() {
+    if (!ascii()) return;
+    rowLine_ = -1;
+    while (at_ < body_.size() && std::isspace(static_cast<unsigned char>(body_[at_])))
+      if (body_[at_++] == '\n') ++line_;
+    if (at_ < body_.size())
+      lfi::fail(Errc::InvalidFile, "'{}': line {}: values after the last element's declared instances (a "
+                "count in the header is short)", path_.string(), line_);
+  }
+
   double real(Type t) {
     if (ascii()) {
       const std::string_view token = nextToken();
@@ -199,6 +227,10 @@ class BodyReader {
     while (at_ < body_.size() && std::isspace(static_cast<unsigned char>(body_[at_])))
       if (body_[at_++] == '\n') ++line_;
     if (at_ == body_.size()) fail("the file ends before it");
+    if (rowLine_ < 0)
+      rowLine_ = line_;
+    else if (line_ != rowLine_)
+      line_ = rowLine_, fail("its line ends before it (a line holds one instance)");  // (named by the row's line)
     const size_t start = at_;
     while (at_ < body_.size() && !std::isspace(static_cast<unsigned char>(body_[at_]))) ++at_;
     return body_.substr(start, at_ - start);
@@ -242,6 +274,7 @@ class BodyReader {
   size_t at_ = 0;
   size_t offset_;  // of the body in the file
   int line_;       // ASCII: the current line
+  int rowLine_ = -1;  // ASCII: the line of the current instance's first value (-1: none read yet)
   Format format_;
 };
 
@@ -372,6 +405,7 @@ TriangleMesh readPly(const fs::path& path) {
     const bool isVertex = &e == vertex, isFace = &e == face;
     if (isVertex) mesh.vertices.reserve(static_cast<size_t>(e.count));
     for (std::uint64_t n = 0; n < e.count; ++n) {
+      in.beginInstance();
       double xyz[3] = {0, 0, 0};
       for (size_t i = 0; i < e.properties.size(); ++i) {
         const Property& p = e.properties[i];
@@ -402,9 +436,11 @@ TriangleMesh readPly(const fs::path& path) {
           mesh.triangles.push_back({static_cast<unsigned>(polygon[0]), static_cast<unsigned>(polygon[k - 1]),
                                     static_cast<unsigned>(polygon[k])});
       }
+      in.endInstance();
       if (isVertex) mesh.vertices.push_back({xyz[0], xyz[1], xyz[2]});
     }
   }
+  in.end();
   return mesh;
 }
 

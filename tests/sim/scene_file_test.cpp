@@ -578,6 +578,13 @@ TEST_F(SceneFile, CorruptPlyIsAnErrorNamingFileAndPlace) {
            std::string(12, '\x7f'),
        {"line 5", "unknown header keyword 'eheader'"}},
       {"missing-face.ply", header + vertices, {"line 13", "face 0", "ends before"}},
+      // An ASCII instance is one line: a row short of a value, or with one more, or rows past the counts.
+      {"short-row.ply", header + "0 0\n1 0 0\n0 1 0\n3 0 1 2\n",
+       {"line 10", "property 'z' of vertex 0", "its line ends before it"}},
+      {"long-row.ply", header + "0 0 0 5\n1 0 0\n0 1 0\n3 0 1 2\n",
+       {"line 10", "vertex 0 has a value more than its 3 properties: '5'"}},
+      {"long-face.ply", header + vertices + "3 0 1 2 2\n", {"line 13", "face 0 has a value more", "'2'"}},
+      {"extra-rows.ply", header + vertices + "3 0 1 2\n3 0 2 1\n", {"line 14", "values after the last element"}},
       {"negative-length.ply", header + vertices + "-1 0 1 2\n", {"face 0", "'-1' is not an integer"}},
       {"inf-length.ply", header + vertices + "-inf 0 1 2\n", {"'-inf' is not an integer"}},
       // Counts and indices the file cannot back.
