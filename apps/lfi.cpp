@@ -123,6 +123,7 @@ void serveCamera(const fs::path& sceneFile, lfi::GvCameraServerOptions options, 
   sigaddset(&signals, SIGINT);
   sigaddset(&signals, SIGTERM);
   pthread_sigmask(SIG_BLOCK, &signals, nullptr);
+  lfi::GvCameraServer::requireInterface(options.interfaceAddress);  // (before the renders)
   lfi::sim::SimImager imager(sceneFile);
   ProgressBar bar;
   imager.setRenderOptions(threads, quiet ? std::function<void(double)>() : [&bar](double f) { bar("rendering", f); });
@@ -577,7 +578,8 @@ int main(int argc, char** argv) {
       serveCamera(serveScene, serveOptions, serveThreads, quiet);
     } else if (*devices) {
       // Displays first: their listing is instant, the cameras' discovery waits about 1 s for answers.
-      try {  // a machine without USB still has cameras to list
+      bool listed = true;  // (exit status 1 when the displays could not be listed, after the cameras)
+      try {                // a machine without USB still has cameras to list
         const std::vector<lfi::UsbDisplayInfo> displays = lfi::listUsbDisplays();
         fmt::print("USB displays: {}\n", displays.empty() ? "none" : std::to_string(displays.size()));
         for (const lfi::UsbDisplayInfo& d : displays)
@@ -585,12 +587,14 @@ int main(int argc, char** argv) {
                      d.problem.empty() ? "" : ": " + d.problem);
       } catch (const lfi::Error& e) {
         fmt::print("USB displays: cannot be listed ({})\n", e.what());
+        listed = false;
       }
       const std::vector<lfi::AravisDeviceInfo> cameras = lfi::listAravisDevices();
       fmt::print("GenICam cameras: {}\n", cameras.empty() ? "none" : std::to_string(cameras.size()));
       for (const lfi::AravisDeviceInfo& c : cameras)
         fmt::print("  aravis:{}  ({} {}, serial {}, {} at {})\n", c.id, c.vendor, c.model, c.serial, c.protocol,
                    c.address);
+      if (!listed) return 1;
     } else if (*lfInfo) {
       const lfi::LightField lf = lfi::readLightFieldExr(lfFile);
       const auto& g = lf.geometry();

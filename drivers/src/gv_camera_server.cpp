@@ -4,9 +4,13 @@
 
 #include "lfi/core/error.h"
 
+#include <arpa/inet.h>
 #include <arv.h>
+#include <ifaddrs.h>
+#include <netinet/in.h>
 #include <spdlog/spdlog.h>
 
+#include <cerrno>
 #include <cstring>
 #include <mutex>
 
@@ -116,6 +120,25 @@ struct GvCameraServer::Impl {
 
   std::string deviceId() const { return options.vendor + "-" + options.model + "-" + options.serial; }
 };
+
+void GvCameraServer::requireInterface(const std::string& interfaceAddress) {
+  ifaddrs* list = nullptr;
+  if (getifaddrs(&list) != 0)
+    fail(Errc::Device, "served camera: the host's network interfaces cannot be listed: {}", std::strerror(errno));
+  std::string have;
+  bool found = false;
+  for (const ifaddrs* i = list; i != nullptr; i = i->ifa_next) {
+    if (i->ifa_addr == nullptr || i->ifa_addr->sa_family != AF_INET) continue;
+    char address[INET_ADDRSTRLEN] = {};
+    inet_ntop(AF_INET, &reinterpret_cast<const sockaddr_in*>(i->ifa_addr)->sin_addr, address, sizeof address);
+    found = found || interfaceAddress == i->ifa_name || interfaceAddress == address;
+    have += fmt::format("{}{} {}", have.empty() ? "" : ", ", i->ifa_name, address);
+  }
+  freeifaddrs(list);
+  if (!found)
+    fail(Errc::InvalidArgument, "served camera: '{}' is neither a network interface nor an IPv4 address of one on "
+         "this host (it has: {})", interfaceAddress, have.empty() ? "none with IPv4" : have);
+}
 
 GvCameraServer::GvCameraServer(const GvCameraServerOptions& options, ServedFrameFiller filler)
     : impl_(std::make_unique<Impl>()) {

@@ -67,6 +67,12 @@ class GvCameraServer {
   // "<vendor>-<model>-<serial>", what Aravis's discovery reports.
   std::string deviceId() const;
 
+  // Throws Errc::InvalidArgument, listing the host's interfaces, when
+  // `interfaceAddress` (GvCameraServerOptions) is neither an interface's name
+  // nor one's IPv4 address: for a check before slow work that precedes
+  // serving (the constructor's own failure cannot tell it from a taken port).
+  static void requireInterface(const std::string& interfaceAddress);
+
  private:
   struct Impl;
   std::unique_ptr<Impl> impl_;
