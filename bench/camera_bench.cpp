@@ -11,6 +11,7 @@
 
 #include "gige_device_process.h"
 
+#include <CLI/CLI.hpp>
 #include <arv.h>
 #include <fmt/format.h>
 #include <signal.h>
@@ -167,18 +168,14 @@ Result benchPlain(const std::string& id, int frames, double rate, int size, lfi:
 int main(int argc, char** argv) {
   int frames = 500, size = 512;
   double rate = 100;
-  lfi::PixelFormat format = lfi::PixelFormat::Mono8;
-  for (int i = 1; i + 1 < argc; i += 2) {
-    const std::string key = argv[i], value = argv[i + 1];
-    if (key == "--frames") frames = std::stoi(value);
-    else if (key == "--rate") rate = std::stod(value);
-    else if (key == "--size") size = std::stoi(value);
-    else if (key == "--format") format = value == "Mono16" ? lfi::PixelFormat::Mono16 : lfi::PixelFormat::Mono8;
-    else {
-      fmt::print(stderr, "usage: lfi-camera-bench [--frames N] [--rate HZ] [--size PX] [--format Mono8|Mono16]\n");
-      return 2;
-    }
-  }
+  std::string formatName = "Mono8";
+  CLI::App app("lfi-camera-bench: the simulated GigE Vision camera through our Aravis backend and a plain client");
+  app.add_option("--frames", frames, "Frames per client and round")->check(CLI::Range(1, 1000000));
+  app.add_option("--rate", rate, "Frame rate asked of the device, Hz")->check(CLI::Range(0.1, 10000.0));
+  app.add_option("--size", size, "Sensor width and height, px")->check(CLI::Range(8, 4096));
+  app.add_option("--format", formatName, "Pixel format")->check(CLI::IsMember({"Mono8", "Mono16"}));
+  CLI11_PARSE(app, argc, argv);
+  const lfi::PixelFormat format = formatName == "Mono16" ? lfi::PixelFormat::Mono16 : lfi::PixelFormat::Mono8;
   // The reference lens over its back light, size x size pixels over the same 60 mm field, 4 samples per pixel.
   const fs::path dir = fs::temp_directory_path() / fmt::format("lfi-camera-bench-{}", ::getpid());
   fs::create_directories(dir);

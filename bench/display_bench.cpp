@@ -21,6 +21,7 @@
 
 #include "bench_util.h"
 
+#include <CLI/CLI.hpp>
 #include <fmt/format.h>
 
 #include <opencv2/core.hpp>
@@ -43,17 +44,10 @@ namespace {
 static int run(int argc, char** argv) {
   int repeats = 5;
   bool mono = false;
-  for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    if (a == "--repeats" && i + 1 < argc)
-      repeats = std::max(1, std::stoi(argv[++i]));
-    else if (a == "--mono")
-      mono = true;
-    else {
-      fmt::print(stderr, "usage: lfi-display-bench [--repeats N] [--mono]\n");
-      return 2;
-    }
-  }
+  CLI::App app("lfi-display-bench: light field to panel encoding against a memcpy of the same bytes");
+  app.add_option("--repeats", repeats, "Runs of each; the best counts")->check(CLI::Range(1, 1000));
+  app.add_flag("--mono", mono, "A monochrome panel");
+  CLI11_PARSE(app, argc, argv);
 
   DisplayInfo info = defaultLenticularDisplay();
   info.panelWidth_px = 3840;

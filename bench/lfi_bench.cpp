@@ -41,6 +41,7 @@
 
 #include "bench_util.h"
 
+#include <CLI/CLI.hpp>
 #include <OpenEXR/ImfRgbaFile.h>
 #include <embree3/rtcore.h>
 #include <fmt/format.h>
@@ -202,12 +203,16 @@ int rmse(const char* a, const char* b) {
 }
 
 static int run(int argc, char** argv) {
-  if (argc == 4 && std::strcmp(argv[1], "--rmse") == 0) return rmse(argv[2], argv[3]);
-  const bool quick = argc == 2 && std::strcmp(argv[1], "--quick") == 0;
-  if (argc > 1 && !quick) {  // (anything else, --help or a typo, used to start the 20-s run)
-    std::fprintf(stderr, "usage: lfi-bench [--quick]\n       lfi-bench --rmse A.exr B.exr\n");
-    return 2;
-  }
+  bool quick = false;
+  std::vector<std::string> compared;
+  CLI::App app("lfi-bench: the ray tracer's throughput next to the raw Embree bound measured in the same run");
+  app.add_flag("--quick", quick, "Smaller images, for a smoke run");
+  app.add_option("--rmse", compared, "Only the relative RMS difference of two EXR images A and B")
+      ->expected(2)
+      ->check(CLI::ExistingFile)
+      ->excludes(app.get_option("--quick"));
+  CLI11_PARSE(app, argc, argv);
+  if (!compared.empty()) return rmse(compared[0].c_str(), compared[1].c_str());
   const int threads = tbb::info::default_concurrency();
   SceneDescription d = loadSceneFile(std::filesystem::path(LFI_SOURCE_DIR) / "data" / "scenes" / "reference.toml");
   auto cam = std::get<TelecentricCamera>(d.sensor);

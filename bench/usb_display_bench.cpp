@@ -15,18 +15,21 @@
 #include "bench_util.h"
 #include "emulated_usb_display.h"
 
+#include <CLI/CLI.hpp>
 #include <fmt/format.h>
 #include <opencv2/core.hpp>
 
 #include <chrono>
-#include <cstdlib>
 #include <cstring>
 #include <vector>
 
 using lfi::bench::bestSeconds;
 
 static int run(int argc, char** argv) {
-  const int frames = argc > 1 ? std::max(1, std::atoi(argv[1])) : 5;
+  int frames = 5;
+  CLI::App app("lfi-usb-display-bench: upload through the usb: backend into the emulated display");
+  app.add_option("frames", frames, "Frames per setting")->check(CLI::Range(1, 100000));
+  CLI11_PARSE(app, argc, argv);
   lfi::testing_support::usePrivateTmpDir();
   if (!lfi::testing_support::umockdevPreloadActive()) {
     fmt::print(stderr, "lfi-usb-display-bench: run it through tests/drivers/run_with_umockdev.sh\n");
