@@ -7,6 +7,7 @@
 #include <arpa/inet.h>
 #include <arv.h>
 #include <ifaddrs.h>
+#include <net/if.h>
 #include <netinet/in.h>
 #include <spdlog/spdlog.h>
 
@@ -125,19 +126,28 @@ void GvCameraServer::requireInterface(const std::string& interfaceAddress) {
   ifaddrs* list = nullptr;
   if (getifaddrs(&list) != 0)
     fail(Errc::Device, "served camera: the host's network interfaces cannot be listed: {}", std::strerror(errno));
-  std::string have;
+  // Aravis serves on an interface that is up, not point-to-point, with an
+  // IPv4 address (arv_enumerate_network_interfaces), named or by address.
+  std::string usable, why;
   bool found = false;
   for (const ifaddrs* i = list; i != nullptr; i = i->ifa_next) {
-    if (i->ifa_addr == nullptr || i->ifa_addr->sa_family != AF_INET) continue;
+    const bool ipv4 = i->ifa_addr != nullptr && i->ifa_addr->sa_family == AF_INET;
     char address[INET_ADDRSTRLEN] = {};
-    inet_ntop(AF_INET, &reinterpret_cast<const sockaddr_in*>(i->ifa_addr)->sin_addr, address, sizeof address);
-    found = found || interfaceAddress == i->ifa_name || interfaceAddress == address;
-    have += fmt::format("{}{} {}", have.empty() ? "" : ", ", i->ifa_name, address);
+    if (ipv4) inet_ntop(AF_INET, &reinterpret_cast<const sockaddr_in*>(i->ifa_addr)->sin_addr, address, sizeof address);
+    const bool named = interfaceAddress == i->ifa_name || (ipv4 && interfaceAddress == address);
+    const bool up = (i->ifa_flags & IFF_UP) != 0, pointToPoint = (i->ifa_flags & IFF_POINTOPOINT) != 0;
+    if (ipv4 && up && !pointToPoint) {
+      found = found || named;
+      usable += fmt::format("{}{} {}", usable.empty() ? "" : ", ", i->ifa_name, address);
+    } else if (named && why.empty() && (ipv4 || !up)) {
+      why = !up ? "it is down" : "it is a point-to-point link";
+    }
   }
   freeifaddrs(list);
-  if (!found)
-    fail(Errc::InvalidArgument, "served camera: '{}' is neither a network interface nor an IPv4 address of one on "
-         "this host (it has: {})", interfaceAddress, have.empty() ? "none with IPv4" : have);
+  if (found) return;
+  if (why.empty()) why = "it is neither a network interface with an IPv4 address nor such an address of one";
+  fail(Errc::InvalidArgument, "served camera: Aravis cannot serve on '{}': {} (usable here: {})", interfaceAddress, why,
+       usable.empty() ? "none" : usable);
 }
 
 GvCameraServer::GvCameraServer(const GvCameraServerOptions& options, ServedFrameFiller filler)

@@ -131,9 +131,9 @@ class BodyReader {
     if (i == body_.size() || body_[i] == '\n') return;
     size_t end = i;
     while (end < body_.size() && !std::isspace(static_cast<unsigned char>(body_[end]))) ++end;
-    lfi::fail(Errc::InvalidFile, "'{}': line {}: {} {} has a value more than its {} properties: '{}' (a line "
-              "holds one instance)", path_.string(), line_, shown(element_->name), instance_,
-              element_->properties.size(), shown(body_.substr(i, end - i)));
+    lfi::fail(Errc::InvalidFile, "'{}': line {}: {} {}: '{}' is a value past the element's declared properties "
+              "(a line holds one instance)", path_.string(), line_, shown(element_->name), instance_,
+              shown(body_.substr(i, end - i)));
   }
   // ASCII: anything but white space after the last element is an error (a
   // count short of the rows that follow).

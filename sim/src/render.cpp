@@ -126,7 +126,8 @@ struct PathState {
 
 // How far a path leaving a triangle mesh's surface at p starts off it, so
 // that its next query cannot meet the same face again: 1e-4 mm, or, far from
-// the origin, 4 units in the last place of p's largest coordinate in float.
+// the origin, 4 float epsilons of p's largest coordinate (4 to 8 units in the
+// last place of that coordinate in float).
 // Embree takes the new ray's origin in float (rounded by up to half a unit
 // there) and meets the face with an error of a few units: a fixed 1e-4 mm is
 // under one unit past 2 m, and paths turned back into a part they had left.
@@ -676,7 +677,7 @@ private:
   // stratified choices and its ray of sight. One random stream per sample:
   // two scenes that differ only where a path can reach (a defect) give
   // identical samples everywhere else. Jittered strata for the pixel area
-  // and, independently permuted, for the stop: the first m^2 samples cover
+  // and, independently permuted, for the stop: the first side^2 samples cover
   // both evenly; the rest are random.
   bool prepareSamples() {
     const size_t m = planSamples(static_cast<size_t>(detail::CameraSampleBatch::kSize));

@@ -158,7 +158,8 @@ TEST_F(LfiCli, BadArgumentsNameTheOptionAndTheValue) {
   // serve-camera on an interface the host does not have: named before the renders, which come first otherwise.
   const Result noInterface = lfi("serve-camera " + quoted(scene) + " --interface lfi-none0");
   EXPECT_EQ(noInterface.status, 1) << noInterface.output;
-  EXPECT_NE(noInterface.output.find("'lfi-none0' is neither a network interface"), std::string::npos)
+  EXPECT_NE(noInterface.output.find("cannot serve on 'lfi-none0': it is neither a network interface"),
+            std::string::npos)
       << noInterface.output;
   EXPECT_NE(noInterface.output.find("lo 127.0.0.1"), std::string::npos) << noInterface.output;  // what it has
   EXPECT_EQ(noInterface.output.find("rendering"), std::string::npos) << "rendered first: " << noInterface.output;

@@ -516,7 +516,8 @@ TEST(CameraSamples, LightFieldPassEqualsOneSampleAtATime) {
     std::mt19937 rng(static_cast<unsigned>(side));
     for (int round = 0; round < 40; ++round) {
       detail::CameraSampleBatch batch;
-      const int n = 1 + round % detail::CameraSampleBatch::kSize;
+      // Whole batches (as the renderer makes them) and partial ones (a tile's last).
+      const int n = round % 2 ? detail::CameraSampleBatch::kSize : 1 + round * 3 % detail::CameraSampleBatch::kSize;
       for (int k = 0; k < n; ++k) {
         batch.stream[k] = rng() * 0x9e3779b97f4a7c15ull + static_cast<std::uint64_t>(k);
         batch.pixelX[k] = rng() % static_cast<unsigned>(sensor.geometry.width());
@@ -555,7 +556,7 @@ TEST(CameraSamples, LightFieldPassEqualsOneSampleAtATime) {
 // cycle walking; and each choice's values over a pixel's samples form a Latin
 // hypercube (one value in each of the spp strata).
 TEST(CameraSamples, StratifiedChoicesAreALatinHypercube) {
-  for (const std::uint32_t spp : {1u, 9u, 16u, 13u}) {
+  for (const std::uint32_t spp : {1u, 9u, 16u, 13u, 100u, 300u}) {
     std::vector<std::vector<int>> perStratum(detail::kStratifiedChoices, std::vector<int>(spp, 0));
     for (std::uint32_t first = 0; first < spp; first += detail::ChoiceBatch::kSize) {
       detail::ChoiceBatch batch;
@@ -582,6 +583,19 @@ TEST(CameraSamples, StratifiedChoicesAreALatinHypercube) {
     }
     for (const auto& counts : perStratum)
       for (const int c : counts) EXPECT_EQ(c, 1) << "spp " << spp;
+  }
+  // A batch as the renderer fills it: samples of several pixels, each with its own keys.
+  std::mt19937 rng(5);
+  for (const std::uint32_t spp : {16u, 13u, 300u}) {
+    detail::ChoiceBatch batch;
+    for (int k = 0; k < detail::ChoiceBatch::kSize; ++k) {
+      batch.sample[k] = rng() % spp;
+      for (int d = 0; d < detail::kBatchedChoices; ++d) batch.key[d][k] = rng();
+    }
+    detail::makeStratifiedChoices(spp, detail::ChoiceBatch::kSize, batch);
+    for (int k = 0; k < detail::ChoiceBatch::kSize; ++k)
+      for (int d = 0; d < detail::kBatchedChoices; ++d)
+        EXPECT_EQ(batch.u[d][k], detail::stratifiedChoice(spp, batch.sample[k], batch.key[d][k])) << spp << " " << k;
   }
 }
 

@@ -67,10 +67,11 @@ class GvCameraServer {
   // "<vendor>-<model>-<serial>", what Aravis's discovery reports.
   std::string deviceId() const;
 
-  // Throws Errc::InvalidArgument, listing the host's interfaces, when
-  // `interfaceAddress` (GvCameraServerOptions) is neither an interface's name
-  // nor one's IPv4 address: for a check before slow work that precedes
-  // serving (the constructor's own failure cannot tell it from a taken port).
+  // Throws Errc::InvalidArgument, listing the interfaces Aravis could serve
+  // on (up, not point-to-point, with an IPv4 address), when
+  // `interfaceAddress` (GvCameraServerOptions) names none of them by name or
+  // address: for a check before slow work that precedes serving (the
+  // constructor's own failure cannot tell it from a taken port).
   static void requireInterface(const std::string& interfaceAddress);
 
  private:
