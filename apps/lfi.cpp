@@ -50,22 +50,35 @@ public:
     std::lock_guard lock(mutex_);
     const int percent = static_cast<int>(fraction * 100);
     if (isatty(STDERR_FILENO)) {
+      if (open_ && percent == shownPercent_ && label == shownLabel_) return;  // (nothing new to draw)
+      shownPercent_ = percent, shownLabel_ = label;
       const int filled = static_cast<int>(fraction * 30);
       fmt::print(stderr, "\r[{:<30}] {:3d}% {:<40}", std::string(static_cast<size_t>(filled), '#'), percent,
                  label.substr(0, 40));
-      if (fraction >= 1) fmt::print(stderr, "\n");
+      open_ = fraction < 1;
+      if (!open_) fmt::print(stderr, "\n");
     } else if (percent / 10 != lastDecile_) {
       lastDecile_ = percent / 10;
       spdlog::info("{:3d}% {}", percent, label);
     }
   }
+  ProgressBar() = default;
+  ProgressBar(const ProgressBar&) = delete;
+  ProgressBar& operator=(const ProgressBar&) = delete;
+  ~ProgressBar() { finish(); }  // (an error unwinding past a bar prints on a line of its own)
+  // Ends a bar left short of 100 % (work stopped early) on its own line.
   void finish() {
-    if (isatty(STDERR_FILENO)) fmt::print(stderr, "\n");
+    std::lock_guard lock(mutex_);
+    if (open_) fmt::print(stderr, "\n");
+    open_ = false;
   }
 
 private:
   std::mutex mutex_;
   int lastDecile_ = -1;
+  bool open_ = false;  // a terminal's bar line printed without its newline
+  int shownPercent_ = -1;
+  std::string shownLabel_;
 };
 
 // Ctrl-C asks long work to stop cleanly (renders check it between tiles).
