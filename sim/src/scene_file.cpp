@@ -144,6 +144,24 @@ void smoothNormals(TriangleMesh& mesh, double creaseAngle) {
   }
 }
 
+// Defined below, with the closure check that shares them.
+double weldTolerance(const TriangleMesh& mesh);
+std::vector<unsigned> weldVertices(const TriangleMesh& mesh, double tolerance, bool neighbours);
+
+// Joins the vertices the closure check counts as one (weldTolerance): each
+// face corner is pointed at the first of its vertex's group (the others stay,
+// unused, so that the file's vertex numbers keep their meaning). Smooth
+// normals need it: a format that repeats a vertex per face (STL, PLY from some
+// exporters), a seam, or a UV sphere's ring of pole vertices (sin π is not 0,
+// so the south pole's copies differ by 1e-16) would give each copy the normal
+// of its own few faces; at a tessellated ball's south pole that tilted the
+// normal by 0.03 rad and turned the rays through it by 0.013.
+void weldMesh(TriangleMesh& mesh) {
+  const std::vector<unsigned> welded = weldVertices(mesh, weldTolerance(mesh), true);
+  for (auto& triangle : mesh.triangles)
+    for (unsigned& corner : triangle) corner = welded[corner];
+}
+
 }  // namespace
 
 TriangleMesh loadMesh(const fs::path& path, double creaseAngle_rad) {
@@ -163,6 +181,7 @@ TriangleMesh loadMesh(const fs::path& path, double creaseAngle_rad) {
            "origin: not a part of a bench (wrong units?)", path.string(), v, p.x, p.y, p.z, kFar);
   }
   if (mesh.triangles.empty()) fail(Errc::InvalidFile, "'{}': the mesh has no faces", path.string());
+  weldMesh(mesh);
   smoothNormals(mesh, creaseAngle_rad);
   return mesh;
 }
@@ -403,18 +422,30 @@ std::optional<ClosureFault> closureFault(const TriangleMesh& mesh, const std::ve
 
 }  // namespace
 
-std::optional<std::string> meshClosureFault(const TriangleMesh& mesh) {
-  // Vertices within a float's precision of the mesh's size are one: formats that repeat a vertex per face (STL,
-  // seams) and rings of vertices at a sphere's pole still close. The quick weld first; the thorough one when that
-  // leaves the mesh open (two such vertices on either side of a cell wall).
-  // (Of the size, or of the distance from the origin where that is larger: a float's step grows with it.)
+namespace {
+
+// Vertices within a float's precision of the mesh's size are one: formats that
+// repeat a vertex per face (STL, seams) and rings of vertices at a sphere's
+// pole still close. (Of the size, or of the distance from the origin where that
+// is larger: a float's step grows with it.) Infinite for vertices that are not.
+double weldTolerance(const TriangleMesh& mesh) {
   const auto [low, high] = bounds(mesh);
   const double extent = std::max({high.x - low.x, high.y - low.y, high.z - low.z, std::abs(low.x), std::abs(low.y),
                                   std::abs(low.z), std::abs(high.x), std::abs(high.y), std::abs(high.z)});
-  if (!std::isfinite(extent))
+  return extent > 0 ? 1e-7 * extent : 1.0;
+}
+
+}  // namespace
+
+std::optional<std::string> meshClosureFault(const TriangleMesh& mesh) {
+  // The quick weld first; the thorough one when that leaves the mesh open (two
+  // such vertices on either side of a cell wall).
+  const double tolerance = weldTolerance(mesh);
+  if (!std::isfinite(tolerance)) {
+    const auto [low, high] = bounds(mesh);
     return fmt::format("not measurable: its vertices span from ({:g}, {:g}, {:g}) to ({:g}, {:g}, {:g})", low.x, low.y,
                        low.z, high.x, high.y, high.z);
-  const double tolerance = extent > 0 ? 1e-7 * extent : 1.0;
+  }
   auto fault = closureFault(mesh, weldVertices(mesh, tolerance, false));
   if (fault && fault->open) fault = closureFault(mesh, weldVertices(mesh, tolerance, true));
   if (!fault) return std::nullopt;

@@ -150,9 +150,17 @@ TEST(Imaging, InverseSchlierenLightsTheWholeIntactLens) {
       "lit fraction of the inner lens: parallel %.3f, light field nearest %.3f (cv %.3f), interpolated %.3f (cv "
       "%.3f)\n",
       parallel.fractionLit, nearest.fractionLit, nearest.cv, interpolated.fractionLit, interpolated.cv);
+  // Reached (issue 3 asks to state it): nearest 80 % of the inner lens lit,
+  // cv 0.43; interpolated 93 %, cv 0.36, against 0.9 % under the collimated
+  // beam. The bounds keep that, with a margin for the sampling: a round trip
+  // that lit only part of the lens (a wrong sign or scale of the emitted
+  // directions, a shifted light field) falls well below them.
   EXPECT_LT(parallel.fractionLit, 0.05);
-  EXPECT_GT(nearest.fractionLit, 0.5);
-  EXPECT_GT(interpolated.fractionLit, 0.5);
+  EXPECT_GT(nearest.fractionLit, 0.75);
+  EXPECT_GT(interpolated.fractionLit, 0.9);
+  EXPECT_LT(nearest.cv, 0.5);
+  EXPECT_LT(interpolated.cv, 0.42);
+  EXPECT_LT(interpolated.cv, nearest.cv);  // interpolation smooths the element steps
 }
 
 }  // namespace
