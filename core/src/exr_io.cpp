@@ -28,8 +28,7 @@ namespace fs = std::filesystem;
 
 namespace {
 
-// The largest image an lfi file holds (a 60 MB file could otherwise ask for 64 GiB).
-constexpr long kMaxSide = 1L << 17, kMaxPixels = 1L << 30;
+constexpr long kMaxSide = kMaxExrSide, kMaxPixels = kMaxExrPixels;
 
 constexpr const char* kKind = "lfi.kind";
 constexpr const char* kVersion = "lfi.formatVersion";

@@ -521,28 +521,23 @@ Object readObject(ConfigTable& t) {
     for (ConfigTable& cut : cuts) {
       const auto c = cut.numbers("position_mm", 3);
       const double r = cut.number("radius_mm", std::nullopt, 1e-9, 1e6);
-      double near2 = 0, far2 = 0;  // squared distances from the centre to the box's nearest and farthest points
-      for (int axis = 0; axis < 3; ++axis) {
-        const double lo = box.lo[axis] - c[static_cast<size_t>(axis)], hi = box.hi[axis] - c[static_cast<size_t>(axis)];
-        const double gap = lo > 0 ? lo : hi < 0 ? -hi : 0;
-        near2 += gap * gap;
-        far2 += std::max(lo * lo, hi * hi);
-      }
-      const auto boxText = fmt::format("[{:g}, {:g}, {:g}] to [{:g}, {:g}, {:g}] mm", box.lo.x, box.lo.y, box.lo.z,
-                                       box.hi.x, box.hi.y, box.hi.z);
-      if (near2 >= r * r)
+      const Bounds::Ball fit = box.ball({c[0], c[1], c[2]}, r);
+      if (fit == Bounds::Ball::Clear)
         fail(Errc::Config, "{}: the cut-out (radius {:g} mm) does not meet the part, which lies within {} in the "
              "object's frame: position_mm is in the object's frame, in millimetres", cut.where("position_mm"), r,
-             boxText);
-      if (far2 <= r * r)
+             box.text());
+      if (fit == Bounds::Ball::HoldsAll)
         fail(Errc::Config, "{}: the cut-out (radius {:g} mm) holds the whole part ({} in the object's frame): "
-             "nothing would be left", cut.where("radius_mm"), r, boxText);
+             "nothing would be left", cut.where("radius_mm"), r, box.text());
       solid = Solid::combine(Solid::Kind::Difference, solid, Solid::sphere(r, Rigid3::translation({c[0], c[1], c[2]})));
       cut.finish();
     }
     obj.shape = solid;
   }
   const std::string material = t.string("material", "absorber", {"dielectric", "absorber", "diffuse"});
+  if (material != "absorber" && t.has("emitter"))  // (its ior, absorption or albedo would be read and not used)
+    fail(Errc::Config, "{}: an emitting object is opaque, its material unused: leave out material = '{}' (or the "
+         "emitter)", t.where("material"), material);
   if (material == "dielectric") {
     if (std::holds_alternative<Rectangle>(obj.shape))  // a path would enter it and never leave
       fail(Errc::Config, "{}: a rectangle has no inside: it cannot be a dielectric (make it a thin box, a solid or "
@@ -700,6 +695,9 @@ SceneDescription loadSceneFile(const fs::path& path) {
     cam.pixelPitch_mm = c.number("pixel_pitch_mm", std::nullopt, 1e-6, 100);
     cam.width = c.integer("width", std::nullopt, 1, 65536);
     cam.height = c.integer("height", std::nullopt, 1, 65536);
+    if (static_cast<long>(cam.width) * cam.height > kMaxExrPixels)
+      fail(Errc::Config, "{}: {} x {} pixels is more than a radiance EXR holds (2^30): the render could not be "
+           "written", c.where("height"), cam.width, cam.height);
     cam.worldFromCamera = readPlacement(c);
     sensorWhere = c.where("position_mm");
     c.finish();

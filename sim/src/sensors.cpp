@@ -1,6 +1,7 @@
 #include "lfi/sim/sensors.h"
 
 #include "lfi/core/error.h"
+#include "lfi/core/exr_io.h"
 
 #include <cmath>
 #include <numbers>
@@ -18,8 +19,10 @@ void TelecentricCamera::validate() const {
   if (imageDistance_mm <= focalLength_mm)
     fail(Errc::InvalidArgument, "telecentric camera: imageDistance_mm = {} must exceed focalLength_mm = {} "
          "(otherwise no real object is in focus)", imageDistance_mm, focalLength_mm);
-  if (width < 1 || height < 1 || width > 65536 || height > 65536)
-    fail(Errc::InvalidArgument, "telecentric camera: size {}x{} is out of range", width, height);
+  if (width < 1 || height < 1 || width > 65536 || height > 65536 ||
+      static_cast<long>(width) * height > kMaxExrPixels)
+    fail(Errc::InvalidArgument, "telecentric camera: size {}x{} is out of range (1..65536 a side, at most 2^30 "
+         "pixels: what a radiance EXR holds)", width, height);
 }
 
 TelecentricCamera::RayMap::RayMap(const TelecentricCamera& cam)

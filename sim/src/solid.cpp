@@ -143,6 +143,22 @@ Bounds Bounds::intersect(const Bounds& o) const {
   return out;
 }
 
+Bounds::Ball Bounds::ball(const Vec3& centre, double radius) const {
+  double near2 = 0, far2 = 0;  // squared distances from the centre to the box's nearest and farthest points
+  for (int axis = 0; axis < 3; ++axis) {
+    const double low = lo[axis] - centre[axis], high = hi[axis] - centre[axis];
+    const double gap = low > 0 ? low : high < 0 ? -high : 0;
+    near2 += gap * gap;
+    far2 += std::max(low * low, high * high);
+  }
+  if (near2 >= radius * radius) return Ball::Clear;
+  return far2 <= radius * radius ? Ball::HoldsAll : Ball::Overlaps;
+}
+
+std::string Bounds::text() const {
+  return fmt::format("[{:g}, {:g}, {:g}] to [{:g}, {:g}, {:g}] mm", lo.x, lo.y, lo.z, hi.x, hi.y, hi.z);
+}
+
 Bounds Bounds::unite(const Bounds& o) const {
   Bounds out;
   for (int i = 0; i < 3; ++i) {

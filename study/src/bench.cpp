@@ -5,6 +5,7 @@
 #include "lfi/study/study.h"
 
 #include <cmath>
+#include <tuple>
 
 namespace lfi::study {
 
@@ -42,6 +43,25 @@ void checkGeometry(const Bench& b, const ConfigTable& cameraTable, const ConfigT
     if (std::abs(radial) >= semi)
       fail(Errc::Config, "{} = {}: the cut's centre would be outside the lens (semi-diameter {})",
            defectsTable.where(key), radial, semi);
+  // A cut (centred on the back surface, as the study makes it) that holds the
+  // lens's whole box would leave no lens.
+  const sim::Bounds box =
+      sim::Solid::sphericalLens(lens.frontRadius_mm, lens.backRadius_mm, lens.centreThickness_mm, lens.diameter_mm)
+          ->bounds();
+  const std::tuple<const char*, double, double> cutBalls[] = {
+      {"cut_large_radius_mm", defects.cutLargeRadius_mm, defects.cutLargeRadial_mm},
+      {"cut_subpixel_radius_mm", defects.cutSubpixelRadius_mm, defects.cutSubpixelRadial_mm}};
+  for (const auto& [key, radius, radial] : cutBalls) {
+    const double z = sim::sphericalFaceZ(lens.backRadius_mm, lens.centreThickness_mm / 2, std::abs(radial));
+    const Vec3 centre(radial, 0, z);
+    if (box.ball(centre, radius) == sim::Bounds::Ball::HoldsAll)
+      fail(Errc::Config, "{} = {}: the cut would hold the whole lens ({}): nothing would be left",
+           defectsTable.where(key), radius, box.text());
+  }
+  // The index defect's glass: no lower than air, no higher than a scene file takes.
+  if (const double n = lens.ior * defects.indexFactor; !(n >= 1 && n <= 5))
+    fail(Errc::Config, "{} = {}: the defect's index would be {} x {} = {:g}, outside [1, 5]",
+         defectsTable.where("index_factor"), defects.indexFactor, lens.ior, defects.indexFactor, n);
   // The inclusions, spheres at z = 0, must lie wholly inside the glass.
   for (const double radial : {0.0, defects.rimRadial_mm})
     if (!sim::sphericalLensHolds(lens.frontRadius_mm, lens.backRadius_mm, lens.centreThickness_mm, lens.diameter_mm,

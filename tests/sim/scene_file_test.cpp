@@ -160,6 +160,18 @@ TEST_F(SceneFile, BadValuesAreErrors) {
   for (int i = 0; i < 15; ++i) cuts += fmt::format("[[object.cut]]\nposition_mm=[0, 0, {}]\nradius_mm=1\n", 6 * i - 45);
   EXPECT_TRUE(throwsError([&] { loadSceneFile(write("cuts.toml", cuts)); }, Errc::Config,
                           {"cuts.toml:", "object[0].cut", "15 cut-outs", "at most 14"}));
+  // An emitter with a material: its ior would be read and never used (an emitting object is opaque).
+  EXPECT_TRUE(throwsError(
+      [&] {
+        loadSceneFile(write("glowing.toml", head + "[[object]]\nname='g'\nshape='sphere'\nradius_mm=5\n"
+                                                  "material='dielectric'\nior=1.5\nemitter='lambertian'\n"));
+      },
+      Errc::Config, {"glowing.toml:", "object[0].material", "an emitting object is opaque"}));
+  // A camera of more pixels than its image could be written with (each side in range).
+  std::string big = std::string("format = \"lfi-scene\"\nversion = 1\n") + kCamera;
+  big = big.replace(big.find("width = 16"), 10, "width = 65536").replace(big.find("height = 16"), 11, "height = 16385");
+  EXPECT_TRUE(throwsError([&] { loadSceneFile(write("big.toml", big)); }, Errc::Config,
+                          {"big.toml:", "camera.height", "65536 x 16385 pixels", "2^30"}));
   // A cut-out that misses the part (here, a position in the world's frame where the object's was meant) or
   // holds all of it.
   const std::string part =
@@ -711,7 +723,9 @@ TEST_F(SceneFile, MeshAndAnalyticSphereRefractAlike) {
       ASSERT_EQ(pa.size(), 4u);  // origin, in, out, escape
       ASSERT_EQ(pm.size(), 4u);
       const double turnA = (pa[3] - pa[2]).normalized().x, turnM = (pm[3] - pm[2]).normalized().x;
-      if (h <= 0.3) EXPECT_NEAR(turnA, -h / 7.5, 0.002 * h / 7.5 + 1e-12) << h;
+      if (h <= 0.3) {
+        EXPECT_NEAR(turnA, -h / 7.5, 0.002 * h / 7.5 + 1e-12) << h;
+      }
       EXPECT_NEAR(turnM, turnA, 0.08 * h / 7.5 + 1e-4) << h;  // (measured: within 7 %)
     }
   }

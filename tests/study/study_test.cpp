@@ -221,7 +221,14 @@ TEST(Bench, OutOfRangeAndMalformedValuesAreErrors) {
   const fs::path dir = freshDir("range");
   const fs::path bad = dir / "bad.toml";
   std::ofstream(bad) << replaceLine(readText(kBench), "ior = 1.5168", "ior = -3");
-  EXPECT_THROW(lfi::study::Bench::load(bad), lfi::Error);
+  EXPECT_TRUE(throwsError([&] { lfi::study::Bench::load(bad); }, Errc::Config, {bad.string() + ":", "lens.ior"}));
+  // Defects the study could not make: a cut that leaves no lens, an index below air's.
+  std::ofstream(bad) << replaceLine(readText(kBench), "cut_large_radius_mm", "cut_large_radius_mm = 30\n#");
+  EXPECT_TRUE(throwsError([&] { lfi::study::Bench::load(bad); }, Errc::Config,
+                          {bad.string() + ":", "defects.cut_large_radius_mm", "hold the whole lens"}));
+  std::ofstream(bad) << replaceLine(readText(kBench), "index_factor", "index_factor = 0.6\n#");
+  EXPECT_TRUE(throwsError([&] { lfi::study::Bench::load(bad); }, Errc::Config,
+                          {bad.string() + ":", "defects.index_factor", "0.91008, outside [1, 5]"}));
   // Values each in range that the bench cannot build, named before a study starts.
   std::ofstream(bad) << replaceLine(readText(kBench), "front_radius_mm = 51.5", "front_radius_mm = 10");
   EXPECT_TRUE(throwsError([&] { lfi::study::Bench::load(bad); }, Errc::Config,

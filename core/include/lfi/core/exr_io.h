@@ -23,6 +23,11 @@ namespace lfi {
 
 inline constexpr int kExrFormatVersion = 2;
 
+// The largest image an lfi EXR file holds, a side and in all (a 60 MB file
+// could otherwise ask for 64 GiB). Images made to be written (renders) keep
+// to it too, so that the work is refused before it is done.
+inline constexpr long kMaxExrSide = 1L << 17, kMaxExrPixels = 1L << 30;
+
 void writeLightFieldExr(const std::filesystem::path& path, const LightField& lightField,
                         Overwrite overwrite = Overwrite::Refuse);
 LightField readLightFieldExr(const std::filesystem::path& path);

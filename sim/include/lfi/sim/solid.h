@@ -16,6 +16,7 @@
 
 #include <array>
 #include <cstdint>
+#include <string>
 #include <limits>
 #include <memory>
 #include <optional>
@@ -103,6 +104,12 @@ struct Bounds {
   Bounds transformed(const Rigid3& parentFromLocal) const;
   Bounds intersect(const Bounds& other) const;
   Bounds unite(const Bounds& other) const;
+  // How a ball (centre, radius) lies against the box: clear of it, holding all
+  // of it, or neither. A cut-out clear of a part's box changes nothing, one
+  // holding it leaves nothing (Solid::bounds is a box around the part).
+  enum class Ball { Clear, HoldsAll, Overlaps };
+  Ball ball(const Vec3& centre, double radius) const;
+  std::string text() const;  // "[x, y, z] to [x, y, z] mm"
 };
 
 class Solid {
