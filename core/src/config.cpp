@@ -80,7 +80,7 @@ std::string ConfigTable::string(const std::string& key, std::optional<std::strin
 }
 
 std::vector<double> ConfigTable::numbers(const std::string& key, size_t count,
-                                         std::optional<std::vector<double>> fallback) {
+                                         std::optional<std::vector<double>> fallback, double min, double max) {
   const toml::node* n = node(key);
   if (!n) {
     if (!fallback) fail(Errc::Config, "{} is missing", where(key));
@@ -94,6 +94,8 @@ std::vector<double> ConfigTable::numbers(const std::string& key, size_t count,
                                              : e.value<double>();
     if (!e.is_number() || !v || !std::isfinite(*v))
       fail(Errc::Config, "{} must be an array of {} numbers", where(key), count);
+    if (*v < min || *v > max)
+      fail(Errc::Config, "{}: {} (element {}) is outside [{}, {}]", where(key), *v, out.size(), min, max);
     out.push_back(*v);
   }
   return out;

@@ -28,6 +28,13 @@ namespace lfi::sim {
 
 namespace fs = std::filesystem;
 
+namespace {
+// No coordinate or size of a bench is this far out: such a value is a wrong
+// unit or a stand-in for "infinite" (Embree, in float, drops a primitive past
+// about 1.8e18, and the object vanished without a word).
+constexpr double kFarthest_mm = 1e9;
+}  // namespace
+
 Rigid3 placement(const std::vector<double>& p, const std::vector<double>& r) {
   const double deg = std::numbers::pi / 180;
   Rigid3 x = Rigid3::rotation({0, 0, 1}, r[2] * deg) * Rigid3::rotation({0, 1, 0}, r[1] * deg) *
@@ -176,7 +183,7 @@ TriangleMesh loadMesh(const fs::path& path, double creaseAngle_rad) {
     const Vec3& p = mesh.vertices[v];
     if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
       fail(Errc::InvalidFile, "'{}': vertex {} (counting from 0) is not finite", path.string(), v);
-    if (constexpr double kFar = 1e9; std::max({std::abs(p.x), std::abs(p.y), std::abs(p.z)}) > kFar)
+    if (constexpr double kFar = kFarthest_mm; std::max({std::abs(p.x), std::abs(p.y), std::abs(p.z)}) > kFar)
       fail(Errc::InvalidFile, "'{}': vertex {} (counting from 0) at ({:g}, {:g}, {:g}) is more than {:g} mm from the "
            "origin: not a part of a bench (wrong units?)", path.string(), v, p.x, p.y, p.z, kFar);
   }
@@ -455,7 +462,7 @@ std::optional<std::string> meshClosureFault(const TriangleMesh& mesh) {
 namespace {
 
 Rigid3 readPlacement(ConfigTable& t) {
-  return placement(t.numbers("position_mm", 3, std::vector<double>{0, 0, 0}),
+  return placement(t.numbers("position_mm", 3, std::vector<double>{0, 0, 0}, -kFarthest_mm, kFarthest_mm),
                    t.numbers("rotation_deg", 3, std::vector<double>{0, 0, 0}));
 }
 
@@ -501,7 +508,7 @@ Object readObject(ConfigTable& t) {
   const std::string kind = t.string("shape", std::nullopt, {"sphere", "lens", "cylinder", "rectangle", "mesh"});
   obj.worldFromObject = readPlacement(t);
   if (kind == "rectangle") {
-    const auto size = t.numbers("size_mm", 2);
+    const auto size = t.numbers("size_mm", 2, std::nullopt, -kFarthest_mm, kFarthest_mm);
     if (!(size[0] > 0 && size[1] > 0)) fail(Errc::Config, "{} must be positive", t.where("size_mm"));
     obj.shape = Rectangle{size[0], size[1]};
   } else if (kind == "mesh") {
@@ -519,7 +526,7 @@ Object readObject(ConfigTable& t) {
     // whole box leaves nothing: both are a wrong position, radius or unit.
     const Bounds box = solid->bounds();  // (conservative: a box around the part)
     for (ConfigTable& cut : cuts) {
-      const auto c = cut.numbers("position_mm", 3);
+      const auto c = cut.numbers("position_mm", 3, std::nullopt, -kFarthest_mm, kFarthest_mm);
       const double r = cut.number("radius_mm", std::nullopt, 1e-9, 1e6);
       const Bounds::Ball fit = box.ball({c[0], c[1], c[2]}, r);
       if (fit == Bounds::Ball::Clear)

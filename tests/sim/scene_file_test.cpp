@@ -160,6 +160,19 @@ TEST_F(SceneFile, BadValuesAreErrors) {
   for (int i = 0; i < 15; ++i) cuts += fmt::format("[[object.cut]]\nposition_mm=[0, 0, {}]\nradius_mm=1\n", 6 * i - 45);
   EXPECT_TRUE(throwsError([&] { loadSceneFile(write("cuts.toml", cuts)); }, Errc::Config,
                           {"cuts.toml:", "object[0].cut", "15 cut-outs", "at most 14"}));
+  // A size or position standing in for "infinite": Embree, in float, would drop the object silently.
+  EXPECT_TRUE(throwsError(
+      [&] {
+        loadSceneFile(write("huge.toml", head + "[[object]]\nname='l'\nshape='rectangle'\nsize_mm=[1e20, 1e20]\n"
+                                               "emitter='lambertian'\n"));
+      },
+      Errc::Config, {"huge.toml:", "object[0].size_mm", "1e+20 (element 0) is outside"}));
+  EXPECT_TRUE(throwsError(
+      [&] {
+        loadSceneFile(write("far.toml", head + "[[object]]\nname='s'\nshape='sphere'\nradius_mm=1\n"
+                                              "position_mm=[0, 0, -2e18]\n"));
+      },
+      Errc::Config, {"far.toml:", "object[0].position_mm", "(element 2) is outside"}));
   // An emitter with a material: its ior would be read and never used (an emitting object is opaque).
   EXPECT_TRUE(throwsError(
       [&] {

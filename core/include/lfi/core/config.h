@@ -26,9 +26,10 @@ public:
               int max = 1 << 30);
   std::string string(const std::string& key, std::optional<std::string> fallback = std::nullopt,
                      const std::vector<std::string>& allowed = {});
-  // An array of numbers of fixed length (e.g. a position [x, y, z]).
+  // An array of numbers of fixed length (e.g. a position [x, y, z]), each in [min, max].
   std::vector<double> numbers(const std::string& key, size_t count,
-                              std::optional<std::vector<double>> fallback = std::nullopt);
+                              std::optional<std::vector<double>> fallback = std::nullopt, double min = -1e300,
+                              double max = 1e300);
   bool has(const std::string& key) const;
   ConfigTable table(const std::string& key);
   // An array of tables ([[key]] in TOML); empty when the key is absent.
