@@ -165,9 +165,21 @@ void checkHeaderSizes(const fs::path& path) {
   }
 }
 
+// OpenEXR sizes its per-line tables from a file's data window when it opens
+// the file; with a maximum image size its sanity check refuses a larger one
+// first. (Process-wide: no lfi file is larger.)
+void limitOpenExrImageSize() {
+  static const bool limited = [] {
+    Imf::Header::setMaxImageSize(static_cast<int>(kMaxSide), static_cast<int>(kMaxSide));
+    return true;
+  }();
+  (void)limited;
+}
+
 LoadedExr loadExr(const fs::path& path, const char* expectedKind) {
   requireInputFile(path);
   checkHeaderSizes(path);
+  limitOpenExrImageSize();
   LoadedExr out;
   int version = 0;
   try {

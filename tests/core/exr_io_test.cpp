@@ -274,6 +274,28 @@ TEST_F(ExrIo, AttributeSizePastTheEndOfTheFileIsNamed) {
                           {file("huge.exr").string(), "'lfi.description'", "declares 1879048192 bytes"}));
 }
 
+TEST_F(ExrIo, HugeDataWindowIsRefusedBeforeOpenExrSizesItsTables) {
+  // A 2^28-row data window in a 1 KB file, with line-based and with DWAB
+  // compression: refused by OpenEXR's own sanity check (the reader sets its
+  // maximum image size), before the reader sizes its per-line tables.
+  lfi::writeRadianceExr(file("r.exr"), randomFloats(8, 8, 21), {0.01, "tall"});
+  std::string bytes = readBytes(file("r.exr"));
+  const std::string field("dataWindow\0box2i\0", 17);
+  const size_t at = bytes.find(field);
+  ASSERT_NE(at, std::string::npos);
+  bytes.replace(at + field.size() + 4 + 12, 4, std::string("\xff\xff\xff\x0f", 4));  // ymax 2^28 - 1
+  for (const char compression : {'\x03', '\x09'}) {  // ZIP (as written), DWAB
+    const std::string key("compression\0compression\0", 24);
+    const size_t c = bytes.find(key);
+    ASSERT_NE(c, std::string::npos);
+    bytes[c + key.size() + 4] = compression;
+    std::ofstream(file("tall.exr"), std::ios::binary) << bytes;
+    EXPECT_TRUE(throwsError([&] { lfi::readRadianceExr(file("tall.exr")); }, Errc::InvalidFile,
+                            {file("tall.exr").string(), "height"}))
+        << static_cast<int>(compression);
+  }
+}
+
 TEST_F(ExrIo, MissingAttributeIsNamed) {
   const LightFieldGeometry g = geometry();
   RawLightFieldAttributes a;
