@@ -255,6 +255,9 @@ void writeLightFieldExr(const fs::path& path, const LightField& lightField, Over
     fail(Errc::InvalidArgument, "cannot write '{}': the lenslet image is {}x{} (type {}); the geometry needs {}x{} "
          "CV_32FC1", path.string(), lightField.lensletImage().cols, lightField.lensletImage().rows,
          lightField.lensletImage().type(), g.width(), g.height());
+  if (const auto bad = firstNegative(lightField.lensletImage()))
+    fail(Errc::InvalidArgument, "cannot write '{}': lenslet pixel ({}, {}) is {}; radiance cannot be negative",
+         path.string(), bad->x, bad->y, lightField.lensletImage().at<float>(*bad));
   Imf::Header header(g.width(), g.height());
   header.insert(kKind, Imf::StringAttribute(kLightFieldKind));
   header.insert(kSpatialX, Imf::IntAttribute(g.spatialX));
@@ -289,6 +292,9 @@ LightField readLightFieldExr(const fs::path& path) {
     fail(Errc::InvalidFile, "'{}': image is {}x{} but attributes {}={}, {}={}, {}={} need {}x{}", path.string(),
          exr.pixels.cols, exr.pixels.rows, kSpatialX, g.spatialX, kSpatialY, g.spatialY, kAngular, g.angular,
          g.width(), g.height());
+  if (const auto bad = firstNegative(exr.pixels))
+    fail(Errc::InvalidFile, "'{}': pixel ({}, {}) is {}; radiance cannot be negative", path.string(), bad->x, bad->y,
+         exr.pixels.at<float>(*bad));
   return LightField(g, std::move(exr.pixels));
 }
 

@@ -29,6 +29,16 @@ std::optional<cv::Point> firstNonFinite(const cv::Mat& image) {
   return std::nullopt;
 }
 
+std::optional<cv::Point> firstNegative(const cv::Mat& image) {
+  requireImageType(image, CV_32FC1, "image to check for negative pixels");
+  for (int r = 0; r < image.rows; ++r) {
+    const float* row = image.ptr<float>(r);
+    for (int c = 0; c < image.cols; ++c)
+      if (row[c] < 0) return cv::Point(c, r);
+  }
+  return std::nullopt;
+}
+
 double percentile(const cv::Mat& image, double fraction) {
   requireImageType(image, CV_32FC1, "image for a percentile");
   std::vector<float> values(image.begin<float>(), image.end<float>());

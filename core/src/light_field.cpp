@@ -49,6 +49,9 @@ LightField::LightField(const LightFieldGeometry& geometry, cv::Mat lensletImage)
   if (const auto bad = firstNonFinite(lenslet_))
     fail(Errc::InvalidArgument, "light field lenslet pixel ({}, {}) is {}; radiance must be finite", bad->x, bad->y,
          lenslet_.at<float>(*bad));
+  if (const auto bad = firstNegative(lenslet_))
+    fail(Errc::InvalidArgument, "light field lenslet pixel ({}, {}) is {}; radiance cannot be negative", bad->x,
+         bad->y, lenslet_.at<float>(*bad));
 }
 
 Vec2 LightField::elementCentre(int ex, int ey) const {

@@ -74,7 +74,7 @@ LightFieldGeometry geometry() {
   return g;
 }
 
-// Random finite floats over the whole bit range (all exponents, both signs, denormals).
+// Random finite, non-negative floats over the whole bit range (all exponents, denormals, +0).
 cv::Mat randomFloats(int rows, int cols, unsigned seed) {
   cv::Mat m(rows, cols, CV_32FC1);
   std::mt19937 rng(seed);
@@ -82,20 +82,22 @@ cv::Mat randomFloats(int rows, int cols, unsigned seed) {
     for (int c = 0; c < cols; ++c) {
       float x;
       do {
-        x = std::bit_cast<float>(static_cast<std::uint32_t>(rng()));
+        x = std::bit_cast<float>(static_cast<std::uint32_t>(rng()) & 0x7fffffffu);  // (radiance: not negative)
       } while (!std::isfinite(x));
       m.at<float>(r, c) = x;
     }
   return m;
 }
 
-cv::Mat specialFloats(int rows, int cols, unsigned seed) {
+cv::Mat specialFloats(int rows, int cols, unsigned seed, bool negatives = true) {
   cv::Mat m = randomFloats(rows, cols, seed);
   using L = std::numeric_limits<float>;
   const float specials[] = {0.0f,      -0.0f,        L::denorm_min(), -L::denorm_min(), L::min() / 3,
                             -L::min(), L::min(),     L::max(),        L::lowest(),      1.0f,
                             -1.0f,     L::epsilon(), -123.456f,       1e-30f,           -1e30f};
-  for (int i = 0; i < static_cast<int>(std::size(specials)); ++i) m.at<float>(i / cols, i % cols) = specials[i];
+  int at = 0;
+  for (const float x : specials)
+    if (negatives || !(x < 0)) m.at<float>(at / cols, at % cols) = x, ++at;  // (-0 is not negative)
   return m;
 }
 
@@ -175,7 +177,7 @@ void writeRawLightField(const fs::path& path, const cv::Mat& pixels, const RawLi
 
 TEST_F(ExrIo, LightFieldRoundTripIsBitExact) {
   const LightFieldGeometry g = geometry();
-  const LightField original(g, specialFloats(g.height(), g.width(), 1));
+  const LightField original(g, specialFloats(g.height(), g.width(), 1, false));
   const fs::path path = file("lf.exr");
   lfi::writeLightFieldExr(path, original);
   const LightField loaded = lfi::readLightFieldExr(path);
@@ -353,6 +355,18 @@ TEST_F(ExrIo, NonFinitePixelIsNamed) {
                             {path.string(), "pixel (13, 7)", "finite"}))
         << name;
   }
+  // Negative radiance: refused by the reader, and by the writer and the light field before it.
+  cv::Mat pixels = randomFloats(g.height(), g.width(), 13);
+  pixels.at<float>(3, 5) = -0.25f;
+  writeRawLightField(file("negative.exr"), pixels, {});
+  EXPECT_TRUE(throwsError([&] { lfi::readLightFieldExr(file("negative.exr")); }, Errc::InvalidFile,
+                          {file("negative.exr").string(), "pixel (5, 3) is -0.25", "cannot be negative"}));
+  EXPECT_TRUE(throwsError([&] { LightField(g, pixels); }, Errc::InvalidArgument, {"(5, 3)", "cannot be negative"}));
+  LightField field(g, randomFloats(g.height(), g.width(), 14));
+  field.lensletImage().at<float>(3, 5) = -1;  // changed after the check
+  EXPECT_TRUE(throwsError([&] { lfi::writeLightFieldExr(file("negative-out.exr"), field); }, Errc::InvalidArgument,
+                          {"negative-out.exr", "(5, 3)", "cannot be negative"}));
+  EXPECT_FALSE(fs::exists(file("negative-out.exr")));
 }
 
 // Writes `pixels` under `header` as it is (its recorded checksum included).

@@ -29,6 +29,10 @@ void requireImageType(const cv::Mat& image, int cvType, const std::string& what)
 // that is NaN or infinite; nullopt when every pixel is finite.
 std::optional<cv::Point> firstNonFinite(const cv::Mat& image);
 
+// The first pixel (as firstNonFinite) of a CV_32FC1 image below 0 (negative
+// radiance, which no light field holds); nullopt when there is none.
+std::optional<cv::Point> firstNegative(const cv::Mat& image);
+
 // The value below which `fraction` (0..1) of a CV_32FC1 image's pixels lie
 // (nearest rank). Throws Errc::InvalidArgument for an empty image.
 double percentile(const cv::Mat& image, double fraction);
