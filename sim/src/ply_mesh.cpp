@@ -135,10 +135,15 @@ class BodyReader {
               "(a line holds one instance)", path_.string(), line_, shown(element_->name), instance_,
               shown(body_.substr(i, end - i)));
   }
-  // ASCII: anything but white space after the last element is an error (a
-  // count short of the rows that follow).
+  // Anything after the last element is an error (a count short of the rows
+  // or faces that follow), but for white space in ASCII.
   void end() {
-    if (!ascii()) return;
+    if (!ascii()) {
+      if (remaining() > 0)
+        lfi::fail(Errc::InvalidFile, "'{}': byte {}: {} bytes after the last element's declared instances (a count "
+                  "in the header is short)", path_.string(), offset_ + at_, remaining());
+      return;
+    }
     rowLine_ = -1;
     while (at_ < body_.size() && std::isspace(static_cast<unsigned char>(body_[at_])))
       if (body_[at_++] == '\n') ++line_;

@@ -632,6 +632,7 @@ TEST_F(SceneFile, CorruptPlyIsAnErrorNamingFileAndPlace) {
            std::string("\xff\xff\xff\x7f", 4),
        {"byte ", "a list of 2147483647 values does not fit"}},
       {"cut-in-body.ply", binary.substr(0, binary.size() - 17), {"byte ", "texcoord' of face 7", "ends inside"}},
+      {"long-body.ply", binary + std::string(13, '\0'), {"13 bytes after the last element", "count in the header"}},
       // Malformed headers and values.
       {"not-a-number.ply", header + "0 0 0\n1 zero 0\n", {"line 11", "property 'y' of vertex 1", "'zero'"}},
       {"no-faces.ply",
