@@ -392,7 +392,8 @@ TEST_F(AravisCameraTest, GenericFeatureAccess) {
       throwsError([&] { camera->getFeature("NoSuchFeature"); }, Errc::NotFound, {"NoSuchFeature", fake_->id()}));
   EXPECT_TRUE(
       throwsError([&] { camera->setFeature("PixelFormat", "Mono99"); }, Errc::NotFound, {"PixelFormat", "Mono99"}));
-  EXPECT_ANY_THROW(camera->setIntegerFeature("Width", 1 << 20));
+  EXPECT_TRUE(throwsError([&] { camera->setIntegerFeature("Width", 1 << 20); }, Errc::InvalidArgument,
+                          {fake_->id(), "'Width' to 1048576"}));
 }
 
 // This host's first IPv4 address outside 127/8 that is up, or "" if it has none.

@@ -652,10 +652,13 @@ TEST(Render, RejectsInvalidOptions) {
   SmallLensScene s;
   RenderOptions opt;
   opt.samplesPerPixel = 0;
-  EXPECT_THROW(render(s.scene, s.cam, opt), Error);
+  EXPECT_TRUE(throwsError([&] { render(s.scene, s.cam, opt); }, Errc::InvalidArgument, {"samplesPerPixel"}));
   opt.samplesPerPixel = 1;
   opt.splitDepth = 13;
-  EXPECT_THROW(render(s.scene, s.cam, opt), Error);
+  EXPECT_TRUE(
+      throwsError([&] { render(s.scene, s.cam, opt); }, Errc::InvalidArgument, {"splitDepth = 13", "[0, 12]"}));
+  opt.splitDepth = 12;  // the largest taken
+  EXPECT_NO_THROW(render(s.scene, s.cam, opt));
 }
 
 // A glass box as a mesh, tilted so that no face lies on a float grid plane,

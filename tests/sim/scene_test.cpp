@@ -4,6 +4,8 @@
 #include "lfi/sim/render.h"
 #include "lfi/sim/scene.h"
 
+#include "lfi_test_support.h"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -14,6 +16,7 @@ namespace {
 
 using namespace lfi;
 using namespace lfi::sim;
+using lfi::testing_support::throwsError;
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
@@ -191,7 +194,8 @@ TEST(Scene, PacketIntersectEqualsOneRayIntersect) {
   EXPECT_GT(laneHits, 1000);
   std::vector<Ray> tooMany(Scene::kPacket + 1, Ray{{0, 0, 30}, {0, 0, -1}});
   std::vector<Hit> out(tooMany.size());
-  EXPECT_THROW(scene.intersect(tooMany, out), Error);
+  EXPECT_TRUE(throwsError([&] { scene.intersect(tooMany, out); }, Errc::InvalidArgument,
+                          {"17 rays for 17 hits", "at most 16 at once"}));
 }
 
 }  // namespace
@@ -289,7 +293,8 @@ TEST(Scene, IsolatedSolidsAnswerHintedRaysAsTheOneRayQuery) {
   std::vector<Ray> rays(2, Ray{{0, 0, 2}, {0, 0, -1}});
   std::vector<Hit> hits(2);
   const std::vector<Scene::RayStart> tooFew{{}};
-  EXPECT_THROW(scene.intersect(rays, hits, Scene::kTMin, tooFew), Error);
+  EXPECT_TRUE(throwsError([&] { scene.intersect(rays, hits, Scene::kTMin, tooFew); }, Errc::InvalidArgument,
+                          {"2 rays for 2 hits and 1 starts"}));
   // A start naming no object is an error that names the lane, not a read out of bounds.
   const int objectCount = static_cast<int>(objects.size());
   for (const Scene::RayStart bad : {Scene::RayStart{objectCount, -1}, Scene::RayStart{-1, objectCount},

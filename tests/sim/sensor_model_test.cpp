@@ -2,6 +2,8 @@
 // quantisation noise, saturation, linearity, reproducibility.
 #include "lfi/sim/camera_sensor_model.h"
 
+#include "lfi_test_support.h"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -11,6 +13,7 @@ namespace {
 
 using namespace lfi;
 using namespace lfi::sim;
+using lfi::testing_support::throwsError;
 
 cv::Mat flat(int size, float radiance) {
   return cv::Mat(size, size, CV_32FC1, cv::Scalar(radiance));
@@ -125,7 +128,7 @@ TEST(CameraSensorModel, ZeroRadianceGivesOnlyReadNoise) {
   // Read noise of 2.4 e- is 0.94 DN, clipped at 0: the mean is small and positive.
   EXPECT_LT(mean, 1.0);
   EXPECT_GE(mean, 0.0);
-  EXPECT_THROW(model.exposeFor(0), std::exception);
+  EXPECT_TRUE(throwsError([&] { model.exposeFor(0); }, Errc::InvalidArgument, {"black image"}));
 }
 
 }  // namespace
