@@ -67,15 +67,15 @@ void checkOutputs(const nlohmann::ordered_json& r, const fs::path& dir) {
       for (const auto& setup : setups) {
         const auto& cell = s["defects"][d][setup];
         const double cnr = cell["cnr"].get<double>();
-        ASSERT_TRUE(std::isfinite(cnr) && cnr >= 0) << scene << "/" << d << "/" << setup << ": cnr " << cnr;
+        ASSERT_TRUE(std::isfinite(cnr)) << scene << "/" << d << "/" << setup << ": cnr " << cnr;
         const char* expected = cnr >= detectedAt ? "detected" : cnr >= weakAt ? "weak" : "missed";
         EXPECT_EQ(cell["verdict"].get<std::string>(), expected) << scene << "/" << d << "/" << setup << ": cnr " << cnr;
         // The ground-truth mask is never empty: sub-pixel defects get their pixel.
         EXPECT_GT(cell["pixels"].get<int>(), 0) << scene << "/" << d;
       }
     for (const auto& setup : setups) {
-      EXPECT_GE(s["false_positives"][setup].get<int>(), 0);
-      EXPECT_GE(s["secondary_regions"][setup].get<int>(), 0);
+      EXPECT_TRUE(s["false_positives"][setup].is_number_integer()) << scene << "/" << setup;
+      EXPECT_TRUE(s["secondary_regions"][setup].is_number_integer()) << scene << "/" << setup;
       for (const char* ext : {".exr", ".png", "_diff.png"})
         EXPECT_TRUE(fs::exists(dir / "images" / (scene + "_" + setup + ext))) << scene << setup << ext;
     }
@@ -125,10 +125,17 @@ TEST(QuickStudy, EndToEnd) {
   ASSERT_TRUE(r.contains("sweep"));
   ASSERT_EQ(r["sweep"]["points"].size(), 2u);
   for (const auto& p : r["sweep"]["points"])
-    for (const char* lookup : {"nearest", "interpolated"}) {
-      EXPECT_EQ(p["cnr"][lookup].size(), 8u) << lookup;
-      EXPECT_GT(p["intact_lit_fraction"][lookup].get<double>(), 0.0);
-    }
+    for (const char* lookup : {"nearest", "interpolated"}) EXPECT_EQ(p["cnr"][lookup].size(), 8u) << lookup;
+  // The bench's own light field lights most of the intact lens: 63 % with the
+  // nearest lookup, 68 % interpolated at this quality's 128 x 128 pixels and 8
+  // samples (the imaging test's finer round trip: 80 %, 93 %); a light field
+  // that lit half of it or less is wrong. (The display 1 mm off lights about as
+  // much: a millimetre is well inside the depth the rim defects allow, ±4 mm.)
+  for (const char* lookup : {"nearest", "interpolated"}) {
+    const double own = r["sweep"]["points"][0]["intact_lit_fraction"][lookup].get<double>();
+    EXPECT_GT(own, 0.55) << lookup;
+    EXPECT_LE(own, 1.0) << lookup;
+  }
   EXPECT_GE(r["sweep"]["points"][0]["cnr"]["nearest"]["absorbing/center"].get<double>(), 3.0);
   EXPECT_TRUE(r["sweep"]["answers"].contains("absorbing/center"));
   EXPECT_NE(readText(dir / "report.html").find("How good must the display be?"), std::string::npos);
