@@ -386,22 +386,26 @@ TEST(Solid, NearestCrossingsAgreeWithIntervals) {
 }
 
 TEST(Solid, LensBoundsAreFiniteAndEncloseTheLens) {
-  for (auto lens : {Solid::sphericalLens(100, -100, 7, 50), Solid::sphericalLens(-100, 0, 3, 50),
-                    Solid::sphericalLens(0, 0, 5, 30)}) {
-    const Bounds b = lens->bounds();
+  struct Lens {
+    double r1, r2, thickness, diameter;
+  };
+  for (const Lens& l : {Lens{100, -100, 7, 50}, Lens{-100, 0, 3, 50}, Lens{0, 0, 5, 30}}) {
+    const Bounds b = Solid::sphericalLens(l.r1, l.r2, l.thickness, l.diameter)->bounds();
     ASSERT_TRUE(b.finite());
-    // The rim and the vertices are inside the box.
-    for (const Vec3& p : {Vec3(0, 0, 0), Vec3(14.9, 0, 0), Vec3(0, -14.9, 0)}) {
-      EXPECT_LE(b.lo.x, p.x);
-      EXPECT_GE(b.hi.x, p.x);
-      EXPECT_LE(b.lo.y, p.y);
-      EXPECT_GE(b.hi.y, p.y);
+    // Both vertices, and both faces' rims all round (for the plano-concave lens
+    // the lowest glass is at the rim: -1.5 - 3.175 mm), lie inside the box.
+    const double rim = l.diameter / 2;
+    std::vector<Vec3> points = {{0, 0, -l.thickness / 2}, {0, 0, l.thickness / 2}};
+    for (int k = 0; k < 8; ++k) {
+      const double a = std::numbers::pi * k / 4, x = rim * std::cos(a), y = rim * std::sin(a);
+      points.push_back({x, y, sphericalFaceZ(l.r1, -l.thickness / 2, rim)});
+      points.push_back({x, y, sphericalFaceZ(l.r2, l.thickness / 2, rim)});
     }
-    IntervalList list;
-    lens->intervals({{0, 0, -100}, {0, 0, 1}}, list);
-    ASSERT_EQ(list.size(), 1);
-    EXPECT_LE(b.lo.z, list[0].enter.t - 100);
-    EXPECT_GE(b.hi.z, list[0].exit.t - 100);
+    for (const Vec3& p : points) {
+      EXPECT_TRUE(p.x >= b.lo.x - 1e-9 && p.x <= b.hi.x + 1e-9 && p.y >= b.lo.y - 1e-9 && p.y <= b.hi.y + 1e-9 &&
+                  p.z >= b.lo.z - 1e-9 && p.z <= b.hi.z + 1e-9)
+          << "R " << l.r1 << ", " << l.r2 << ": (" << p.x << ", " << p.y << ", " << p.z << ") outside the box";
+    }
   }
 }
 
