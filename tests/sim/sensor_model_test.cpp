@@ -124,10 +124,18 @@ TEST(CameraSensorModel, DoublingElectronsPerUnitDoublesTheMean) {
 TEST(CameraSensorModel, ZeroRadianceGivesOnlyReadNoise) {
   CameraSensorModel model;
   double mean, sd;
-  meanStd(model.capture(flat(256, 0.0f), 41), mean, sd);
-  // Read noise of 2.4 e- is 0.94 DN, clipped at 0: the mean is small and positive.
-  EXPECT_LT(mean, 1.0);
-  EXPECT_GE(mean, 0.0);
+  const cv::Mat dn = model.capture(flat(256, 0.0f), 41);
+  meanStd(dn, mean, sd);
+  // Read noise of 2.4 e- is sigma = 2.4 x 4095 / 10500 = 0.936 DN, rounded and
+  // clipped at 0: the mean is sum over k >= 1 of P(X >= k - 1/2) = 0.355 DN,
+  // and 70 % of the pixels read 0 (P(X < 1/2)). (No read noise: mean 0; twice
+  // as much: 0.74 DN.) 65 536 pixels: both known to about 0.003.
+  const double sigma = 2.4 * 4095 / 10500;
+  auto above = [&](double x) { return 0.5 * std::erfc(x / (sigma * std::sqrt(2.0))); };
+  double expectedMean = 0;
+  for (int k = 1; k < 20; ++k) expectedMean += above(k - 0.5);
+  EXPECT_NEAR(mean, expectedMean, 0.012);
+  EXPECT_NEAR(1.0 - cv::countNonZero(dn) / static_cast<double>(dn.total()), 1 - above(0.5), 0.01);
   EXPECT_TRUE(throwsError([&] { model.exposeFor(0); }, Errc::InvalidArgument, {"black image"}));
 }
 
