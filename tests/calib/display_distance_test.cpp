@@ -146,7 +146,23 @@ TEST(DisplayDistance, MeasuresHowFarTheDisplayMoved) {
   const double offset = estimate(0);
   RecordProperty("sampling_offset_mm", std::to_string(offset));
   EXPECT_LT(std::abs(offset), 3.0);  // a fraction of the 6 mm scan, not a runaway
-  for (double trueError : {1.5, -2.0}) EXPECT_NEAR(estimate(trueError) - offset, trueError, 0.6) << trueError;
+  // The estimates follow the error with a slope a little under 1: the
+  // candidates' own resampling blurs the field more the further they
+  // propagate it, which tilts the peak towards ε = 0 (measured: 0.87 with
+  // this ideal emitter; docs/calibration.md). A slope far from that (a sign or
+  // scale error in the propagation) fails.
+  const std::vector<double> errors = {-2.0, 1.5, 3.0};
+  double sxx = 0, sxy = 0;
+  for (const double trueError : errors) {
+    const double relative = estimate(trueError) - offset;
+    EXPECT_NEAR(relative, trueError, 0.25 * std::abs(trueError)) << trueError;
+    sxx += trueError * trueError, sxy += trueError * relative;
+  }
+  const double slope = sxy / sxx;  // through the origin: the offset is measured
+  RecordProperty("slope", std::to_string(slope));
+  std::printf("slope of the estimates against the true errors: %.3f\n", slope);
+  EXPECT_GT(slope, 0.78);
+  EXPECT_LT(slope, 1.02);
 }
 
 // The distance of the plane a shown light field was propagated to, from the
