@@ -221,6 +221,71 @@ TEST(UsbDisplayProtocol, TheMaximumPayloadIsCheckedAgainstThePanelsOwnFrame) {
                           Errc::Device, {"768000"}));
 }
 
+// A frame header as docs/usb-display-protocol.md lays it out, byte by byte
+// (little-endian; the header CRC-32 of bytes 0..27 as zlib computes it,
+// 0x137eda8b, from Python's zlib), against the codec: the emulated device
+// decodes with the same codec, so a layout error shared by both would pass
+// every transfer test but not this one.
+TEST(UsbDisplayProtocol, AFrameHeaderIsTheDocumentedBytes) {
+  usbdisplay::FrameHeader header;
+  header.sequence = 0x01020304;
+  header.format = usbdisplay::Format::Rgb888;
+  header.width = 640, header.height = 400;
+  header.payloadSize = 640 * 400 * 3;
+  header.payloadCrc = 0xdeadbeef;
+  const std::vector<std::uint8_t> expected = {
+      0x4c, 0x46, 0x49, 0x46,  // magic "LFIF"
+      0x01, 0x00, 0x20, 0x00,  // protocol major 1, header size 32
+      0x04, 0x03, 0x02, 0x01,  // sequence
+      0x02, 0x00, 0x00, 0x00,  // format RGB888, flags
+      0x80, 0x02, 0x90, 0x01,  // 640 x 400
+      0x00, 0xb8, 0x0b, 0x00,  // payload 768000 bytes
+      0xef, 0xbe, 0xad, 0xde,  // payload CRC
+      0x8b, 0xda, 0x7e, 0x13,  // header CRC
+  };
+  EXPECT_EQ(usbdisplay::encodeFrameHeader(header), expected);
+  EXPECT_EQ(usbdisplay::crc32Of(std::span(expected).first(28)), 0x137eda8bu);
+  usbdisplay::FrameHeader decoded;
+  EXPECT_EQ(usbdisplay::decodeFrameHeader(expected, decoded), usbdisplay::DeviceError::None);
+  EXPECT_EQ(decoded.sequence, header.sequence);
+  EXPECT_EQ(decoded.payloadSize, header.payloadSize);
+  // The standard check value of CRC-32: "123456789" -> 0xcbf43926.
+  const std::string check = "123456789";
+  EXPECT_EQ(usbdisplay::crc32Of({reinterpret_cast<const std::uint8_t*>(check.data()), check.size()}), 0xcbf43926u);
+}
+
+// The device info block at the documented offsets (docs/usb-display-protocol.md).
+TEST(UsbDisplayProtocol, ADeviceInfoBlockIsTheDocumentedBytes) {
+  usbdisplay::DeviceInfoBlock info;
+  info.vendor = "Vend", info.model = "Model X", info.serial = "S/1";
+  info.panelWidth_px = 0x0a00, info.panelHeight_px = 0x0600;  // 2560 x 1536
+  info.subpixels = usbdisplay::SubpixelCode::BgrStripe;
+  info.formats = 0x3;
+  info.brightnessMax = 0x0102, info.brightness = 0x0101, info.viewCount = 45;
+  info.calibrationSize = 76;
+  info.maxPayloadSize = 2560 * 1536 * 3;
+  const std::vector<std::uint8_t> b = usbdisplay::encodeDeviceInfo(info);
+  ASSERT_EQ(b.size(), 128u);
+  auto u16 = [&](size_t at) { return b[at] | b[at + 1] << 8; };
+  auto u32 = [&](size_t at) { return static_cast<std::uint32_t>(u16(at) | u16(at + 2) << 16); };
+  auto text = [&](size_t at) { return std::string(reinterpret_cast<const char*>(&b[at])); };  // NUL-terminated
+  EXPECT_EQ(u16(0), 1);    // info version
+  EXPECT_EQ(u16(2), 128);  // block size
+  EXPECT_EQ(text(4), "Vend");
+  EXPECT_EQ(text(36), "Model X");
+  EXPECT_EQ(text(68), "S/1");
+  EXPECT_EQ(u16(100), 2560);
+  EXPECT_EQ(u16(102), 1536);
+  EXPECT_EQ(b[104], 2);  // BGR stripe
+  EXPECT_EQ(b[105], 3);  // Mono8 and RGB888
+  EXPECT_EQ(u16(106), 0x0102);
+  EXPECT_EQ(u16(108), 0x0101);
+  EXPECT_EQ(u16(110), 45);
+  EXPECT_EQ(u32(112), 76u);
+  EXPECT_EQ(u32(116), 2560u * 1536u * 3u);
+  for (size_t at = 120; at < 128; ++at) EXPECT_EQ(b[at], 0) << "reserved byte " << at;
+}
+
 TEST(DisplayCalibrationFile, ValuesTheDisplayWouldRefuseAreNamedInTheFile) {
   // A calibration file overrides what the device reports; a value that
   // DisplayInfo::validate() refuses is named in the file, not blamed on the device.
