@@ -112,8 +112,8 @@ class AravisCameraTest : public ::testing::Test {
   void SetUp() override {
     binary_ = findInPath(kFakeCameraBinary);
     if (binary_.empty())
-      GTEST_SKIP() << kFakeCameraBinary << " not found in PATH: install Debian's aravis-tools "
-                   << "(scripts/install-deps.sh) to run the GigE Vision loopback tests";
+      LFI_SKIP_WITHOUT_TOOL(kFakeCameraBinary << " not found in PATH: install Debian's aravis-tools "
+                                              << "(scripts/install-deps.sh) to run the GigE Vision loopback tests");
     lock_ = std::make_unique<LoopbackGigeLock>();
     registerBuiltinBackends();
     fake_ = std::make_unique<FakeGvCamera>("LFI" + std::to_string(::getpid()));

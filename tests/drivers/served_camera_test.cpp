@@ -117,7 +117,7 @@ class ServedCamera {
 class ServedCameraTest : public ::testing::Test {
  protected:
   void SetUp() override {
-    if (::access(LFI_EXECUTABLE, X_OK) != 0) GTEST_SKIP() << LFI_EXECUTABLE << " is not built";
+    if (::access(LFI_EXECUTABLE, X_OK) != 0) LFI_SKIP_WITHOUT_TOOL(LFI_EXECUTABLE << " is not built");
     dir_ = fs::temp_directory_path() / ("lfi-served-camera-" + std::to_string(::getpid()));
     fs::create_directories(dir_);
     scene_ = dir_ / "served.toml";
