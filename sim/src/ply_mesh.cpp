@@ -397,12 +397,13 @@ TriangleMesh readPly(const fs::path& path) {
   std::vector<std::int64_t> polygon;
   for (const Element& e : elements) {
     if (e.properties.empty()) continue;  // nothing to read, however many
-    // Every instance takes at least one byte (ASCII: a character per value;
+    // Every instance takes some bytes (ASCII: a character and a separator per
+    // value, the last instance of the file perhaps without its newline;
     // binary: its fixed-size values and list counts): a count the rest of the
     // file cannot hold is an error before anything is allocated.
     size_t least = 0;
-    for (const Property& p : e.properties) least += in.ascii() ? 1 : sizeOf(p.count ? *p.count : p.type);
-    if (e.count > in.remaining() / least)
+    for (const Property& p : e.properties) least += in.ascii() ? 2 : sizeOf(p.count ? *p.count : p.type);
+    if (e.count > (in.remaining() + (in.ascii() ? 1 : 0)) / least)
       fail(Errc::InvalidFile,
            "'{}': line {}: element '{}' declares {} instances, more than the file's remaining {} "
            "bytes can hold",

@@ -20,6 +20,7 @@
 #include <fstream>
 #include <functional>
 #include <limits>
+#include <map>
 #include <unordered_map>
 #include <numbers>
 #include <numeric>
@@ -112,11 +113,16 @@ void smoothNormals(TriangleMesh& mesh, double creaseAngle) {
   for (unsigned v = 0; v < nv; ++v) {
     const unsigned begin = first[v], count = first[v + 1] - begin;
     if (count == 0) continue;
-    // Faces sharing an edge from v (the same other end) join when they meet at less than the crease angle.
+    // Two faces sharing an edge from v (the same other end) join when they
+    // meet at less than the crease angle. An edge of more than two faces
+    // (where parts touch) is sharp, and faces of no area (corners welded into
+    // one) share no edge: each face's edges are compared once, not with every
+    // other face of a fan of thousands.
     edges.clear();
     for (unsigned s = 0; s < count; ++s)
-      for (const unsigned w : mesh.triangles[around[begin + s]])
-        if (w != v) edges.emplace_back(w, s);
+      if (unit[around[begin + s]] != Vec3(0, 0, 0))
+        for (const unsigned w : mesh.triangles[around[begin + s]])
+          if (w != v) edges.emplace_back(w, s);
     std::sort(edges.begin(), edges.end());
     group.resize(count);
     std::iota(group.begin(), group.end(), 0u);
@@ -124,10 +130,12 @@ void smoothNormals(TriangleMesh& mesh, double creaseAngle) {
       while (group[s] != s) s = group[s] = group[group[s]];
       return s;
     };
-    for (size_t i = 0; i + 1 < edges.size(); ++i)
-      for (size_t j = i + 1; j < edges.size() && edges[j].first == edges[i].first; ++j)
-        if (unit[around[begin + edges[i].second]].dot(unit[around[begin + edges[j].second]]) >= cosCrease)
-          group[root(edges[i].second)] = root(edges[j].second);
+    for (size_t i = 0, j; i < edges.size(); i = j) {
+      for (j = i + 1; j < edges.size() && edges[j].first == edges[i].first;) ++j;
+      if (j - i == 2 &&
+          unit[around[begin + edges[i].second]].dot(unit[around[begin + edges[i + 1].second]]) >= cosCrease)
+        group[root(edges[i].second)] = root(edges[i + 1].second);
+    }
     // One normal per group, the sum of its faces'; the first group keeps v.
     sum.assign(count, Vec3(0, 0, 0));
     for (unsigned s = 0; s < count; ++s) sum[root(s)] += area[around[begin + s]];
@@ -507,13 +515,24 @@ Object readObject(ConfigTable& t) {
   obj.name = t.string("name");
   const std::string kind = t.string("shape", std::nullopt, {"sphere", "lens", "cylinder", "rectangle", "mesh"});
   obj.worldFromObject = readPlacement(t);
+  if ((kind == "rectangle" || kind == "mesh") && t.has("cut"))  // (else it would be an unknown key)
+    fail(Errc::Config, "{}: cut-outs apply to solids (sphere, lens, cylinder), not to a {}", t.where("cut"), kind);
   if (kind == "rectangle") {
     const auto size = t.numbers("size_mm", 2, std::nullopt, -kFarthest_mm, kFarthest_mm);
     if (!(size[0] > 0 && size[1] > 0)) fail(Errc::Config, "{} must be positive", t.where("size_mm"));
     obj.shape = Rectangle{size[0], size[1]};
   } else if (kind == "mesh") {
     const double crease = t.number("crease_angle_deg", kDefaultCreaseAngle_deg, 0, 180) * std::numbers::pi / 180;
-    obj.shape = readNamedFile(t, "file", [crease](const fs::path& file) { return loadMesh(file, crease); });
+    TriangleMesh mesh = readNamedFile(t, "file", [crease](const fs::path& file) { return loadMesh(file, crease); });
+    // The file's unit: 1 for millimetres, 1000 for metres (glTF).
+    if (const double scale = t.number("scale", 1.0, 1e-6, 1e6); scale != 1)
+      for (Vec3& v : mesh.vertices) {
+        v *= scale;
+        if (std::max({std::abs(v.x), std::abs(v.y), std::abs(v.z)}) > kFarthest_mm)
+          fail(Errc::Config, "{} = {:g} puts a vertex at ({:g}, {:g}, {:g}) mm, past {:g} mm", t.where("scale"), scale,
+               v.x, v.y, v.z, kFarthest_mm);
+      }
+    obj.shape = std::move(mesh);
   } else {
     std::shared_ptr<const Solid> solid = readSolid(t, kind);
     // Cut-outs: spheres subtracted from the solid (object frame). Each can split
@@ -615,6 +634,9 @@ DisplayParameters readDisplay(ConfigTable& t) {
   info.viewCount = t.integer("view_count", defaults.viewCount, 1, 1 << 20);
   info.brightnessMin = t.integer("brightness_min", defaults.brightnessMin, 0, 1 << 20);
   info.brightnessMax = t.integer("brightness_max", defaults.brightnessMax, 0, 1 << 20);
+  if (info.brightnessMax < info.brightnessMin)
+    fail(Errc::Config, "{} = {} is below brightness_min = {}", t.where("brightness_max"), info.brightnessMax,
+         info.brightnessMin);
   d.brightness = t.number("brightness", 1.0, 0, 1e12);
   t.finish();
   try {
@@ -745,7 +767,18 @@ SceneDescription loadSceneFile(const fs::path& path) {
         c.number("electrons_per_unit_per_us", d.cameraSensor.electronsPerUnitPerUs, 1e-12, 1e12);
     c.finish();
   }
-  for (ConfigTable& o : root.tables("object")) d.objects.push_back(readObject(o));
+  // Errors, the study's report and the tracer's messages name objects: one name each.
+  std::map<std::string, std::string> named;  // name -> where
+  for (ConfigTable& o : root.tables("object")) {
+    d.objects.push_back(readObject(o));
+    const std::string& name = d.objects.back().name;
+    if (name.empty()) fail(Errc::Config, "{} is empty: errors and reports name an object by it", o.where("name"));
+    if (const auto [at, fresh] = named.emplace(name, o.where("name")); !fresh)
+      fail(Errc::Config, "{}: '{}' names another object too ({})", o.where("name"), name, at->second);
+  }
+  if (root.has("display") && named.contains("display"))
+    fail(Errc::Config, "{}: 'display' names the [display] panel's object: call this one something else",
+         named["display"]);
   if (root.has("display")) {
     ConfigTable t = root.table("display");
     d.display = readDisplay(t);

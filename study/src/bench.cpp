@@ -62,6 +62,10 @@ void checkGeometry(const Bench& b, const ConfigTable& cameraTable, const ConfigT
   if (const double n = lens.ior * defects.indexFactor; !(n >= 1 && n <= 5))
     fail(Errc::Config, "{} = {}: the defect's index would be {} x {} = {:g}, outside [1, 5]",
          defectsTable.where("index_factor"), defects.indexFactor, lens.ior, defects.indexFactor, n);
+  // The rim inclusion apart from the centre one: overlapping, the study would report one spot twice.
+  if (std::abs(defects.rimRadial_mm) < 2 * defects.inclusionRadius_mm)
+    fail(Errc::Config, "{} = {}: the rim inclusion would overlap the one on the axis (radius {} mm each)",
+         defectsTable.where("rim_radial_mm"), defects.rimRadial_mm, defects.inclusionRadius_mm);
   // The inclusions, spheres at z = 0, must lie wholly inside the glass.
   for (const double radial : {0.0, defects.rimRadial_mm})
     if (!sim::sphericalLensHolds(lens.frontRadius_mm, lens.backRadius_mm, lens.centreThickness_mm, lens.diameter_mm,

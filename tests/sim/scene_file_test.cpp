@@ -173,6 +173,19 @@ TEST_F(SceneFile, BadValuesAreErrors) {
                                               "position_mm=[0, 0, -2e18]\n"));
       },
       Errc::Config, {"far.toml:", "object[0].position_mm", "(element 2) is outside"}));
+  // Objects are named once each, and not 'display' beside a [display]; cut-outs are for solids.
+  const std::string sphere = "[[object]]\nname='a'\nshape='sphere'\nradius_mm=1\n";
+  EXPECT_TRUE(throwsError([&] { loadSceneFile(write("twice.toml", head + sphere + sphere)); }, Errc::Config,
+                          {"twice.toml:", "object[1].name", "'a' names another object too", "object[0].name"}));
+  EXPECT_TRUE(throwsError([&] { loadSceneFile(write("unnamed.toml", head + "[[object]]\nname=''\nshape='sphere'\n"
+                                                                          "radius_mm=1\n")); },
+                          Errc::Config, {"unnamed.toml:", "object[0].name", "is empty"}));
+  EXPECT_TRUE(throwsError(
+      [&] {
+        loadSceneFile(write("cut-rect.toml", head + "[[object]]\nname='r'\nshape='rectangle'\nsize_mm=[1,1]\n"
+                                                   "[[object.cut]]\nposition_mm=[0,0,0]\nradius_mm=0.1\n"));
+      },
+      Errc::Config, {"cut-rect.toml:", "object[0].cut", "apply to solids", "not to a rectangle"}));
   // An emitter with a material: its ior would be read and never used (an emitting object is opaque).
   EXPECT_TRUE(throwsError(
       [&] {
@@ -269,6 +282,23 @@ TEST_F(SceneFile, MeshesLoadWithOutwardSmoothNormals) {
   write("text.ply", "this is not a mesh\n");
   EXPECT_TRUE(throwsError([&] { loadMesh(dir_ / "text.ply"); }, Errc::InvalidFile, {"text.ply"}));
   EXPECT_TRUE(throwsError([&] { loadMesh(dir_ / "none.obj"); }, Errc::NotFound, {"none.obj"}));
+}
+
+// A mesh in metres (as glTF files are) comes in at its size with scale = 1000.
+TEST_F(SceneFile, AMeshScaleGivesTheFilesUnit) {
+  write("metres.obj", "v 0.001 0 0\nv -0.001 0 0\nv 0 0.001 0\nv 0 -0.001 0\nv 0 0 0.001\nv 0 0 -0.001\n"
+                      "f 1 3 5\nf 3 2 5\nf 2 4 5\nf 4 1 5\nf 3 1 6\nf 2 3 6\nf 4 2 6\nf 1 4 6\n");
+  auto scene = [&](const std::string& name, const std::string& scale) {
+    return write(name, std::string("format = \"lfi-scene\"\nversion = 1\n") + kCamera +
+                           "[[object]]\nname='m'\nshape='mesh'\nfile='metres.obj'\nmaterial='dielectric'\nior=1.5\n" +
+                           scale + "position_mm=[0, 0, -20]\n");
+  };
+  const SceneDescription d = loadSceneFile(scene("metres.toml", "scale=1000\n"));
+  const Bounds box = worldBounds(d.objects[0]);
+  EXPECT_NEAR(box.hi.x - box.lo.x, 2.0, 1e-6);  // the octahedron's 2 mm across (Assimp reads floats)
+  EXPECT_NEAR(box.hi.z - box.lo.z, 2.0, 1e-6);
+  EXPECT_TRUE(throwsError([&] { loadSceneFile(scene("zero.toml", "scale=0\n")); }, Errc::Config,
+                          {"zero.toml:", "object[0].scale", "outside"}));
 }
 
 // Normals are smooth across gentle edges and sharp across creases (30 degrees
@@ -634,7 +664,10 @@ TEST_F(SceneFile, CorruptPlyIsAnErrorNamingFileAndPlace) {
       {"cut-in-body.ply", binary.substr(0, binary.size() - 17), {"byte ", "texcoord' of face 7", "ends inside"}},
       {"long-body.ply", binary + std::string(13, '\0'), {"13 bytes after the last element", "count in the header"}},
       // Malformed headers and values.
-      {"not-a-number.ply", header + "0 0 0\n1 zero 0\n", {"line 11", "property 'y' of vertex 1", "'zero'"}},
+      {"not-a-number.ply", header + "0 0 0\n1 zero 0\n0 1 0\n3 0 1 2\n",
+       {"line 11", "property 'y' of vertex 1", "'zero'"}},
+      // Fewer bytes than the declared rows need (3 values and their separators each): named before reading.
+      {"short-of-rows.ply", header + "0 0 0\n1 0 0\n", {"line 3", "'vertex' declares 3 instances"}},
       {"no-faces.ply",
        "ply\nformat ascii 1.0\nelement vertex 0\nproperty float x\nproperty float y\n"
        "property float z\nend_header\n",

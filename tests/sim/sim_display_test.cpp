@@ -168,7 +168,13 @@ TEST_F(SimDisplayTest, BadUrisAndSceneFilesAreClearErrors) {
                                                            "focal_length_mm = 1\n"));
   EXPECT_TRUE(throwsError([&] { openDisplay(uri(lensKey)); }, Errc::Config, {"focal_length_mm"}));
   const fs::path badRange = write("range.toml", sceneText("brightness_min = 10\nbrightness_max = 5\n"));
-  EXPECT_TRUE(throwsError([&] { openDisplay(uri(badRange)); }, Errc::Config, {"range.toml", "brightnessMax"}));
+  EXPECT_TRUE(throwsError([&] { openDisplay(uri(badRange)); }, Errc::Config,
+                          {"range.toml:", "'display.brightness_max' = 5 is below brightness_min = 10"}));
+  // The [display] panel is an object named 'display': another object may not take the name.
+  const fs::path clash =
+      write("clash.toml", sceneText("") + "[[object]]\nname = \"display\"\nshape = \"sphere\"\nradius_mm = 1\n"
+                                          "position_mm = [0, 0, -50]\n");
+  EXPECT_TRUE(throwsError([&] { openDisplay(uri(clash)); }, Errc::Config, {"clash.toml:", "'display' names the"}));
 }
 
 // The source light field: smooth in position, linear in the direction across the

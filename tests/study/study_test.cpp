@@ -233,6 +233,9 @@ TEST(Bench, OutOfRangeAndMalformedValuesAreErrors) {
   std::ofstream(bad) << replaceLine(readText(kBench), "cut_large_radius_mm", "cut_large_radius_mm = 30\n#");
   EXPECT_TRUE(throwsError([&] { lfi::study::Bench::load(bad); }, Errc::Config,
                           {bad.string() + ":", "defects.cut_large_radius_mm", "hold the whole lens"}));
+  std::ofstream(bad) << replaceLine(readText(kBench), "rim_radial_mm", "rim_radial_mm = 0.8\n#");
+  EXPECT_TRUE(throwsError([&] { lfi::study::Bench::load(bad); }, Errc::Config,
+                          {bad.string() + ":", "defects.rim_radial_mm", "overlap the one on the axis"}));
   std::ofstream(bad) << replaceLine(readText(kBench), "index_factor", "index_factor = 0.6\n#");
   EXPECT_TRUE(throwsError([&] { lfi::study::Bench::load(bad); }, Errc::Config,
                           {bad.string() + ":", "defects.index_factor", "0.91008, outside [1, 5]"}));
