@@ -183,6 +183,7 @@ class ServedCameraTest : public ::testing::Test {
     }
     const Frame& frame = frames.back();
     // Frames differ (new noise each), and are not black.
+    EXPECT_GT(cv::norm(frames.front().image, frame.image, cv::NORM_INF), 0);
     EXPECT_GT(cv::mean(frame.image)[0], 1.0);
   }
 

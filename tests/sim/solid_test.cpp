@@ -233,6 +233,12 @@ TEST(Solid, DifferenceFlipsTheSubtractedNormals) {
   EXPECT_NEAR(list[0].enter.t, 23, 1e-12);  // x = 3: B's surface, B's normal -x
   EXPECT_NEAR(list[0].exit.t, 30, 1e-12);   // x = 10: A's surface
   expectNear(list[0].enter.normal, {-1, 0, 0}, 1e-12);
+  auto either = Solid::combine(Solid::Kind::Union, Solid::sphere(10), Solid::sphere(5, Rigid3::translation({8, 0, 0})));
+  either->intervals({{-20, 0, 0}, {1, 0, 0}}, list);
+  ASSERT_EQ(list.size(), 1);
+  EXPECT_NEAR(list[0].enter.t, 10, 1e-12);  // x = -10: A's surface
+  EXPECT_NEAR(list[0].exit.t, 33, 1e-12);   // x = 13: B's surface, B's normal +x
+  expectNear(list[0].exit.normal, {1, 0, 0}, 1e-12);
 }
 
 // Random lines through a few solids: sample points along each line; a point
