@@ -65,7 +65,9 @@ public:
   ProgressBar() = default;
   ProgressBar(const ProgressBar&) = delete;
   ProgressBar& operator=(const ProgressBar&) = delete;
-  ~ProgressBar() { finish(); }  // (an error unwinding past a bar prints on a line of its own)
+  ~ProgressBar() {  // (an error unwinding past a bar prints on a line of its own)
+    if (open_) std::fputs("\n", stderr);  // (no fmt::print: it may throw, and a destructor must not)
+  }
   // Ends a bar left short of 100 % (work stopped early) on its own line.
   void finish() {
     std::lock_guard lock(mutex_);

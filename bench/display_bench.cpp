@@ -30,11 +30,11 @@
 #include <opencv2/core.hpp>
 
 #include <algorithm>
-#include <cmath>
-#include <stdexcept>
 #include <chrono>
+#include <cmath>
 #include <cstring>
 #include <functional>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -62,14 +62,16 @@ static int run(int argc, char** argv) {
   rng.fill(lightField.lensletImage(), cv::RNG::UNIFORM, 0.0, 1.0);
 
   const int threads = cv::getNumThreads();
-  cv::Mat panel;
+  cv::Mat panel, panel1;
   const double encode = bestSeconds(repeats, [&] { panel = encodeLightField(lightField, optics, 1.0); });
   cv::setNumThreads(1);
   const double encode1 =
-      bestSeconds(std::max(1, repeats / 2), [&] { panel = encodeLightField(lightField, optics, 1.0); });
+      bestSeconds(std::max(1, repeats / 2), [&] { panel1 = encodeLightField(lightField, optics, 1.0); });
   cv::setNumThreads(threads);
+  if (cv::norm(panel, panel1, cv::NORM_INF) != 0)
+    throw std::runtime_error("self-check: the encode on OpenCV's threads differs from the encode on one");
 
-  // Self-check: the timed encode against the model's own chief rays
+  // Self-check: the timed encode (both are the same) against the model's own chief rays
   // (rayFromPixel and LightField::radiance), at random subpixels: a fast
   // encode that wrote the wrong levels would otherwise pass for the best time.
   const int sub = info.subpixelsPerPixel();

@@ -130,7 +130,7 @@ struct PathState {
 // last place of that coordinate in float).
 // Embree takes the new ray's origin in float (rounded by up to half a unit
 // there) and meets the face with an error of a few units: a fixed 1e-4 mm is
-// under one unit past 2 m, and paths turned back into a part they had left.
+// under one unit past 1024 mm, and paths turned back into a part they had left.
 double meshOffset(const Vec3& p) {
   const double largest = std::max({std::abs(p.x), std::abs(p.y), std::abs(p.z)});
   return std::max(1e-4, 4 * std::numeric_limits<float>::epsilon() * largest);

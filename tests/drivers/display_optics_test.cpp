@@ -267,7 +267,9 @@ TEST(UsbDisplayProtocol, ADeviceInfoBlockIsTheDocumentedBytes) {
   const std::vector<std::uint8_t> b = usbdisplay::encodeDeviceInfo(info);
   ASSERT_EQ(b.size(), 128u);
   auto u16 = [&](size_t at) { return b[at] | b[at + 1] << 8; };
-  auto u32 = [&](size_t at) { return static_cast<std::uint32_t>(u16(at) | u16(at + 2) << 16); };
+  auto u32 = [&](size_t at) {
+    return static_cast<std::uint32_t>(u16(at)) | static_cast<std::uint32_t>(u16(at + 2)) << 16;
+  };
   auto text = [&](size_t at) { return std::string(reinterpret_cast<const char*>(&b[at])); };  // NUL-terminated
   EXPECT_EQ(u16(0), 1);    // info version
   EXPECT_EQ(u16(2), 128);  // block size

@@ -665,7 +665,7 @@ TEST(Render, RejectsInvalidOptions) {
 // placed 3 m and 10 m out along (1, 1, 1), and rays crossing it as they
 // cross it at the origin. A mesh is met in float, so a path leaving a face
 // must start off it by more than float rounding there: a fixed 1e-4 mm is
-// under one unit in the last place past 2 m, and at 3 m a quarter of these
+// under one unit in the last place past 1024 mm, and at 3 m a quarter of these
 // paths met the face they had left again (at 10 m the box stacked inside
 // itself until the tracer refused the path).
 TEST(MeshPaths, AMeshFarFromTheOriginIsCrossedAsNearIt) {

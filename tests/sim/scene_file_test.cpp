@@ -211,7 +211,7 @@ TEST_F(SceneFile, BadValuesAreErrors) {
   EXPECT_TRUE(throwsError(
       [&] { loadSceneFile(write("big-cut.toml", part + "position_mm=[0, 0, 0]\nradius_mm=9\n")); },
       Errc::Config, {"big-cut.toml:", "object[0].cut[0].radius_mm", "holds the whole part"}));
-  // A bubble inside, and a nick at the box's corner region that only just reaches the box, are kept.
+  // A bubble inside, and a nick at the top of the sphere that only just reaches the box, are kept.
   EXPECT_NO_THROW(loadSceneFile(write("bubble.toml", part + "position_mm=[0, 1, 2]\nradius_mm=0.5\n")));
   EXPECT_NO_THROW(loadSceneFile(write("nick.toml", part + "position_mm=[0, 0, 5.4]\nradius_mm=0.5\n")));
   // A light field emitter is a rectangle of the light field's extent: 4 x 3 elements of 2 x 0.5 mm.
@@ -766,7 +766,8 @@ TEST_F(SceneFile, MeshAndAnalyticSphereRefractAlike) {
   {
     const Scene a(analytic.objects), m(mesh.objects);
     for (const double h : {0.0, 0.05, 0.1, 0.3, 1.0}) {
-      const auto pa = refractionPath(a, {{h, 0.0, 20.0}, {0, 0, -1}}), pm = refractionPath(m, {{h, 0.0, 20.0}, {0, 0, -1}});
+      const Ray down{{h, 0.0, 20.0}, {0, 0, -1}};
+      const auto pa = refractionPath(a, down), pm = refractionPath(m, down);
       ASSERT_EQ(pa.size(), 4u);  // origin, in, out, escape
       ASSERT_EQ(pm.size(), 4u);
       const double turnA = (pa[3] - pa[2]).normalized().x, turnM = (pm[3] - pm[2]).normalized().x;
@@ -776,11 +777,13 @@ TEST_F(SceneFile, MeshAndAnalyticSphereRefractAlike) {
       EXPECT_NEAR(turnM, turnA, 0.08 * h / 7.5 + 1e-4) << h;  // (measured: within 7 %)
     }
   }
-  // In the image, only camera rays turned by less than about 0.05 - 0.01 rad
-  // find the light: a disc of radius about 0.3 mm (3 pixels), fully lit to
-  // 0.05 + 0.01 = 0.45 mm, dark beyond. At its centre the rays cross both
-  // surfaces at normal incidence: (1 - R)^2 of the light, R = ((n - 1)/(n +
-  // 1))^2 = 0.04 (the reflected paths leave the cone).
+  // In the image, a camera ray turned by h / f finds the light when that and
+  // its own slope (up to the 0.01 rad acceptance) stay within the 0.05 rad
+  // cone: fully lit while h / f < 0.04 rad (h < 0.3 mm, 3 pixels), partly to
+  // 0.06 rad (0.45 mm), dark beyond. At its centre the rays cross both
+  // surfaces at normal incidence: (1 - R)^2 = 0.9216 of the light, R = ((n -
+  // 1)/(n + 1))^2 = 0.04, and the paths reflected twice inside, turned by
+  // about 2h/R, mostly stay in the cone too: T^2 / (1 - R^2) = 0.9231 at most.
   const cv::Mat ia = render(Scene(std::move(analytic.objects)), analytic.sensor, analytic.render);
   const cv::Mat im = render(Scene(std::move(mesh.objects)), mesh.sensor, mesh.render);
   const double centre = std::pow(1 - 0.04, 2);

@@ -137,8 +137,8 @@ TEST_F(SimCameraTest, NoiseStatisticsMatchTheModel) {
     const CameraSettings s = imager.resolve(mono16(exposure), "test");
     imager.capture(s, 11, frame);
     const auto [mean, sigma] = stats(frame, 12);
-    // From the scene file's numbers, not the imager's model: 2 e-/us of shot
-    // noise, 5 e- of read noise, 4095 DN for the 20 000 e- well, and the
+    // From the scene file's numbers, not the imager's model: 2 e-/us of
+    // signal (its shot noise's variance is the count), 5 e- of read noise, 4095 DN for the 20 000 e- well, and the
     // quantisation's 1/12 DN^2. (At 100 us the read noise is 11 % of the
     // variance: a model that dropped it would be 5.7 % low.)
     const double dnPerElectron = 4095.0 / 20000;

@@ -404,7 +404,7 @@ TEST_F(SimDisplayTest, FramesExposedBeforeAShowShowTheOldPanel) {
   for (int i = 0; i < 4; ++i) EXPECT_LT(meanDn(), 5) << "buffered frame " << i << " was exposed before the show";
   const double lit = meanDn();  // the next frame is due after the show
   EXPECT_GT(std::chrono::nanoseconds(frame.timestamp_ns), showing.time_since_epoch());
-  // The whole exposure on the new panel: a frame that straddled the show would be dimmer.
+  // The frame due after the show shows the full-level panel: half the 12-bit scale.
   const double fullScale = 4095 * 2.0 * 5000 / 20000;
   EXPECT_NEAR(lit, fullScale, 0.02 * fullScale);
   EXPECT_GE(camera->statistics().underruns, 6u);

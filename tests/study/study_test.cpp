@@ -74,8 +74,6 @@ void checkOutputs(const nlohmann::ordered_json& r, const fs::path& dir) {
         EXPECT_GT(cell["pixels"].get<int>(), 0) << scene << "/" << d;
       }
     for (const auto& setup : setups) {
-      EXPECT_TRUE(s["false_positives"][setup].is_number_integer()) << scene << "/" << setup;
-      EXPECT_TRUE(s["secondary_regions"][setup].is_number_integer()) << scene << "/" << setup;
       for (const char* ext : {".exr", ".png", "_diff.png"})
         EXPECT_TRUE(fs::exists(dir / "images" / (scene + "_" + setup + ext))) << scene << setup << ext;
     }
@@ -134,7 +132,6 @@ TEST(QuickStudy, EndToEnd) {
   for (const char* lookup : {"nearest", "interpolated"}) {
     const double own = r["sweep"]["points"][0]["intact_lit_fraction"][lookup].get<double>();
     EXPECT_GT(own, 0.55) << lookup;
-    EXPECT_LE(own, 1.0) << lookup;
   }
   EXPECT_GE(r["sweep"]["points"][0]["cnr"]["nearest"]["absorbing/center"].get<double>(), 3.0);
   EXPECT_TRUE(r["sweep"]["answers"].contains("absorbing/center"));
