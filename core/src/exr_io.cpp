@@ -74,7 +74,19 @@ std::string canonicalAttributes(const fs::path& path, const Imf::Header& header)
 
 // What loadExr() refuses is refused here too, before anything is written: a
 // file that could not be read back must not replace a good one.
+// OpenEXR sizes its per-line tables from a file's data window when it opens
+// the file; with a maximum image size its sanity check refuses a larger one
+// first. (Process-wide: no lfi file is larger.)
+void limitOpenExrImageSize() {
+  static const bool limited = [] {
+    Imf::Header::setMaxImageSize(static_cast<int>(kMaxSide), static_cast<int>(kMaxSide));
+    return true;
+  }();
+  (void)limited;
+}
+
 void writeExr(const fs::path& path, const cv::Mat& image, Imf::Header header, Overwrite overwrite) {
+  limitOpenExrImageSize();  // (the read-back check opens the file too)
   requireImageType(image, CV_32FC1, "EXR image '" + path.string() + "'");
   if (image.cols > kMaxSide || image.rows > kMaxSide || static_cast<long>(image.total()) > kMaxPixels)
     fail(Errc::InvalidArgument, "cannot write '{}': {}x{} pixels is more than an lfi file holds (2^17 a side, 2^30 "
@@ -163,17 +175,6 @@ void checkHeaderSizes(const fs::path& path) {
            "(truncated or corrupt)", path.string(), shown(name), n, fileSize - std::min(at, fileSize));
     in.seekg(static_cast<std::streamoff>(n), std::ios::cur);
   }
-}
-
-// OpenEXR sizes its per-line tables from a file's data window when it opens
-// the file; with a maximum image size its sanity check refuses a larger one
-// first. (Process-wide: no lfi file is larger.)
-void limitOpenExrImageSize() {
-  static const bool limited = [] {
-    Imf::Header::setMaxImageSize(static_cast<int>(kMaxSide), static_cast<int>(kMaxSide));
-    return true;
-  }();
-  (void)limited;
 }
 
 LoadedExr loadExr(const fs::path& path, const char* expectedKind) {

@@ -135,11 +135,13 @@ class BodyReader {
               "(a line holds one instance)", path_.string(), line_, shown(element_->name), instance_,
               shown(body_.substr(i, end - i)));
   }
-  // Anything after the last element is an error (a count short of the rows
-  // or faces that follow), but for white space in ASCII.
+  // Anything but white space after the last element is an error (a count
+  // short of the rows or faces that follow; a binary file may end with a
+  // line end or spaces some writers leave).
   void end() {
     if (!ascii()) {
-      if (remaining() > 0)
+      const auto rest = body_.substr(at_);
+      if (rest.find_first_not_of(" \t\r\n") != std::string_view::npos)
         lfi::fail(Errc::InvalidFile, "'{}': byte {}: {} bytes after the last element's declared instances (a count "
                   "in the header is short)", path_.string(), offset_ + at_, remaining());
       return;

@@ -113,11 +113,12 @@ void smoothNormals(TriangleMesh& mesh, double creaseAngle) {
   for (unsigned v = 0; v < nv; ++v) {
     const unsigned begin = first[v], count = first[v + 1] - begin;
     if (count == 0) continue;
-    // Two faces sharing an edge from v (the same other end) join when they
-    // meet at less than the crease angle. An edge of more than two faces
-    // (where parts touch) is sharp, and faces of no area (corners welded into
-    // one) share no edge: each face's edges are compared once, not with every
-    // other face of a fan of thousands.
+    // Faces sharing an edge from v (the same other end) join when they meet
+    // at less than the crease angle: the two of an ordinary edge, any two of
+    // a few (a sheet stored double-sided has four, its two layers facing
+    // apart). An edge of more than kMostFacesOnAnEdge is sharp, and faces of
+    // no area (corners welded into one) share none: the comparisons stay
+    // linear in the faces, however many meet at one edge.
     edges.clear();
     for (unsigned s = 0; s < count; ++s)
       if (unit[around[begin + s]] != Vec3(0, 0, 0))
@@ -130,21 +131,27 @@ void smoothNormals(TriangleMesh& mesh, double creaseAngle) {
       while (group[s] != s) s = group[s] = group[group[s]];
       return s;
     };
+    constexpr size_t kMostFacesOnAnEdge = 8;
     for (size_t i = 0, j; i < edges.size(); i = j) {
       for (j = i + 1; j < edges.size() && edges[j].first == edges[i].first;) ++j;
-      if (j - i == 2 &&
-          unit[around[begin + edges[i].second]].dot(unit[around[begin + edges[i + 1].second]]) >= cosCrease)
-        group[root(edges[i].second)] = root(edges[i + 1].second);
+      if (j - i > kMostFacesOnAnEdge) continue;
+      for (size_t a = i; a + 1 < j; ++a)
+        for (size_t b = a + 1; b < j; ++b)
+          if (unit[around[begin + edges[a].second]].dot(unit[around[begin + edges[b].second]]) >= cosCrease)
+            group[root(edges[a].second)] = root(edges[b].second);
     }
     // One normal per group, the sum of its faces'; the first group keeps v.
     sum.assign(count, Vec3(0, 0, 0));
     for (unsigned s = 0; s < count; ++s) sum[root(s)] += area[around[begin + s]];
     copyOf.assign(count, ~0u);
+    bool kept = false;  // whether a group has taken v itself
     for (unsigned s = 0; s < count; ++s) {
+      if (unit[around[begin + s]] == Vec3(0, 0, 0)) continue;  // (no area: never met, its corners left as they are)
       const unsigned r = root(s);
       if (copyOf[r] == ~0u) {
         const Vec3 n = sum[r].length() > 0 ? sum[r].normalized() : Vec3(0, 0, 1);
-        if (s == 0) {
+        if (!kept) {
+          kept = true;
           copyOf[r] = v, mesh.normals[v] = n;
         } else {
           copyOf[r] = static_cast<unsigned>(mesh.vertices.size());
@@ -172,23 +179,29 @@ std::vector<unsigned> weldVertices(const TriangleMesh& mesh, double tolerance, b
 // of its own few faces; at a tessellated ball's south pole that tilted the
 // normal by 0.03 rad and turned the rays through it by 0.013.
 void weldMesh(TriangleMesh& mesh) {
-  const std::vector<unsigned> welded = weldVertices(mesh, weldTolerance(mesh), true);
+  // (The quick weld: a pair it leaves apart across a cell wall keeps a normal
+  // each, as every vertex did before; the closure check then searches the
+  // neighbouring cells.)
+  const std::vector<unsigned> welded = weldVertices(mesh, weldTolerance(mesh), false);
   for (auto& triangle : mesh.triangles)
     for (unsigned& corner : triangle) corner = welded[corner];
 }
 
 }  // namespace
 
-TriangleMesh loadMesh(const fs::path& path, double creaseAngle_rad) {
+TriangleMesh loadMesh(const fs::path& path, double creaseAngle_rad, double scale) {
   if (!(creaseAngle_rad >= 0 && creaseAngle_rad <= std::numbers::pi))
     fail(Errc::InvalidArgument, "'{}': crease angle {} rad is outside [0, pi]", path.string(), creaseAngle_rad);
+  if (!(scale > 0) || !std::isfinite(scale))
+    fail(Errc::InvalidArgument, "'{}': scale {} must be finite and > 0", path.string(), scale);
   requireInputFile(path, "mesh file");
   // PLY by its content, whatever the name; a .ply that is not PLY is not handed to Assimp either.
   std::string extension = path.extension().string();
   for (char& c : extension) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
   TriangleMesh mesh = detail::isPly(head(path, 5)) || extension == ".ply" ? detail::readPly(path) : importMesh(path);
   for (size_t v = 0; v < mesh.vertices.size(); ++v) {
-    const Vec3& p = mesh.vertices[v];
+    Vec3& p = mesh.vertices[v];
+    p *= scale;
     if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
       fail(Errc::InvalidFile, "'{}': vertex {} (counting from 0) is not finite", path.string(), v);
     if (constexpr double kFar = kFarthest_mm; std::max({std::abs(p.x), std::abs(p.y), std::abs(p.z)}) > kFar)
@@ -447,6 +460,7 @@ double weldTolerance(const TriangleMesh& mesh) {
   const auto [low, high] = bounds(mesh);
   const double extent = std::max({high.x - low.x, high.y - low.y, high.z - low.z, std::abs(low.x), std::abs(low.y),
                                   std::abs(low.z), std::abs(high.x), std::abs(high.y), std::abs(high.z)});
+  if (!std::isfinite(extent)) return std::numeric_limits<double>::infinity();
   return extent > 0 ? 1e-7 * extent : 1.0;
 }
 
@@ -523,16 +537,8 @@ Object readObject(ConfigTable& t) {
     obj.shape = Rectangle{size[0], size[1]};
   } else if (kind == "mesh") {
     const double crease = t.number("crease_angle_deg", kDefaultCreaseAngle_deg, 0, 180) * std::numbers::pi / 180;
-    TriangleMesh mesh = readNamedFile(t, "file", [crease](const fs::path& file) { return loadMesh(file, crease); });
-    // The file's unit: 1 for millimetres, 1000 for metres (glTF).
-    if (const double scale = t.number("scale", 1.0, 1e-6, 1e6); scale != 1)
-      for (Vec3& v : mesh.vertices) {
-        v *= scale;
-        if (std::max({std::abs(v.x), std::abs(v.y), std::abs(v.z)}) > kFarthest_mm)
-          fail(Errc::Config, "{} = {:g} puts a vertex at ({:g}, {:g}, {:g}) mm, past {:g} mm", t.where("scale"), scale,
-               v.x, v.y, v.z, kFarthest_mm);
-      }
-    obj.shape = std::move(mesh);
+    const double scale = t.number("scale", 1.0, 1e-6, 1e6);  // the file's unit: 1000 for metres (glTF)
+    obj.shape = readNamedFile(t, "file", [=](const fs::path& file) { return loadMesh(file, crease, scale); });
   } else {
     std::shared_ptr<const Solid> solid = readSolid(t, kind);
     // Cut-outs: spheres subtracted from the solid (object frame). Each can split
@@ -635,7 +641,8 @@ DisplayParameters readDisplay(ConfigTable& t) {
   info.brightnessMin = t.integer("brightness_min", defaults.brightnessMin, 0, 1 << 20);
   info.brightnessMax = t.integer("brightness_max", defaults.brightnessMax, 0, 1 << 20);
   if (info.brightnessMax < info.brightnessMin)
-    fail(Errc::Config, "{} = {} is below brightness_min = {}", t.where("brightness_max"), info.brightnessMax,
+    fail(Errc::Config, "{}: brightness_max = {} is below brightness_min = {}",
+         t.where(t.has("brightness_max") ? "brightness_max" : "brightness_min"), info.brightnessMax,
          info.brightnessMin);
   d.brightness = t.number("brightness", 1.0, 0, 1e12);
   t.finish();
@@ -724,7 +731,7 @@ SceneDescription loadSceneFile(const fs::path& path) {
     cam.pixelPitch_mm = c.number("pixel_pitch_mm", std::nullopt, 1e-6, 100);
     cam.width = c.integer("width", std::nullopt, 1, 65536);
     cam.height = c.integer("height", std::nullopt, 1, 65536);
-    if (static_cast<long>(cam.width) * cam.height > kMaxExrPixels)
+    if (static_cast<std::int64_t>(cam.width) * cam.height > kMaxExrPixels)
       fail(Errc::Config, "{}: {} x {} pixels is more than a radiance EXR holds (2^30): the render could not be "
            "written", c.where("height"), cam.width, cam.height);
     cam.worldFromCamera = readPlacement(c);

@@ -284,6 +284,35 @@ TEST_F(SceneFile, MeshesLoadWithOutwardSmoothNormals) {
   EXPECT_TRUE(throwsError([&] { loadMesh(dir_ / "none.obj"); }, Errc::NotFound, {"none.obj"}));
 }
 
+// A bent sheet stored double-sided (both layers on the same vertices, wound
+// apart): its inner edge has four faces; each layer still shades smoothly
+// across it (its two faces meet at 10 degrees), and the layers do not blend.
+TEST_F(SceneFile, ADoubleSidedSheetShadesSmoothlyOnEachSide) {
+  const double s = std::sin(10 * std::numbers::pi / 180), c = std::cos(10 * std::numbers::pi / 180);
+  // Two unit squares hinged along x = 0 (the second turned up by 10 degrees), as 4 triangles a layer.
+  write("sheet.obj", fmt::format("v -1 0 0\nv -1 1 0\nv 0 0 0\nv 0 1 0\nv {} 0 {}\nv {} 1 {}\n"
+                                 "f 1 3 4\nf 1 4 2\nf 3 5 6\nf 3 6 4\n"    // up (+z)
+                                 "f 1 4 3\nf 1 2 4\nf 3 6 5\nf 3 4 6\n",  // down
+                                 c, s, c, s));
+  const TriangleMesh sheet = loadMesh(dir_ / "sheet.obj");
+  // Every corner on the hinge (x = 0) has its layer's smooth normal, an
+  // area-weighted mean of the faces on both sides: within 10 degrees of its
+  // face's normal but not along it (flat) and not blended with the other
+  // layer (which would turn it by 90 degrees or more).
+  int hinge = 0;
+  for (const auto& t : sheet.triangles) {
+    const Vec3 n = (sheet.vertices[t[1]] - sheet.vertices[t[0]]).cross(sheet.vertices[t[2]] - sheet.vertices[t[0]])
+                       .normalized();
+    for (const unsigned v : t)
+      if (std::abs(sheet.vertices[v].x) < 1e-9) {
+        ++hinge;
+        EXPECT_GT(sheet.normals[v].dot(n), c - 1e-9);
+        EXPECT_LT(sheet.normals[v].dot(n), 1 - 1e-6);
+      }
+  }
+  EXPECT_EQ(hinge, 12);  // 6 corners a layer: 2, 1, 1 and 2 of its four faces
+}
+
 // A mesh in metres (as glTF files are) comes in at its size with scale = 1000.
 TEST_F(SceneFile, AMeshScaleGivesTheFilesUnit) {
   write("metres.obj", "v 0.001 0 0\nv -0.001 0 0\nv 0 0.001 0\nv 0 -0.001 0\nv 0 0 0.001\nv 0 0 -0.001\n"
@@ -662,7 +691,7 @@ TEST_F(SceneFile, CorruptPlyIsAnErrorNamingFileAndPlace) {
            std::string("\xff\xff\xff\x7f", 4),
        {"byte ", "a list of 2147483647 values does not fit"}},
       {"cut-in-body.ply", binary.substr(0, binary.size() - 17), {"byte ", "texcoord' of face 7", "ends inside"}},
-      {"long-body.ply", binary + std::string(13, '\0'), {"13 bytes after the last element", "count in the header"}},
+      {"long-body.ply", binary + "\n" + std::string(13, '\0'), {"14 bytes after the last element", "count in the header"}},
       // Malformed headers and values.
       {"not-a-number.ply", header + "0 0 0\n1 zero 0\n0 1 0\n3 0 1 2\n",
        {"line 11", "property 'y' of vertex 1", "'zero'"}},

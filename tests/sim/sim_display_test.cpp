@@ -169,7 +169,7 @@ TEST_F(SimDisplayTest, BadUrisAndSceneFilesAreClearErrors) {
   EXPECT_TRUE(throwsError([&] { openDisplay(uri(lensKey)); }, Errc::Config, {"focal_length_mm"}));
   const fs::path badRange = write("range.toml", sceneText("brightness_min = 10\nbrightness_max = 5\n"));
   EXPECT_TRUE(throwsError([&] { openDisplay(uri(badRange)); }, Errc::Config,
-                          {"range.toml:", "'display.brightness_max' = 5 is below brightness_min = 10"}));
+                          {"range.toml:", "'display.brightness_max'", "brightness_max = 5 is below brightness_min = 10"}));
   // The [display] panel is an object named 'display': another object may not take the name.
   const fs::path clash =
       write("clash.toml", sceneText("") + "[[object]]\nname = \"display\"\nshape = \"sphere\"\nradius_mm = 1\n"

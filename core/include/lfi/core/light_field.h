@@ -59,7 +59,8 @@ public:
   // A zero light field with the given geometry (validated).
   explicit LightField(const LightFieldGeometry& geometry);
   // Wraps a lenslet image; throws if its size or type does not match or a
-  // pixel is not finite (what at() and lensletImage() write is not checked).
+  // pixel is not finite or negative (what at() and lensletImage() write is not
+  // checked).
   LightField(const LightFieldGeometry& geometry, cv::Mat lensletImage);
 
   const LightFieldGeometry& geometry() const { return geometry_; }

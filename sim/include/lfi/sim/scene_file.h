@@ -58,11 +58,14 @@ SceneDescription loadSceneFile(const std::filesystem::path& path);
 // where faces meet at less than `creaseAngle_rad`, sharp across the others
 // (the vertex is then repeated, one copy per smooth group of faces around it),
 // so that a tessellated curved surface shades smoothly and a glass cube's faces
-// stay flat. The file's units are taken as millimetres (a vertex more than
-// 1e9 mm from the origin is refused); faces must wind outwards.
+// stay flat. Vertices that meshClosureFault counts as one are one for the
+// normals; of the faces on one edge any two may join (an edge of more than 8
+// is sharp), faces of no area none. The file's coordinates times `scale` are
+// millimetres (a vertex then more than 1e9 mm from the origin is refused);
+// faces must wind outwards.
 inline constexpr double kDefaultCreaseAngle_deg = 30;
 TriangleMesh loadMesh(const std::filesystem::path& path,
-                      double creaseAngle_rad = kDefaultCreaseAngle_deg * std::numbers::pi / 180);
+                      double creaseAngle_rad = kDefaultCreaseAngle_deg * std::numbers::pi / 180, double scale = 1);
 
 // Why `mesh` does not bound a solid the tracer can enter and leave, or nothing:
 // every edge must be crossed once each way by the triangles around it (vertices
