@@ -304,6 +304,14 @@ bool isPly(std::string_view head) {
   return head.starts_with("ply\n") || head.starts_with("ply\r\n");
 }
 
+bool looksLikePly(std::string_view head) {
+  if (head.starts_with("\xef\xbb\xbf")) head.remove_prefix(3);  // a UTF-8 byte order mark
+  if (head.size() < 4) return false;
+  auto lower = [](char c) { return static_cast<char>(std::tolower(static_cast<unsigned char>(c))); };
+  return lower(head[0]) == 'p' && lower(head[1]) == 'l' && lower(head[2]) == 'y' &&
+         std::isspace(static_cast<unsigned char>(head[3]));
+}
+
 TriangleMesh readPly(const fs::path& path) {
   const std::string bytes = readWholeFile(path);
   if (!isPly(bytes)) fail(Errc::InvalidFile, "'{}': not a PLY file (the first line is not 'ply')", path.string());

@@ -22,6 +22,10 @@ namespace lfi::sim::detail {
 
 // True when `head` (the file's first bytes) starts with the PLY magic line.
 bool isPly(std::string_view head);
+// True also for what only resembles it ("PLY", a byte order mark before it):
+// such a file is read, and refused, by lfi's reader, never by Assimp's PLY
+// importer (which fuzzing hung and crashed).
+bool looksLikePly(std::string_view head);
 
 // The mesh's vertices and triangles (no normals). Throws Errc::InvalidFile.
 TriangleMesh readPly(const std::filesystem::path& path);

@@ -140,7 +140,7 @@ void smoothNormals(TriangleMesh& mesh, double creaseAngle) {
           if (unit[around[begin + edges[a].second]].dot(unit[around[begin + edges[b].second]]) >= cosCrease)
             group[root(edges[a].second)] = root(edges[b].second);
     }
-    // One normal per group, the sum of its faces'; the first group keeps v.
+    // One normal per group, the sum of its faces'; the first group (of faces with area) keeps v.
     sum.assign(count, Vec3(0, 0, 0));
     for (unsigned s = 0; s < count; ++s) sum[root(s)] += area[around[begin + s]];
     copyOf.assign(count, ~0u);
@@ -198,15 +198,17 @@ TriangleMesh loadMesh(const fs::path& path, double creaseAngle_rad, double scale
   // PLY by its content, whatever the name; a .ply that is not PLY is not handed to Assimp either.
   std::string extension = path.extension().string();
   for (char& c : extension) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  TriangleMesh mesh = detail::isPly(head(path, 5)) || extension == ".ply" ? detail::readPly(path) : importMesh(path);
+  TriangleMesh mesh =
+      detail::looksLikePly(head(path, 8)) || extension == ".ply" ? detail::readPly(path) : importMesh(path);
   for (size_t v = 0; v < mesh.vertices.size(); ++v) {
     Vec3& p = mesh.vertices[v];
     p *= scale;
     if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
       fail(Errc::InvalidFile, "'{}': vertex {} (counting from 0) is not finite", path.string(), v);
-    if (constexpr double kFar = kFarthest_mm; std::max({std::abs(p.x), std::abs(p.y), std::abs(p.z)}) > kFar)
-      fail(Errc::InvalidFile, "'{}': vertex {} (counting from 0) at ({:g}, {:g}, {:g}) is more than {:g} mm from the "
-           "origin: not a part of a bench (wrong units?)", path.string(), v, p.x, p.y, p.z, kFar);
+    if (std::max({std::abs(p.x), std::abs(p.y), std::abs(p.z)}) > kFarthest_mm)
+      fail(Errc::InvalidFile, "'{}': vertex {} (counting from 0) at ({:g}, {:g}, {:g}) mm is more than {:g} mm from "
+           "the origin: not a part of a bench (wrong units? the scale is {:g})", path.string(), v, p.x, p.y, p.z,
+           kFarthest_mm, scale);
   }
   if (mesh.triangles.empty()) fail(Errc::InvalidFile, "'{}': the mesh has no faces", path.string());
   weldMesh(mesh);
@@ -783,10 +785,10 @@ SceneDescription loadSceneFile(const fs::path& path) {
     if (const auto [at, fresh] = named.emplace(name, o.where("name")); !fresh)
       fail(Errc::Config, "{}: '{}' names another object too ({})", o.where("name"), name, at->second);
   }
-  if (root.has("display") && named.contains("display"))
-    fail(Errc::Config, "{}: 'display' names the [display] panel's object: call this one something else",
-         named["display"]);
   if (root.has("display")) {
+    if (named.contains("display"))
+      fail(Errc::Config, "{}: 'display' names the [display] panel's object: call this one something else",
+           named["display"]);
     ConfigTable t = root.table("display");
     d.display = readDisplay(t);
     const DisplayInfo& info = d.display->info;

@@ -709,6 +709,9 @@ TEST_F(SceneFile, CorruptPlyIsAnErrorNamingFileAndPlace) {
        "ply\nformat ascii 1.0\nelem\x01\xffnt vertex 0\nend_header\n",
        {"line 3", "'elem\\x01\\xffnt'"}},
       {"not-ply.ply", "solid cube\nendsolid cube\n", {"not a PLY file"}},
+      // What only resembles PLY goes to lfi's reader, not to Assimp's PLY importer, whatever the name.
+      {"upper.dat", "PLY\nformat ascii 1.0\nend_header\n", {"not a PLY file"}},
+      {"bom.obj", "\xef\xbb\xbfply\nformat ascii 1.0\nend_header\n", {"not a PLY file"}},
       // A repeated element read past its property list (fuzzing found it in the first version of the reader).
       {"two-faces.ply",
        header.substr(0, header.size() - 11) + "element face 1\nend_header\n" + vertices + "3 0 1 2\n",
