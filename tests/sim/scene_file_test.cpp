@@ -519,6 +519,26 @@ TEST_F(SceneFile, EachPartOfAMeshIsWoundOutwardsButCavities) {
   // Two shells crossing each other (never merged into one solid): half of each lies inside the other, so neither
   // is a cavity nor a solid beside it. No verdict on their winding.
   EXPECT_EQ(meshClosureFault(twoParts(1, {0.5, 0, 0}, true)), std::nullopt);
+  // Many parts (the check looks for the parts around a point on a grid): the hollow, an island in its cavity
+  // (inside two parts: wound outwards) and 6 x 6 x 6 beads beside it.
+  auto many = [&](bool islandOutwards) {
+    TriangleMesh mesh = twoParts(0.5, {0.1, 0.05, 0}, false);
+    auto add = [&](const Vec3& centre, double scale, bool outwards) {
+      const auto base = static_cast<unsigned>(mesh.vertices.size());
+      for (const Vec3& c : corner) mesh.vertices.push_back(centre + c * scale);
+      for (const auto& f : faces)
+        mesh.triangles.push_back(outwards ? std::array<unsigned, 3>{f[0] + base, f[1] + base, f[2] + base}
+                                          : std::array<unsigned, 3>{f[2] + base, f[1] + base, f[0] + base});
+    };
+    add({0.1, 0.05, 0}, 0.1, islandOutwards);
+    for (int i = 0; i < 216; ++i) add({3.0 + i % 6, 1.0 * (i / 6 % 6), 1.0 * (i / 36)}, 0.2, true);
+    return mesh;
+  };
+  EXPECT_EQ(meshClosureFault(many(true)), std::nullopt);
+  const auto island = meshClosureFault(many(false));
+  ASSERT_TRUE(island.has_value());
+  EXPECT_NE(island->find("lies inside 2 of the mesh's other 218 parts"), std::string::npos) << *island;
+  EXPECT_NE(island->find("a solid must be wound outwards"), std::string::npos) << *island;
 }
 
 // Assimp's formats place meshes with node transforms (glTF, COLLADA): the
