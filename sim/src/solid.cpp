@@ -539,7 +539,7 @@ void Solid::differenceCrossings(const RayLanes& rays, std::uint32_t lanes, doubl
     };
     Event ea[2] = {{a.enter[k], true, true}, {a.exit[k], true, false}};
     Event eb[2] = {{b.enter[k], false, true}, {b.exit[k], false, false}};
-    const int nb = b.present(k) ? 2 : 0;
+    const int nb = b.present(k) && b.exit[k] > b.enter[k] ? 2 : 0;  // (a tangent B, of no length, cuts nothing)
     Event events[4];
     int ia = 0, ib = 0, n = 0;
     while (ia < 2 || ib < nb) events[n++] = ib < nb && (ia == 2 || eb[ib].t < ea[ia].t) ? eb[ib++] : ea[ia++];
@@ -597,18 +597,23 @@ void Solid::localIntervals(const Ray& ray, IntervalList& out) const {
       // boundaries where the boolean's membership changes.
       // Each list is sorted and disjoint, so its events are already in order:
       // a linear merge is enough (A first on ties).
+      // (An interval of no length, a ray tangent to a ball, changes nothing:
+      // kept, a tangent cut-out would split A's interval with a gap of none.)
       std::array<Event, 2 * IntervalList::kCapacity> ea, eb;
       std::array<Event, 4 * IntervalList::kCapacity> events;
-      for (int i = 0; i < la.size(); ++i) {
-        ea[2 * i] = {la[i].enter.t, la[i].enter.normal, true, true};
-        ea[2 * i + 1] = {la[i].exit.t, la[i].exit.normal, true, false};
-      }
-      for (int i = 0; i < lb.size(); ++i) {
-        eb[2 * i] = {lb[i].enter.t, lb[i].enter.normal, false, true};
-        eb[2 * i + 1] = {lb[i].exit.t, lb[i].exit.normal, false, false};
-      }
-      const int n = 2 * (la.size() + lb.size());
-      std::merge(ea.begin(), ea.begin() + 2 * la.size(), eb.begin(), eb.begin() + 2 * lb.size(), events.begin(),
+      int na = 0, nb = 0;
+      for (int i = 0; i < la.size(); ++i)
+        if (la[i].exit.t > la[i].enter.t) {
+          ea[na++] = {la[i].enter.t, la[i].enter.normal, true, true};
+          ea[na++] = {la[i].exit.t, la[i].exit.normal, true, false};
+        }
+      for (int i = 0; i < lb.size(); ++i)
+        if (lb[i].exit.t > lb[i].enter.t) {
+          eb[nb++] = {lb[i].enter.t, lb[i].enter.normal, false, true};
+          eb[nb++] = {lb[i].exit.t, lb[i].exit.normal, false, false};
+        }
+      const int n = na + nb;
+      std::merge(ea.begin(), ea.begin() + na, eb.begin(), eb.begin() + nb, events.begin(),
                  [](const Event& x, const Event& y) { return x.t < y.t; });
       bool inA = false, inB = false, inside = false;
       Interval current{};

@@ -241,6 +241,29 @@ TEST(Solid, DifferenceFlipsTheSubtractedNormals) {
   expectNear(list[0].exit.normal, {1, 0, 0}, 1e-12);
 }
 
+// A ray tangent to a cut-out (the discriminant exactly 0: one point in
+// common) passes through the part as if the cut-out were not there: one
+// interval, not two touching at the tangent point (an exit and a re-entry at
+// grazing incidence). The general merge (intervals) and the convex-difference
+// kernel (nearestCrossings) agree.
+TEST(Solid, ATangentCutOutLeavesTheIntervalWhole) {
+  const auto part = Solid::combine(Solid::Kind::Difference, Solid::sphere(10),
+                                   Solid::sphere(1, Rigid3::translation({0, 1, 0})));
+  const Ray ray{{-20, 0, 0}, {1, 0, 0}};  // touches the cut-out's ball at (0, 0, 0)
+  IntervalList list;
+  part->intervals(ray, list);
+  ASSERT_EQ(list.size(), 1);
+  EXPECT_EQ(list[0].enter.t, 10);
+  EXPECT_EQ(list[0].exit.t, 30);
+  // The lane kernel (a difference of two convex solids): the first crossing past 11 is the far side, x = 10.
+  RayLanes lanes;
+  lanes.set(0, ray);
+  double t[RayLanes::kSize];
+  Vec3 normal[RayLanes::kSize];
+  part->nearestCrossings(lanes, 1u, 11, t, normal);
+  EXPECT_EQ(t[0], 30);
+}
+
 // Random lines through a few solids: sample points along each line; a point
 // strictly inside an interval is contained, a point outside all intervals is
 // not (away from the boundaries by more than the rounding).
