@@ -28,8 +28,6 @@ namespace fs = std::filesystem;
 
 namespace {
 
-constexpr long kMaxSide = kMaxExrSide, kMaxPixels = kMaxExrPixels;
-
 constexpr const char* kKind = "lfi.kind";
 constexpr const char* kVersion = "lfi.formatVersion";
 constexpr const char* kChecksum = "lfi.checksum";
@@ -72,23 +70,23 @@ std::string canonicalAttributes(const fs::path& path, const Imf::Header& header)
   return text;
 }
 
-// What loadExr() refuses is refused here too, before anything is written: a
-// file that could not be read back must not replace a good one.
 // OpenEXR sizes its per-line tables from a file's data window when it opens
 // the file; with a maximum image size its sanity check refuses a larger one
 // first. (Process-wide: no lfi file is larger.)
 void limitOpenExrImageSize() {
   static const bool limited = [] {
-    Imf::Header::setMaxImageSize(static_cast<int>(kMaxSide), static_cast<int>(kMaxSide));
+    Imf::Header::setMaxImageSize(static_cast<int>(kMaxExrSide), static_cast<int>(kMaxExrSide));
     return true;
   }();
   (void)limited;
 }
 
+// What loadExr() refuses is refused here too, before anything is written: a
+// file that could not be read back must not replace a good one.
 void writeExr(const fs::path& path, const cv::Mat& image, Imf::Header header, Overwrite overwrite) {
   limitOpenExrImageSize();  // (the read-back check opens the file too)
   requireImageType(image, CV_32FC1, "EXR image '" + path.string() + "'");
-  if (image.cols > kMaxSide || image.rows > kMaxSide || static_cast<long>(image.total()) > kMaxPixels)
+  if (image.cols > kMaxExrSide || image.rows > kMaxExrSide || static_cast<long>(image.total()) > kMaxExrPixels)
     fail(Errc::InvalidArgument, "cannot write '{}': {}x{} pixels is more than an lfi file holds (2^17 a side, 2^30 "
          "pixels)", path.string(), image.cols, image.rows);
   if (const auto bad = firstNonFinite(image))
@@ -200,7 +198,7 @@ LoadedExr loadExr(const fs::path& path, const char* expectedKind) {
       fail(Errc::InvalidFile, "'{}': expected one FLOAT channel 'Y' ({} channel(s))", path.string(), channels);
     const Imath::Box2i dw = out.header.dataWindow();
     const long width = static_cast<long>(dw.max.x) - dw.min.x + 1, height = static_cast<long>(dw.max.y) - dw.min.y + 1;
-    if (width < 1 || height < 1 || width > kMaxSide || height > kMaxSide || width * height > kMaxPixels)
+    if (width < 1 || height < 1 || width > kMaxExrSide || height > kMaxExrSide || width * height > kMaxExrPixels)
       fail(Errc::InvalidFile, "'{}': data window {}x{} is out of range (at most 2^17 a side and 2^30 pixels)",
            path.string(), width, height);
     out.pixels.create(static_cast<int>(height), static_cast<int>(width), CV_32FC1);

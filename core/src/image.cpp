@@ -18,25 +18,29 @@ void requireImageType(const cv::Mat& image, int cvType, const std::string& what)
          cv::typeToString(cvType));
 }
 
-// (cv::checkRange would do, but it refuses FLT_MAX.)
-std::optional<cv::Point> firstNonFinite(const cv::Mat& image) {
-  requireImageType(image, CV_32FC1, "image to check for non-finite pixels");
+namespace {
+
+// The first pixel (in row order) of a CV_32FC1 image where `bad` holds.
+template <typename Predicate>
+std::optional<cv::Point> firstPixelWhere(const cv::Mat& image, const char* what, Predicate bad) {
+  requireImageType(image, CV_32FC1, what);
   for (int r = 0; r < image.rows; ++r) {
     const float* row = image.ptr<float>(r);
     for (int c = 0; c < image.cols; ++c)
-      if (!std::isfinite(row[c])) return cv::Point(c, r);
+      if (bad(row[c])) return cv::Point(c, r);
   }
   return std::nullopt;
 }
 
+}  // namespace
+
+// (cv::checkRange would do, but it refuses FLT_MAX.)
+std::optional<cv::Point> firstNonFinite(const cv::Mat& image) {
+  return firstPixelWhere(image, "image to check for non-finite pixels", [](float v) { return !std::isfinite(v); });
+}
+
 std::optional<cv::Point> firstNegative(const cv::Mat& image) {
-  requireImageType(image, CV_32FC1, "image to check for negative pixels");
-  for (int r = 0; r < image.rows; ++r) {
-    const float* row = image.ptr<float>(r);
-    for (int c = 0; c < image.cols; ++c)
-      if (row[c] < 0) return cv::Point(c, r);
-  }
-  return std::nullopt;
+  return firstPixelWhere(image, "image to check for negative pixels", [](float v) { return v < 0; });
 }
 
 double percentile(const cv::Mat& image, double fraction) {

@@ -101,6 +101,14 @@ cv::Mat specialFloats(int rows, int cols, unsigned seed, bool negatives = true) 
   return m;
 }
 
+// Where attribute `name` of `type` keeps its 4-byte size in an EXR header's
+// bytes (its value follows); npos when there is no such attribute.
+size_t attributeSizeAt(const std::string& bytes, const std::string& name, const std::string& type) {
+  const std::string field = name + '\0' + type + '\0';
+  const size_t at = bytes.find(field);
+  return at == std::string::npos ? at : at + field.size();
+}
+
 std::string readBytes(const fs::path& path) {
   std::ifstream in(path, std::ios::binary);
   return {std::istreambuf_iterator<char>(in), {}};
@@ -267,10 +275,9 @@ TEST_F(ExrIo, AttributeSizePastTheEndOfTheFileIsNamed) {
   // (1.9 GB for a 2 KB file, found by fuzzing) before failing.
   lfi::writeRadianceExr(file("r.exr"), randomFloats(8, 8, 20), {0.01, "a description"});
   std::string bytes = readBytes(file("r.exr"));
-  const std::string field("lfi.description\0string\0", 23);
-  const size_t at = bytes.find(field);
+  const size_t at = attributeSizeAt(bytes, "lfi.description", "string");
   ASSERT_NE(at, std::string::npos);
-  bytes.replace(at + field.size(), 4, std::string("\x00\x00\x00\x70", 4));  // 0x70000000 bytes, little-endian
+  bytes.replace(at, 4, std::string("\x00\x00\x00\x70", 4));  // 0x70000000 bytes, little-endian
   std::ofstream(file("huge.exr"), std::ios::binary) << bytes;
   EXPECT_TRUE(throwsError([&] { lfi::readRadianceExr(file("huge.exr")); }, Errc::InvalidFile,
                           {file("huge.exr").string(), "'lfi.description'", "declares 1879048192 bytes"}));
@@ -282,15 +289,13 @@ TEST_F(ExrIo, HugeDataWindowIsRefusedBeforeOpenExrSizesItsTables) {
   // maximum image size), before the reader sizes its per-line tables.
   lfi::writeRadianceExr(file("r.exr"), randomFloats(8, 8, 21), {0.01, "tall"});
   std::string bytes = readBytes(file("r.exr"));
-  const std::string field("dataWindow\0box2i\0", 17);
-  const size_t at = bytes.find(field);
-  ASSERT_NE(at, std::string::npos);
-  bytes.replace(at + field.size() + 4 + 12, 4, std::string("\xff\xff\xff\x0f", 4));  // ymax 2^28 - 1
+  const size_t window = attributeSizeAt(bytes, "dataWindow", "box2i");
+  const size_t compressionAt = attributeSizeAt(bytes, "compression", "compression");
+  ASSERT_NE(window, std::string::npos);
+  ASSERT_NE(compressionAt, std::string::npos);
+  bytes.replace(window + 4 + 12, 4, std::string("\xff\xff\xff\x0f", 4));  // ymax 2^28 - 1
   for (const char compression : {'\x03', '\x09'}) {  // ZIP (as written), DWAB
-    const std::string key("compression\0compression\0", 24);
-    const size_t c = bytes.find(key);
-    ASSERT_NE(c, std::string::npos);
-    bytes[c + key.size() + 4] = compression;
+    bytes[compressionAt + 4] = compression;
     std::ofstream(file("tall.exr"), std::ios::binary) << bytes;
     EXPECT_TRUE(throwsError([&] { lfi::readRadianceExr(file("tall.exr")); }, Errc::InvalidFile,
                             {file("tall.exr").string(), "height"}))

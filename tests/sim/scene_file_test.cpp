@@ -160,39 +160,32 @@ TEST_F(SceneFile, BadValuesAreErrors) {
   for (int i = 0; i < 15; ++i) cuts += fmt::format("[[object.cut]]\nposition_mm=[0, 0, {}]\nradius_mm=1\n", 6 * i - 45);
   EXPECT_TRUE(throwsError([&] { loadSceneFile(write("cuts.toml", cuts)); }, Errc::Config,
                           {"cuts.toml:", "object[0].cut", "15 cut-outs", "at most 14"}));
+  // Objects the scene file refuses, each named by its file, line and key (Errc::Config).
+  auto refused = [&](const std::string& name, const std::string& objects, std::vector<std::string> fragments) {
+    fragments.push_back(name + ":");
+    return throwsError([&] { loadSceneFile(write(name, head + objects)); }, Errc::Config, fragments);
+  };
   // A size or position standing in for "infinite": Embree, in float, would drop the object silently.
-  EXPECT_TRUE(throwsError(
-      [&] {
-        loadSceneFile(write("huge.toml", head + "[[object]]\nname='l'\nshape='rectangle'\nsize_mm=[1e20, 1e20]\n"
-                                               "emitter='lambertian'\n"));
-      },
-      Errc::Config, {"huge.toml:", "object[0].size_mm", "1e+20 (element 0) is outside"}));
-  EXPECT_TRUE(throwsError(
-      [&] {
-        loadSceneFile(write("far.toml", head + "[[object]]\nname='s'\nshape='sphere'\nradius_mm=1\n"
-                                              "position_mm=[0, 0, -2e18]\n"));
-      },
-      Errc::Config, {"far.toml:", "object[0].position_mm", "(element 2) is outside"}));
+  EXPECT_TRUE(refused("huge.toml",
+                      "[[object]]\nname='l'\nshape='rectangle'\nsize_mm=[1e20, 1e20]\nemitter='lambertian'\n",
+                      {"object[0].size_mm", "1e+20 (element 0) is outside"}));
+  EXPECT_TRUE(refused("far.toml", "[[object]]\nname='s'\nshape='sphere'\nradius_mm=1\nposition_mm=[0, 0, -2e18]\n",
+                      {"object[0].position_mm", "(element 2) is outside"}));
   // Objects are named once each, and not 'display' beside a [display]; cut-outs are for solids.
   const std::string sphere = "[[object]]\nname='a'\nshape='sphere'\nradius_mm=1\n";
-  EXPECT_TRUE(throwsError([&] { loadSceneFile(write("twice.toml", head + sphere + sphere)); }, Errc::Config,
-                          {"twice.toml:", "object[1].name", "'a' names another object too", "object[0].name"}));
-  EXPECT_TRUE(throwsError([&] { loadSceneFile(write("unnamed.toml", head + "[[object]]\nname=''\nshape='sphere'\n"
-                                                                          "radius_mm=1\n")); },
-                          Errc::Config, {"unnamed.toml:", "object[0].name", "is empty"}));
-  EXPECT_TRUE(throwsError(
-      [&] {
-        loadSceneFile(write("cut-rect.toml", head + "[[object]]\nname='r'\nshape='rectangle'\nsize_mm=[1,1]\n"
-                                                   "[[object.cut]]\nposition_mm=[0,0,0]\nradius_mm=0.1\n"));
-      },
-      Errc::Config, {"cut-rect.toml:", "object[0].cut", "apply to solids", "not to a rectangle"}));
+  EXPECT_TRUE(refused("twice.toml", sphere + sphere,
+                      {"object[1].name", "'a' names another object too", "object[0].name"}));
+  EXPECT_TRUE(refused("unnamed.toml", "[[object]]\nname=''\nshape='sphere'\nradius_mm=1\n",
+                      {"object[0].name", "is empty"}));
+  EXPECT_TRUE(refused("cut-rect.toml",
+                      "[[object]]\nname='r'\nshape='rectangle'\nsize_mm=[1,1]\n"
+                      "[[object.cut]]\nposition_mm=[0,0,0]\nradius_mm=0.1\n",
+                      {"object[0].cut", "apply to solids", "not to a rectangle"}));
   // An emitter with a material: its ior would be read and never used (an emitting object is opaque).
-  EXPECT_TRUE(throwsError(
-      [&] {
-        loadSceneFile(write("glowing.toml", head + "[[object]]\nname='g'\nshape='sphere'\nradius_mm=5\n"
-                                                  "material='dielectric'\nior=1.5\nemitter='lambertian'\n"));
-      },
-      Errc::Config, {"glowing.toml:", "object[0].material", "an emitting object is opaque"}));
+  EXPECT_TRUE(refused("glowing.toml",
+                      "[[object]]\nname='g'\nshape='sphere'\nradius_mm=5\nmaterial='dielectric'\nior=1.5\n"
+                      "emitter='lambertian'\n",
+                      {"object[0].material", "an emitting object is opaque"}));
   // A camera of more pixels than its image could be written with (each side in range).
   std::string big = std::string("format = \"lfi-scene\"\nversion = 1\n") + kCamera;
   big = big.replace(big.find("width = 16"), 10, "width = 65536").replace(big.find("height = 16"), 11, "height = 16385");
@@ -711,7 +704,8 @@ TEST_F(SceneFile, CorruptPlyIsAnErrorNamingFileAndPlace) {
            std::string("\xff\xff\xff\x7f", 4),
        {"byte ", "a list of 2147483647 values does not fit"}},
       {"cut-in-body.ply", binary.substr(0, binary.size() - 17), {"byte ", "texcoord' of face 7", "ends inside"}},
-      {"long-body.ply", binary + "\n" + std::string(13, '\0'), {"14 bytes after the last element", "count in the header"}},
+      {"long-body.ply", binary + "\n" + std::string(13, '\0'),
+       {"14 bytes after the last element", "count in the header"}},
       // Malformed headers and values.
       {"not-a-number.ply", header + "0 0 0\n1 zero 0\n0 1 0\n3 0 1 2\n",
        {"line 11", "property 'y' of vertex 1", "'zero'"}},

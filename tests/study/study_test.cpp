@@ -224,22 +224,25 @@ TEST(Bench, UnknownKeyIsAnErrorNamingFileLineAndKey) {
 TEST(Bench, OutOfRangeAndMalformedValuesAreErrors) {
   const fs::path dir = freshDir("range");
   const fs::path bad = dir / "bad.toml";
-  std::ofstream(bad) << replaceLine(readText(kBench), "ior = 1.5168", "ior = -3");
-  EXPECT_TRUE(throwsError([&] { lfi::study::Bench::load(bad); }, Errc::Config, {bad.string() + ":", "lens.ior"}));
-  // Defects the study could not make: a cut that leaves no lens, an index below air's.
-  std::ofstream(bad) << replaceLine(readText(kBench), "cut_large_radius_mm", "cut_large_radius_mm = 30\n#");
-  EXPECT_TRUE(throwsError([&] { lfi::study::Bench::load(bad); }, Errc::Config,
-                          {bad.string() + ":", "defects.cut_large_radius_mm", "hold the whole lens"}));
-  std::ofstream(bad) << replaceLine(readText(kBench), "rim_radial_mm", "rim_radial_mm = 0.8\n#");
-  EXPECT_TRUE(throwsError([&] { lfi::study::Bench::load(bad); }, Errc::Config,
-                          {bad.string() + ":", "defects.rim_radial_mm", "overlap the one on the axis"}));
-  std::ofstream(bad) << replaceLine(readText(kBench), "index_factor", "index_factor = 0.6\n#");
-  EXPECT_TRUE(throwsError([&] { lfi::study::Bench::load(bad); }, Errc::Config,
-                          {bad.string() + ":", "defects.index_factor", "0.91008, outside [1, 5]"}));
-  // Values each in range that the bench cannot build, named before a study starts.
-  std::ofstream(bad) << replaceLine(readText(kBench), "front_radius_mm = 51.5", "front_radius_mm = 10");
-  EXPECT_TRUE(throwsError([&] { lfi::study::Bench::load(bad); }, Errc::Config,
-                          {bad.string() + ":", "lens.front_radius_mm", "semi-diameter 12.7"}));
+  struct Case {
+    std::string from, to;                // the line's start, and what replaces it
+    std::vector<std::string> fragments;  // of the error, beside the file's name
+  };
+  const std::vector<Case> cases = {
+      {"ior = 1.5168", "ior = -3", {"lens.ior"}},
+      // Defects the study could not make: a cut that leaves no lens, overlapping inclusions, an index below air's.
+      {"cut_large_radius_mm", "cut_large_radius_mm = 30\n#", {"defects.cut_large_radius_mm", "hold the whole lens"}},
+      {"rim_radial_mm", "rim_radial_mm = 0.8\n#", {"defects.rim_radial_mm", "overlap the one on the axis"}},
+      {"index_factor", "index_factor = 0.6\n#", {"defects.index_factor", "0.91008, outside [1, 5]"}},
+      // Values each in range that the bench cannot build, named before a study starts.
+      {"front_radius_mm = 51.5", "front_radius_mm = 10", {"lens.front_radius_mm", "semi-diameter 12.7"}},
+  };
+  for (const Case& c : cases) {
+    std::ofstream(bad) << replaceLine(readText(kBench), c.from, c.to);
+    std::vector<std::string> fragments = c.fragments;
+    fragments.push_back(bad.string() + ":");
+    EXPECT_TRUE(throwsError([&] { lfi::study::Bench::load(bad); }, Errc::Config, fragments)) << c.to;
+  }
   std::ofstream(bad) << replaceLine(replaceLine(readText(kBench), "spatial = 40", "spatial = 4096"), "angular = 16",
                                     "angular = 256");
   EXPECT_TRUE(throwsError([&] { lfi::study::Bench::load(bad); }, Errc::Config,
