@@ -29,6 +29,7 @@
 namespace {
 
 using Clock = std::chrono::steady_clock;
+using lfi::testing_support::missingBlockIds;
 namespace fs = std::filesystem;
 
 double seconds(Clock::time_point a, Clock::time_point b) {
@@ -44,12 +45,6 @@ struct Result {
 };
 
 constexpr int kBuffers = 16;
-
-// Frames missing between two GigE Vision block ids (16 bits, 65535 is followed by 1).
-std::uint64_t missingBetween(std::uint64_t previous, std::uint64_t id) {
-  const std::uint64_t step = id > previous ? id - previous : id + 65535 - previous;
-  return step - 1;
-}
 
 void printResult(const char* name, const Result& r) {
   fmt::print("  {:<28} {:8.1f} frames/s {:8.1f} MB/s  lost {:3}  grab of a waiting frame {:7.1f} us\n", name, r.fps,
@@ -75,7 +70,7 @@ Result benchOurs(const std::string& id, int frames, double rate, int size, lfi::
     camera->grabInto(frame, std::chrono::seconds(2));
     // Lost: the ids skipped (dropped frames, underruns among them, and timeouts) and the incomplete ones.
     if (frame.status == lfi::FrameStatus::Timeout) continue;  // (the next id's gap counts it)
-    lost += missingBetween(previous, frame.frameId) + (frame.status == lfi::FrameStatus::Complete ? 0 : 1);
+    lost += missingBlockIds(previous, frame.frameId) + (frame.status == lfi::FrameStatus::Complete ? 0 : 1);
     previous = frame.frameId;
     if (frame.status != lfi::FrameStatus::Complete) continue;
     bytes += frame.image.total() * frame.image.elemSize();
@@ -144,7 +139,7 @@ Result benchPlain(int frames, double rate, int size, lfi::PixelFormat format) {
     if (buffer == nullptr) continue;  // (the next id's gap counts it)
     const std::uint64_t frameId = arv_buffer_get_frame_id(buffer);
     const bool complete = arv_buffer_get_status(buffer) == ARV_BUFFER_STATUS_SUCCESS;
-    lost += missingBetween(previous, frameId) + (complete ? 0 : 1);  // as in benchOurs
+    lost += missingBlockIds(previous, frameId) + (complete ? 0 : 1);  // as in benchOurs
     previous = frameId;
     if (complete) {
       size_t size_bytes = 0;

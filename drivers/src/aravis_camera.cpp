@@ -118,6 +118,18 @@ bool knownToAravis(const std::string& id) {
   return false;
 }
 
+// Discovery is a UDP broadcast answered within Aravis's fixed wait: on a loaded
+// host or network an answer can miss a round. Up to two rounds, until `id` (any
+// device when empty) is listed; returns whether it is. Lock held.
+bool discoverLocked(const std::string& id) {
+  constexpr int kRounds = 2;
+  for (int round = 0; round < kRounds; ++round) {
+    arv_update_device_list();
+    if (id.empty() ? arv_get_n_devices() > 0 : knownToAravis(id)) return true;
+  }
+  return false;
+}
+
 bool isIpv4Address(const std::string& text) {
   in_addr address{};
   return ::inet_pton(AF_INET, text.c_str(), &address) == 1;
@@ -253,12 +265,11 @@ class AravisCamera final : public Camera {
       // messages and a reopen after a loss then name this camera, not whichever
       // comes first at the time.
       if (deviceId_.empty()) {
-        const auto devices = listDevicesLocked(true);
-        if (devices.empty()) fail(Errc::NotFound, "camera '{}': no devices found", name());
-        deviceId_ = devices.front().id;
+        if (!discoverLocked("")) fail(Errc::NotFound, "camera '{}': no devices found", name());
+        deviceId_ = listDevicesLocked(false).front().id;
       }
       const bool discovered = !isIpv4Address(deviceId_) && !knownToAravis(deviceId_);
-      if (discovered) arv_update_device_list();
+      if (discovered) discoverLocked(deviceId_);
       GError* error = nullptr;
       camera_ = arv_camera_new(deviceId_.c_str(), &error);
       if (camera_ == nullptr) {
@@ -571,7 +582,7 @@ class AravisCamera final : public Camera {
   }
 
   bool deviceAnswers() {
-    if (!gvcpIp_.empty()) return gvcpDeviceAnswers(gvcpIp_, gvcpPort_, 3, 100);
+    if (!gvcpIp_.empty()) return gvcpDeviceAnswers(gvcpIp_, gvcpPort_, 5, 200);
     guint32 value = 0;
     GError* error = nullptr;
     const bool ok = arv_device_read_register(arv_camera_get_device(camera_), 0, &value, &error);

@@ -10,6 +10,7 @@
 #include "lfi/drivers/aravis_camera.h"
 #include "lfi/drivers/registry.h"
 
+#include "aravis_discovery.h"
 #include "gige_device_process.h"
 
 #include <arv.h>
@@ -40,9 +41,13 @@ namespace {
 using namespace std::chrono_literals;
 using testing_support::throwsError;
 using Clock = std::chrono::steady_clock;
+using lfi::testing_support::discoverDevice;
 using lfi::testing_support::gigeDeviceAnswers;
 using lfi::testing_support::GigeDeviceProcess;
+using lfi::testing_support::gigeWriteRegister;
+using lfi::testing_support::kHeartbeatTimeoutRegister;
 using lfi::testing_support::LoopbackGigeLock;
+using lfi::testing_support::missingBlockIds;
 
 constexpr const char* kFakeCameraBinary = "arv-fake-gv-camera-0.8";
 
@@ -88,6 +93,16 @@ class FakeGvCamera {
       args.push_back(genicam);
     }
     process_ = std::make_unique<GigeDeviceProcess>(args, 5s, /*quietStderr=*/true, address);
+    address_ = address;
+    // The fake device drops a controller that has not sent a heartbeat for 3 s (its default), as a real one does;
+    // a client process stalled that long on a loaded CI host would lose its stream. 10 s, as `lfi serve-camera`.
+    setHeartbeatTimeout(10s);
+  }
+
+  // Sets the device's heartbeat timeout (GigE Vision bootstrap register 0x0938); no controller may hold it.
+  void setHeartbeatTimeout(std::chrono::milliseconds timeout) {
+    if (!gigeWriteRegister(kHeartbeatTimeoutRegister, static_cast<std::uint32_t>(timeout.count()), address_))
+      throw std::runtime_error("the fake device at " + address_ + " did not take its heartbeat timeout");
   }
 
   static bool answersGvcp() { return gigeDeviceAnswers(); }
@@ -104,6 +119,7 @@ class FakeGvCamera {
 
  private:
   std::string serial_;
+  std::string address_;
   std::unique_ptr<GigeDeviceProcess> process_;
 };
 
@@ -143,17 +159,15 @@ class AravisCameraTest : public ::testing::Test {
 };
 
 TEST_F(AravisCameraTest, DiscoveryFindsTheFakeCamera) {
-  bool found = false;
-  for (const AravisDeviceInfo& d : listAravisDevices()) {
-    if (d.id != fake_->id()) continue;
-    found = true;
-    EXPECT_EQ(d.vendor, "Aravis");
-    EXPECT_EQ(d.model, "Fake");
-    EXPECT_EQ(d.serial, fake_->serial());
-    EXPECT_EQ(d.address, "127.0.0.1");
-    EXPECT_EQ(d.protocol, "GigEVision");
-  }
-  EXPECT_TRUE(found);
+  int rounds = 0;
+  const std::optional<AravisDeviceInfo> d = discoverDevice(fake_->id(), 3, rounds);
+  ASSERT_TRUE(d) << fake_->id() << " not discovered in " << rounds << " rounds";
+  EXPECT_EQ(d->vendor, "Aravis");
+  EXPECT_EQ(d->model, "Fake");
+  EXPECT_EQ(d->serial, fake_->serial());
+  EXPECT_EQ(d->address, "127.0.0.1");
+  EXPECT_EQ(d->protocol, "GigEVision");
+  if (rounds > 1) std::printf("[ info     ] discovered in round %d\n", rounds);
 }
 
 TEST_F(AravisCameraTest, OpensByIdAndByAddress) {
@@ -469,11 +483,12 @@ TEST_F(AravisCameraTest, StreamsContinuousCompleteFramesIntoReusedMemory) {
   const std::uint8_t* memory = frame.image.data;
   std::uint64_t lastId = frame.frameId;
   std::uint64_t lastTimestamp = frame.timestamp_ns;
+  std::uint64_t gaps = 0;
   const auto t0 = Clock::now();
   for (int i = 1; i < kFrames; ++i) {
     camera->grabInto(frame, 2s);
     ASSERT_EQ(frame.status, FrameStatus::Complete) << "frame " << i;
-    EXPECT_EQ(frame.frameId, lastId + 1);
+    gaps += missingBlockIds(lastId, frame.frameId);
     EXPECT_GT(frame.timestamp_ns, lastTimestamp);
     EXPECT_EQ(frame.image.data, memory) << "grabInto must reuse the frame's memory";
     lastId = frame.frameId;
@@ -492,6 +507,10 @@ TEST_F(AravisCameraTest, StreamsContinuousCompleteFramesIntoReusedMemory) {
   EXPECT_GE(stats.completed, static_cast<std::uint64_t>(kFrames));
   EXPECT_EQ(stats.failed, 0u);
   EXPECT_EQ(stats.missingPackets, 0u);
+  // Frame ids are consecutive unless this client let the buffer pool run dry
+  // (a stall of 40 ms on a loaded host; Aravis then counts underruns): no id may go missing otherwise.
+  if (stats.underruns == 0) EXPECT_EQ(gaps, 0u) << "frame ids must be consecutive";
+  else EXPECT_LE(gaps, stats.underruns) << "frame ids skipped without an underrun";
   camera->stop();
   const StreamStatistics after = camera->statistics();  // kept after stop
   EXPECT_GE(after.completed, stats.completed);
@@ -551,7 +570,7 @@ TEST_F(AravisCameraTest, KilledDeviceIsReportedWithinTheTimeoutAndReopens) {
   }
   const double detected_s = secondsSince(t0);
   std::printf("[ info     ] device loss detected after %.3f s (%d timeouts before)\n", detected_s, timeouts);
-  EXPECT_TRUE(deviceError);  // (expected after about 0.5 s: one 200 ms timeout and a 3 × 100 ms probe)
+  EXPECT_TRUE(deviceError);  // (expected after about 0.2 s: one 200 ms timeout and a probe the ICMP refusal ends)
   EXPECT_EQ(camera->state(), Camera::State::Closed);
   EXPECT_TRUE(throwsError([&] { camera->grab(10ms); }, Errc::InvalidArgument, {"state Closed"}));
 
@@ -573,11 +592,12 @@ TEST_F(AravisCameraTest, KilledDeviceIsReportedWithinTheTimeoutAndReopens) {
   std::printf("[ info     ] destroyed after %.3f s\n", secondsSince(t2));
 }
 
-// A device that stalls longer than its heartbeat timeout (the fake device's
-// 3 s) drops its controller and stops streaming for good, though it answers
-// again: the grab waiting for the next frame must say so, not time out, and
-// open() takes control again.
+// A device that stalls longer than its heartbeat timeout (3 s here, the fake
+// device's default) drops its controller and stops streaming for good, though
+// it answers again: the grab waiting for the next frame must say so, not time
+// out, and open() takes control again.
 TEST_F(AravisCameraTest, AControlChannelLostWhileStreamingIsADeviceError) {
+  fake_->setHeartbeatTimeout(3s);
   auto camera = openFake();
   camera->configure(smallSettings());
   camera->start(4);

@@ -10,6 +10,7 @@
 #include "lfi/drivers/aravis_camera.h"
 #include "lfi/drivers/registry.h"
 #include "lfi/sim/sim_camera.h"
+#include "aravis_discovery.h"
 #include "gige_device_process.h"
 #include "lfi_test_support.h"
 
@@ -35,9 +36,11 @@ namespace {
 using namespace std::chrono_literals;
 using testing_support::throwsError;
 using Clock = std::chrono::steady_clock;
+using lfi::testing_support::discoverDevice;
 using lfi::testing_support::gigeDeviceAnswers;
 using lfi::testing_support::GigeDeviceProcess;
 using lfi::testing_support::LoopbackGigeLock;
+using lfi::testing_support::missingBlockIds;
 namespace fs = std::filesystem;
 
 double secondsSince(Clock::time_point t0) {
@@ -83,12 +86,6 @@ radiance = 1
 )";
 
 bool answersGvcp() { return gigeDeviceAnswers(); }
-
-// Block ids missing between two received frames. GigE Vision block ids are 16
-// bits here: 65535 is followed by 1 (0 is never used).
-std::uint64_t missingBlockIds(std::uint64_t previous, std::uint64_t id) {
-  return id > previous ? id - previous - 1 : id + 65534 - previous;
-}
 
 // `lfi serve-camera` as a child process.
 class ServedCamera {
@@ -193,23 +190,13 @@ class ServedCameraTest : public ::testing::Test {
 };
 
 TEST_F(ServedCameraTest, DiscoveryFindsTheServedCamera) {
-  // Discovery is a UDP broadcast answered within Aravis's fixed wait: on a
-  // loaded host (the whole suite on 2 cores) an answer can miss one round, as
-  // on a real network. Three rounds, as a user would list again.
-  bool found = false;
   int rounds = 0;
-  while (!found && rounds < 3) {
-    ++rounds;
-    for (const AravisDeviceInfo& d : listAravisDevices()) {
-      if (d.id != server_->id()) continue;
-      found = true;
-      EXPECT_EQ(d.vendor, "lfi");
-      EXPECT_EQ(d.model, "SimCamera");
-      EXPECT_EQ(d.address, "127.0.0.1");
-      EXPECT_EQ(d.protocol, "GigEVision");
-    }
-  }
-  EXPECT_TRUE(found) << server_->id() << " not discovered in " << rounds << " rounds";
+  const std::optional<AravisDeviceInfo> d = discoverDevice(server_->id(), 3, rounds);
+  ASSERT_TRUE(d) << server_->id() << " not discovered in " << rounds << " rounds";
+  EXPECT_EQ(d->vendor, "lfi");
+  EXPECT_EQ(d->model, "SimCamera");
+  EXPECT_EQ(d->address, "127.0.0.1");
+  EXPECT_EQ(d->protocol, "GigEVision");
   if (rounds > 1) std::printf("[ info     ] discovered in round %d\n", rounds);
   auto camera = openServed();
   const CameraInfo info = camera->info();

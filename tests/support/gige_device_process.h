@@ -12,8 +12,8 @@
 #include <netinet/in.h>
 #include <poll.h>
 #include <signal.h>
-#include <spawn.h>
 #include <sys/file.h>
+#include <sys/prctl.h>
 #include <sys/socket.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -33,7 +33,8 @@ namespace lfi::testing_support {
 // Exclusive use of 127.0.0.1:3956 among cooperating processes.
 class LoopbackGigeLock {
 public:
-  LoopbackGigeLock() : fd_(::open("/tmp/lfi-fake-gv-camera.lock", O_RDWR | O_CREAT | O_CLOEXEC, 0666)) {
+  // (Read-only: flock needs no write access, so the file another user created, 0644, locks as well.)
+  LoopbackGigeLock() : fd_(::open("/tmp/lfi-fake-gv-camera.lock", O_RDONLY | O_CREAT | O_CLOEXEC, 0666)) {
     if (fd_ < 0 || ::flock(fd_, LOCK_EX) != 0)
       throw std::runtime_error(std::string("cannot lock /tmp/lfi-fake-gv-camera.lock: ") + std::strerror(errno));
   }
@@ -45,47 +46,101 @@ private:
   int fd_;
 };
 
-// A GVCP READREG of the control channel privilege register (0x0A00) on
-// `address`:3956 gets an answer within `timeoutMs`.
-inline bool gigeDeviceAnswers(int timeoutMs = 100, const std::string& address = "127.0.0.1") {
+// Sends one GVCP command (a 12- or 16-byte packet) to `address`:3956 and waits
+// up to `timeoutMs` for its acknowledgement; returns the ack's size (0: none).
+inline size_t gvcpCommand(const std::string& address, const std::uint8_t* packet, size_t size, std::uint8_t* reply,
+                          size_t replySize, int timeoutMs) {
   const int fd = ::socket(AF_INET, SOCK_DGRAM | SOCK_CLOEXEC, 0);
-  if (fd < 0) return false;
+  if (fd < 0) return 0;
   sockaddr_in device{};
   device.sin_family = AF_INET;
   device.sin_port = htons(3956);
-  if (::inet_pton(AF_INET, address.c_str(), &device.sin_addr) != 1) {
-    ::close(fd);
-    return false;
-  }
-  const std::uint8_t packet[12] = {0x42, 0x01, 0x00, 0x80, 0x00, 0x04, 0x00, 0x01, 0x00, 0x00, 0x0a, 0x00};
-  bool answered = false;
-  if (::connect(fd, reinterpret_cast<const sockaddr*>(&device), sizeof device) == 0 &&
-      ::send(fd, packet, sizeof packet, 0) == sizeof packet) {
+  ssize_t n = 0;
+  if (::inet_pton(AF_INET, address.c_str(), &device.sin_addr) == 1 &&
+      ::connect(fd, reinterpret_cast<const sockaddr*>(&device), sizeof device) == 0 &&
+      ::send(fd, packet, size, 0) == static_cast<ssize_t>(size)) {
     pollfd pfd{.fd = fd, .events = POLLIN, .revents = 0};
-    std::uint8_t reply[64];
-    answered = ::poll(&pfd, 1, timeoutMs) > 0 && ::recv(fd, reply, sizeof reply, 0) >= 8;
+    if (::poll(&pfd, 1, timeoutMs) > 0) n = ::recv(fd, reply, replySize, 0);
   }
   ::close(fd);
-  return answered;
+  return n > 0 ? static_cast<size_t>(n) : 0;
 }
+
+// A GVCP READREG of the control channel privilege register (0x0A00) on
+// `address`:3956 gets an answer within `timeoutMs`.
+inline bool gigeDeviceAnswers(int timeoutMs = 100, const std::string& address = "127.0.0.1") {
+  const std::uint8_t packet[12] = {0x42, 0x01, 0x00, 0x80, 0x00, 0x04, 0x00, 0x01, 0x00, 0x00, 0x0a, 0x00};
+  std::uint8_t reply[64];
+  return gvcpCommand(address, packet, sizeof packet, reply, sizeof reply, timeoutMs) >= 8;
+}
+
+// A GVCP WRITEREG of `value` to bootstrap register `reg` on `address`:3956,
+// acknowledged with success. (A device with no controller takes it from anyone.)
+inline bool gigeWriteRegister(std::uint32_t reg, std::uint32_t value, const std::string& address = "127.0.0.1",
+                              int timeoutMs = 1000) {
+  const std::uint8_t packet[16] = {0x42, 0x01, 0x00, 0x82, 0x00, 0x08, 0x00, 0x02,
+                                   static_cast<std::uint8_t>(reg >> 24), static_cast<std::uint8_t>(reg >> 16),
+                                   static_cast<std::uint8_t>(reg >> 8), static_cast<std::uint8_t>(reg),
+                                   static_cast<std::uint8_t>(value >> 24), static_cast<std::uint8_t>(value >> 16),
+                                   static_cast<std::uint8_t>(value >> 8), static_cast<std::uint8_t>(value)};
+  std::uint8_t reply[64];
+  // WRITEREG_ACK: status 0 (success), ack 0x0083.
+  return gvcpCommand(address, packet, sizeof packet, reply, sizeof reply, timeoutMs) >= 8 && reply[0] == 0 &&
+         reply[1] == 0 && reply[2] == 0x00 && reply[3] == 0x83;
+}
+
+// Block ids missing between two received frames. GigE Vision block ids are 16
+// bits here: 65535 is followed by 1 (0 is never used).
+inline std::uint64_t missingBlockIds(std::uint64_t previous, std::uint64_t id) {
+  return id > previous ? id - previous - 1 : id + 65534 - previous;
+}
+
+// GigE Vision bootstrap register: how long a device keeps its controller without a heartbeat (ms).
+constexpr std::uint32_t kHeartbeatTimeoutRegister = 0x0938;
 
 // The device's process: started with `args` (args[0] is the executable's path),
 // stdout (and with quietStderr stderr) to /dev/null; waits until the device
-// answers GVCP on `address` or the process exits. Killed with SIGKILL on destruction.
+// answers GVCP on `address` or the process exits. Killed with SIGKILL on
+// destruction, and when the thread that started it dies (a crashed test must
+// not leave a device that answers the next test's GVCP requests in its place).
 class GigeDeviceProcess {
 public:
   GigeDeviceProcess(std::vector<std::string> args, std::chrono::milliseconds startTimeout, bool quietStderr = true,
                     const std::string& address = "127.0.0.1") {
+    if (gigeDeviceAnswers(100, address))
+      throw std::runtime_error("a GigE Vision device already answers on " + address + ":3956 before " + args[0] +
+                               " starts (one left running? `ss -ulpn 'sport = :3956'` names its process)");
     std::vector<char*> argv;
     for (std::string& a : args) argv.push_back(a.data());
     argv.push_back(nullptr);
-    posix_spawn_file_actions_t actions;
-    posix_spawn_file_actions_init(&actions);
-    posix_spawn_file_actions_addopen(&actions, STDOUT_FILENO, "/dev/null", O_WRONLY, 0);
-    if (quietStderr) posix_spawn_file_actions_addopen(&actions, STDERR_FILENO, "/dev/null", O_WRONLY, 0);
-    const int rc = posix_spawn(&pid_, args[0].c_str(), &actions, nullptr, argv.data(), environ);
-    posix_spawn_file_actions_destroy(&actions);
-    if (rc != 0) throw std::runtime_error("posix_spawn " + args[0] + ": " + std::strerror(rc));
+    int execError[2];  // the child's exec errno, or end of file when exec succeeded (close on exec)
+    if (::pipe2(execError, O_CLOEXEC) != 0) throw std::runtime_error(std::string("pipe2: ") + std::strerror(errno));
+    const pid_t parent = ::getpid();
+    pid_ = ::fork();
+    if (pid_ == 0) {  // the child: async-signal-safe calls only
+      ::prctl(PR_SET_PDEATHSIG, SIGKILL);
+      if (::getppid() != parent) ::_exit(127);  // the parent died before prctl
+      const int null = ::open("/dev/null", O_WRONLY);
+      if (null >= 0) {
+        ::dup2(null, STDOUT_FILENO);
+        if (quietStderr) ::dup2(null, STDERR_FILENO);
+      }
+      ::execve(argv[0], argv.data(), environ);
+      const int error = errno;
+      (void)!::write(execError[1], &error, sizeof error);
+      ::_exit(127);
+    }
+    const int forkError = errno;
+    ::close(execError[1]);
+    int error = 0;
+    const bool execFailed = pid_ > 0 && ::read(execError[0], &error, sizeof error) == sizeof error;
+    ::close(execError[0]);
+    if (pid_ < 0) throw std::runtime_error(std::string("fork: ") + std::strerror(forkError));
+    if (execFailed) {
+      ::waitpid(pid_, nullptr, 0);
+      pid_ = -1;
+      throw std::runtime_error("cannot run " + args[0] + ": " + std::strerror(error));
+    }
     const auto deadline = std::chrono::steady_clock::now() + startTimeout;
     while (!gigeDeviceAnswers(100, address)) {
       int status = 0;

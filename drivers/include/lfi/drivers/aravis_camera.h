@@ -9,9 +9,9 @@
 // (arv_camera_gv_auto_packet_size). Aravis types stay inside the .cpp.
 //
 // Device loss: when grab times out, the backend asks the device whether it is
-// still there (for GigE Vision a GVCP register read with 3 × 100 ms timeouts, not
+// still there (for GigE Vision a GVCP register read with 5 × 200 ms timeouts, not
 // Aravis's 5 × 500 ms) and throws Errc::Device if it is not; so grab returns
-// within timeout + 0.3 s. Destroying a camera whose device vanished can take
+// within timeout + 1 s. Destroying a camera whose device vanished can take
 // Aravis's GVCP timeout (about 2.5 s) while it tries to release control.
 
 #include "lfi/drivers/camera.h"
