@@ -317,7 +317,15 @@ class AravisCamera final : public Camera {
     applyPixelFormat(s.pixelFormat);
     applyBinning(s.binning);
     applyRegion(s);
+    // SFNC leaves open how ExposureTime and AcquisitionFrameRate bound each
+    // other; many devices keep the exposure within the frame period and the
+    // rate under 1 / exposure. An exposure past what the current period allows
+    // needs the new rate first; otherwise the exposure goes first, which opens
+    // the higher rates.
+    const bool rateFirst = setsFrameRate(s) && s.exposure_us > exposureBounds().second;
+    if (rateFirst) applyFrameRate(s);
     applyExposureAndGain(s);
+    if (!rateFirst) applyFrameRate(s);
     applyTrigger(s);
     settings_ = s;
     state_ = State::Configured;
@@ -754,21 +762,37 @@ class AravisCamera final : public Camera {
     check(error, name(), fmt::format("arv_camera_set_region({}, {}, {}, {})", s.roiX_px, s.roiY_px, width, height));
   }
 
+  static bool setsFrameRate(const CameraSettings& s) { return s.trigger == TriggerMode::FreeRun && s.frameRate_hz > 0; }
+
+  std::pair<double, double> exposureBounds() const {
+    GError* error = nullptr;
+    double min = 0, max = 0;
+    arv_camera_get_exposure_time_bounds(camera_, &min, &max, &error);
+    check(error, name(), "arv_camera_get_exposure_time_bounds");
+    return {min, max};
+  }
+
   void applyExposureAndGain(const CameraSettings& s) {
     GError* error = nullptr;
     if (arv_camera_is_exposure_auto_available(camera_, nullptr)) {
       arv_camera_set_exposure_time_auto(camera_, ARV_AUTO_OFF, &error);
       check(error, name(), "arv_camera_set_exposure_time_auto(Off)");
     }
-    double min = 0, max = 0;
-    arv_camera_get_exposure_time_bounds(camera_, &min, &max, &error);
-    check(error, name(), "arv_camera_get_exposure_time_bounds");
-    if (s.exposure_us < min || s.exposure_us > max)
-      fail(Errc::InvalidArgument, "camera '{}': exposure_us {} is outside the device's {}..{} us", name(),
-           s.exposure_us, min, max);
+    const auto [shortest, longest] = exposureBounds();
+    if (s.exposure_us < shortest || s.exposure_us > longest) {
+      std::string rate;  // (the bound may be the frame period's)
+      if (arv_camera_is_frame_rate_available(camera_, nullptr)) {
+        const double hz = arv_camera_get_frame_rate(camera_, &error);
+        if (error == nullptr) rate = fmt::format(" at {} Hz", hz);
+        g_clear_error(&error);
+      }
+      fail(Errc::InvalidArgument, "camera '{}': exposure_us {} is outside the device's {}..{} us{}", name(),
+           s.exposure_us, shortest, longest, rate);
+    }
     arv_camera_set_exposure_time(camera_, s.exposure_us, &error);
     check(error, name(), fmt::format("arv_camera_set_exposure_time({} us)", s.exposure_us));
 
+    double min = 0, max = 0;
     if (!arv_camera_is_gain_available(camera_, nullptr)) {
       if (s.gain != 0)
         fail(Errc::InvalidArgument, "camera '{}': gain {} asked, the device has no gain", name(), s.gain);
@@ -786,22 +810,25 @@ class AravisCamera final : public Camera {
     check(error, name(), fmt::format("arv_camera_set_gain({})", s.gain));
   }
 
+  // (Before applyTrigger: arv_camera_set_frame_rate switches triggers off.)
+  void applyFrameRate(const CameraSettings& s) {
+    if (!setsFrameRate(s)) return;
+    if (!arv_camera_is_frame_rate_available(camera_, nullptr))
+      fail(Errc::InvalidArgument, "camera '{}': frameRate_hz {} asked, the device has no frame rate control", name(),
+           s.frameRate_hz);
+    GError* error = nullptr;
+    double min = 0, max = 0;
+    arv_camera_get_frame_rate_bounds(camera_, &min, &max, &error);
+    check(error, name(), "arv_camera_get_frame_rate_bounds");
+    if (s.frameRate_hz < min || s.frameRate_hz > max)
+      fail(Errc::InvalidArgument, "camera '{}': frameRate_hz {} is outside the device's {}..{} Hz", name(),
+           s.frameRate_hz, min, max);
+    arv_camera_set_frame_rate(camera_, s.frameRate_hz, &error);
+    check(error, name(), fmt::format("arv_camera_set_frame_rate({} Hz)", s.frameRate_hz));
+  }
+
   void applyTrigger(const CameraSettings& s) {
     GError* error = nullptr;
-    // arv_camera_set_frame_rate switches triggers off, so it goes first.
-    if (s.trigger == TriggerMode::FreeRun && s.frameRate_hz > 0) {
-      if (!arv_camera_is_frame_rate_available(camera_, nullptr))
-        fail(Errc::InvalidArgument, "camera '{}': frameRate_hz {} asked, the device has no frame rate control", name(),
-             s.frameRate_hz);
-      double min = 0, max = 0;
-      arv_camera_get_frame_rate_bounds(camera_, &min, &max, &error);
-      check(error, name(), "arv_camera_get_frame_rate_bounds");
-      if (s.frameRate_hz < min || s.frameRate_hz > max)
-        fail(Errc::InvalidArgument, "camera '{}': frameRate_hz {} is outside the device's {}..{} Hz", name(),
-             s.frameRate_hz, min, max);
-      arv_camera_set_frame_rate(camera_, s.frameRate_hz, &error);
-      check(error, name(), fmt::format("arv_camera_set_frame_rate({} Hz)", s.frameRate_hz));
-    }
     switch (s.trigger) {
       case TriggerMode::FreeRun:
         arv_camera_clear_triggers(camera_, &error);

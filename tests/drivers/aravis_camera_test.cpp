@@ -194,23 +194,18 @@ TEST_F(AravisCameraTest, OpensByIdAndByAddress) {
   EXPECT_EQ(first->info().deviceId, fake_->id());
 }
 
-// The fake device's own GenICam description with every node named after
-// `feature` renamed, so that the device no longer has that feature but keeps
-// its registers.
-// `extra` nodes go in before the description's end.
-std::filesystem::path genicamWithout(std::initializer_list<std::string> features, const std::filesystem::path& file,
-                                     const std::string& extra = {}) {
+// The fake device's own GenICam description.
+std::string fakeGenicam() {
   ArvFakeCamera* fake = arv_fake_camera_new("genicam");
   std::size_t size = 0;
   const char* xml = arv_fake_camera_get_genicam_xml(fake, &size);
   std::string text(xml, size);
   g_object_unref(fake);
-  for (const std::string& feature : features) {
-    std::size_t replaced = 0;
-    for (std::size_t at = 0; (at = text.find(feature, at)) != std::string::npos; at += feature.size() + 6, ++replaced)
-      text.insert(at, "Hidden");
-    EXPECT_GT(replaced, 0u) << feature << " is not in the fake device's description";
-  }
+  return text;
+}
+
+// Writes a GenICam description for FakeGvCamera::start, with `extra` nodes before its end.
+std::filesystem::path writeGenicam(std::string text, const std::filesystem::path& file, const std::string& extra) {
   const std::size_t end = text.rfind("</RegisterDescription>");
   EXPECT_NE(end, std::string::npos);
   if (end != std::string::npos) text.insert(end, extra);
@@ -221,6 +216,21 @@ std::filesystem::path genicamWithout(std::initializer_list<std::string> features
     std::fclose(out);
   }
   return file;
+}
+
+// The fake device's description with every node named after `feature`
+// renamed, so that the device no longer has that feature but keeps its
+// registers.
+std::filesystem::path genicamWithout(std::initializer_list<std::string> features, const std::filesystem::path& file,
+                                     const std::string& extra = {}) {
+  std::string text = fakeGenicam();
+  for (const std::string& feature : features) {
+    std::size_t replaced = 0;
+    for (std::size_t at = 0; (at = text.find(feature, at)) != std::string::npos; at += feature.size() + 6, ++replaced)
+      text.insert(at, "Hidden");
+    EXPECT_GT(replaced, 0u) << feature << " is not in the fake device's description";
+  }
+  return writeGenicam(text, file, extra);
 }
 
 // SFNC only recommends SensorWidth and SensorHeight: a device without them
@@ -254,6 +264,54 @@ TEST_F(AravisCameraTest, ADeviceWithoutSensorSizeFeaturesOpensWithItsLargestImag
   camera = openFake();
   EXPECT_EQ(camera->info().sensorWidth_px, 1000);
   EXPECT_EQ(camera->info().sensorHeight_px, 700);
+  camera.reset();
+  std::filesystem::remove(xml);
+}
+
+// SFNC leaves open how ExposureTime and AcquisitionFrameRate bound each other.
+// Many devices keep the exposure within the frame period and the frame rate
+// under 1 / exposure: going to a long exposure at a low rate then needs the
+// rate first, and back to a short exposure at a high rate the exposure first.
+// A fake device with both bounds (its description edited) takes both ways.
+TEST_F(AravisCameraTest, AnExposureAndAFrameRateThatBoundEachOtherAreSetInAnOrderThatWorks) {
+  std::string text = fakeGenicam();
+  auto replaceOnce = [&text](const std::string& from, const std::string& to) {
+    const std::size_t at = text.find(from);
+    ASSERT_NE(at, std::string::npos) << from << " is not in the fake device's description";
+    ASSERT_EQ(text.find(from, at + 1), std::string::npos) << from << " is in the fake device's description twice";
+    text.replace(at, from.size(), to);
+  };
+  replaceOnce("<Max>10000000.0</Max>", "<pMax>ExposureTimeAbsMax</pMax>");  // ExposureTimeAbs's, in us
+  replaceOnce("<Min>1000</Min>", "<pMin>AcquisitionFramePeriodMin</pMin>");  // AcquisitionFramePeriod's, in us
+  const std::filesystem::path xml = writeGenicam(
+      text, std::filesystem::temp_directory_path() / ("lfi-genicam-bounds-" + fake_->serial() + ".xml"),
+      "<SwissKnife Name=\"ExposureTimeAbsMax\" NameSpace=\"Custom\">\n"
+      "  <pVariable Name=\"PERIOD\">AcquisitionFramePeriod</pVariable><Formula>PERIOD</Formula>\n"
+      "</SwissKnife>\n"
+      "<IntSwissKnife Name=\"AcquisitionFramePeriodMin\" NameSpace=\"Custom\">\n"
+      "  <pVariable Name=\"EXPOSURE\">ExposureTimeAbsRegister</pVariable>\n"
+      "  <Formula>(EXPOSURE &gt; 1000) ? EXPOSURE : 1000</Formula>\n"
+      "</IntSwissKnife>\n");
+  fake_.reset();
+  fake_ = std::make_unique<FakeGvCamera>("LFIB" + std::to_string(::getpid()));
+  fake_->start(binary_, 0, xml.string());
+  auto camera = openFake();
+  const CameraSettings fast = smallSettings();  // 1 ms at 200 Hz
+  CameraSettings slow = fast;
+  slow.exposure_us = 50'000;  // 50 ms at 10 Hz: past the 5 ms period of 200 Hz
+  slow.frameRate_hz = 10;
+  for (const CameraSettings& s : {fast, slow, fast}) {
+    ASSERT_NO_THROW(camera->configure(s)) << s.exposure_us << " us at " << s.frameRate_hz << " Hz";
+    const CameraSettings got = camera->settings();
+    EXPECT_NEAR(got.exposure_us, s.exposure_us, 1e-6);
+    EXPECT_NEAR(got.frameRate_hz, s.frameRate_hz, 1e-6);
+  }
+  // A pair no order allows is refused by its field and the bound in force.
+  CameraSettings impossible = fast;
+  impossible.exposure_us = 50'000;
+  impossible.frameRate_hz = 100;
+  EXPECT_TRUE(throwsError([&] { camera->configure(impossible); }, Errc::InvalidArgument,
+                          {"exposure_us 50000", "10..10000 us", "100 Hz"}));
   camera.reset();
   std::filesystem::remove(xml);
 }
