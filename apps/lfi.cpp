@@ -119,7 +119,7 @@ fs::path defaultBench() {
   const fs::path self = fs::read_symlink("/proc/self/exe", ec);
   if (!ec)
     if (const fs::path installed = self.parent_path().parent_path() / LFI_INSTALL_DATADIR / "lfi" / relative;
-        fs::exists(installed))
+        fs::exists(installed, ec))
       return installed;
   return fs::path(LFI_DATA_DIR) / relative;
 }
@@ -138,7 +138,7 @@ void serveCamera(const fs::path& sceneFile, lfi::GvCameraServerOptions options, 
   sigaddset(&signals, SIGINT);
   sigaddset(&signals, SIGTERM);
   pthread_sigmask(SIG_BLOCK, &signals, nullptr);
-  lfi::GvCameraServer::requireInterface(options.interfaceAddress);  // (before the renders)
+  lfi::GvCameraServer::validate(options);  // (before the renders: the serial's length, the interface)
   lfi::sim::SimImager imager(sceneFile);
   ProgressBar bar;
   imager.setRenderOptions(threads, quiet ? std::function<void(double)>() : [&bar](double f) { bar("rendering", f); });
@@ -251,12 +251,24 @@ OpenBench openBench(const BenchOptions& o, const char* command) {
 void requireOutputFolder(const fs::path& folder, const char* command) {
   std::error_code made;
   fs::create_directories(folder, made);
-  if (made || !fs::is_directory(folder))
+  if (made || !fs::is_directory(folder, made))
     lfi::fail(lfi::Errc::Io, "{}: cannot make the folder '{}' for --out: {}", command, folder.string(),
               made ? made.message() : std::string("a file of that name is in the way"));
-  if (::access(folder.c_str(), W_OK) != 0)
+  if (::access(folder.c_str(), W_OK | X_OK) != 0)  // (files are made in it: it must be searchable too)
     lfi::fail(lfi::Errc::Io, "{}: cannot write into '{}' for --out: {}", command, folder.string(),
               std::strerror(errno));
+}
+
+// Refuses to start when one of `files` exists, unless `force`; Errc::Io when
+// that cannot be told (a folder on the way that cannot be searched).
+void refuseExisting(const std::vector<fs::path>& files, bool force, const char* command) {
+  if (force) return;
+  for (const fs::path& file : files) {
+    std::error_code ec;
+    if (fs::exists(file, ec))
+      lfi::fail(lfi::Errc::Exists, "'{}' exists; refusing to overwrite it (use --force to replace it)", file.string());
+    if (ec) lfi::fail(lfi::Errc::Io, "{}: cannot look for '{}': {}", command, file.string(), ec.message());
+  }
 }
 
 // --from, --to and --step as the candidate errors; Errc::Config naming them.
@@ -275,16 +287,14 @@ std::vector<double> scanCandidates(double from, double to, double step) {
 void calibrateDistance(const BenchOptions& o, const std::vector<double>& candidates, const std::vector<int>& roiBox,
                        const fs::path& out, bool force, bool quiet) {
   const auto overwrite = force ? lfi::Overwrite::Allow : lfi::Overwrite::Refuse;
-  if (out.filename().empty() || fs::is_directory(out))
+  if (std::error_code ec; out.filename().empty() || fs::is_directory(out, ec))
     lfi::fail(lfi::Errc::InvalidArgument, "calibrate-distance: --out '{}' must name a file, not a folder",
               out.string());
   // A captured reference is kept beside the scan (scan.json: scan.lightfield.exr), as `inspect` keeps its own.
   const fs::path referenceFile = fs::path(out).replace_extension(".lightfield.exr");
   std::vector<fs::path> outputs{out};
   if (!o.capture.empty()) outputs.push_back(referenceFile);
-  for (const fs::path& file : outputs)
-    if (!force && fs::exists(file))
-      lfi::fail(lfi::Errc::Exists, "'{}' exists; refusing to overwrite it (use --force to replace it)", file.string());
+  refuseExisting(outputs, force, "calibrate-distance");
   OpenBench bench = openBench(o, "calibrate-distance");
   // Where the result goes must take it before the scan, not after (and a bad device leaves no folder behind).
   requireOutputFolder(out.parent_path().empty() ? fs::path(".") : out.parent_path(), "calibrate-distance");
@@ -517,10 +527,7 @@ int main(int argc, char** argv) {
           lightField ? std::vector<fs::path>{renderOut / (d.name + "_lightfield.exr")}
                      : std::vector<fs::path>{renderOut / (d.name + ".exr"), renderOut / (d.name + ".png")};
       requireOutputFolder(renderOut, "render");
-      for (const fs::path& out : outputs)
-        if (!renderForce && fs::exists(out))
-          lfi::fail(lfi::Errc::Exists, "'{}' exists; refusing to overwrite it (use --force to replace it)",
-                    out.string());
+      refuseExisting(outputs, renderForce, "render");
       const lfi::sim::Scene scene(std::move(d.objects), d.ambientIor);
       const auto start = std::chrono::steady_clock::now();
       cv::Mat image;
@@ -546,12 +553,10 @@ int main(int argc, char** argv) {
       spdlog::info("{:.0f} samples in {:.3f} s: {:.2f} M samples/s", samples, seconds, samples / seconds / 1e6);
     } else if (*inspect) {
       const auto overwrite = inspectForce ? lfi::Overwrite::Allow : lfi::Overwrite::Refuse;
-      std::vector<std::string> outputs{"inspection.exr", "inspection.png"};
-      if (!inspectBench.capture.empty()) outputs.push_back("lightfield.exr");  // (a given light field is not written)
-      for (const std::string& name : outputs)
-        if (!inspectForce && fs::exists(inspectOut / name))
-          lfi::fail(lfi::Errc::Exists, "'{}' exists; refusing to overwrite it (use --force to replace it)",
-                    (inspectOut / name).string());
+      std::vector<fs::path> outputs{inspectOut / "inspection.exr", inspectOut / "inspection.png"};
+      if (!inspectBench.capture.empty())  // (a given light field is not written)
+        outputs.push_back(inspectOut / "lightfield.exr");
+      refuseExisting(outputs, inspectForce, "inspect");
       OpenBench bench = openBench(inspectBench, "inspect");
       lfi::ControllerOptions options;
       options.frames = inspectBench.frames;
@@ -576,8 +581,10 @@ int main(int argc, char** argv) {
       }
       const auto info = bench.camera->info();
       lfi::writeRadianceExr(inspectOut / "inspection.exr", image,
-                            {0, fmt::format("inspection image (DN, mean of {} frames) from {} {} via {}",
-                                            inspectBench.frames, info.vendor, info.model, inspectBench.camera)},
+                            {0,
+                             fmt::format("inspection image (DN, mean of {} frames) from {} {} via {}",
+                                         inspectBench.frames, info.vendor, info.model, inspectBench.camera),
+                             "camera digital numbers (DN)"},
                             overwrite);
       double maxValue = 0;
       cv::minMaxLoc(image, nullptr, &maxValue);

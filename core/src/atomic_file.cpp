@@ -3,14 +3,20 @@
 #include "lfi/core/error.h"
 
 #include <fcntl.h>
+#include <signal.h>
 #include <sys/stat.h>
 #include <stdio.h>
 #include <unistd.h>
 
+#include <array>
+#include <atomic>
 #include <cerrno>
+#include <climits>
 #include <cstring>
 #include <fstream>
+#include <mutex>
 #include <string>
+#include <utility>
 
 namespace lfi {
 
@@ -55,6 +61,71 @@ void syncFile(const fs::path& file, const fs::path& target) {
     fail(Errc::Io, "cannot write '{}': flushing it to the disk failed: {}", target.string(), std::strerror(err));
 }
 
+// The temporaries being written, for a signal that ends the process: a table
+// the handler reads without allocating or locking.
+constexpr std::size_t kTemporarySlots = 16;
+struct TemporarySlot {
+  std::atomic<bool> used{false};
+  char path[PATH_MAX] = {};
+};
+std::array<TemporarySlot, kTemporarySlots> temporaries;
+constexpr std::array<int, 3> kEndingSignals{SIGINT, SIGTERM, SIGHUP};
+std::mutex handlersMutex;  // (guards the counts and the handlers' installation, never taken in a handler)
+int liveTemporaries = 0;
+std::array<bool, kEndingSignals.size()> installed{};  // our handler is in place of SIG_DFL
+
+void removeTemporariesAndDie(int signal) {
+  for (TemporarySlot& slot : temporaries)
+    if (slot.used.load(std::memory_order_acquire)) ::unlink(slot.path);
+  ::signal(signal, SIG_DFL);  // then the default action: the process ends as it would have
+  ::raise(signal);
+}
+
+// Registers `temporary` for removal by a signal whose action is to end the
+// process (signals with a handler of the program's own are left alone).
+class TemporaryGuard {
+public:
+  explicit TemporaryGuard(const fs::path& temporary) {
+    const std::string& path = temporary.native();
+    std::lock_guard lock(handlersMutex);
+    for (TemporarySlot& s : temporaries) {
+      if (path.size() >= sizeof s.path || s.used.load(std::memory_order_relaxed)) continue;
+      std::memcpy(s.path, path.c_str(), path.size() + 1);
+      s.used.store(true, std::memory_order_release);
+      slot_ = &s;
+      break;
+    }
+    if (slot_ == nullptr || liveTemporaries++ > 0) return;  // (more than kTemporarySlots at once: not removed)
+    for (std::size_t i = 0; i < kEndingSignals.size(); ++i) {
+      struct sigaction current {};
+      ::sigaction(kEndingSignals[i], nullptr, &current);
+      if (current.sa_handler != SIG_DFL) continue;
+      struct sigaction ours {};
+      ours.sa_handler = removeTemporariesAndDie;
+      sigemptyset(&ours.sa_mask);
+      ::sigaction(kEndingSignals[i], &ours, nullptr);
+      installed[i] = true;
+    }
+  }
+  ~TemporaryGuard() {
+    if (slot_ == nullptr) return;
+    std::lock_guard lock(handlersMutex);
+    slot_->used.store(false, std::memory_order_release);
+    if (--liveTemporaries > 0) return;
+    for (std::size_t i = 0; i < kEndingSignals.size(); ++i) {
+      if (!std::exchange(installed[i], false)) continue;
+      struct sigaction current {};
+      ::sigaction(kEndingSignals[i], nullptr, &current);
+      if (current.sa_handler == removeTemporariesAndDie) ::signal(kEndingSignals[i], SIG_DFL);  // (not one set since)
+    }
+  }
+  TemporaryGuard(const TemporaryGuard&) = delete;
+  TemporaryGuard& operator=(const TemporaryGuard&) = delete;
+
+private:
+  TemporarySlot* slot_ = nullptr;
+};
+
 }  // namespace
 
 fs::path resolvedTarget(const fs::path& path) {
@@ -89,6 +160,7 @@ void writeFileAtomically(const fs::path& requested, Overwrite overwrite,
   std::string pattern = (dir / ("." + target.filename().string() + ".tmp-XXXXXX")).string();
   const int fd = ::mkstemp(pattern.data());
   if (fd < 0) fail(Errc::Io, "cannot create a temporary file next to '{}': {}", target.string(), std::strerror(errno));
+  const TemporaryGuard guard(pattern);  // (a signal in the microseconds since mkstemp still leaves it)
   // mkstemp creates 0600, which the writer keeps while it writes; published
   // files get the mode a plain create would give them, or keep the mode of
   // the file they replace (even a read-only one: --force replaces it).

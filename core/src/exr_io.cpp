@@ -83,7 +83,10 @@ void limitOpenExrImageSize() {
 
 // What loadExr() refuses is refused here too, before anything is written: a
 // file that could not be read back must not replace a good one.
-void writeExr(const fs::path& path, const cv::Mat& image, Imf::Header header, Overwrite overwrite) {
+constexpr const char* kUnitsPrefix = "lengths mm, angles rad, pixels ";
+
+void writeExr(const fs::path& path, const cv::Mat& image, Imf::Header header, Overwrite overwrite,
+              const std::string& pixelUnit = "linear relative radiance") {
   limitOpenExrImageSize();  // (the read-back check opens the file too)
   requireImageType(image, CV_32FC1, "EXR image '" + path.string() + "'");
   if (image.cols > kMaxExrSide || image.rows > kMaxExrSide || static_cast<long>(image.total()) > kMaxExrPixels)
@@ -96,7 +99,7 @@ void writeExr(const fs::path& path, const cv::Mat& image, Imf::Header header, Ov
   header.compression() = Imf::ZIP_COMPRESSION;
   header.channels().insert("Y", Imf::Channel(Imf::FLOAT));
   header.insert(kVersion, Imf::IntAttribute(kExrFormatVersion));
-  header.insert(kUnits, Imf::StringAttribute("lengths mm, angles rad, pixels linear relative radiance"));
+  header.insert(kUnits, Imf::StringAttribute(kUnitsPrefix + pixelUnit));
   header.insert(kChecksum, Imf::StringAttribute(checksumText(fileChecksum(canonicalAttributes(path, header), pixels))));
   writeFileAtomically(path, overwrite, [&](const fs::path& temporary) {
     try {
@@ -308,7 +311,9 @@ void writeRadianceExr(const fs::path& path, const cv::Mat& image, const Radiance
   header.insert(kObjectPixel, Imf::DoubleAttribute(info.objectPixel_mm));
   header.insert(kFrame, Imf::StringAttribute("camera image: row 0 at world +y, columns along world +x"));
   header.insert(kDescription, Imf::StringAttribute(info.description));
-  writeExr(path, image, std::move(header), overwrite);
+  if (info.pixelUnit.empty())
+    fail(Errc::InvalidArgument, "cannot write '{}': the pixels' unit is empty", path.string());
+  writeExr(path, image, std::move(header), overwrite, info.pixelUnit);
 }
 
 cv::Mat readRadianceExr(const fs::path& path, RadianceImageInfo* info) {
@@ -321,6 +326,9 @@ cv::Mat readRadianceExr(const fs::path& path, RadianceImageInfo* info) {
     info->objectPixel_mm = objectPixel;
     const auto* d = exr.header.findTypedAttribute<Imf::StringAttribute>(kDescription);
     info->description = d ? d->value() : std::string();
+    const auto* u = exr.header.findTypedAttribute<Imf::StringAttribute>(kUnits);
+    const std::string prefix = kUnitsPrefix;
+    info->pixelUnit = u && u->value().starts_with(prefix) ? u->value().substr(prefix.size()) : std::string();
   }
   return exr.pixels;
 }

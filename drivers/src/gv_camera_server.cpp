@@ -122,7 +122,18 @@ struct GvCameraServer::Impl {
   std::string deviceId() const { return options.vendor + "-" + options.model + "-" + options.serial; }
 };
 
-void GvCameraServer::requireInterface(const std::string& interfaceAddress) {
+namespace {
+
+void requireIdentity(const GvCameraServerOptions& options) {
+  if (options.serial.empty() || options.serial.size() >= 16)
+    fail(Errc::InvalidArgument, "served camera: serial '{}' must have 1..15 characters", options.serial);
+  if (options.vendor.empty() || options.vendor.size() >= kNameSize || options.model.empty() ||
+      options.model.size() >= kNameSize)
+    fail(Errc::InvalidArgument, "served camera: vendor '{}' and model '{}' must have 1..31 characters",
+         options.vendor, options.model);
+}
+
+void requireInterface(const std::string& interfaceAddress) {
   ifaddrs* list = nullptr;
   if (getifaddrs(&list) != 0)
     fail(Errc::Device, "served camera: the host's network interfaces cannot be listed: {}", std::strerror(errno));
@@ -150,14 +161,16 @@ void GvCameraServer::requireInterface(const std::string& interfaceAddress) {
        usable.empty() ? "none" : usable);
 }
 
+}  // namespace
+
+void GvCameraServer::validate(const GvCameraServerOptions& options) {
+  requireIdentity(options);
+  requireInterface(options.interfaceAddress);
+}
+
 GvCameraServer::GvCameraServer(const GvCameraServerOptions& options, ServedFrameFiller filler)
     : impl_(std::make_unique<Impl>()) {
-  if (options.serial.empty() || options.serial.size() >= 16)
-    fail(Errc::InvalidArgument, "served camera: serial '{}' must have 1..15 characters", options.serial);
-  if (options.vendor.empty() || options.vendor.size() >= kNameSize || options.model.empty() ||
-      options.model.size() >= kNameSize)
-    fail(Errc::InvalidArgument, "served camera: vendor '{}' and model '{}' must have 1..31 characters",
-         options.vendor, options.model);
+  requireIdentity(options);
   if (options.sensorWidth_px < 1 || options.sensorHeight_px < 1)
     fail(Errc::InvalidArgument, "served camera: sensor {} x {} px", options.sensorWidth_px, options.sensorHeight_px);
   if (!filler) fail(Errc::InvalidArgument, "served camera: no frame filler");

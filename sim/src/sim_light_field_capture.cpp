@@ -19,9 +19,12 @@ public:
     if (!(settings_.beamHalfAngle_rad > 0 && settings_.beamHalfAngle_rad < 1.5))
       fail(Errc::Config, "sim light field capture: beam_half_angle_rad = {} is outside (0, 1.5)",
            settings_.beamHalfAngle_rad);
-    if (!(settings_.beamDistance_mm > 0))
-      fail(Errc::Config, "sim light field capture: beam_distance_mm = {} must be > 0", settings_.beamDistance_mm);
-    if (settings_.samplesPerPixel < 1) fail(Errc::Config, "sim light field capture: spp must be >= 1");
+    // (As a scene file's positions and samples per pixel: a beam at infinity would light nothing.)
+    if (!(settings_.beamDistance_mm > 0 && settings_.beamDistance_mm <= 1e9))
+      fail(Errc::Config, "sim light field capture: beam_distance_mm = {} is outside (0, 1e9]",
+           settings_.beamDistance_mm);
+    if (settings_.samplesPerPixel < 1 || settings_.samplesPerPixel > (1 << 20))
+      fail(Errc::Config, "sim light field capture: spp = {} is outside 1 .. 2^20", settings_.samplesPerPixel);
     // (0 means "not set" in a light field file; here it is where the sensor is.)
     if (!(settings_.geometry.distance_mm > 0))
       fail(Errc::Config, "sim light field capture: distance_mm = {} must be > 0: the sensor's plane lies Δ below the "

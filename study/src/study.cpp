@@ -407,8 +407,9 @@ Evaluation evaluate(const Bench& bench, const Illumination& light, const std::ve
     if (imagesDir) {
       const std::string stem = spec.name + "_" + light.setup;
       writeRadianceExr(*imagesDir / (stem + ".exr"), frame,
-                       {camera.objectPixel_mm(), fmt::format("camera frame (DN) of scene {} under {}", spec.name,
-                                                             light.setup)},
+                       {camera.objectPixel_mm(),
+                        fmt::format("camera frame (DN) of scene {} under {}", spec.name, light.setup),
+                        "camera digital numbers (DN)"},
                        overwrite);
       cv::Mat png8;
       frame.convertTo(png8, CV_8U, 255.0 / sensor.maxDigitalNumber());
@@ -510,10 +511,13 @@ nlohmann::ordered_json runStudy(const Bench& bench, const fs::path& outDir, cons
       options.sweep ? *options.sweep : (options.quality == Quality::Quick ? std::vector<SweepPoint>{} : defaultSweep()));
   // Any of the study's files (an interrupted run leaves some without study.json) stops it before the work.
   if (!options.overwrite)
-    for (const fs::path& file : {outDir / "study.json", outDir / "report.html", outDir / "lightfield.exr"})
-      if (fs::exists(file))
+    for (const fs::path& file : {outDir / "study.json", outDir / "report.html", outDir / "lightfield.exr"}) {
+      std::error_code ec;
+      if (fs::exists(file, ec))
         fail(Errc::Exists, "'{}' already holds a study ('{}' is there); use --force to replace it", outDir.string(),
              file.filename().string());
+      if (ec) fail(Errc::Io, "study: cannot look for '{}' in the output folder: {}", file.string(), ec.message());
+    }
   if (std::error_code ec; !options.overwrite && fs::is_directory(outDir / "images", ec) &&
                           !fs::is_empty(outDir / "images", ec))
     fail(Errc::Exists, "'{}' already holds a study's images; use --force to replace them", outDir.string());
@@ -560,6 +564,9 @@ nlohmann::ordered_json runStudy(const Bench& bench, const fs::path& outDir, cons
   writeLightFieldExr(outDir / "lightfield.exr", *lightField, overwrite);
 
   nlohmann::ordered_json study;
+  study["format"] = "lfi-study";
+  study["version"] = 1;
+  study["units"] = "lengths mm, angles rad; images and noise in the camera's digital numbers (DN)";
   study["setups"] = kSetups;
   study["quality"] = options.quality == Quality::Quick  ? "quick"
                      : options.quality == Quality::High ? "high"
@@ -609,7 +616,9 @@ nlohmann::ordered_json runStudy(const Bench& bench, const fs::path& outDir, cons
   auto writeResults = [&](Overwrite mode, bool complete) {
     study["complete"] = complete;
     writeFileAtomically(outDir / "report.html", mode, htmlReport(study));
-    writeFileAtomically(outDir / "study.json", mode, study.dump(2) + "\n");
+    // (The bench's path need not be UTF-8: replace what is not.)
+    writeFileAtomically(outDir / "study.json", mode,
+                        study.dump(2, ' ', false, nlohmann::ordered_json::error_handler_t::replace) + "\n");
   };
   writeResults(overwrite, sweep.empty());
   if (!sweep.empty()) {

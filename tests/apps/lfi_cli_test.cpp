@@ -163,6 +163,12 @@ TEST_F(LfiCli, BadArgumentsNameTheOptionAndTheValue) {
       << noInterface.output;
   EXPECT_NE(noInterface.output.find("usable here: "), std::string::npos) << noInterface.output;  // what it has
   EXPECT_EQ(noInterface.output.find("rendering"), std::string::npos) << "rendered first: " << noInterface.output;
+  // So is a serial GigE Vision cannot hold (16 bytes with its terminating zero).
+  const Result longSerial = lfi("serve-camera " + quoted(scene) + " --serial LFI-0123456789AB");
+  EXPECT_EQ(longSerial.status, 1) << longSerial.output;
+  EXPECT_NE(longSerial.output.find("serial 'LFI-0123456789AB' must have 1..15 characters"), std::string::npos)
+      << longSerial.output;
+  EXPECT_EQ(longSerial.output.find("rendering"), std::string::npos) << "rendered first: " << longSerial.output;
 }
 
 TEST_F(LfiCli, BadSceneFilesAreNamedWithTheLineOrKey) {

@@ -304,6 +304,13 @@ TEST_F(ControllerTest, ErrorsNameTheProblem) {
   EXPECT_TRUE(throwsError([&] { openLightFieldCapture(uri("intact.toml") + "?beam_distance_mm=2.4"); },
                           Errc::Config, {"'lens'", "beam_distance_mm", "2.4"}));
   EXPECT_NO_THROW(openLightFieldCapture(uri("intact.toml") + "?distance_mm=2.6&beam_distance_mm=2.6"));
+  // Numbers that parse but mean nothing here: a beam at infinity lights nothing; more samples than a scene file takes.
+  for (const char* bad : {"beam_distance_mm=inf", "beam_distance_mm=1e300", "beam_distance_mm=nan"})
+    EXPECT_TRUE(throwsError([&] { openLightFieldCapture(uri("intact.toml") + "?" + bad); }, Errc::Config,
+                            {"beam_distance_mm", "(0, 1e9]"}))
+        << bad;
+  EXPECT_TRUE(throwsError([&] { openLightFieldCapture(uri("intact.toml") + "?spp=2000000"); }, Errc::Config,
+                          {"spp = 2000000", "2^20"}));
 }
 
 }  // namespace

@@ -7,10 +7,12 @@
 
 #include <gtest/gtest.h>
 #include <sys/stat.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <atomic>
+#include <csignal>
 #include <filesystem>
 #include <fstream>
 #include <functional>
@@ -99,6 +101,45 @@ TEST_F(AtomicFile, InterruptedWriteOfNewFileLeavesNothing) {
       },
       Errc::Cancelled, {"stopped by the user"}));
   EXPECT_EQ(entries(), Names{});
+}
+
+// Ctrl-C, or a SIGTERM from a job's time limit, while a file is being written
+// ends the process as it always would, but leaves no hidden temporary behind;
+// a signal the program handles itself is left to it, and the default action
+// is back once nothing is being written.
+TEST_F(AtomicFile, ASignalThatEndsTheProcessMidWriteLeavesNoTemporary) {
+  for (const int signal : {SIGINT, SIGTERM, SIGHUP}) {
+    const fs::path target = dir_ / "lightfield.exr";
+    const pid_t child = ::fork();
+    ASSERT_GE(child, 0);
+    if (child == 0) {  // (a single-threaded test process: the child may use the library)
+      std::signal(signal, SIG_DFL);  // (a shell may have started the tests with SIGINT ignored)
+      lfi::writeFileAtomically(target, Overwrite::Refuse, [signal](const fs::path& temporary) {
+        std::ofstream(temporary, std::ios::binary) << "half a light field";
+        ::raise(signal);
+      });
+      ::_exit(0);  // not reached: the signal ended the child
+    }
+    int status = 0;
+    ASSERT_EQ(::waitpid(child, &status, 0), child);
+    EXPECT_TRUE(WIFSIGNALED(status) && WTERMSIG(status) == signal) << "signal " << signal << ", status " << status;
+    EXPECT_EQ(entries(), Names{}) << "signal " << signal;
+  }
+  // After a write the disposition is the default again; a program's own handler is left in place.
+  const auto previous = std::signal(SIGTERM, SIG_DFL);
+  lfi::writeFileAtomically(dir_ / "plain.txt", Overwrite::Refuse, std::string_view("text"));
+  struct sigaction action {};
+  ::sigaction(SIGTERM, nullptr, &action);
+  EXPECT_EQ(action.sa_handler, SIG_DFL);
+  static std::atomic<int> handled{0};
+  std::signal(SIGTERM, [](int) { handled.fetch_add(1); });
+  lfi::writeFileAtomically(dir_ / "kept.txt", Overwrite::Refuse, [](const fs::path& temporary) {
+    std::ofstream(temporary) << "written";
+    ::raise(SIGTERM);  // the program's handler takes it, and the write goes on
+  });
+  std::signal(SIGTERM, previous);
+  EXPECT_EQ(handled.load(), 1);
+  EXPECT_EQ(readAll(dir_ / "kept.txt"), "written");
 }
 
 TEST_F(AtomicFile, RefuseKeepsExistingTarget) {

@@ -229,8 +229,19 @@ TEST_F(ExrIo, RadianceRoundTripKeepsPixelsAndInfo) {
   EXPECT_TRUE(bitIdentical(loaded, image));
   EXPECT_EQ(loadedInfo.objectPixel_mm, info.objectPixel_mm);
   EXPECT_EQ(loadedInfo.description, info.description);
+  EXPECT_EQ(loadedInfo.pixelUnit, "linear relative radiance");  // the default
   // The info is optional.
   EXPECT_TRUE(bitIdentical(lfi::readRadianceExr(file("r.exr")), image));
+  // A camera frame says its pixels are digital numbers, in lfi.units.
+  info.pixelUnit = "camera digital numbers (DN)";
+  lfi::writeRadianceExr(file("dn.exr"), image, info);
+  lfi::readRadianceExr(file("dn.exr"), &loadedInfo);
+  EXPECT_EQ(loadedInfo.pixelUnit, info.pixelUnit);
+  EXPECT_EQ(Imf::InputFile(file("dn.exr").c_str()).header().typedAttribute<Imf::StringAttribute>("lfi.units").value(),
+            "lengths mm, angles rad, pixels camera digital numbers (DN)");
+  info.pixelUnit.clear();
+  EXPECT_TRUE(throwsError([&] { lfi::writeRadianceExr(file("none.exr"), image, info); }, Errc::InvalidArgument,
+                          {"none.exr", "unit"}));
 }
 
 TEST_F(ExrIo, KindsAreNotInterchangeable) {

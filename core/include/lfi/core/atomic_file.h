@@ -5,7 +5,9 @@
 // in one step; a failure at any point leaves the old file untouched and removes
 // the temporary. Without Overwrite::Allow an existing target is never replaced
 // (checked atomically by the rename itself, not by a racy stat). A target that
-// is a symbolic link is written where the link points; the link stays.
+// is a symbolic link is written where the link points; the link stays. A
+// SIGINT, SIGTERM or SIGHUP that would end the process while a temporary is
+// being written (its default action) removes the temporary first.
 
 #include <filesystem>
 #include <functional>

@@ -37,6 +37,7 @@ LightField readLightFieldExr(const std::filesystem::path& path);
 struct RadianceImageInfo {
   double objectPixel_mm = 0;
   std::string description;
+  std::string pixelUnit = "linear relative radiance";  // lfi.units: "lengths mm, angles rad, pixels <pixelUnit>"
 };
 
 void writeRadianceExr(const std::filesystem::path& path, const cv::Mat& image, const RadianceImageInfo& info,

@@ -67,12 +67,14 @@ class GvCameraServer {
   // "<vendor>-<model>-<serial>", what Aravis's discovery reports.
   std::string deviceId() const;
 
-  // Throws Errc::InvalidArgument, listing the interfaces Aravis could serve
-  // on (up, not point-to-point, with an IPv4 address), when
-  // `interfaceAddress` (GvCameraServerOptions) names none of them by name or
-  // address: for a check before slow work that precedes serving (the
-  // constructor's own failure cannot tell it from a taken port).
-  static void requireInterface(const std::string& interfaceAddress);
+  // The constructor's checks of `options` that need no frame filler nor
+  // sensor size, for a check before slow work that precedes serving: the
+  // identity's lengths, and the interface. Throws Errc::InvalidArgument; for
+  // an interface, listing those Aravis could serve on (up, not
+  // point-to-point, with an IPv4 address) when `interfaceAddress` names none
+  // of them by name or address (the constructor's own failure cannot tell it
+  // from a taken port).
+  static void validate(const GvCameraServerOptions& options);
 
  private:
   struct Impl;
