@@ -163,7 +163,11 @@ void serveCamera(const fs::path& sceneFile, lfi::GvCameraServerOptions options, 
     s.roiHeight_px = request.height_px;
     s = imager.resolve(s, device);
     imager.capture(s, request.frameId, frame);
-    frame.copyTo(image);  // same size and type: written into the outgoing buffer
+    // Into the outgoing buffer: copyTo would reallocate `image` for another size or type, and a black frame go out.
+    if (frame.size() != image.size() || frame.type() != image.type())
+      lfi::fail(lfi::Errc::Device, "the frame made is {} x {} (type {}), the buffer {} x {} (type {})", frame.cols,
+                frame.rows, frame.type(), image.cols, image.rows, image.type());
+    frame.copyTo(image);
   });
   fmt::print("{}\n", server.deviceId());
   std::fflush(stdout);
@@ -391,9 +395,9 @@ int main(int argc, char** argv) {
   app.set_version_flag("--version", LFI_VERSION);
   app.require_subcommand(1);
   int verbosity = 0;
-  app.add_flag("-v,--verbose", verbosity, "More log output (repeat for more)");
+  auto* verbose = app.add_flag("-v,--verbose", verbosity, "More log output (repeat for more)");
   bool quiet = false;
-  app.add_flag("-q,--quiet", quiet, "Only errors on stderr");
+  app.add_flag("-q,--quiet", quiet, "Only errors on stderr")->excludes(verbose);
 
   // lfi study
   auto* study = app.add_subcommand("study", "Run the reference study on the simulated bench");

@@ -139,6 +139,10 @@ TEST_F(LfiCli, BadArgumentsNameTheOptionAndTheValue) {
     EXPECT_NE(run.output.find(message), std::string::npos) << arguments << ": " << run.output;
   }
   EXPECT_FALSE(fs::exists(out / "small.exr"));
+  // Quiet and verbose at once is a contradiction, not quiet winning silently (CLI11's ExcludesError: 108).
+  const Result both = lfi("-q -v render " + quoted(scene) + " --out " + quoted(out));
+  EXPECT_EQ(both.status, 108) << both.output;
+  EXPECT_NE(both.output.find("excludes"), std::string::npos) << both.output;
   // Decimal, whatever CLI11 would make of a leading zero (octal): --spp 010 renders 10 samples, as 10 does.
   const Result ten = lfi("render " + quoted(scene) + " --out " + quoted(dir_ / "ten") + " --spp 010 --seed 3");
   const Result plain = lfi("render " + quoted(scene) + " --out " + quoted(dir_ / "plain") + " --spp 10 --seed 3");

@@ -2,6 +2,7 @@
 // expectations that physics (not today's numbers) guarantees.
 
 #include "lfi/core/error.h"
+#include "lfi/core/exr_io.h"
 #include "lfi/study/study.h"
 
 #include "lfi_test_support.h"
@@ -79,6 +80,13 @@ void checkOutputs(const nlohmann::ordered_json& r, const fs::path& dir) {
     }
   }
   EXPECT_TRUE(fs::exists(dir / "lightfield.exr"));
+  // The file says what it is and its units; its camera frames say theirs.
+  EXPECT_EQ(r.value("format", ""), "lfi-study");
+  EXPECT_EQ(r.value("version", 0), 1);
+  EXPECT_NE(r.value("units", "").find("lengths mm, angles rad"), std::string::npos);
+  lfi::RadianceImageInfo frame;
+  lfi::readRadianceExr(dir / "images" / "absorbing_inverse_schlieren.exr", &frame);
+  EXPECT_EQ(frame.pixelUnit, "camera digital numbers (DN)");
   const std::string html = readText(dir / "report.html");
   EXPECT_NE(html.find("images/absorbing_inverse_schlieren.png"), std::string::npos);
   EXPECT_EQ(nlohmann::ordered_json::parse(readText(dir / "study.json")), r);
