@@ -12,6 +12,7 @@
 #include <algorithm>
 #include <charconv>
 #include <cstring>
+#include <optional>
 #include <vector>
 
 namespace lfi {
@@ -111,8 +112,13 @@ public:
         options_.transferSize_bytes % 512 != 0)
       fail(Errc::InvalidArgument, "{}: transferSize_bytes = {} is not a multiple of 512 in 512..16 MiB", name_,
            options_.transferSize_bytes);
-    if (options_.controlTimeout.count() < 1 || options_.transferTimeout.count() < 1 || options_.stallRetries < 0)
-      fail(Errc::InvalidArgument, "{}: timeouts must be >= 1 ms and stallRetries >= 0", name_);
+    // (libusb takes an unsigned ms count, 0 = forever; the URI's timeout_ms has the same bound.)
+    constexpr std::chrono::milliseconds kLongest{600'000};
+    if (options_.controlTimeout.count() < 1 || options_.transferTimeout.count() < 1 ||
+        options_.controlTimeout > kLongest || options_.transferTimeout > kLongest || options_.stallRetries < 0)
+      fail(Errc::InvalidArgument, "{}: timeouts must be 1 .. 600000 ms and stallRetries >= 0 (control {} ms, "
+           "transfer {} ms, stallRetries {})", name_, options_.controlTimeout.count(),
+           options_.transferTimeout.count(), options_.stallRetries);
   }
   ~UsbDisplay() override { close(); }
 
@@ -201,6 +207,7 @@ public:
     resync_ = rc < 0;  // unanswered or failed: the device may still hold the frame
     requireOk(rc, proto::Request::Present);
     state_ = State::Showing;
+    lastPresented_ = sequence;
     return {PresentStatus::Presented, sequence, {}};
   }
 
@@ -224,6 +231,13 @@ public:
     requireDisplayState(state_, {State::Open, State::Showing}, "status", name_);
     const proto::StatusBlock s =
         proto::decodeStatus(controlIn(proto::Request::GetStatus, 0, proto::kStatusSize), name_);
+    // What the device says must agree with what this host did and with the device's own description.
+    if (s.brightness < info_.brightnessMin || s.brightness > info_.brightnessMax)
+      fail(Errc::Device, "{}: GET_STATUS says brightness {}, outside the device's own {}..{}", name_, s.brightness,
+           info_.brightnessMin, info_.brightnessMax);
+    if (state_ == State::Showing && (s.showing != 1 || s.presentedSequence != lastPresented_))
+      fail(Errc::Device, "{}: GET_STATUS says {} frame {}; the last frame this host presented is {}", name_,
+           s.showing == 1 ? "it shows" : "it is blank, after", s.presentedSequence, lastPresented_);
     DisplayStatus out;
     out.showing = s.showing == 1;
     out.presentedSequence = s.presentedSequence;
@@ -242,7 +256,7 @@ private:
     if (count < 0) fail(Errc::Device, "{}: cannot list USB devices: {}", name_, libusb_error_name(int(count)));
     std::vector<std::string> seen;
     std::vector<std::pair<libusb_device_handle*, std::string>> matches;
-    int lastOpenError = 0, lastSerialError = 0;
+    int lastOpenError = 0, lastSerialError = 0, unopened = 0;
     for (ssize_t i = 0; i < count; ++i) {
       libusb_device_descriptor desc{};
       if (libusb_get_device_descriptor(list[i], &desc) != 0) continue;
@@ -251,6 +265,7 @@ private:
       libusb_device_handle* handle = nullptr;
       if (const int rc = libusb_open(list[i], &handle); rc != 0) {
         lastOpenError = rc;
+        ++unopened;
         continue;
       }
       int unreadable = 0;
@@ -275,6 +290,15 @@ private:
              selector_.vendorId, selector_.productId, libusb_error_name(lastSerialError));
       fail(Errc::NotFound, "{}: no such USB device (present: {})", name_,
            seen.empty() ? std::string("none") : fmt::format("{}", fmt::join(seen, ", ")));
+    }
+    // Without a serial, a second display that cannot be opened still makes the choice ambiguous: opening the
+    // other one silently could drive the wrong panel.
+    if (matches.size() == 1 && unopened > 0 && selector_.serial.empty()) {
+      libusb_close(matches.front().first);
+      fail(Errc::Config, "{}: {} displays match, {} of them cannot be opened ({}); name one by serial "
+           "(usb:{:04x}:{:04x}/<serial>; this one's: {})", name_, unopened + 1, unopened,
+           libusb_error_name(lastOpenError), selector_.vendorId, selector_.productId,
+           serialInUri(matches.front().second));
     }
     if (matches.size() > 1) {
       std::vector<std::string> serials;
@@ -433,21 +457,28 @@ private:
     return buffer;
   }
 
-  std::string lastErrorText() {
+  // The device's last error; with `rejected`, the frame it must be about (a
+  // device that gives none, or one about another frame, is said to).
+  std::string lastErrorText(std::optional<std::uint32_t> rejected = std::nullopt) {
     const std::vector<std::uint8_t> reply =
         controlIn(proto::Request::GetLastError, 0, 8 + proto::kMaxErrorText);
     if (reply.size() < 8)
       fail(Errc::Device, "{}: GET_LAST_ERROR returned {} bytes, expected at least 8", name_, reply.size());
     const auto code = static_cast<proto::DeviceError>(proto::getU32(reply.data()));
+    const std::uint32_t frame = proto::getU32(reply.data() + 4);
     std::string text;
     for (std::size_t i = 8; i < reply.size(); ++i)
       text.push_back(reply[i] >= 0x20 && reply[i] <= 0x7e ? static_cast<char>(reply[i]) : '?');
-    return fmt::format("{} (code {}, frame {}){}{}", proto::toString(code), static_cast<unsigned>(code),
-                       proto::getU32(reply.data() + 4), text.empty() ? "" : ": ", text);
+    if (rejected && (code == proto::DeviceError::None || (frame & 0xffff) != (*rejected & 0xffff)))
+      return fmt::format("the device gives no reason for it (its last error: {}, code {}, concerns frame {})",
+                         proto::toString(code), static_cast<unsigned>(code), frame);
+    return fmt::format("{} (code {}, frame {}){}{}", proto::toString(code), static_cast<unsigned>(code), frame,
+                       text.empty() ? "" : ": ", text);
   }
 
   std::string rejection(std::uint32_t sequence) {
-    return fmt::format("{}: PRESENT of frame {} refused by the device: {}", name_, sequence, lastErrorText());
+    const std::string reason = lastErrorText(sequence);
+    return fmt::format("{}: PRESENT of frame {} refused by the device: {}", name_, sequence, reason);
   }
 
   [[noreturn]] void vanished(const std::string& request) {
@@ -483,7 +514,7 @@ private:
     bool outOfMemory = false;  // reported once the transfers in flight are drained, not while libusb holds `chunks`
     std::size_t next = 0, inFlight = 0;
     // A guard above libusb's own per-transfer timeouts, in case a cancellation never completes.
-    const auto deadline =
+    auto deadline =
         Clock::now() + options_.transferTimeout * static_cast<int>(count + options_.transfersInFlight + 1) +
         std::chrono::seconds(2);
     auto record = [&](BulkOutcome o) {
@@ -532,7 +563,9 @@ private:
           case LIBUSB_TRANSFER_STALL: record(BulkOutcome::Stall); break;
           case LIBUSB_TRANSFER_TIMED_OUT: record(BulkOutcome::Timeout); break;
           case LIBUSB_TRANSFER_NO_DEVICE: record(BulkOutcome::NoDevice); break;
-          case LIBUSB_TRANSFER_CANCELLED: break;  // we cancelled it after another one failed
+          case LIBUSB_TRANSFER_CANCELLED:  // we cancelled it after another one failed, or the system did
+            if (!c.cancelled) record(BulkOutcome::Error);  // (a hole in the frame: never PRESENT it)
+            break;
           default: record(BulkOutcome::Error); break;
         }
       }
@@ -545,6 +578,13 @@ private:
         }
       }
       if (Clock::now() > deadline) {
+        // The frame was not all sent in time (the host stalled, say): never PRESENT it. Transfers in flight are
+        // cancelled above on the next turn and get a last second to come back.
+        if (outcome == BulkOutcome::Ok) {
+          record(BulkOutcome::Timeout);
+          deadline = Clock::now() + std::chrono::seconds(1);
+          continue;
+        }
         if (inFlight > 0) {
           // Transfers that neither complete nor cancel: libusb still owns them, so they
           // (and the context) must not be freed; give the device up.
@@ -562,6 +602,9 @@ private:
     }
     for (Chunk& c : chunks)
       if (c.transfer) libusb_free_transfer(c.transfer);
+    if (outcome == BulkOutcome::Ok && (next != count || sent != frame_.size()))  // (cannot happen: said, not PRESENTed)
+      fail(Errc::Device, "{}: {} of the frame's {} bytes sent, reported complete (a defect in lfi)", name_, sent,
+           frame_.size());
     if (outOfMemory) {
       resync_ = true;  // the device may hold the transfers sent before
       fail(Errc::Device, "{}: libusb_alloc_transfer failed (out of memory)", name_);
@@ -582,6 +625,7 @@ private:
   DisplayInfo info_;
   State state_ = State::Closed;
   std::uint32_t sequence_ = 0;
+  std::uint32_t lastPresented_ = 0;  // the sequence of the last frame presented (State::Showing)
   std::uint64_t stallsCleared_ = 0;
   bool resync_ = false;  // a frame failed or timed out: clear the endpoint's halt before the next one
   std::string clearHaltError_;  // why the last CLEAR_HALT failed (libusb's error name)

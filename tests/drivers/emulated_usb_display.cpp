@@ -82,7 +82,9 @@ struct EmulatedUsbDisplay::Impl {
   bool halted = false;
   // faults
   bool stallNext = false, stallAll = false, corruptNext = false, unplugNext = false, silent = false;
-  bool absurdInfo = false, badCalibrationCrc = false;
+  bool absurdInfo = false, badCalibrationCrc = false, forgetErrors = false;
+  int statusBrightness = -1;              // GET_STATUS's brightness, -1: the true one
+  std::int64_t statusPresentedSequence = -1;  // and its presented sequence
   std::size_t truncateNext = 0;
   int silentAfterUrbs = -1;  // bulk URBs to take before turning silent; -1: never
   bool silentAtPresent = false;
@@ -512,17 +514,19 @@ struct EmulatedUsbDisplay::Impl {
         case proto::Request::GetStatus: {
           proto::StatusBlock s;
           s.showing = state.showing ? 1 : 0;
-          s.presentedSequence = state.presentedSequence;
+          s.presentedSequence = statusPresentedSequence >= 0 ? static_cast<std::uint32_t>(statusPresentedSequence)
+                                                             : state.presentedSequence;
           s.framesPresented = state.framesPresented;
           s.framesRejected = state.framesRejected;
-          s.brightness = static_cast<std::uint16_t>(state.brightness);
+          s.brightness = static_cast<std::uint16_t>(statusBrightness >= 0 ? statusBrightness : state.brightness);
           s.lastError = static_cast<std::uint32_t>(state.lastError);
           s.lastErrorSequence = lastErrorSequence;
           reply = proto::encodeStatus(s);
           break;
         }
         case proto::Request::GetLastError:
-          reply = proto::encodeLastError(state.lastError, lastErrorSequence, lastErrorText);
+          reply = forgetErrors ? proto::encodeLastError(proto::DeviceError::None, 0, "")
+                               : proto::encodeLastError(state.lastError, lastErrorSequence, lastErrorText);
           break;
         default: stall = true;
       }
@@ -709,6 +713,15 @@ void EmulatedUsbDisplay::setAbsurdDeviceInfo(bool on) {
 void EmulatedUsbDisplay::setBadCalibrationCrc(bool on) {
   std::lock_guard lock(impl_->mutex);
   impl_->badCalibrationCrc = on;
+}
+void EmulatedUsbDisplay::lieInStatus(int brightness, std::int64_t presentedSequence) {
+  std::lock_guard lock(impl_->mutex);
+  impl_->statusBrightness = brightness;
+  impl_->statusPresentedSequence = presentedSequence;
+}
+void EmulatedUsbDisplay::forgetErrors(bool on) {
+  std::lock_guard lock(impl_->mutex);
+  impl_->forgetErrors = on;
 }
 
 EmulatedDisplayState EmulatedUsbDisplay::state() const {

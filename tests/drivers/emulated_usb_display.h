@@ -83,6 +83,8 @@ public:
   void failClearHalt(int errnoValue);     // CLEAR_HALT fails with this errno until set to 0 (the frame stays held)
   void setAbsurdDeviceInfo(bool on);      // GET_DEVICE_INFO announces a 4 GiB calibration blob
   void setBadCalibrationCrc(bool on);     // the calibration blob's CRC does not match
+  void lieInStatus(int brightness, std::int64_t presentedSequence);  // GET_STATUS says these (-1: the truth)
+  void forgetErrors(bool on);             // GET_LAST_ERROR says "no error" whatever happened
 
   const EmulatedDisplayConfig& config() const { return config_; }
   EmulatedDisplayState state() const;

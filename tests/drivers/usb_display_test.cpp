@@ -358,6 +358,34 @@ TEST_F(UsbDisplayTest, AbsurdDeviceRepliesAreClearErrors) {
   EXPECT_NO_THROW(openDisplay("usb:1209:4c46"));  // the failed opens released the device
 }
 
+// A status that contradicts what the host did, or the device's own
+// description, is an error naming the field; so is a rejection the device
+// gives no reason for (never another frame's reason, or "no error").
+TEST_F(UsbDisplayTest, AStatusOrARejectionThatContradictsTheHostIsAnError) {
+  EmulatedUsbDisplay device;
+  device.plug();
+  auto display = openDisplay("usb:1209:4c46");
+  const DisplayInfo info = display->info();
+  ASSERT_EQ(display->show(randomPanel(info, 5)).status, PresentStatus::Presented);  // frame 1
+  EXPECT_NO_THROW(display->status());
+  device.lieInStatus(-1, 7);
+  EXPECT_TRUE(throwsError([&] { display->status(); }, Errc::Device,
+                          {"usb:1209:4c46", "GET_STATUS says it shows frame 7", "last frame this host presented is 1"}));
+  device.lieInStatus(info.brightnessMax + 1, -1);
+  EXPECT_TRUE(throwsError([&] { display->status(); }, Errc::Device,
+                          {"usb:1209:4c46", fmt::format("brightness {}", info.brightnessMax + 1)}));
+  device.lieInStatus(-1, -1);
+  EXPECT_NO_THROW(display->status());
+
+  device.forgetErrors(true);
+  device.corruptNextFrame();
+  const PresentResult result = display->show(randomPanel(info, 6));  // frame 2
+  EXPECT_EQ(result.status, PresentStatus::Rejected);
+  EXPECT_NE(result.message.find("PRESENT of frame 2 refused by the device: the device gives no reason for it"),
+            std::string::npos)
+      << result.message;
+}
+
 TEST_F(UsbDisplayTest, ADeviceThatNeverAnswersTimesOut) {
   EmulatedUsbDisplay device;
   device.plug();
