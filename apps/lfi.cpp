@@ -573,28 +573,27 @@ int main(int argc, char** argv) {
       });
       bar.finish();
       if (bench.captured) lfi::writeLightFieldExr(inspectOut / "lightfield.exr", reference, overwrite);
-      cv::Mat image;
-      try {
+      try {  // (whatever fails from here on, a captured light field is kept and named)
         controller.emit(reference);
-        image = controller.inspect();
+        const cv::Mat image = controller.inspect();
+        const auto info = bench.camera->info();
+        lfi::writeRadianceExr(inspectOut / "inspection.exr", image,
+                              {0,
+                               fmt::format("inspection image (DN, mean of {} frames) from {} {} via {}",
+                                           inspectBench.frames, info.vendor, info.model, inspectBench.camera),
+                               "camera digital numbers (DN)"},
+                              overwrite);
+        double maxValue = 0;
+        cv::minMaxLoc(image, nullptr, &maxValue);
+        cv::Mat png8;
+        image.convertTo(png8, CV_8U, maxValue > 0 ? 255.0 / maxValue : 1.0);
+        lfi::writePngAtomically(inspectOut / "inspection.png", png8, overwrite);
       } catch (const lfi::Error& e) {
         if (!bench.captured) throw;
         throw lfi::Error(e.code(),
                          fmt::format("{} (the captured light field is kept: rerun with --light-field {} to skip the "
                                      "capture)", e.what(), (inspectOut / "lightfield.exr").string()));
       }
-      const auto info = bench.camera->info();
-      lfi::writeRadianceExr(inspectOut / "inspection.exr", image,
-                            {0,
-                             fmt::format("inspection image (DN, mean of {} frames) from {} {} via {}",
-                                         inspectBench.frames, info.vendor, info.model, inspectBench.camera),
-                             "camera digital numbers (DN)"},
-                            overwrite);
-      double maxValue = 0;
-      cv::minMaxLoc(image, nullptr, &maxValue);
-      cv::Mat png8;
-      image.convertTo(png8, CV_8U, maxValue > 0 ? 255.0 / maxValue : 1.0);
-      lfi::writePngAtomically(inspectOut / "inspection.png", png8, overwrite);
       if (bench.captured) fmt::print("{}\n", (inspectOut / "lightfield.exr").string());
       fmt::print("{}\n{}\n", (inspectOut / "inspection.exr").string(), (inspectOut / "inspection.png").string());
     } else if (*calibrate) {

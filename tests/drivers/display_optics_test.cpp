@@ -11,9 +11,11 @@
 #include <unistd.h>
 
 #include <cmath>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <limits>
 #include <numbers>
 #include <string>
 #include <utility>
@@ -200,17 +202,23 @@ TEST(DisplayOptics, InvalidParametersNameTheField) {
   EXPECT_NO_THROW(DisplayOptics optics(info));
 }
 
+// A valid device info block of a 640 x 400 panel, its maximum payload one frame.
+usbdisplay::DeviceInfoBlock panelInfo(usbdisplay::SubpixelCode subpixels, std::uint8_t formats) {
+  usbdisplay::DeviceInfoBlock info;
+  info.vendor = "lfi", info.model = "panel", info.serial = "P1";
+  info.panelWidth_px = 640, info.panelHeight_px = 400;
+  info.subpixels = subpixels;
+  info.formats = formats;
+  info.brightnessMax = 255, info.brightness = 128, info.viewCount = 8;
+  info.calibrationSize = 76;
+  info.maxPayloadSize = 640 * 400 * (subpixels == usbdisplay::SubpixelCode::Mono ? 1 : 3);
+  return info;
+}
+
 // The device's maximum payload must hold the panel's own frame: a mono panel
 // that also takes RGB888 needs only width x height bytes.
 TEST(UsbDisplayProtocol, TheMaximumPayloadIsCheckedAgainstThePanelsOwnFrame) {
-  usbdisplay::DeviceInfoBlock info;
-  info.vendor = "lfi", info.model = "mono", info.serial = "M1";
-  info.panelWidth_px = 640, info.panelHeight_px = 400;
-  info.subpixels = usbdisplay::SubpixelCode::Mono;
-  info.formats = 0x3;
-  info.brightnessMax = 255, info.viewCount = 1;
-  info.calibrationSize = 76;
-  info.maxPayloadSize = 640 * 400;
+  usbdisplay::DeviceInfoBlock info = panelInfo(usbdisplay::SubpixelCode::Mono, 0x3);
   EXPECT_EQ(usbdisplay::decodeDeviceInfo(usbdisplay::encodeDeviceInfo(info), "dev").maxPayloadSize, 640u * 400u);
   info.maxPayloadSize = 640 * 400 - 1;
   EXPECT_TRUE(throwsError([&] { usbdisplay::decodeDeviceInfo(usbdisplay::encodeDeviceInfo(info), "dev"); },
@@ -219,6 +227,92 @@ TEST(UsbDisplayProtocol, TheMaximumPayloadIsCheckedAgainstThePanelsOwnFrame) {
   info.maxPayloadSize = 640 * 400;
   EXPECT_TRUE(throwsError([&] { usbdisplay::decodeDeviceInfo(usbdisplay::encodeDeviceInfo(info), "dev"); },
                           Errc::Device, {"768000"}));
+}
+
+// A device that answers nonsense: every field the decoders check, broken in
+// turn in a valid reply (docs/usb-display-protocol.md's offsets, little-endian),
+// is an Errc::Device naming the device and the field.
+TEST(UsbDisplayProtocol, RepliesThatAreNonsenseNameTheFieldAndTheDevice) {
+  const std::vector<std::uint8_t> goodInfo =
+      usbdisplay::encodeDeviceInfo(panelInfo(usbdisplay::SubpixelCode::RgbStripe, 0x2));
+  ASSERT_NO_THROW(usbdisplay::decodeDeviceInfo(goodInfo, "dev"));
+  using Edit = std::function<void(std::vector<std::uint8_t>&)>;
+  auto put16 = [](std::size_t at, unsigned v) -> Edit {
+    return [=](std::vector<std::uint8_t>& b) { b[at] = v & 0xff, b[at + 1] = (v >> 8) & 0xff; };
+  };
+  auto put8 = [](std::size_t at, unsigned v) -> Edit { return [=](std::vector<std::uint8_t>& b) { b[at] = v & 0xff; }; };
+  auto put32 = [](std::size_t at, std::uint32_t v) -> Edit {
+    return [=](std::vector<std::uint8_t>& b) {
+      for (int i = 0; i < 4; ++i) b[at + i] = static_cast<std::uint8_t>(v >> (8 * i));
+    };
+  };
+  const std::vector<std::pair<Edit, std::string>> infoCases = {
+      {[](auto& b) { b.resize(100); }, "GET_DEVICE_INFO returned 100 bytes"},
+      {put16(0, 9), "GET_DEVICE_INFO has version 9"},
+      {put16(2, 64), "declares a size of 64 bytes"},
+      {put8(4, 0x07), "field 'vendor' has a non-printable byte 0x07"},
+      {[](auto& b) { std::fill(b.begin() + 36, b.begin() + 68, 'x'); }, "'model' is not NUL-terminated"},
+      {put16(100, 0), "panel size 0x400 px"},
+      {put16(102, 9000), "panel size 640x9000 px"},
+      {put8(104, 3), "subpixel layout code 3"},
+      {put8(105, 0), "format mask 0x00"},
+      {put8(105, 0x6), "format mask 0x06"},
+      {put16(108, 300), "brightness 300 of maximum 255"},
+      {put16(110, 0), "view count 0"},
+      {put32(112, 12), "calibration size 12 bytes"},
+      {put32(112, 0xffffffff), "calibration size 4294967295 bytes"},
+      {put32(116, 1000), "maximum payload 1000 bytes"},
+  };
+  // Each case's edit of `good`, decoded, is refused naming the device and the case's message.
+  auto expectRefused = [](const std::vector<std::uint8_t>& good, const std::vector<std::pair<Edit, std::string>>& cases,
+                          const std::function<void(const std::vector<std::uint8_t>&)>& decode) {
+    for (const auto& [edit, message] : cases) {
+      std::vector<std::uint8_t> bytes = good;
+      edit(bytes);
+      EXPECT_TRUE(throwsError([&] { decode(bytes); }, Errc::Device, {"usb:1209:4c46", message})) << message;
+    }
+  };
+  expectRefused(goodInfo, infoCases, [](const auto& b) { usbdisplay::decodeDeviceInfo(b, "usb:1209:4c46"); });
+
+  usbdisplay::CalibrationBlock calibration;
+  calibration.pixelPitch_mm = 0.05, calibration.lensPitch_px = 8, calibration.gap_mm = 1;
+  calibration.focalLength_mm = 1;
+  const std::vector<std::uint8_t> goodCalibration = usbdisplay::encodeCalibration(calibration);
+  ASSERT_NO_THROW(usbdisplay::decodeCalibration(goodCalibration, "dev"));
+  auto sealed = [](Edit edit) -> Edit {  // the edit, then a CRC-32 that matches: the field check itself is reached
+    return [edit](std::vector<std::uint8_t>& b) {
+      edit(b);
+      const std::uint32_t crc = usbdisplay::crc32Of(std::span(b).first(b.size() - 4));
+      for (int i = 0; i < 4; ++i) b[b.size() - 4 + i] = static_cast<std::uint8_t>(crc >> (8 * i));
+    };
+  };
+  auto putF64 = [](std::size_t at, double v) -> Edit {
+    return [=](std::vector<std::uint8_t>& b) { std::memcpy(b.data() + at, &v, sizeof v); };
+  };
+  const std::vector<std::pair<Edit, std::string>> calibrationCases = {
+      {[](auto& b) { b.resize(40); }, "calibration blob has 40 bytes"},
+      {put8(0, 0), "calibration blob has magic"},
+      {put16(4, 7), "calibration blob version 7"},
+      {put16(6, 80), "calibration blob declares 80 bytes"},
+      {put8(20, 0x55), "calibration blob CRC-32"},
+      {sealed(put8(8, 2)), "optics code 2"},
+      {sealed(putF64(16, std::numeric_limits<double>::quiet_NaN())), "pixelPitch"},
+      {sealed(putF64(24, 0.5)), "lensPitch"},
+      {sealed(putF64(32, 1.0)), "slant"},
+      {sealed(putF64(48, 0)), "gap"},
+      {sealed(putF64(56, std::numeric_limits<double>::infinity())), "focalLength"},
+  };
+  expectRefused(goodCalibration, calibrationCases,
+                [](const auto& b) { usbdisplay::decodeCalibration(b, "usb:1209:4c46"); });
+
+  std::vector<std::uint8_t> status = usbdisplay::encodeStatus({});
+  ASSERT_NO_THROW(usbdisplay::decodeStatus(status, "dev"));
+  status[0] = 2;
+  EXPECT_TRUE(throwsError([&] { usbdisplay::decodeStatus(status, "usb:1209:4c46"); }, Errc::Device,
+                          {"usb:1209:4c46", "GET_STATUS state 2"}));
+  status.resize(20);
+  EXPECT_TRUE(throwsError([&] { usbdisplay::decodeStatus(status, "usb:1209:4c46"); }, Errc::Device,
+                          {"usb:1209:4c46", "GET_STATUS returned 20 bytes"}));
 }
 
 // A frame header as docs/usb-display-protocol.md lays it out, byte by byte
