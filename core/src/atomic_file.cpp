@@ -62,13 +62,16 @@ void syncFile(const fs::path& file, const fs::path& target) {
 }
 
 // The temporaries being written, for a signal that ends the process: a table
-// the handler reads without allocating or locking.
+// the handler reads without allocating or locking. Paths are absolute (a later
+// chdir changes nothing). (A signal while another thread reuses a slot could
+// read a path half rewritten; unlink then finds no such file.)
 constexpr std::size_t kTemporarySlots = 16;
 struct TemporarySlot {
   std::atomic<bool> used{false};
   char path[PATH_MAX] = {};
 };
 std::array<TemporarySlot, kTemporarySlots> temporaries;
+static_assert(std::atomic<bool>::is_always_lock_free);  // (read in a signal handler)
 constexpr std::array<int, 3> kEndingSignals{SIGINT, SIGTERM, SIGHUP};
 std::mutex handlersMutex;  // (guards the counts and the handlers' installation, never taken in a handler)
 int liveTemporaries = 0;
@@ -86,7 +89,9 @@ void removeTemporariesAndDie(int signal) {
 class TemporaryGuard {
 public:
   explicit TemporaryGuard(const fs::path& temporary) {
-    const std::string& path = temporary.native();
+    std::error_code ec;
+    const fs::path absolute = fs::absolute(temporary, ec);
+    const std::string& path = ec ? temporary.native() : absolute.native();
     std::lock_guard lock(handlersMutex);
     for (TemporarySlot& s : temporaries) {
       if (path.size() >= sizeof s.path || s.used.load(std::memory_order_relaxed)) continue;
@@ -95,7 +100,8 @@ public:
       slot_ = &s;
       break;
     }
-    if (slot_ == nullptr || liveTemporaries++ > 0) return;  // (more than kTemporarySlots at once: not removed)
+    // (Not registered, so not removed by a signal: a path of PATH_MAX or more, or kTemporarySlots writes at once.)
+    if (slot_ == nullptr || liveTemporaries++ > 0) return;
     for (std::size_t i = 0; i < kEndingSignals.size(); ++i) {
       struct sigaction current {};
       ::sigaction(kEndingSignals[i], nullptr, &current);

@@ -86,7 +86,7 @@ void limitOpenExrImageSize() {
 constexpr const char* kUnitsPrefix = "lengths mm, angles rad, pixels ";
 
 void writeExr(const fs::path& path, const cv::Mat& image, Imf::Header header, Overwrite overwrite,
-              const std::string& pixelUnit = "linear relative radiance") {
+              const std::string& pixelUnit = RadianceImageInfo{}.pixelUnit) {
   limitOpenExrImageSize();  // (the read-back check opens the file too)
   requireImageType(image, CV_32FC1, "EXR image '" + path.string() + "'");
   if (image.cols > kMaxExrSide || image.rows > kMaxExrSide || static_cast<long>(image.total()) > kMaxExrPixels)

@@ -205,6 +205,7 @@ public:
                            nullptr, 0);
     if (rc == LIBUSB_ERROR_PIPE) return {PresentStatus::Rejected, sequence, rejection(sequence)};
     resync_ = rc < 0;  // unanswered or failed: the device may still hold the frame
+    uncertain_ = rc < 0;  // (and may show it)
     requireOk(rc, proto::Request::Present);
     state_ = State::Showing;
     lastPresented_ = sequence;
@@ -213,7 +214,9 @@ public:
 
   void blank() override {
     requireDisplayState(state_, {State::Open, State::Showing}, "blank", name_);
-    requireOk(control(LIBUSB_ENDPOINT_OUT, proto::Request::Blank, 0, nullptr, 0), proto::Request::Blank);
+    const int rc = control(LIBUSB_ENDPOINT_OUT, proto::Request::Blank, 0, nullptr, 0);
+    uncertain_ = rc < 0;  // (it may have blanked)
+    requireOk(rc, proto::Request::Blank);
     state_ = State::Open;
   }
 
@@ -235,7 +238,7 @@ public:
     if (s.brightness < info_.brightnessMin || s.brightness > info_.brightnessMax)
       fail(Errc::Device, "{}: GET_STATUS says brightness {}, outside the device's own {}..{}", name_, s.brightness,
            info_.brightnessMin, info_.brightnessMax);
-    if (state_ == State::Showing && (s.showing != 1 || s.presentedSequence != lastPresented_))
+    if (state_ == State::Showing && !uncertain_ && (s.showing != 1 || s.presentedSequence != lastPresented_))
       fail(Errc::Device, "{}: GET_STATUS says {} frame {}; the last frame this host presented is {}", name_,
            s.showing == 1 ? "it shows" : "it is blank, after", s.presentedSequence, lastPresented_);
     DisplayStatus out;
@@ -457,7 +460,7 @@ private:
     return buffer;
   }
 
-  // The device's last error; with `rejected`, the frame it must be about (a
+  // The device's last error; with `rejected`, the frame it should be about (a
   // device that gives none, or one about another frame, is said to).
   std::string lastErrorText(std::optional<std::uint32_t> rejected = std::nullopt) {
     const std::vector<std::uint8_t> reply =
@@ -469,11 +472,12 @@ private:
     std::string text;
     for (std::size_t i = 8; i < reply.size(); ++i)
       text.push_back(reply[i] >= 0x20 && reply[i] <= 0x7e ? static_cast<char>(reply[i]) : '?');
-    if (rejected && (code == proto::DeviceError::None || (frame & 0xffff) != (*rejected & 0xffff)))
-      return fmt::format("the device gives no reason for it (its last error: {}, code {}, concerns frame {})",
-                         proto::toString(code), static_cast<unsigned>(code), frame);
-    return fmt::format("{} (code {}, frame {}){}{}", proto::toString(code), static_cast<unsigned>(code), frame,
-                       text.empty() ? "" : ": ", text);
+    if (rejected && code == proto::DeviceError::None) return "the device gives no reason for it";
+    const std::string reason = fmt::format("{} (code {}, frame {}){}{}", proto::toString(code),
+                                           static_cast<unsigned>(code), frame, text.empty() ? "" : ": ", text);
+    if (rejected && (frame & 0xffff) != (*rejected & 0xffff))
+      return fmt::format("its last error concerns another frame: {}", reason);
+    return reason;
   }
 
   std::string rejection(std::uint32_t sequence) {
@@ -580,7 +584,7 @@ private:
       if (Clock::now() > deadline) {
         // The frame was not all sent in time (the host stalled, say): never PRESENT it. Transfers in flight are
         // cancelled above on the next turn and get a last second to come back.
-        if (outcome == BulkOutcome::Ok) {
+        if (outcome == BulkOutcome::Ok && (next < count || inFlight > 0)) {
           record(BulkOutcome::Timeout);
           deadline = Clock::now() + std::chrono::seconds(1);
           continue;
@@ -626,6 +630,7 @@ private:
   State state_ = State::Closed;
   std::uint32_t sequence_ = 0;
   std::uint32_t lastPresented_ = 0;  // the sequence of the last frame presented (State::Showing)
+  bool uncertain_ = false;  // a PRESENT or BLANK went unanswered: the device may show either (status() trusts it)
   std::uint64_t stallsCleared_ = 0;
   bool resync_ = false;  // a frame failed or timed out: clear the endpoint's halt before the next one
   std::string clearHaltError_;  // why the last CLEAR_HALT failed (libusb's error name)

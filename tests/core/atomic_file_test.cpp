@@ -12,6 +12,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <chrono>
 #include <csignal>
 #include <filesystem>
 #include <fstream>
@@ -19,6 +20,7 @@
 #include <sstream>
 #include <stdexcept>
 #include <string>
+#include <thread>
 #include <vector>
 
 namespace {
@@ -121,7 +123,14 @@ TEST_F(AtomicFile, ASignalThatEndsTheProcessMidWriteLeavesNoTemporary) {
       ::_exit(0);  // not reached: the signal ended the child
     }
     int status = 0;
-    ASSERT_EQ(::waitpid(child, &status, 0), child);
+    pid_t reaped = 0;
+    for (int i = 0; i < 1000 && (reaped = ::waitpid(child, &status, WNOHANG)) == 0; ++i)  // up to 10 s, never a hang
+      std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    if (reaped == 0) {
+      ::kill(child, SIGKILL);
+      ::waitpid(child, &status, 0);
+    }
+    ASSERT_EQ(reaped, child) << "the child neither ended nor was ended by signal " << signal;
     EXPECT_TRUE(WIFSIGNALED(status) && WTERMSIG(status) == signal) << "signal " << signal << ", status " << status;
     EXPECT_EQ(entries(), Names{}) << "signal " << signal;
   }

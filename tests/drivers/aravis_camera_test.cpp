@@ -283,6 +283,7 @@ TEST_F(AravisCameraTest, AnExposureAndAFrameRateThatBoundEachOtherAreSetInAnOrde
   };
   replaceOnce("<Max>10000000.0</Max>", "<pMax>ExposureTimeAbsMax</pMax>");  // ExposureTimeAbs's, in us
   replaceOnce("<Min>1000</Min>", "<pMin>AcquisitionFramePeriodMin</pMin>");  // AcquisitionFramePeriod's, in us
+  if (HasFatalFailure()) return;  // (the fake device's description changed)
   const std::filesystem::path xml = writeGenicam(
       text, std::filesystem::temp_directory_path() / ("lfi-genicam-bounds-" + fake_->serial() + ".xml"),
       "<SwissKnife Name=\"ExposureTimeAbsMax\" NameSpace=\"Custom\">\n"
@@ -320,7 +321,7 @@ TEST_F(AravisCameraTest, WrongIdIsNotFoundAndListsTheDevices) {
   const auto t0 = Clock::now();
   EXPECT_TRUE(throwsError([] { openCamera("aravis:No-Such-Camera"); }, Errc::NotFound,
                           {"No-Such-Camera", "devices found", fake_->id(), "127.0.0.1"}));
-  std::printf("[ info     ] not found after %.3f s (a discovery)\n", secondsSince(t0));
+  std::printf("[ info     ] not found after %.3f s (two discovery rounds)\n", secondsSince(t0));
 }
 
 TEST_F(AravisCameraTest, StateMachine) {

@@ -359,8 +359,8 @@ TEST_F(UsbDisplayTest, AbsurdDeviceRepliesAreClearErrors) {
 }
 
 // A status that contradicts what the host did, or the device's own
-// description, is an error naming the field; so is a rejection the device
-// gives no reason for (never another frame's reason, or "no error").
+// description, is an error naming the field; a rejection the device gives no
+// reason for says so (never "no error" as the reason).
 TEST_F(UsbDisplayTest, AStatusOrARejectionThatContradictsTheHostIsAnError) {
   EmulatedUsbDisplay device;
   device.plug();
@@ -376,12 +376,16 @@ TEST_F(UsbDisplayTest, AStatusOrARejectionThatContradictsTheHostIsAnError) {
                           {"usb:1209:4c46", fmt::format("brightness {}", info.brightnessMax + 1)}));
   device.lieInStatus(-1, -1);
   EXPECT_NO_THROW(display->status());
+  display->blank();
+  EXPECT_NO_THROW(display->status());  // blank: no frame to hold the device to
+  ASSERT_EQ(display->show(randomPanel(info, 7)).status, PresentStatus::Presented);  // frame 2
+  EXPECT_EQ(display->status().presentedSequence, 2u);
 
   device.forgetErrors(true);
   device.corruptNextFrame();
-  const PresentResult result = display->show(randomPanel(info, 6));  // frame 2
+  const PresentResult result = display->show(randomPanel(info, 6));  // frame 3
   EXPECT_EQ(result.status, PresentStatus::Rejected);
-  EXPECT_NE(result.message.find("PRESENT of frame 2 refused by the device: the device gives no reason for it"),
+  EXPECT_NE(result.message.find("PRESENT of frame 3 refused by the device: the device gives no reason for it"),
             std::string::npos)
       << result.message;
 }

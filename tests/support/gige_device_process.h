@@ -92,6 +92,7 @@ inline bool gigeWriteRegister(std::uint32_t reg, std::uint32_t value, const std:
 // Block ids missing between two received frames. GigE Vision block ids are 16
 // bits here: 65535 is followed by 1 (0 is never used).
 inline std::uint64_t missingBlockIds(std::uint64_t previous, std::uint64_t id) {
+  if (id == previous) return 0;  // (the same frame twice: nothing missing)
   return id > previous ? id - previous - 1 : id + 65534 - previous;
 }
 
@@ -120,7 +121,7 @@ public:
     if (pid_ == 0) {  // the child: async-signal-safe calls only
       ::prctl(PR_SET_PDEATHSIG, SIGKILL);
       if (::getppid() != parent) ::_exit(127);  // the parent died before prctl
-      const int null = ::open("/dev/null", O_WRONLY);
+      const int null = ::open("/dev/null", O_WRONLY | O_CLOEXEC);  // (the dup2 copies stay open)
       if (null >= 0) {
         ::dup2(null, STDOUT_FILENO);
         if (quietStderr) ::dup2(null, STDERR_FILENO);
@@ -133,7 +134,10 @@ public:
     const int forkError = errno;
     ::close(execError[1]);
     int error = 0;
-    const bool execFailed = pid_ > 0 && ::read(execError[0], &error, sizeof error) == sizeof error;
+    ssize_t got = 0;
+    while (pid_ > 0 && (got = ::read(execError[0], &error, sizeof error)) < 0 && errno == EINTR) {
+    }
+    const bool execFailed = got == sizeof error;
     ::close(execError[0]);
     if (pid_ < 0) throw std::runtime_error(std::string("fork: ") + std::strerror(forkError));
     if (execFailed) {
