@@ -106,7 +106,7 @@ CLI::Validator wholeNumberIn(T lowest, T highest) {
       },
       fmt::format("INT in [{}, {}]", lowest, highest));
 }
-constexpr long long kMostThreads = 4096, kMostFrames = 100000, kMostSpp = 1 << 20;  // (scene files' own bound)
+constexpr long long kMostThreads = 4096, kMostFrames = 100000, kMostSpp = lfi::sim::kMostSamplesPerPixel;
 CLI::Validator threadCount() { return wholeNumberIn(0LL, kMostThreads); }
 CLI::Validator seedValue() { return wholeNumberIn<std::uint64_t>(0, std::numeric_limits<std::uint64_t>::max()); }
 
@@ -581,7 +581,7 @@ int main(int argc, char** argv) {
                               {0,
                                fmt::format("inspection image (DN, mean of {} frames) from {} {} via {}",
                                            inspectBench.frames, info.vendor, info.model, inspectBench.camera),
-                               "camera digital numbers (DN)"},
+                               lfi::kCameraDigitalNumbers},
                               overwrite);
         double maxValue = 0;
         cv::minMaxLoc(image, nullptr, &maxValue);

@@ -294,10 +294,11 @@ LightField readLightFieldExr(const fs::path& path) {
     fail(Errc::InvalidFile, "'{}': image is {}x{} but attributes {}={}, {}={}, {}={} need {}x{}", path.string(),
          exr.pixels.cols, exr.pixels.rows, kSpatialX, g.spatialX, kSpatialY, g.spatialY, kAngular, g.angular,
          g.width(), g.height());
-  if (const auto bad = firstNegative(exr.pixels))
-    fail(Errc::InvalidFile, "'{}': pixel ({}, {}) is {}; radiance cannot be negative", path.string(), bad->x, bad->y,
-         exr.pixels.at<float>(*bad));
-  return LightField(g, std::move(exr.pixels));
+  try {  // (LightField checks the pixels: a negative radiance, say, is the file's fault here)
+    return LightField(g, std::move(exr.pixels));
+  } catch (const Error& e) {
+    fail(Errc::InvalidFile, "'{}': {}", path.string(), e.what());
+  }
 }
 
 void writeRadianceExr(const fs::path& path, const cv::Mat& image, const RadianceImageInfo& info,

@@ -29,13 +29,6 @@ namespace lfi::sim {
 
 namespace fs = std::filesystem;
 
-namespace {
-// No coordinate or size of a bench is this far out: such a value is a wrong
-// unit or a stand-in for "infinite" (Embree, in float, drops a primitive past
-// about 1.8e18, and the object vanished without a word).
-constexpr double kFarthest_mm = 1e9;
-}  // namespace
-
 Rigid3 placement(const std::vector<double>& p, const std::vector<double>& r) {
   const double deg = std::numbers::pi / 180;
   Rigid3 x = Rigid3::rotation({0, 0, 1}, r[2] * deg) * Rigid3::rotation({0, 1, 0}, r[1] * deg) *
@@ -748,7 +741,7 @@ SceneDescription loadSceneFile(const fs::path& path) {
   d.ambientIor = root.number("ambient_ior", 1.0, 1.0, 5.0);
   if (root.has("render")) {
     ConfigTable r = root.table("render");
-    d.render.samplesPerPixel = r.integer("samples_per_pixel", 16, 1, 1 << 20);
+    d.render.samplesPerPixel = r.integer("samples_per_pixel", 16, 1, kMostSamplesPerPixel);
     d.render.seed = static_cast<std::uint64_t>(r.integer("seed", 1, 0, 1 << 30));
     d.render.splitDepth = r.integer("split_depth", 4, 0, RenderOptions::kMaxSplitDepth);
     d.render.maxDepth = r.integer("max_depth", 64, 1, 1024);

@@ -20,10 +20,11 @@ public:
       fail(Errc::Config, "sim light field capture: beam_half_angle_rad = {} is outside (0, 1.5)",
            settings_.beamHalfAngle_rad);
     // (As a scene file's positions and samples per pixel: a beam at infinity would light nothing.)
-    if (!(settings_.beamDistance_mm > 0 && settings_.beamDistance_mm <= 1e9))
+    if (!(settings_.beamDistance_mm > 0 && settings_.beamDistance_mm <= kFarthest_mm))
       fail(Errc::Config, "sim light field capture: beam_distance_mm = {} is outside (0, 1e9]",
            settings_.beamDistance_mm);
-    if (settings_.samplesPerPixel < 1 || settings_.samplesPerPixel > (1 << 20))
+    static_assert(kFarthest_mm == 1e9, "the message above states the bound");
+    if (settings_.samplesPerPixel < 1 || settings_.samplesPerPixel > kMostSamplesPerPixel)
       fail(Errc::Config, "sim light field capture: spp = {} is outside 1 .. 2^20", settings_.samplesPerPixel);
     // (0 means "not set" in a light field file; here it is where the sensor is.)
     if (!(settings_.geometry.distance_mm > 0))

@@ -409,7 +409,7 @@ Evaluation evaluate(const Bench& bench, const Illumination& light, const std::ve
       writeRadianceExr(*imagesDir / (stem + ".exr"), frame,
                        {camera.objectPixel_mm(),
                         fmt::format("camera frame (DN) of scene {} under {}", spec.name, light.setup),
-                        "camera digital numbers (DN)"},
+                        kCameraDigitalNumbers},
                        overwrite);
       cv::Mat png8;
       frame.convertTo(png8, CV_8U, 255.0 / sensor.maxDigitalNumber());

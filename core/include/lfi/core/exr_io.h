@@ -34,6 +34,9 @@ LightField readLightFieldExr(const std::filesystem::path& path);
 
 // Metadata of a radiance image. objectPixel_mm is the pixel size projected into
 // object space (0 = unknown); description is free text shown by tools.
+// RadianceImageInfo::pixelUnit of a camera frame.
+inline constexpr const char* kCameraDigitalNumbers = "camera digital numbers (DN)";
+
 struct RadianceImageInfo {
   double objectPixel_mm = 0;
   std::string description;

@@ -64,6 +64,14 @@ SceneDescription loadSceneFile(const std::filesystem::path& path);
 // millimetres (a vertex then more than 1e9 mm from the origin is refused);
 // faces must wind outwards.
 inline constexpr double kDefaultCreaseAngle_deg = 30;
+
+// The bounds a scene file and the sim: devices' URIs keep to. No coordinate
+// or size of a bench is this far out: such a value is a wrong unit or a
+// stand-in for "infinite" (Embree, in float, drops a primitive past about
+// 1.8e18, and the object vanished without a word).
+inline constexpr double kFarthest_mm = 1e9;
+inline constexpr int kMostSamplesPerPixel = 1 << 20;
+
 TriangleMesh loadMesh(const std::filesystem::path& path,
                       double creaseAngle_rad = kDefaultCreaseAngle_deg * std::numbers::pi / 180, double scale = 1);
 
