@@ -1,6 +1,7 @@
 // The display optics model against analytic geometry (display_optics.h).
 
 #include "lfi_test_support.h"
+#include "toml_mutation.h"
 
 #include "lfi/drivers/display.h"
 #include "lfi/drivers/display_calibration_file.h"
@@ -17,6 +18,7 @@
 #include <functional>
 #include <limits>
 #include <numbers>
+#include <random>
 #include <string>
 #include <utility>
 #include <vector>
@@ -413,6 +415,43 @@ TEST(DisplayCalibrationFile, ValuesTheDisplayWouldRefuseAreNamedInTheFile) {
         << c.optics;
   }
   EXPECT_EQ(read("optics = \"barrier\"\nslit_width_mm = 0.05\n").type, OpticsType::Barrier);
+  std::filesystem::remove(file);
+}
+
+TEST(DisplayCalibrationFile, MutatedValuesGiveOpticsTheDisplayTakesOrAreNamedErrors) {
+  // Seeded value edits of a whole calibration file (toml_mutation.h). Each
+  // either reads as optics the display's own check accepts, and whose rays
+  // are finite, or is an lfi::Error naming the file; never a crash.
+  const auto file = std::filesystem::path(::testing::TempDir()) / fmt::format("lfi-cal-mut-{}.toml", ::getpid());
+  const DisplayInfo device = defaultLenticularDisplay();
+  const std::string seed =
+      "format = \"lfi-display-calibration\"\nversion = 1\n[optics]\noptics = \"lenslet\"\nlens_pitch_px = 7.22\n"
+      "slant_rad = 0.1826\noffset_px = 0.30\ngap_mm = 0.7333\nfocal_length_mm = 0.7333\nslit_width_mm = 0.13\n";
+  std::mt19937 rng(20261123);
+  int read = 0, refused = 0;
+  for (int n = 0; n < 1000; ++n) {
+    std::string what;
+    const std::string text = testing_support::mutateTomlValues(seed, rng, 2, what);
+    SCOPED_TRACE(fmt::format("case {}: {}", n, what));
+    std::ofstream(file) << text;
+    try {
+      DisplayInfo info = device;
+      info.optics = readDisplayOpticsFile(file, device.optics);
+      info.validate();
+      const DisplayOptics optics(info);
+      for (const auto& [col, row] : {std::pair{0, 0}, {info.panelWidth_px / 2, info.panelHeight_px / 2}}) {
+        const DisplayRay ray = optics.rayFromPixel(col, row);
+        ASSERT_TRUE(std::isfinite(ray.origin_mm.x + ray.origin_mm.y + ray.origin_mm.z)) << col << ", " << row;
+        ASSERT_TRUE(std::isfinite(ray.direction.x + ray.direction.y + ray.direction.z)) << col << ", " << row;
+      }
+      ++read;
+    } catch (const Error& e) {
+      ASSERT_NE(std::string(e.what()).find(file.string()), std::string::npos) << e.what();
+      ++refused;
+    }
+  }
+  EXPECT_GT(read, 100);
+  EXPECT_GT(refused, 300);
   std::filesystem::remove(file);
 }
 

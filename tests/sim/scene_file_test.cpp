@@ -2,9 +2,11 @@
 // every kind of bad input is an error naming file, line and key.
 
 #include "lfi/core/exr_io.h"
+#include "lfi/core/image.h"
 #include "lfi/sim/scene_file.h"
 
 #include "lfi_test_support.h"
+#include "toml_mutation.h"
 
 #include <fmt/format.h>
 #include <gtest/gtest.h>
@@ -775,6 +777,62 @@ TEST_F(SceneFile, MutatedPlyFilesLoadCheckedOrAreNamedErrors) {
   // Both outcomes occur: the mutations reach past the header checks.
   EXPECT_GT(loaded, 50);
   EXPECT_GT(refused, 500);
+}
+
+TEST_F(SceneFile, MutatedValuesLoadAsScenesThatRenderOrAreNamedErrors) {
+  // Seeded value edits of the two shipped scene files (toml_mutation.h: NaN,
+  // infinities, extremes, signs, integers past 32 bits, other words, other
+  // types, keys and tables removed or repeated, unknown keys). Each file
+  // either loads as a scene that renders finite, non-negative radiance (on
+  // a crop of at most 8 x 8 pixels, 2 samples each) or is an lfi::Error
+  // naming the file; never a crash, a hang or another exception.
+  const fs::path scenes = fs::path(LFI_SOURCE_DIR) / "data" / "scenes";
+  std::vector<std::string> seeds;
+  for (const char* name : {"reference.toml", "inspection_bench.toml"}) {
+    std::ifstream in(scenes / name);
+    seeds.emplace_back(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  }
+  std::mt19937 rng(20261123);
+  int rendered = 0, refused = 0;
+  for (int n = 0; n < 2000; ++n) {
+    std::string what;
+    const std::string text = lfi::testing_support::mutateTomlValues(seeds[n % seeds.size()], rng, 3, what);
+    SCOPED_TRACE(fmt::format("case {}: {}", n, what));
+    const fs::path file = write("mutated.toml", text);
+    SceneDescription d;
+    try {
+      d = loadSceneFile(file);
+    } catch (const Error& e) {
+      ASSERT_NE(std::string(e.what()).find(file.string()), std::string::npos) << e.what();
+      ++refused;
+      continue;
+    }
+    if (auto* cam = std::get_if<TelecentricCamera>(&d.sensor)) {
+      cam->width = std::min(cam->width, 8);
+      cam->height = std::min(cam->height, 8);
+    } else {
+      LightFieldGeometry& g = std::get<LightFieldSensor>(d.sensor).geometry;
+      g.spatialX = std::min(g.spatialX, 2);
+      g.spatialY = std::min(g.spatialY, 2);
+      g.angular = std::min(g.angular, 4);
+    }
+    d.render.samplesPerPixel = std::min(d.render.samplesPerPixel, 2);
+    d.render.threads = 1;
+    const Scene scene(std::move(d.objects), d.ambientIor);
+    cv::Mat image;
+    try {
+      image = render(scene, d.sensor, d.render);
+    } catch (const Error& e) {  // (only a path in too many nested dielectrics may stop a render)
+      ASSERT_EQ(e.code(), Errc::Config) << e.what();
+      ASSERT_NE(std::string(e.what()).find("nested dielectrics"), std::string::npos) << e.what();
+    }
+    ASSERT_FALSE(lfi::firstNonFinite(image).has_value());
+    ASSERT_FALSE(lfi::firstNegative(image).has_value());
+    ++rendered;
+  }
+  // Both outcomes occur: the edits reach the checks of values, and many leave a scene.
+  EXPECT_GT(rendered, 150);
+  EXPECT_GT(refused, 1000);
 }
 
 TEST_F(SceneFile, MeshAndAnalyticSphereRefractAlike) {

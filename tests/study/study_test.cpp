@@ -6,7 +6,9 @@
 #include "lfi/study/study.h"
 
 #include "lfi_test_support.h"
+#include "toml_mutation.h"
 
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 #include <unistd.h>
 
@@ -14,6 +16,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <random>
 #include <sstream>
 
 namespace {
@@ -197,6 +200,41 @@ TEST(Sweep, AnswersFollowTheDeclaredThreshold) {
   EXPECT_EQ(a["d"]["interpolated"]["coarsest_element_mm"], 1.6);
   EXPECT_EQ(a["d"]["interpolated"]["fewest_angular"], 4);
   EXPECT_EQ(a["d"]["interpolated"]["delta_tolerance_mm"], 4.0);
+}
+
+TEST(Bench, MutatedValuesLoadAsConsistentBenchesOrAreNamedErrors) {
+  // Seeded value edits of the reference bench (toml_mutation.h). Each file
+  // either loads as a bench whose camera, light field and lens validate and
+  // are finite, or is an lfi::Error naming the file; never a crash or another
+  // exception.
+  const fs::path dir = freshDir("mutated_bench");
+  const std::string seed = readText(kBench);
+  std::mt19937 rng(20261123);
+  int loaded = 0, refused = 0;
+  for (int n = 0; n < 1500; ++n) {
+    std::string what;
+    const std::string text = lfi::testing_support::mutateTomlValues(seed, rng, 3, what);
+    SCOPED_TRACE(fmt::format("case {}: {}", n, what));
+    const fs::path file = dir / "mutated.toml";
+    std::ofstream(file) << text;
+    try {
+      const lfi::study::Bench b = lfi::study::Bench::load(file);
+      b.telecentricCamera().validate();
+      b.lightFieldGeometry().validate();
+      for (const bool misaligned : {false, true}) {
+        const auto span = b.lensSpan(misaligned);
+        ASSERT_TRUE(std::isfinite(span.low) && std::isfinite(span.high) && span.low < 0 && span.high > 0);
+      }
+      b.sensorModel().validate();
+      ++loaded;
+    } catch (const lfi::Error& e) {
+      ASSERT_NE(std::string(e.what()).find(file.string()), std::string::npos) << e.what();
+      ++refused;
+    }
+  }
+  EXPECT_GT(loaded, 50);
+  EXPECT_GT(refused, 1000);
+  fs::remove_all(dir);
 }
 
 TEST(Bench, UnknownKeyIsAnErrorNamingFileLineAndKey) {
