@@ -81,7 +81,12 @@ struct EmulatedUsbDisplay::Impl {
   bool unplugged = true;
   bool halted = false;
   // faults
-  bool stallNext = false, stallAll = false, corruptNext = false, unplugNext = false, silent = false;
+  bool stallAll = false, corruptNext = false, unplugNext = false, silent = false;
+  int stallNextAt = -1;                  // the next frame's bulk URB that halts the endpoint; -1: none
+  int shortNextAt = -1;                  // the next frame's bulk URB the device takes only part of; -1: none
+  int shortNextBy = 0;                   // and how many of its bytes it leaves
+  int unplugAtRequest = -1;              // the vendor request at which the device vanishes; -1: none
+  int claimErrno = 0;                    // CLAIMINTERFACE fails with this errno (0: it succeeds)
   bool absurdInfo = false, badCalibrationCrc = false, forgetErrors = false;
   int statusBrightness = -1;              // GET_STATUS's brightness, -1: the true one
   std::int64_t statusPresentedSequence = -1;  // and its presented sequence
@@ -98,6 +103,8 @@ struct EmulatedUsbDisplay::Impl {
   bool frameCorrupt = false;
   std::size_t frameTruncate = 0;
   bool frameUnplug = false;
+  int frameUrb = 0;  // bulk URBs of this frame so far
+  int frameStallAt = -1, frameShortAt = -1, frameShortBy = 0;
   std::uint32_t lastErrorSequence = 0;
   std::string lastErrorText;
   cv::Mat presented;
@@ -262,6 +269,10 @@ struct EmulatedUsbDisplay::Impl {
           finish(-1, EINVAL);
           return TRUE;
         }
+        if (request == USBDEVFS_CLAIMINTERFACE && claimErrno != 0) {
+          finish(-1, claimErrno);
+          return TRUE;
+        }
         state.claimed = request == USBDEVFS_CLAIMINTERFACE;
         finish(0, 0);
         return TRUE;
@@ -339,7 +350,13 @@ struct EmulatedUsbDisplay::Impl {
       ++state.controlRequests;
       if (silentAtPresent && bytes[1] == static_cast<std::uint8_t>(proto::Request::Present))
         silent = true, silentAtPresent = false;
-      if (silent) {
+      const bool vendor = bytes[0] == proto::kRequestTypeIn || bytes[0] == proto::kRequestTypeOut;
+      if (vendor && bytes[1] == unplugAtRequest) {  // the request and everything pending fail as the device goes
+        unplugAtRequest = -1;
+        u.status = -ESHUTDOWN;
+        done.push_back(u);
+        failAll();
+      } else if (silent) {
         held.push_back(u);
       } else {
         control(bytes, length, u);
@@ -387,6 +404,8 @@ struct EmulatedUsbDisplay::Impl {
     frameStarted = false;
     frameCorrupt = frameUnplug = false;
     frameTruncate = 0;
+    frameUrb = frameShortBy = 0;
+    frameStallAt = frameShortAt = -1;
   }
 
   void bulkOut(const std::uint8_t* bytes, int length, Urb& u) {
@@ -397,17 +416,20 @@ struct EmulatedUsbDisplay::Impl {
     }
     if (!frameStarted) {
       frameStarted = true;
-      if (stallNext) {
-        stallNext = false;
-        halted = true;
-        u.status = -EPIPE;
-        frameStarted = false;
-        return;
-      }
       frameCorrupt = std::exchange(corruptNext, false);
       frameTruncate = std::exchange(truncateNext, 0);
       frameUnplug = std::exchange(unplugNext, false);
+      frameStallAt = std::exchange(stallNextAt, -1);
+      frameShortAt = std::exchange(shortNextAt, -1);
+      frameShortBy = std::exchange(shortNextBy, 0);
     }
+    const int urb = frameUrb++;
+    if (urb == frameStallAt) {  // (CLEAR_HALT then drops what the frame sent before)
+      halted = true;
+      u.status = -EPIPE;
+      return;
+    }
+    if (urb == frameShortAt) length = std::max(0, length - frameShortBy);
     u.status = 0;
     u.actualLength = length;
     if (rxError != proto::DeviceError::None) return;  // discard until PRESENT
@@ -670,9 +692,22 @@ void EmulatedUsbDisplay::unplug() {
   g_free(root);
 }
 
-void EmulatedUsbDisplay::stallNextFrame() {
+void EmulatedUsbDisplay::stallNextFrame(int urb) {
   std::lock_guard lock(impl_->mutex);
-  impl_->stallNext = true;
+  impl_->stallNextAt = urb;
+}
+void EmulatedUsbDisplay::shortenNextFrame(int urb, int bytes) {
+  std::lock_guard lock(impl_->mutex);
+  impl_->shortNextAt = urb;
+  impl_->shortNextBy = bytes;
+}
+void EmulatedUsbDisplay::unplugAtRequest(usbdisplay::Request request) {
+  std::lock_guard lock(impl_->mutex);
+  impl_->unplugAtRequest = static_cast<int>(request);
+}
+void EmulatedUsbDisplay::failClaim(int errnoValue) {
+  std::lock_guard lock(impl_->mutex);
+  impl_->claimErrno = errnoValue;
 }
 void EmulatedUsbDisplay::stallAlways(bool on) {
   std::lock_guard lock(impl_->mutex);

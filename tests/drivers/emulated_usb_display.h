@@ -72,7 +72,8 @@ public:
   void unplug();
 
   // Faults, each for the next frame only unless said otherwise.
-  void stallNextFrame();                  // the first bulk URB of the next frame halts the endpoint
+  void stallNextFrame(int urb = 0);       // bulk URB `urb` (0: the first) of the next frame halts the endpoint
+  void shortenNextFrame(int urb, int bytes);  // bulk URB `urb` of the next frame completes with `bytes` fewer taken
   void stallAlways(bool on);              // every bulk URB halts the endpoint (clear halt does not help)
   void corruptNextFrame();                // a payload byte flips on arrival → payload CRC mismatch
   void truncateNextFrame(std::size_t bytes);  // the device loses the last `bytes` of the next frame
@@ -85,6 +86,11 @@ public:
   void setBadCalibrationCrc(bool on);     // the calibration blob's CRC does not match
   void lieInStatus(int brightness, std::int64_t presentedSequence);  // GET_STATUS says these (-1: the truth)
   void forgetErrors(bool on);             // GET_LAST_ERROR says "no error" whatever happened
+  // The device vanishes when vendor request `request` arrives: it and every
+  // pending URB fail with -ESHUTDOWN, all else with ENODEV, as after an unplug
+  // (unplug() then removes its node).
+  void unplugAtRequest(usbdisplay::Request request);
+  void failClaim(int errnoValue);         // CLAIMINTERFACE fails with this errno until set to 0 (EBUSY: held elsewhere)
 
   const EmulatedDisplayConfig& config() const { return config_; }
   EmulatedDisplayState state() const;

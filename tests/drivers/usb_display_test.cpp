@@ -16,10 +16,12 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
-#include <fstream>
-
 #include <chrono>
 #include <cmath>
+#include <fstream>
+#include <functional>
+#include <string>
+#include <vector>
 
 namespace lfi {
 namespace {
@@ -50,6 +52,15 @@ protected:
 
   static bool sameBytes(const cv::Mat& a, const cv::Mat& b) {
     return a.size() == b.size() && a.type() == b.type() && cv::norm(a, b, cv::NORM_INF) == 0;
+  }
+
+  // `panel` is presented whole, after one CLEAR_HALT that drops what the device holds of an earlier frame.
+  static void expectPresentedAfterOneClearHalt(EmulatedUsbDisplay& device, Display& display, const cv::Mat& panel) {
+    const std::uint32_t halts = device.state().clearHalts;
+    const PresentResult result = display.show(panel);
+    ASSERT_EQ(result.status, PresentStatus::Presented) << result.message;
+    EXPECT_TRUE(sameBytes(device.presented(), panel));
+    EXPECT_EQ(device.state().clearHalts, halts + 1);
   }
 };
 
@@ -309,6 +320,105 @@ TEST_F(UsbDisplayTest, StallIsClearedAndTheFrameResent) {
   EXPECT_EQ(display->show(panel).status, PresentStatus::Presented);
 }
 
+// A stall on a later transfer of a frame: the device's CLEAR_HALT drops the
+// part it took, so the host must send the whole frame again, not the rest.
+TEST_F(UsbDisplayTest, AStallOnALaterTransferIsClearedAndTheWholeFrameResent) {
+  EmulatedUsbDisplay device;
+  device.plug();
+  UsbDisplayOptions options;
+  options.transferSize_bytes = 64 * 1024;  // 13 transfers for the 640 x 400 RGB panel
+  const UsbDisplaySelector selector{usbdisplay::kDefaultVendorId, usbdisplay::kDefaultProductId, ""};
+  auto display = openUsbDisplay(selector, options);
+  const cv::Mat panel = randomPanel(display->info(), 21);
+  const std::uint32_t halts = device.state().clearHalts;
+  device.stallNextFrame(5);
+  const PresentResult result = display->show(panel);
+  ASSERT_EQ(result.status, PresentStatus::Presented) << result.message;
+  EXPECT_TRUE(sameBytes(device.presented(), panel));
+  EXPECT_EQ(device.state().clearHalts, halts + 1);
+  EXPECT_EQ(display->status().stallsCleared, 1u);
+}
+
+// A transfer the device acknowledged with fewer bytes than it was given
+// leaves a hole in the frame: the frame is an error, never PRESENTed, and
+// the next one (after a CLEAR_HALT that drops the rest) arrives whole.
+TEST_F(UsbDisplayTest, ATransferTheDeviceTookOnlyPartOfIsAnErrorAndTheNextFrameIsWhole) {
+  EmulatedUsbDisplay device;
+  device.plug();
+  UsbDisplayOptions options;
+  options.transferSize_bytes = 64 * 1024;
+  const UsbDisplaySelector selector{usbdisplay::kDefaultVendorId, usbdisplay::kDefaultProductId, ""};
+  auto display = openUsbDisplay(selector, options);
+  const cv::Mat first = randomPanel(display->info(), 22), second = randomPanel(display->info(), 23);
+  device.shortenNextFrame(2, 100);
+  EXPECT_TRUE(throwsError([&] { display->show(first); }, Errc::Device,
+                          {"usb:1209:4c46", "bulk OUT of frame 1", "failed"}));
+  EXPECT_EQ(device.state().framesPresented, 0u);
+  EXPECT_EQ(device.state().framesRejected, 0u);  // (nothing PRESENTed, so nothing refused)
+  expectPresentedAfterOneClearHalt(device, *display, second);
+}
+
+TEST_F(UsbDisplayTest, AnInterfaceAnotherProgramHoldsIsNamed) {
+  EmulatedUsbDisplay device;
+  device.plug();
+  device.failClaim(EBUSY);
+  EXPECT_TRUE(throwsError([&] { openDisplay("usb:1209:4c46"); }, Errc::Device,
+                          {"usb:1209:4c46", "cannot claim interface 0", "LIBUSB_ERROR_BUSY", "another program has it"}));
+  device.failClaim(0);
+  auto display = openDisplay("usb:1209:4c46");
+  EXPECT_EQ(display->state(), Display::State::Open);
+}
+
+// The device vanishes at each request the host sends, at open and after: each
+// is an error naming the device and the request, the display is closed, and
+// it opens again once the device is back.
+TEST_F(UsbDisplayTest, ADeviceThatVanishesAtAnyRequestIsNamedAndOpensAgainWhenBack) {
+  using usbdisplay::Request;
+  struct Case {
+    Request request;
+    bool atOpen;
+    std::function<void(Display&, const cv::Mat&)> act;
+  };
+  const std::vector<Case> cases = {
+      {Request::GetProtocolVersion, true, {}},
+      {Request::GetDeviceInfo, true, {}},
+      {Request::GetCalibration, true, {}},
+      {Request::SetBrightness, false, [](Display& d, const cv::Mat&) { d.setBrightness(7); }},
+      {Request::Present, false, [](Display& d, const cv::Mat& panel) { d.show(panel); }},
+      {Request::GetStatus, false, [](Display& d, const cv::Mat&) { d.status(); }},
+      {Request::Blank, false, [](Display& d, const cv::Mat&) { d.blank(); }},
+  };
+  for (const Case& c : cases) {
+    const std::string name = usbdisplay::toString(c.request);
+    SCOPED_TRACE(name);
+    EmulatedUsbDisplay device;
+    device.plug();
+    auto display = openDisplay("usb:1209:4c46");
+    const cv::Mat panel = randomPanel(display->info(), 24);
+    if (c.atOpen) display->close();
+    device.unplugAtRequest(c.request);
+    EXPECT_TRUE(throwsError([&] { c.atOpen ? display->open() : c.act(*display, panel); }, Errc::Device,
+                            {"usb:1209:4c46", "vanished during " + name}));
+    EXPECT_EQ(display->state(), Display::State::Closed);
+    device.unplug();
+    device.plug();
+    display->open();
+    const cv::Mat again = randomPanel(display->info(), 25);
+    const PresentResult result = display->show(again);
+    ASSERT_EQ(result.status, PresentStatus::Presented) << result.message;
+    EXPECT_TRUE(sameBytes(device.presented(), again));
+  }
+  // And while it reads the reason for a refused frame.
+  EmulatedUsbDisplay device;
+  device.plug();
+  auto display = openDisplay("usb:1209:4c46");
+  device.corruptNextFrame();
+  device.unplugAtRequest(Request::GetLastError);
+  EXPECT_TRUE(throwsError([&] { display->show(randomPanel(display->info(), 26)); }, Errc::Device,
+                          {"usb:1209:4c46", "vanished during GET_LAST_ERROR"}));
+  EXPECT_EQ(display->state(), Display::State::Closed);
+}
+
 TEST_F(UsbDisplayTest, CrcMismatchIsARejectedFrame) {
   EmulatedUsbDisplay device;
   device.plug();
@@ -469,11 +579,7 @@ TEST_F(UsbDisplayTest, AFailedClearHaltIsTriedAgainBeforeTheNextFrame) {
   EXPECT_NE(refused.message.find("CLEAR_HALT"), std::string::npos) << refused.message;
   EXPECT_NE(refused.message.find("LIBUSB_ERROR_OTHER"), std::string::npos) << refused.message;
   device.failClearHalt(0);
-  const std::uint32_t halts = device.state().clearHalts;
-  const PresentResult next = display->show(second);
-  EXPECT_EQ(next.status, PresentStatus::Presented) << next.message;
-  EXPECT_TRUE(sameBytes(device.presented(), second));
-  EXPECT_EQ(device.state().clearHalts, halts + 1);
+  expectPresentedAfterOneClearHalt(device, *display, second);
 }
 
 // The same when the host that left part of a frame is gone (a crashed
