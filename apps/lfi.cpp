@@ -108,7 +108,7 @@ CLI::Validator wholeNumberIn(T lowest, T highest) {
 }
 constexpr long long kMostThreads = 4096, kMostFrames = 100000, kMostSpp = lfi::sim::kMostSamplesPerPixel;
 CLI::Validator threadCount() { return wholeNumberIn(0LL, kMostThreads); }
-CLI::Validator seedValue() { return wholeNumberIn<std::uint64_t>(0, std::numeric_limits<std::uint64_t>::max()); }
+CLI::Validator seedValue() { return wholeNumberIn<std::uint64_t>(0, lfi::sim::kLargestSeed); }
 
 // The reference bench: next to an installed `lfi` (<prefix>/bin/lfi and
 // <prefix>/share/lfi, as `cmake --install` lays them out), else in the source

@@ -54,15 +54,20 @@ double ConfigTable::number(const std::string& key, std::optional<double> fallbac
 }
 
 int ConfigTable::integer(const std::string& key, std::optional<int> fallback, int min, int max) {
+  return static_cast<int>(integer64(key, fallback, min, max));
+}
+
+std::int64_t ConfigTable::integer64(const std::string& key, std::optional<std::int64_t> fallback, std::int64_t min,
+                                    std::int64_t max) {
   const toml::node* n = node(key);
   if (!n) {
     if (!fallback) fail(Errc::Config, "{} is missing", where(key));
     return *fallback;
   }
   if (!n->is_integer()) fail(Errc::Config, "{} must be an integer", where(key));
-  const int64_t v = *n->value<int64_t>();
+  const std::int64_t v = *n->value<std::int64_t>();
   if (v < min || v > max) fail(Errc::Config, "{} = {} is outside [{}, {}]", where(key), v, min, max);
-  return static_cast<int>(v);
+  return v;
 }
 
 std::string ConfigTable::string(const std::string& key, std::optional<std::string> fallback,

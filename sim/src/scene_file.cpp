@@ -742,7 +742,7 @@ SceneDescription loadSceneFile(const fs::path& path) {
   if (root.has("render")) {
     ConfigTable r = root.table("render");
     d.render.samplesPerPixel = r.integer("samples_per_pixel", 16, 1, kMostSamplesPerPixel);
-    d.render.seed = static_cast<std::uint64_t>(r.integer("seed", 1, 0, 1 << 30));
+    d.render.seed = static_cast<std::uint64_t>(r.integer64("seed", 1, 0, kLargestSeed));
     d.render.splitDepth = r.integer("split_depth", 4, 0, RenderOptions::kMaxSplitDepth);
     d.render.maxDepth = r.integer("max_depth", 64, 1, 1024);
     r.finish();

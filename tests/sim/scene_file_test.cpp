@@ -193,6 +193,12 @@ TEST_F(SceneFile, BadValuesAreErrors) {
   big = big.replace(big.find("width = 16"), 10, "width = 65536").replace(big.find("height = 16"), 11, "height = 16385");
   EXPECT_TRUE(throwsError([&] { loadSceneFile(write("big.toml", big)); }, Errc::Config,
                           {"big.toml:", "camera.height", "65536 x 16385 pixels", "2^30"}));
+  // Seeds: TOML's whole range of non-negative integers, the range `lfi render --seed` takes.
+  const std::string ball = "[[object]]\nname='b'\nshape='sphere'\nradius_mm=1\n";
+  EXPECT_EQ(loadSceneFile(write("seed.toml", head + ball + "[render]\nseed = 9223372036854775807\n")).render.seed,
+            9223372036854775807ull);
+  EXPECT_TRUE(throwsError([&] { loadSceneFile(write("seed.toml", head + ball + "[render]\nseed = -1\n")); },
+                          Errc::Config, {"seed.toml:", "render.seed", "outside [0, 9223372036854775807]"}));
   // A cut-out that misses the part (here, a position in the world's frame where the object's was meant) or
   // holds all of it.
   const std::string part =

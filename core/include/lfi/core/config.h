@@ -6,6 +6,7 @@
 
 #include <toml++/toml.h>
 
+#include <cstdint>
 #include <filesystem>
 #include <memory>
 #include <optional>
@@ -24,6 +25,9 @@ public:
                 double min = -1e300, double max = 1e300);
   int integer(const std::string& key, std::optional<int> fallback = std::nullopt, int min = -(1 << 30),
               int max = 1 << 30);
+  // The same for TOML's whole range of integers (64-bit signed).
+  std::int64_t integer64(const std::string& key, std::optional<std::int64_t> fallback, std::int64_t min,
+                         std::int64_t max);
   std::string string(const std::string& key, std::optional<std::string> fallback = std::nullopt,
                      const std::vector<std::string>& allowed = {});
   // An array of numbers of fixed length (e.g. a position [x, y, z]), each in [min, max].

@@ -7,7 +7,9 @@
 #include "lfi/sim/scene.h"
 #include "lfi/sim/sensors.h"
 
+#include <cstdint>
 #include <filesystem>
+#include <limits>
 #include <numbers>
 #include <optional>
 #include <string>
@@ -71,6 +73,8 @@ inline constexpr double kDefaultCreaseAngle_deg = 30;
 // 1.8e18, and the object vanished without a word).
 inline constexpr double kFarthest_mm = 1e9;
 inline constexpr int kMostSamplesPerPixel = 1 << 20;
+// The largest seed: TOML's largest integer, so that any seed `lfi render --seed` takes can be written in a scene file.
+inline constexpr std::int64_t kLargestSeed = std::numeric_limits<std::int64_t>::max();
 
 TriangleMesh loadMesh(const std::filesystem::path& path,
                       double creaseAngle_rad = kDefaultCreaseAngle_deg * std::numbers::pi / 180, double scale = 1);
