@@ -541,6 +541,10 @@ int main(int argc, char** argv) {
         if (e.code() != lfi::Errc::Config) throw;
         throw lfi::Error(e.code(), fmt::format("{}: {}", sceneFile.string(), e.what()));
       }
+      // From here Ctrl-C ends the process again (a write in progress removes its temporary): the render it
+      // would have cancelled is done.
+      std::signal(SIGINT, SIG_DFL);
+      if (gCancel) lfi::fail(lfi::Errc::Cancelled, "render: interrupted");
       const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
       bar.finish();
       if (const auto* lfs = std::get_if<lfi::sim::LightFieldSensor>(&d.sensor)) {
