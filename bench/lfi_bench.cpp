@@ -357,10 +357,10 @@ static int run(int argc, char** argv) {
       for (int k = 0; k < 16; ++k) {
         const size_t i = std::min(k0 + static_cast<size_t>(k), batch.rays.size() - 1);
         const RTCRay& r = batch.rays[i].ray;
-        valid[k] = k0 + static_cast<size_t>(k) < batch.rays.size() ? -1 : 0;
+        valid[k] = k0 + static_cast<size_t>(k) < batch.rays.size() ? -1 : 0;  // (and tfar < tnear: scene.cpp)
         p.ray.org_x[k] = r.org_x, p.ray.org_y[k] = r.org_y, p.ray.org_z[k] = r.org_z;
         p.ray.dir_x[k] = r.dir_x, p.ray.dir_y[k] = r.dir_y, p.ray.dir_z[k] = r.dir_z;
-        p.ray.tnear[k] = r.tnear, p.ray.tfar[k] = std::numeric_limits<float>::infinity();
+        p.ray.tnear[k] = r.tnear, p.ray.tfar[k] = valid[k] ? std::numeric_limits<float>::infinity() : -1.0f;
         p.ray.time[k] = 0, p.ray.mask[k] = 0xffffffffu, p.ray.id[k] = static_cast<unsigned>(k), p.ray.flags[k] = 0;
         p.hit.geomID[k] = RTC_INVALID_GEOMETRY_ID;
       }

@@ -175,7 +175,10 @@ void analyticIntersect(const RTCIntersectFunctionNArguments* args) {
 }
 
 // Embree's packet for the lanes in `traced` (the others invalid), every lane
-// at once (vectorised).
+// at once (vectorised). An invalid lane also gets tfar < tnear: on a CPU
+// without AVX-512, Embree 3.13 answers rtcIntersect16 through its ray-stream
+// path, which ignores the valid mask and skips only such rays (it traced all
+// sixteen, and the callbacks noted lanes nobody asked for).
 LFI_SIMD_CLONES void embreePacket(const RayLanes& __restrict r, std::uint32_t traced, double tMin,
                                   int* __restrict valid, RTCRayHit16& __restrict rh) {
   for (int k = 0; k < RayLanes::kSize; ++k) {
@@ -187,7 +190,8 @@ LFI_SIMD_CLONES void embreePacket(const RayLanes& __restrict r, std::uint32_t tr
     rh.ray.dir_y[k] = static_cast<float>(r.dy[k]);
     rh.ray.dir_z[k] = static_cast<float>(r.dz[k]);
     rh.ray.tnear[k] = static_cast<float>(tMin);
-    rh.ray.tfar[k] = std::numeric_limits<float>::infinity();
+    rh.ray.tfar[k] = (traced >> k & 1) != 0 ? std::numeric_limits<float>::infinity()
+                                            : -std::numeric_limits<float>::infinity();
     rh.ray.time[k] = 0;
     rh.ray.mask[k] = 0xffffffffu;
     rh.ray.id[k] = static_cast<unsigned>(k);
