@@ -313,7 +313,7 @@ class AravisCamera final : public Camera {
   void configure(const CameraSettings& s) override {
     requireCameraState(state_, {State::Open, State::Configured}, "configure", name());
     state_ = State::Open;  // until every field is applied
-    validate(s);
+    requireSaneSettings(s, name());
     applyPixelFormat(s.pixelFormat);
     applyBinning(s.binning);
     applyRegion(s);
@@ -660,20 +660,6 @@ class AravisCamera final : public Camera {
     if (node == nullptr || !ARV_IS_GC_FEATURE_NODE(node))
       fail(Errc::NotFound, "camera '{}': {}('{}'): the device has no such feature", name(), method, feature);
     return ARV_GC_FEATURE_NODE(node);
-  }
-
-  void validate(const CameraSettings& s) const {
-    if (!(s.exposure_us > 0) || !std::isfinite(s.exposure_us))
-      fail(Errc::InvalidArgument, "camera '{}': exposure_us {} must be finite and > 0", name(), s.exposure_us);
-    if (!std::isfinite(s.gain)) fail(Errc::InvalidArgument, "camera '{}': gain {} must be finite", name(), s.gain);
-    if (s.binning < 1) fail(Errc::InvalidArgument, "camera '{}': binning {} must be >= 1", name(), s.binning);
-    if (s.roiX_px < 0 || s.roiY_px < 0 || s.roiWidth_px < 0 || s.roiHeight_px < 0)
-      fail(Errc::InvalidArgument, "camera '{}': ROI ({}, {}, {} x {}) has a negative value", name(), s.roiX_px,
-           s.roiY_px, s.roiWidth_px, s.roiHeight_px);
-    if (!(s.frameRate_hz >= 0) || !std::isfinite(s.frameRate_hz))
-      fail(Errc::InvalidArgument, "camera '{}': frameRate_hz {} must be finite and >= 0", name(), s.frameRate_hz);
-    if (s.trigger == TriggerMode::Line && s.triggerLine.empty())
-      fail(Errc::InvalidArgument, "camera '{}': TriggerMode::Line needs triggerLine", name());
   }
 
   std::vector<std::string> availablePixelFormats() const {

@@ -5,6 +5,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <cmath>
 #include <string>
 
 namespace lfi {
@@ -66,6 +67,20 @@ void requireCameraState(Camera::State current, std::initializer_list<Camera::Sta
   for (Camera::State state : allowed) names += fmt::format("{}{}", names.empty() ? "" : ", ", toString(state));
   fail(Errc::InvalidArgument, "camera '{}': {}() is not allowed in state {} (allowed in: {})", device, method,
        toString(current), names);
+}
+
+void requireSaneSettings(const CameraSettings& s, const std::string& device) {
+  if (!(s.exposure_us > 0) || !std::isfinite(s.exposure_us))
+    fail(Errc::InvalidArgument, "camera '{}': exposure_us {} must be finite and > 0", device, s.exposure_us);
+  if (!std::isfinite(s.gain)) fail(Errc::InvalidArgument, "camera '{}': gain {} must be finite", device, s.gain);
+  if (s.binning < 1) fail(Errc::InvalidArgument, "camera '{}': binning {} must be >= 1", device, s.binning);
+  if (s.roiX_px < 0 || s.roiY_px < 0 || s.roiWidth_px < 0 || s.roiHeight_px < 0)
+    fail(Errc::InvalidArgument, "camera '{}': ROI ({}, {}, {} x {}) has a negative value", device, s.roiX_px,
+         s.roiY_px, s.roiWidth_px, s.roiHeight_px);
+  if (!(s.frameRate_hz >= 0) || !std::isfinite(s.frameRate_hz))
+    fail(Errc::InvalidArgument, "camera '{}': frameRate_hz {} must be finite and >= 0", device, s.frameRate_hz);
+  if (s.trigger == TriggerMode::Line && s.triggerLine.empty())
+    fail(Errc::InvalidArgument, "camera '{}': TriggerMode::Line needs triggerLine", device);
 }
 
 std::chrono::milliseconds checkedGrabTimeout(std::chrono::milliseconds timeout, const std::string& device) {

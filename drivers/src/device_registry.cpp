@@ -22,6 +22,7 @@ DeviceUri parseDeviceUri(std::string_view text, std::string_view kind, std::stri
   if (question == std::string_view::npos) return uri;
 
   std::string_view query = rest.substr(question + 1);
+  if (query.empty()) fail(Errc::Config, "{} URI '{}' ends with '?' (no query after it)", kind, text);
   while (!query.empty()) {
     const std::size_t amp = query.find('&');
     const std::string_view item = query.substr(0, amp);

@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 #include <string>
 #include <vector>
 
@@ -61,7 +62,7 @@ void DisplayInfo::validate() const {
         "(0, 10]");
   check(finite(optics.lensPitch_px) && optics.lensPitch_px >= 1 && optics.lensPitch_px <= 1000, "lensPitch_px",
         optics.lensPitch_px, "[1, 1000]");
-  check(finite(optics.slant_rad) && std::abs(optics.slant_rad) < 0.786, "slant_rad", optics.slant_rad,
+  check(finite(optics.slant_rad) && std::abs(optics.slant_rad) < std::numbers::pi / 4, "slant_rad", optics.slant_rad,
         "(-pi/4, pi/4)");
   check(finite(optics.offset_px) && std::abs(optics.offset_px) <= 1e6, "offset_px", optics.offset_px, "[-1e6, 1e6]");
   // (A gap below a micrometre is no display; it would also put the rays' slopes
@@ -79,7 +80,7 @@ void DisplayInfo::validate() const {
 }
 
 PresentResult Display::show(const LightField& lightField, double white) {
-  requireDisplayState(state(), {State::Open, State::Showing}, "show(LightField)", "display");
+  requireDisplayState(state(), {State::Open, State::Showing}, "show(LightField)", name());
   return show(encodeLightField(lightField, DisplayOptics(info()), white));
 }
 

@@ -123,6 +123,7 @@ public:
   ~UsbDisplay() override { close(); }
 
   State state() const override { return state_; }
+  std::string name() const override { return name_; }
 
   void open() override {
     requireDisplayState(state_, {State::Closed}, "open", name_);

@@ -3,6 +3,7 @@
 #include "lfi/core/error.h"
 
 #include <map>
+#include <utility>
 
 namespace lfi::sim {
 
@@ -101,6 +102,16 @@ void SimBench::showPanel(const cv::Mat& panel) {
     lit_ = true;
     return true;
   });
+}
+
+bool SimBench::claimDisplay() {
+  std::lock_guard lock(mutex_);
+  return !std::exchange(displayClaimed_, true);
+}
+
+void SimBench::releaseDisplay() {
+  std::lock_guard lock(mutex_);
+  displayClaimed_ = false;
 }
 
 void SimBench::blankPanel() {

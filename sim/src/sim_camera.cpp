@@ -68,6 +68,7 @@ void SimImager::setRenderOptions(int threads, std::function<void(double)> progre
 
 CameraSettings SimImager::resolve(const CameraSettings& s, const std::string& device) const {
   const Limits limits;
+  requireSaneSettings(s, device);
   CameraSettings r = s;
   if (!(s.exposure_us >= limits.minExposure_us && s.exposure_us <= limits.maxExposure_us))
     fail(Errc::InvalidArgument, "camera '{}': exposure_us {} is outside {}..{} us", device, s.exposure_us,
@@ -80,9 +81,6 @@ CameraSettings SimImager::resolve(const CameraSettings& s, const std::string& de
     fail(Errc::InvalidArgument, "camera '{}': binning {} is outside 1..{} (sensor {} x {})", device, s.binning,
          limits.maxBinning, camera_.width, camera_.height);
   const int width = camera_.width / s.binning, height = camera_.height / s.binning;
-  if (s.roiX_px < 0 || s.roiY_px < 0 || s.roiWidth_px < 0 || s.roiHeight_px < 0)
-    fail(Errc::InvalidArgument, "camera '{}': ROI ({}, {}, {} x {}) has a negative value", device, s.roiX_px,
-         s.roiY_px, s.roiWidth_px, s.roiHeight_px);
   r.roiWidth_px = s.roiWidth_px > 0 ? s.roiWidth_px : width - s.roiX_px;
   r.roiHeight_px = s.roiHeight_px > 0 ? s.roiHeight_px : height - s.roiY_px;
   if (r.roiWidth_px < 1 || r.roiHeight_px < 1 || r.roiWidth_px > width - s.roiX_px ||
@@ -94,9 +92,9 @@ CameraSettings SimImager::resolve(const CameraSettings& s, const std::string& de
          "(FreeRun, Software)", device);
   if (s.trigger == TriggerMode::FreeRun) {
     if (s.frameRate_hz == 0) r.frameRate_hz = limits.defaultFrameRate_hz;
-    if (!(r.frameRate_hz > 0 && r.frameRate_hz <= limits.maxFrameRate_hz))
-      fail(Errc::InvalidArgument, "camera '{}': frameRate_hz {} is outside (0, {}] Hz", device, s.frameRate_hz,
-           limits.maxFrameRate_hz);
+    if (!(r.frameRate_hz >= limits.minFrameRate_hz && r.frameRate_hz <= limits.maxFrameRate_hz))
+      fail(Errc::InvalidArgument, "camera '{}': frameRate_hz {} is outside {}..{} Hz (0: the default, {} Hz)", device,
+           s.frameRate_hz, limits.minFrameRate_hz, limits.maxFrameRate_hz, limits.defaultFrameRate_hz);
   }
   return r;
 }

@@ -25,18 +25,28 @@ class SimDisplay final : public Display {
   ~SimDisplay() override { close(); }
 
   State state() const override { return state_; }
+  std::string name() const override { return name_; }
 
   void open() override {
     requireDisplayState(state_, {State::Closed}, "open", name_);
     auto bench = SimBench::open(sceneFile_, fmt::format("display '{}'", name_));
     if (!bench->hasDisplay())
       fail(Errc::Config, "display '{}': the scene file has no [display] table (docs/scene-files.md)", name_);
+    if (!bench->claimDisplay())
+      fail(Errc::Device, "display '{}': already open in this process (one display drives a scene file's panel; "
+           "close the other first)", name_);
     info_ = bench->description().display->info;
     info_.serial = bench->description().name;
     info_.deviceId = sceneFile_.string();
-    bench->blankPanel();
-    bench->setBacklight(info_.brightnessMax);
-    bench_ = std::move(bench);
+    bench_ = std::move(bench);  // (holds the claim: close() releases it)
+    sequence_ = 0;              // frames count from 1 after each open, as the USB protocol's do
+    try {
+      bench_->blankPanel();
+      bench_->setBacklight(info_.brightnessMax);
+    } catch (...) {  // (a camera's change listener failed: the display stays closed, its claim released)
+      close();
+      throw;
+    }
     state_ = State::Open;
   }
 
@@ -46,6 +56,7 @@ class SimDisplay final : public Display {
         bench_->blankPanel();
       } catch (...) {  // close() does not throw; a change listener (a camera's) that failed is not its business
       }
+      bench_->releaseDisplay();
     }
     bench_.reset();
     state_ = State::Closed;

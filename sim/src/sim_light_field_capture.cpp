@@ -4,9 +4,11 @@
 #include "lfi/sim/render.h"
 #include "lfi/sim/scene_file.h"
 
+#include <algorithm>
 #include <charconv>
-#include <mutex>
 #include <numbers>
+#include <string>
+#include <vector>
 
 namespace lfi::sim {
 namespace {
@@ -15,21 +17,26 @@ class SimLightFieldCapture final : public LightFieldCapture {
 public:
   SimLightFieldCapture(const std::filesystem::path& sceneFile, const SimCaptureSettings& settings)
       : sceneFile_(sceneFile), settings_(settings) {
-    settings_.geometry.validate();
+    try {
+      settings_.geometry.validate();
+    } catch (const Error& e) {
+      fail(e.code(), "sim light field capture of '{}': {}", sceneFile_.string(), e.what());
+    }
     if (!(settings_.beamHalfAngle_rad > 0 && settings_.beamHalfAngle_rad < 1.5))
-      fail(Errc::Config, "sim light field capture: beam_half_angle_rad = {} is outside (0, 1.5)",
-           settings_.beamHalfAngle_rad);
+      fail(Errc::InvalidArgument, "sim light field capture of '{}': beam_half_angle_rad = {} is outside (0, 1.5)",
+           sceneFile_.string(), settings_.beamHalfAngle_rad);
     // (As a scene file's positions and samples per pixel: a beam at infinity would light nothing.)
     if (!(settings_.beamDistance_mm > 0 && settings_.beamDistance_mm <= kFarthest_mm))
-      fail(Errc::Config, "sim light field capture: beam_distance_mm = {} is outside (0, 1e9]",
-           settings_.beamDistance_mm);
+      fail(Errc::InvalidArgument, "sim light field capture of '{}': beam_distance_mm = {} is outside (0, 1e9]",
+           sceneFile_.string(), settings_.beamDistance_mm);
     static_assert(kFarthest_mm == 1e9, "the message above states the bound");
     if (settings_.samplesPerPixel < 1 || settings_.samplesPerPixel > kMostSamplesPerPixel)
-      fail(Errc::Config, "sim light field capture: spp = {} is outside 1 .. 2^20", settings_.samplesPerPixel);
+      fail(Errc::InvalidArgument, "sim light field capture of '{}': spp = {} is outside 1 .. 2^20",
+           sceneFile_.string(), settings_.samplesPerPixel);
     // (0 means "not set" in a light field file; here it is where the sensor is.)
     if (!(settings_.geometry.distance_mm > 0))
-      fail(Errc::Config, "sim light field capture: distance_mm = {} must be > 0: the sensor's plane lies Δ below the "
-           "part", settings_.geometry.distance_mm);
+      fail(Errc::InvalidArgument, "sim light field capture of '{}': distance_mm = {} must be > 0: the sensor's plane "
+           "lies Δ below the part", sceneFile_.string(), settings_.geometry.distance_mm);
     // Load now, so that a bad scene file is reported at open.
     SceneDescription d = loadSceneFile(sceneFile_);
     seed_ = d.render.seed;
@@ -102,8 +109,9 @@ std::unique_ptr<LightFieldCapture> openSimLightFieldCapture(const std::filesyste
 }
 
 void registerSimLightFieldCapture() {
-  static std::once_flag once;
-  std::call_once(once, [] {
+  const std::vector<std::string> schemes = lightFieldCaptureSchemes();
+  if (std::ranges::find(schemes, std::string("sim")) != schemes.end()) return;
+  try {
     registerLightFieldCaptureBackend(LightFieldCaptureBackend{
         .scheme = "sim",
         .queryKeys = {"spatial", "angular", "pitch_mm", "distance_mm", "beam_half_angle_rad", "beam_distance_mm",
@@ -121,14 +129,16 @@ void registerSimLightFieldCapture() {
               s.beamDistance_mm = parseValue(uri, "beam_distance_mm", s.beamDistance_mm);
               s.samplesPerPixel = parseValue(uri, "spp", s.samplesPerPixel);
               try {
-                s.geometry.validate();
-              } catch (const Error& e) {
+                return openSimLightFieldCapture(uri.path, s);
+              } catch (const Error& e) {  // (a setting out of range: the URI's)
+                if (e.code() != Errc::InvalidArgument) throw;
                 fail(Errc::Config, "light field capture URI '{}': {}", uri.text, e.what());
               }
-              return openSimLightFieldCapture(uri.path, s);
             },
     });
-  });
+  } catch (const Error&) {
+    // Registered by another thread in between: fine, the scheme is there.
+  }
 }
 
 }  // namespace lfi::sim

@@ -12,6 +12,7 @@
 #include <opencv2/imgproc.hpp>
 #include <unistd.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <thread>
@@ -156,6 +157,28 @@ protected:
 
   fs::path dir_;
 };
+
+// registerSimBackends() may be called again and again, also when another
+// library took a scheme first: a light field capture backend "sim" of its
+// own leaves lfi's camera and display backends registered. (ctest runs this
+// test in a process of its own, where no "sim" is registered before it.)
+TEST(SimBackends, RegisterWhenAnotherLibraryTookTheCaptureScheme) {
+  const std::vector<std::string> captures = lightFieldCaptureSchemes();
+  if (std::ranges::find(captures, std::string("sim")) == captures.end())
+    registerLightFieldCaptureBackend(LightFieldCaptureBackend{
+        .scheme = "sim",
+        .queryKeys = {},
+        .description = "another library's",
+        .factory = [](const DeviceUri&) -> std::unique_ptr<LightFieldCapture> {
+          fail(Errc::Device, "another library's");
+        },
+    });
+  EXPECT_NO_THROW(sim::registerSimBackends());
+  EXPECT_NO_THROW(sim::registerSimBackends());
+  const std::vector<std::string> cameras = cameraSchemes(), displays = displaySchemes();
+  EXPECT_NE(std::ranges::find(cameras, std::string("sim")), cameras.end());
+  EXPECT_NE(std::ranges::find(displays, std::string("sim")), displays.end());
+}
 
 TEST_F(ControllerTest, InverseSchlierenCycleLightsTheIntactLensAndDarkensTheParticle) {
   auto capture = openLightFieldCapture(captureUri());
@@ -310,7 +333,9 @@ TEST_F(ControllerTest, ErrorsNameTheProblem) {
                             {"beam_distance_mm", "(0, 1e9]"}))
         << bad;
   EXPECT_TRUE(throwsError([&] { openLightFieldCapture(uri("intact.toml") + "?spp=2000000"); }, Errc::Config,
-                          {"spp = 2000000", "2^20"}));
+                          {uri("intact.toml") + "?spp=2000000", "spp = 2000000", "2^20"}));
+  EXPECT_TRUE(throwsError([&] { openLightFieldCapture(uri("intact.toml") + "?beam_half_angle_rad=0"); },
+                          Errc::Config, {uri("intact.toml") + "?beam_half_angle_rad=0", "(0, 1.5)"}));
 }
 
 }  // namespace

@@ -36,6 +36,7 @@ TEST(CameraUri, MalformedUrisAreConfigErrors) {
   EXPECT_TRUE(throwsError([] { parseCameraUri("aravis:x?=3"); }, Errc::Config, {"<key>=<value>"}));
   EXPECT_TRUE(throwsError([] { parseCameraUri("aravis:x?a=1&a=2"); }, Errc::Config, {"'a'", "twice"}));
   EXPECT_TRUE(throwsError([] { parseCameraUri("aravis:x?a=1&"); }, Errc::Config, {"ends with '&'"}));
+  EXPECT_TRUE(throwsError([] { parseCameraUri("aravis:x?"); }, Errc::Config, {"aravis:x?", "ends with '?'"}));
 }
 
 TEST(CameraRegistry, UnknownSchemeListsKnownSchemes) {

@@ -13,6 +13,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <string>
 
 namespace lfi::sim {
@@ -222,10 +223,25 @@ TEST_F(SimCameraTest, StateMachine) {
   EXPECT_EQ(camera->state(), S::Open);
   bad = s;
   bad.trigger = TriggerMode::Line;
+  bad.triggerLine = "Line1";
   EXPECT_TRUE(throwsError([&] { camera->configure(bad); }, Errc::InvalidArgument, {"Line", "no trigger lines"}));
   bad = s;
   bad.gain = 30;
   EXPECT_TRUE(throwsError([&] { camera->configure(bad); }, Errc::InvalidArgument, {"gain 30", "0..24 dB"}));
+  // A free-running clock of a frame per 10^12 s would overflow its nanoseconds (and its loop would never
+  // end); a rate that is no rate is refused whatever the trigger, as the Aravis backend refuses it.
+  bad = s;
+  bad.trigger = TriggerMode::FreeRun;
+  bad.frameRate_hz = 1e-12;
+  EXPECT_TRUE(throwsError([&] { camera->configure(bad); }, Errc::InvalidArgument,
+                          {"frameRate_hz 1e-12", "0.001..1000 Hz"}));
+  for (const double rate : {-1.0, std::numeric_limits<double>::quiet_NaN()}) {
+    bad = s;
+    bad.trigger = TriggerMode::Software;
+    bad.frameRate_hz = rate;
+    EXPECT_TRUE(throwsError([&] { camera->configure(bad); }, Errc::InvalidArgument, {"frameRate_hz", ">= 0"}));
+  }
+  EXPECT_EQ(camera->state(), S::Open);
 
   // Features.
   camera->configure(s);

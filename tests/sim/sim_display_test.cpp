@@ -144,11 +144,23 @@ TEST_F(SimDisplayTest, StateMachineThroughTheSimBackend) {
   EXPECT_TRUE(throwsError([&] { display->info(); }, Errc::InvalidArgument, {"info", "Closed"}));
   EXPECT_TRUE(throwsError([&] { display->show(cv::Mat(200, 320, CV_8UC1)); }, Errc::InvalidArgument, {"Closed"}));
   EXPECT_TRUE(throwsError([&] { display->blank(); }, Errc::InvalidArgument, {"Closed"}));
+  EXPECT_TRUE(throwsError([&] { display->show(LightField(LightFieldGeometry{2, 2, 4, 0.05, 30})); },
+                          Errc::InvalidArgument, {uri(file), "show(LightField)", "Closed"}));
   display->close();  // any state
   display->open();
   EXPECT_EQ(display->state(), Display::State::Open);
   EXPECT_EQ(display->status().brightness, 255);  // open() resets the backlight
   EXPECT_TRUE(throwsError([&] { display->open(); }, Errc::InvalidArgument, {"open", "Open"}));
+  // Frames count from 1 again after an open, as the USB protocol's do.
+  EXPECT_EQ(display->show(cv::Mat(200, 320, CV_8UC1, cv::Scalar(9))).sequence, 1u);
+
+  // One display drives the file's panel: a second is refused, naming it, and leaves the first showing.
+  EXPECT_TRUE(throwsError([&] { openDisplay(uri(file)); }, Errc::Device, {uri(file), "already open"}));
+  EXPECT_EQ(display->state(), Display::State::Showing);
+  EXPECT_TRUE(bench->lit());
+  display->close();
+  auto second = openDisplay(uri(file));
+  EXPECT_EQ(second->state(), Display::State::Open);
 }
 
 TEST_F(SimDisplayTest, BadUrisAndSceneFilesAreClearErrors) {

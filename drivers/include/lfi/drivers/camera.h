@@ -171,6 +171,12 @@ const char* toString(Camera::State state);
 void requireCameraState(Camera::State current, std::initializer_list<Camera::State> allowed, const char* method,
                         const std::string& device);
 
+// For backends' configure, before their own ranges: throws Errc::InvalidArgument
+// naming the device and the field unless the exposure is finite and > 0, the
+// gain finite, the binning >= 1, no ROI value negative, the frame rate finite
+// and >= 0 (whatever the trigger mode) and TriggerMode::Line names a line.
+void requireSaneSettings(const CameraSettings& settings, const std::string& device);
+
 // For backends' grabInto: throws Errc::InvalidArgument for a negative timeout;
 // returns it at most a year, so that "forever" (milliseconds::max()) added to
 // a clock does not overflow.

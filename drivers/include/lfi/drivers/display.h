@@ -119,6 +119,10 @@ public:
   // Any state.
   virtual State state() const = 0;
 
+  // Any state: the device's name in messages, the URI that opens it
+  // ("usb:1209:4c46/LFI-0001", "sim:bench.toml").
+  virtual std::string name() const = 0;
+
   // Closed → Open: (re)connects to the device named at creation and reads its
   // info and calibration. Throws Errc::NotFound when the device is not there.
   virtual void open() = 0;

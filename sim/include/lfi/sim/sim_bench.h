@@ -80,6 +80,13 @@ class SimBench : public std::enable_shared_from_this<SimBench> {
   using ChangeListener = std::function<void()>;
   [[nodiscard]] std::shared_ptr<void> onDisplayChange(ChangeListener listener);
 
+  // The display's one driver: a SimDisplay claims the panel at open and
+  // releases it at close. False when another holds it (a second display on the
+  // file would blank the first's frame under it; the `usb:` backend refuses a
+  // second claim of its interface likewise).
+  bool claimDisplay();
+  void releaseDisplay();
+
   // Display side (require hasDisplay()). `panel` as makePanelEmission() takes it.
   void showPanel(const cv::Mat& panel);
   void blankPanel();
@@ -102,6 +109,7 @@ class SimBench : public std::enable_shared_from_this<SimBench> {
   std::shared_ptr<const cv::Mat> levels_;
   bool lit_ = false;
   int backlight_ = 0;
+  bool displayClaimed_ = false;
   std::shared_ptr<const DisplayState> state_ = std::make_shared<const DisplayState>();  // version 1
   std::mutex changeMutex_;  // one change at a time: listeners see them in order
   std::mutex listenersMutex_;

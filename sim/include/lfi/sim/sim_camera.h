@@ -62,7 +62,7 @@ class SimImager {
     double minExposure_us = 1, maxExposure_us = 10'000'000;
     double minGain_dB = 0, maxGain_dB = 24;
     int maxBinning = 8;
-    double maxFrameRate_hz = 1000, defaultFrameRate_hz = 25;
+    double minFrameRate_hz = 1e-3, maxFrameRate_hz = 1000, defaultFrameRate_hz = 25;  // (a frame per 1000 s at least)
   };
 
   // Opens the scene file's bench (sim_bench.h: shared with a SimDisplay on the same
