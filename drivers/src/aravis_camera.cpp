@@ -322,6 +322,10 @@ class AravisCamera final : public Camera {
     // rate under 1 / exposure. An exposure past what the current period allows
     // needs the new rate first; otherwise the exposure goes first, which opens
     // the higher rates.
+    if (s.trigger != TriggerMode::FreeRun)
+      setFrameRateCap(false);
+    else if (setsFrameRate(s))
+      setFrameRateCap(true);
     const bool rateFirst = setsFrameRate(s) && s.exposure_us > exposureBounds().second;
     if (rateFirst) applyFrameRate(s);
     applyExposureAndGain(s);
@@ -794,6 +798,24 @@ class AravisCamera final : public Camera {
       fail(Errc::InvalidArgument, "camera '{}': gain {} is outside the device's {}..{}", name(), s.gain, min, max);
     arv_camera_set_gain(camera_, s.gain, &error);
     check(error, name(), fmt::format("arv_camera_set_gain({})", s.gain));
+  }
+
+  // SFNC's frame-rate cap (AcquisitionFrameRateEnable), where the device has
+  // it: on for a free run at a set rate (a rate does not apply without it), off
+  // in a triggered mode, where the triggers set the pace. Left on from an
+  // earlier free run, it would keep a triggered exposure within that rate's
+  // period and drop triggers that come faster. (A device that will not change
+  // it keeps it; the exposure's check then names the bound in force.)
+  void setFrameRateCap(bool on) {
+    static constexpr const char* kFeature = "AcquisitionFrameRateEnable";
+    GError* error = nullptr;
+    if (arv_camera_is_feature_available(camera_, kFeature, &error) && error == nullptr &&
+        (arv_camera_get_boolean(camera_, kFeature, &error) != FALSE) != on && error == nullptr)
+      arv_camera_set_boolean(camera_, kFeature, on ? TRUE : FALSE, &error);
+    if (error != nullptr) {
+      spdlog::warn("camera '{}': {} could not be set to {}: {}", name(), kFeature, on, error->message);
+      g_clear_error(&error);
+    }
   }
 
   // (Before applyTrigger: arv_camera_set_frame_rate switches triggers off.)

@@ -29,7 +29,6 @@
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
-#include <cstring>
 #include <filesystem>
 #include <string>
 #include <thread>
@@ -143,6 +142,15 @@ class AravisCameraTest : public ::testing::Test {
 
   std::unique_ptr<Camera> openFake() { return openCamera("aravis:" + fake_->id()); }
 
+  // Replaces the fake device by one serving the GenICam description `xml`
+  // (serial `prefix` + pid), and opens it.
+  std::unique_ptr<Camera> openFakeWith(const std::string& prefix, const std::filesystem::path& xml) {
+    fake_.reset();
+    fake_ = std::make_unique<FakeGvCamera>(prefix + std::to_string(::getpid()));
+    fake_->start(binary_, 0, xml.string());
+    return openFake();
+  }
+
   // A small free-running Mono8 set-up that streams fast on loopback.
   static CameraSettings smallSettings() {
     CameraSettings s;
@@ -204,6 +212,15 @@ std::string fakeGenicam() {
   return text;
 }
 
+// Replaces the one occurrence of `from` in a GenICam description (a failure
+// when it is not there exactly once: the fake device's description changed).
+void replaceOnce(std::string& text, const std::string& from, const std::string& to) {
+  const std::size_t at = text.find(from);
+  ASSERT_NE(at, std::string::npos) << from << " is not in the fake device's description";
+  ASSERT_EQ(text.find(from, at + 1), std::string::npos) << from << " is in the fake device's description twice";
+  text.replace(at, from.size(), to);
+}
+
 // Writes a GenICam description for FakeGvCamera::start, with `extra` nodes before its end.
 std::filesystem::path writeGenicam(std::string text, const std::filesystem::path& file, const std::string& extra) {
   const std::size_t end = text.rfind("</RegisterDescription>");
@@ -238,10 +255,7 @@ std::filesystem::path genicamWithout(std::initializer_list<std::string> features
 TEST_F(AravisCameraTest, ADeviceWithoutSensorSizeFeaturesOpensWithItsLargestImage) {
   const std::filesystem::path xml = genicamWithout(
       {"SensorWidth", "SensorHeight"}, std::filesystem::temp_directory_path() / ("lfi-genicam-" + fake_->serial() + ".xml"));
-  fake_.reset();
-  fake_ = std::make_unique<FakeGvCamera>("LFIG" + std::to_string(::getpid()));
-  fake_->start(binary_, 0, xml.string());
-  auto camera = openFake();
+  auto camera = openFakeWith("LFIG", xml);
   EXPECT_TRUE(throwsError([&] { camera->getIntegerFeature("SensorWidth"); }, Errc::NotFound, {"SensorWidth"}));
   EXPECT_EQ(camera->getIntegerFeature("Width"), 512);  // the fake device's start-up image, smaller than its sensor
   const CameraInfo info = camera->info();
@@ -258,10 +272,7 @@ TEST_F(AravisCameraTest, ADeviceWithoutSensorSizeFeaturesOpensWithItsLargestImag
   genicamWithout({"SensorWidth", "SensorHeight"}, xml,
                  "<Integer Name=\"WidthMax\" NameSpace=\"Standard\"><Value>1000</Value></Integer>\n"
                  "<Integer Name=\"HeightMax\" NameSpace=\"Standard\"><Value>700</Value></Integer>\n");
-  fake_.reset();
-  fake_ = std::make_unique<FakeGvCamera>("LFIH" + std::to_string(::getpid()));
-  fake_->start(binary_, 0, xml.string());
-  camera = openFake();
+  camera = openFakeWith("LFIH", xml);
   EXPECT_EQ(camera->info().sensorWidth_px, 1000);
   EXPECT_EQ(camera->info().sensorHeight_px, 700);
   camera.reset();
@@ -275,14 +286,8 @@ TEST_F(AravisCameraTest, ADeviceWithoutSensorSizeFeaturesOpensWithItsLargestImag
 // A fake device with both bounds (its description edited) takes both ways.
 TEST_F(AravisCameraTest, AnExposureAndAFrameRateThatBoundEachOtherAreSetInAnOrderThatWorks) {
   std::string text = fakeGenicam();
-  auto replaceOnce = [&text](const std::string& from, const std::string& to) {
-    const std::size_t at = text.find(from);
-    ASSERT_NE(at, std::string::npos) << from << " is not in the fake device's description";
-    ASSERT_EQ(text.find(from, at + 1), std::string::npos) << from << " is in the fake device's description twice";
-    text.replace(at, from.size(), to);
-  };
-  replaceOnce("<Max>10000000.0</Max>", "<pMax>ExposureTimeAbsMax</pMax>");  // ExposureTimeAbs's, in us
-  replaceOnce("<Min>1000</Min>", "<pMin>AcquisitionFramePeriodMin</pMin>");  // AcquisitionFramePeriod's, in us
+  replaceOnce(text, "<Max>10000000.0</Max>", "<pMax>ExposureTimeAbsMax</pMax>");  // ExposureTimeAbs's, in us
+  replaceOnce(text, "<Min>1000</Min>", "<pMin>AcquisitionFramePeriodMin</pMin>");  // AcquisitionFramePeriod's, in us
   if (HasFatalFailure()) return;  // (the fake device's description changed)
   const std::filesystem::path xml = writeGenicam(
       text, std::filesystem::temp_directory_path() / ("lfi-genicam-bounds-" + fake_->serial() + ".xml"),
@@ -293,10 +298,7 @@ TEST_F(AravisCameraTest, AnExposureAndAFrameRateThatBoundEachOtherAreSetInAnOrde
       "  <pVariable Name=\"EXPOSURE\">ExposureTimeAbsRegister</pVariable>\n"
       "  <Formula>(EXPOSURE &gt; 1000) ? EXPOSURE : 1000</Formula>\n"
       "</IntSwissKnife>\n");
-  fake_.reset();
-  fake_ = std::make_unique<FakeGvCamera>("LFIB" + std::to_string(::getpid()));
-  fake_->start(binary_, 0, xml.string());
-  auto camera = openFake();
+  auto camera = openFakeWith("LFIB", xml);
   const CameraSettings fast = smallSettings();  // 1 ms at 200 Hz
   CameraSettings slow = fast;
   slow.exposure_us = 50'000;  // 50 ms at 10 Hz: past the 5 ms period of 200 Hz
@@ -313,6 +315,47 @@ TEST_F(AravisCameraTest, AnExposureAndAFrameRateThatBoundEachOtherAreSetInAnOrde
   impossible.frameRate_hz = 100;
   EXPECT_TRUE(throwsError([&] { camera->configure(impossible); }, Errc::InvalidArgument,
                           {"exposure_us 50000", "10..10000 us", "100 Hz"}));
+  camera.reset();
+  std::filesystem::remove(xml);
+}
+
+// A frame-rate cap (SFNC's AcquisitionFrameRateEnable) left on by a
+// free-running set-up bounds the exposure by that rate's period; in a
+// triggered mode the triggers set the pace, so a long triggered exposure
+// after a fast free run is taken. A fake device with the cap (its
+// description edited: the exposure's maximum is the frame period while the
+// cap is on) goes fast free run -> long software-triggered exposure -> fast.
+TEST_F(AravisCameraTest, ATriggeredExposureIsNotBoundByAnEarlierFreeRunsFrameRate) {
+  std::string text = fakeGenicam();
+  replaceOnce(text, "<Max>10000000.0</Max>", "<pMax>ExposureTimeAbsMax</pMax>");  // ExposureTimeAbs's, in us
+  if (HasFatalFailure()) return;  // (the fake device's description changed)
+  const std::filesystem::path xml = writeGenicam(
+      text, std::filesystem::temp_directory_path() / ("lfi-genicam-cap-" + fake_->serial() + ".xml"),
+      "<Boolean Name=\"AcquisitionFrameRateEnable\" NameSpace=\"Standard\">\n"
+      "  <pValue>AcquisitionFrameRateEnableValue</pValue><OnValue>1</OnValue><OffValue>0</OffValue>\n"
+      "</Boolean>\n"
+      "<Integer Name=\"AcquisitionFrameRateEnableValue\" NameSpace=\"Custom\"><Value>1</Value></Integer>\n"
+      "<SwissKnife Name=\"ExposureTimeAbsMax\" NameSpace=\"Custom\">\n"
+      "  <pVariable Name=\"PERIOD\">AcquisitionFramePeriod</pVariable>\n"
+      "  <pVariable Name=\"CAPPED\">AcquisitionFrameRateEnableValue</pVariable>\n"
+      "  <Formula>CAPPED ? PERIOD : 10000000</Formula>\n"
+      "</SwissKnife>\n");
+  auto camera = openFakeWith("LFIC", xml);
+  const CameraSettings fast = smallSettings();  // 1 ms at 200 Hz: a 5 ms period
+  CameraSettings triggered = fast;
+  triggered.trigger = TriggerMode::Software;
+  triggered.frameRate_hz = 0;
+  triggered.exposure_us = 50'000;
+  for (const CameraSettings& s : {fast, triggered, fast}) {
+    ASSERT_NO_THROW(camera->configure(s)) << toString(s.trigger) << ", " << s.exposure_us << " us";
+    EXPECT_NEAR(camera->settings().exposure_us, s.exposure_us, 1e-6);
+  }
+  EXPECT_NEAR(camera->settings().frameRate_hz, 200, 1e-6);
+  // The free run has its cap again: 50 ms do not fit its 5 ms period.
+  CameraSettings tooLong = fast;
+  tooLong.exposure_us = 50'000;
+  EXPECT_TRUE(throwsError([&] { camera->configure(tooLong); }, Errc::InvalidArgument,
+                          {"exposure_us 50000", "10..5000 us", "200 Hz"}));
   camera.reset();
   std::filesystem::remove(xml);
 }

@@ -20,6 +20,7 @@
 #include <future>
 #include <mutex>
 #include <thread>
+#include <utility>
 #include <vector>
 
 namespace lfi::testing_support {
@@ -60,6 +61,14 @@ std::vector<std::uint8_t> utf16Descriptor(const std::string& text) {
   return d;
 }
 
+// The process's one testbed: umockdev's preload library follows the newest
+// testbed's directory, so devices emulated at once must share one. Never
+// freed (devices come and go in it; usePrivateTmpDir's folder goes at exit).
+UMockdevTestbed* sharedTestbed() {
+  static UMockdevTestbed* const testbed = umockdev_testbed_new();
+  return testbed;
+}
+
 }  // namespace
 
 struct EmulatedUsbDisplay::Impl {
@@ -71,6 +80,7 @@ struct EmulatedUsbDisplay::Impl {
   std::atomic<bool> stop{false};
   std::string devnode;
   std::string syspath;
+  bool inTestbed = false;  // its sysfs entry and node are in the testbed (from plug() to unplug())
   bool trace = std::getenv("LFI_USB_EMULATION_TRACE") != nullptr;  // log every ioctl to stderr
 
   mutable std::mutex mutex;
@@ -148,6 +158,22 @@ struct EmulatedUsbDisplay::Impl {
     }
   }
 
+  // The device's node file (not part of the sysfs tree umockdev removes).
+  void removeNode() const {
+    std::error_code ec;
+    gchar* root = umockdev_testbed_get_root_dir(testbed);  // transfer full
+    std::filesystem::remove(std::filesystem::path(root) / devnode.substr(1), ec);
+    g_free(root);
+  }
+
+  // Takes the device out of the (shared) testbed, for good.
+  void removeFromTestbed() {
+    if (!std::exchange(inTestbed, false)) return;
+    umockdev_testbed_uevent(testbed, syspath.c_str(), "remove");
+    umockdev_testbed_remove_device(testbed, syspath.c_str());
+    removeNode();
+  }
+
   void detachHandler() {
     if (!handler) return;
     GError* error = nullptr;
@@ -181,7 +207,7 @@ struct EmulatedUsbDisplay::Impl {
     d.push_back(0);
     const std::string node = devnode.substr(5);  // without /dev/
     return fmt::format(
-        "P: /devices/{}-1\n"
+        "P: /devices/{}-{}\n"
         "N: {}\n"
         "E: SUBSYSTEM=usb\n"
         "E: DEVTYPE=usb_device\n"
@@ -202,7 +228,7 @@ struct EmulatedUsbDisplay::Impl {
         "A: serial={}\\n\n"
         "A: dev=189:{}\\n\n"
         "H: descriptors={}\n",
-        config.busNumber, node, devnode, config.vendorId, config.productId, config.busNumber, config.deviceNumber,
+        config.busNumber, config.deviceNumber, node, devnode, config.vendorId, config.productId, config.busNumber, config.deviceNumber,
         config.busNumber, config.deviceNumber, config.vendorId, config.productId, config.vendor, config.model,
         config.serial, (config.busNumber - 1) * 128 + config.deviceNumber - 1, hex(d));
   }
@@ -613,8 +639,8 @@ EmulatedUsbDisplay::EmulatedUsbDisplay(EmulatedDisplayConfig config) : config_(s
   Impl& d = *impl_;
   d.config = config_;
   d.devnode = fmt::format("/dev/bus/usb/{:03d}/{:03d}", config_.busNumber, config_.deviceNumber);
-  d.syspath = fmt::format("/sys/devices/{}-1", config_.busNumber);
-  d.testbed = umockdev_testbed_new();
+  d.syspath = fmt::format("/sys/devices/{}-{}", config_.busNumber, config_.deviceNumber);
+  d.testbed = sharedTestbed();
   d.context = g_main_context_new();
   d.thread = std::thread([&d] {
     g_main_context_push_thread_default(d.context);
@@ -641,10 +667,10 @@ EmulatedUsbDisplay::~EmulatedUsbDisplay() {
     });
   } catch (...) {
   }
+  d.removeFromTestbed();  // (the testbed is shared: the next device must not find this one)
   d.stop = true;
   g_main_context_wakeup(d.context);
   d.thread.join();
-  g_object_unref(d.testbed);
   g_main_context_unref(d.context);
 }
 
@@ -672,6 +698,7 @@ void EmulatedUsbDisplay::plug() {
     g_clear_error(&error);
     fail(Errc::Device, "emulated display: adding the device to the testbed failed: {}", message);
   }
+  d.inTestbed = true;
   umockdev_testbed_uevent(d.testbed, d.syspath.c_str(), "add");
 }
 
@@ -683,14 +710,10 @@ void EmulatedUsbDisplay::unplug() {
     d.state.plugged = false;
     d.state.claimed = false;
   }
-  umockdev_testbed_uevent(d.testbed, d.syspath.c_str(), "remove");
-  umockdev_testbed_remove_device(d.testbed, d.syspath.c_str());
-  // The node file is not part of the sysfs tree; remove it so the device is gone for good.
-  std::error_code ec;
-  gchar* root = umockdev_testbed_get_root_dir(d.testbed);  // transfer full
-  std::filesystem::remove(std::filesystem::path(root) / d.devnode.substr(1), ec);
-  g_free(root);
+  d.removeFromTestbed();
 }
+
+void EmulatedUsbDisplay::loseNode() { impl_->removeNode(); }
 
 void EmulatedUsbDisplay::stallNextFrame(int urb) {
   std::lock_guard lock(impl_->mutex);

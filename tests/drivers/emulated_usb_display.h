@@ -12,6 +12,8 @@
 //
 // The handler runs on its own GLib main context thread; the test thread reads the
 // device's state (last presented panel, counters) under a mutex and arms faults.
+// Several devices may be emulated at once (distinct busNumber/deviceNumber):
+// they share the process's one testbed.
 // Frames are validated like firmware would: header magic/version/CRC, sizes against
 // the panel, payload CRC, exact byte count; the last valid presented frame is kept.
 
@@ -70,6 +72,9 @@ public:
   // Fails every pending URB with -ESHUTDOWN, answers ENODEV from then on, and
   // removes the device from the testbed (with a "remove" uevent).
   void unplug();
+  // The device stays listed (sysfs) but its /dev node is gone, so that
+  // libusb_open fails: a node udev has not made yet, or one a program cannot open.
+  void loseNode();
 
   // Faults, each for the next frame only unless said otherwise.
   void stallNextFrame(int urb = 0);       // bulk URB `urb` (0: the first) of the next frame halts the endpoint

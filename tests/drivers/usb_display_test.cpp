@@ -12,6 +12,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cstdio>
 #include <cstdlib>
@@ -181,6 +182,38 @@ TEST_F(UsbDisplayTest, ASerialWithSpacesAndSlashesIsNamedPercentEncoded) {
     const std::string text = s.uri();
     EXPECT_EQ(parseUsbDisplayPath(std::string_view(text).substr(4), text).serial, s.serial);
   }
+}
+
+// Two displays of one VID:PID: without a serial the choice is refused,
+// listing both; a serial opens the one it names, and frames go to it alone.
+// One that cannot be opened still makes the choice ambiguous.
+TEST_F(UsbDisplayTest, SeveralDisplaysAreToldApartByTheirSerials) {
+  EmulatedDisplayConfig a, b;
+  a.serial = "LFI-EMU-A";
+  b.serial = "LFI-EMU-B";
+  b.deviceNumber = 3;
+  EmulatedUsbDisplay first(a), second(b);
+  first.plug();
+  second.plug();
+  EXPECT_TRUE(throwsError([] { openDisplay("usb:1209:4c46"); }, Errc::Config,
+                          {"usb:1209:4c46", "2 displays match", "name one by serial", "LFI-EMU-A", "LFI-EMU-B"}));
+  std::vector<std::string> listed;
+  for (const UsbDisplayInfo& d : listUsbDisplays()) listed.push_back(d.selector.uri());
+  std::sort(listed.begin(), listed.end());
+  EXPECT_EQ(listed, (std::vector<std::string>{"usb:1209:4c46/LFI-EMU-A", "usb:1209:4c46/LFI-EMU-B"}));
+
+  auto display = openDisplay("usb:1209:4c46/LFI-EMU-B");
+  EXPECT_EQ(display->info().serial, "LFI-EMU-B");
+  const cv::Mat panel = randomPanel(display->info(), 27);
+  ASSERT_EQ(display->show(panel).status, PresentStatus::Presented);
+  EXPECT_TRUE(sameBytes(second.presented(), panel));
+  EXPECT_TRUE(first.presented().empty());
+  display.reset();
+
+  second.loseNode();
+  EXPECT_TRUE(throwsError([] { openDisplay("usb:1209:4c46"); }, Errc::Config,
+                          {"usb:1209:4c46", "2 displays match, 1 of them cannot be opened", "LFI-EMU-A"}));
+  EXPECT_EQ(openDisplay("usb:1209:4c46/LFI-EMU-A")->info().serial, "LFI-EMU-A");
 }
 
 TEST_F(UsbDisplayTest, UriErrorsNameTheUri) {
