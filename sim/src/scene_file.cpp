@@ -517,20 +517,49 @@ Rigid3 readPlacement(ConfigTable& t) {
                    t.numbers("rotation_deg", 3, std::vector<double>{0, 0, 0}));
 }
 
+// Whether any of the kGridLines x kGridLines lines along x, along y and along
+// z across `box` meets `solid`: after its cut-outs, a part none of them meets
+// is gone (or a chip under 1/kGridLines of its box).
+constexpr int kGridLines = 33;
+bool meetsLines(const Solid& solid, const Bounds& box) {
+  IntervalList found;
+  for (int axis = 0; axis < 3; ++axis)
+    for (int i = 0; i < kGridLines; ++i)
+      for (int j = 0; j < kGridLines; ++j) {
+        const double u = (i + 0.5) / kGridLines, v = (j + 0.5) / kGridLines;
+        const double lo[3] = {box.lo.x, box.lo.y, box.lo.z}, hi[3] = {box.hi.x, box.hi.y, box.hi.z};
+        double o[3], d[3] = {0, 0, 0};
+        const int a = (axis + 1) % 3, b = (axis + 2) % 3;
+        o[axis] = lo[axis];
+        o[a] = lo[a] + u * (hi[a] - lo[a]);
+        o[b] = lo[b] + v * (hi[b] - lo[b]);
+        d[axis] = 1;
+        solid.intervals(Ray{{o[0], o[1], o[2]}, {d[0], d[1], d[2]}}, found);
+        if (found.size() > 0) return true;
+      }
+  return false;
+}
+
+// The least size of a solid or a cut-out, 1 µm: a thousand times the tracer's
+// least hit distance (Scene::kTMin), so that a ray crossing the thinnest part
+// still meets both of its surfaces.
+constexpr double kSmallest_mm = 1e-3;
+
 std::shared_ptr<const Solid> readSolid(ConfigTable& t, const std::string& kind) {
-  if (kind == "sphere") return Solid::sphere(t.number("radius_mm", std::nullopt, 1e-6, 1e6));
+  if (kind == "sphere") return Solid::sphere(t.number("radius_mm", std::nullopt, kSmallest_mm, 1e6));
   if (kind == "lens") {
     const double r1 = t.number("front_radius_mm", std::nullopt, -1e6, 1e6);
     const double r2 = t.number("back_radius_mm", std::nullopt, -1e6, 1e6);
-    const double tc = t.number("centre_thickness_mm", std::nullopt, 1e-6, 1e6);
-    const double diameter = t.number("diameter_mm", std::nullopt, 1e-6, 1e6);
+    const double tc = t.number("centre_thickness_mm", std::nullopt, kSmallest_mm, 1e6);
+    const double diameter = t.number("diameter_mm", std::nullopt, kSmallest_mm, 1e6);
     if (const auto fault = sphericalLensFault(r1, r2, tc, diameter))
       fail(Errc::Config, "{}: {}", t.where(lensKey(fault->part)), fault->why);
     return Solid::sphericalLens(r1, r2, tc, diameter);
   }
   if (kind == "cylinder") {
     // A finite cylinder along z, centred: the infinite one cut by two planes.
-    const double r = t.number("radius_mm", std::nullopt, 1e-6, 1e6), h = t.number("length_mm", std::nullopt, 1e-6, 1e6);
+    const double r = t.number("radius_mm", std::nullopt, kSmallest_mm, 1e6);
+    const double h = t.number("length_mm", std::nullopt, kSmallest_mm, 1e6);
     Rigid3 top = Rigid3::translation({0, 0, h / 2});
     Rigid3 bottom = Rigid3::rotation({1, 0, 0}, std::numbers::pi);
     bottom.t = {0, 0, -h / 2};
@@ -571,17 +600,22 @@ Object readObject(ConfigTable& t) {
   } else {
     std::shared_ptr<const Solid> solid = readSolid(t, kind);
     // Cut-outs: spheres subtracted from the solid (object frame). Each can split
-    // the part once along a ray; the tracer holds IntervalList::kCapacity pieces.
+    // the part once along a ray; the tracer holds IntervalList::kCapacity pieces,
+    // less a spare and less the pieces of the part itself along a ray: one, and
+    // one more per concave face of a lens (each is a sphere taken away).
     auto cuts = t.tables("cut");
-    if (constexpr auto kMaxCuts = static_cast<size_t>(IntervalList::kCapacity) - 2; cuts.size() > kMaxCuts)
-      fail(Errc::Config, "{}: {} cut-outs; at most {} per object (a ray through all of them would cross more "
-           "pieces than the tracer follows): make the part a mesh", t.where("cut"), cuts.size(), kMaxCuts);
+    int pieces = 1;
+    if (kind == "lens")
+      pieces += (t.number("front_radius_mm") < 0 ? 1 : 0) + (t.number("back_radius_mm") > 0 ? 1 : 0);
+    if (const auto maxCuts = static_cast<size_t>(IntervalList::kCapacity - 1 - pieces); cuts.size() > maxCuts)
+      fail(Errc::Config, "{}: {} cut-outs; at most {} for this {} (a ray through all of them would cross more "
+           "pieces than the tracer follows): make the part a mesh", t.where("cut"), cuts.size(), maxCuts, kind);
     // A cut that misses the part's box changes nothing, and one holding the
     // whole box leaves nothing: both are a wrong position, radius or unit.
     const Bounds box = solid->bounds();  // (conservative: a box around the part)
     for (ConfigTable& cut : cuts) {
       const auto c = cut.numbers("position_mm", 3, std::nullopt, -kFarthest_mm, kFarthest_mm);
-      const double r = cut.number("radius_mm", std::nullopt, 1e-9, 1e6);
+      const double r = cut.number("radius_mm", std::nullopt, kSmallest_mm, 1e6);
       const Bounds::Ball fit = box.ball({c[0], c[1], c[2]}, r);
       if (fit == Bounds::Ball::Clear)
         fail(Errc::Config, "{}: the cut-out (radius {:g} mm) does not meet the part, which lies within {} in the "
@@ -593,6 +627,10 @@ Object readObject(ConfigTable& t) {
       solid = Solid::combine(Solid::Kind::Difference, solid, Solid::sphere(r, Rigid3::translation({c[0], c[1], c[2]})));
       cut.finish();
     }
+    if (!cuts.empty() && !meetsLines(*solid, box))
+      fail(Errc::Config, "{}: the cut-outs together leave nothing of the part ({} in the object's frame; no line of "
+           "a {} x {} grid across it along x, y or z meets what is left)", cuts.back().where("radius_mm"),
+           box.text(), kGridLines, kGridLines);
     obj.shape = solid;
   }
   const std::string material = t.string("material", "absorber", {"dielectric", "absorber", "diffuse"});
@@ -617,7 +655,7 @@ Object readObject(ConfigTable& t) {
     const std::string e = t.string("emitter", std::nullopt, {"parallel", "lambertian", "light_field"});
     if (e == "parallel") {
       obj.emission = ParallelEmission{t.number("radiance", 1.0, 0, 1e12),
-                                      t.number("half_angle_rad", std::nullopt, 1e-9, std::numbers::pi / 2)};
+                                      t.number("half_angle_rad", std::nullopt, 1e-6, std::numbers::pi / 2)};
     } else if (e == "lambertian") {
       obj.emission = LambertianEmission{t.number("radiance", 1.0, 0, 1e12)};
     } else {
@@ -750,7 +788,8 @@ SceneDescription loadSceneFile(const fs::path& path) {
   const bool hasCamera = root.has("camera"), hasLightField = root.has("light_field_sensor");
   std::string sensorWhere;  // the sensor's position_mm, to name it
   if (hasCamera == hasLightField)
-    fail(Errc::Config, "{}: give exactly one sensor: [camera] or [light_field_sensor]", path.string());
+    fail(Errc::Config, "{}: give exactly one sensor: [camera] or [light_field_sensor]",
+         hasCamera ? root.where("light_field_sensor") : path.string());
   if (hasCamera) {
     ConfigTable c = root.table("camera");
     TelecentricCamera cam;
@@ -774,6 +813,12 @@ SceneDescription loadSceneFile(const fs::path& path) {
     } catch (const Error& e) {
       fail(Errc::Config, "{}: [camera]: {}", path.string(), e.what());
     }
+    // b just past f puts the focused plane, and the field with it, out of any bench's reach.
+    if (const TelecentricCamera::RayMap map(cam);
+        !(map.pixel * std::max(map.halfW, map.halfH) + map.stop <= kFarthest_mm))
+      fail(Errc::Config, "{} = {}: with focal_length_mm = {}, the field reaches {:g} mm from the axis, past {:g} mm",
+           c.where("image_distance_mm"), cam.imageDistance_mm, cam.focalLength_mm,
+           map.pixel * std::max(map.halfW, map.halfH) + map.stop, kFarthest_mm);
     d.sensor = cam;
   } else {
     ConfigTable c = root.table("light_field_sensor");
@@ -794,7 +839,7 @@ SceneDescription loadSceneFile(const fs::path& path) {
     d.sensor = lfs;
   }
   if (root.has("camera_sensor")) {
-    if (!hasCamera) fail(Errc::Config, "{}: [camera_sensor] needs a [camera]", path.string());
+    if (!hasCamera) fail(Errc::Config, "{}: [camera_sensor] needs a [camera]", root.where("camera_sensor"));
     ConfigTable c = root.table("camera_sensor");
     d.cameraSensor.fullWell_e = c.number("full_well_e", d.cameraSensor.fullWell_e, 1, 1e9);
     d.cameraSensor.readNoise_e = c.number("read_noise_e", d.cameraSensor.readNoise_e, 0, 1e6);

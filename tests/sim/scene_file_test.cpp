@@ -161,7 +161,7 @@ TEST_F(SceneFile, BadValuesAreErrors) {
   std::string cuts = head + "[[object]]\nname='holes'\nshape='cylinder'\nradius_mm=2\nlength_mm=100\n";
   for (int i = 0; i < 15; ++i) cuts += fmt::format("[[object.cut]]\nposition_mm=[0, 0, {}]\nradius_mm=1\n", 6 * i - 45);
   EXPECT_TRUE(throwsError([&] { loadSceneFile(write("cuts.toml", cuts)); }, Errc::Config,
-                          {"cuts.toml:", "object[0].cut", "15 cut-outs", "at most 14"}));
+                          {"cuts.toml:", "object[0].cut", "15 cut-outs", "at most 14 for this cylinder"}));
   // Objects the scene file refuses, each named by its file, line and key (Errc::Config).
   auto refused = [&](const std::string& name, const std::string& objects, std::vector<std::string> fragments) {
     fragments.push_back(name + ":");
@@ -215,6 +215,32 @@ TEST_F(SceneFile, BadValuesAreErrors) {
   // A bubble inside, and a nick at the top of the sphere that only just reaches the box, are kept.
   EXPECT_NO_THROW(loadSceneFile(write("bubble.toml", part + "position_mm=[0, 1, 2]\nradius_mm=0.5\n")));
   EXPECT_NO_THROW(loadSceneFile(write("nick.toml", part + "position_mm=[0, 0, 5.4]\nradius_mm=0.5\n")));
+  // Two cut-outs that each leave part of the box but together hold the whole ball (radius 5): every point
+  // of it is within sqrt(5^2 + 3^2) = 5.83 mm of the nearer centre.
+  EXPECT_TRUE(throwsError(
+      [&] {
+        loadSceneFile(write("two-cuts.toml", part + "position_mm=[3, 0, 0]\nradius_mm=7\n"
+                                                    "[[object.cut]]\nposition_mm=[-3, 0, 0]\nradius_mm=7\n"));
+      },
+      Errc::Config, {"two-cuts.toml:", "object[0].cut[1].radius_mm", "together leave nothing"}));
+  EXPECT_NO_THROW(loadSceneFile(write("two-nicks.toml", part + "position_mm=[3, 0, 0]\nradius_mm=5\n"
+                                                               "[[object.cut]]\nposition_mm=[-3, 0, 0]\nradius_mm=5\n")));
+  // Parts thinner than the tracer can follow (its least hit distance is 1e-6 mm): at least 1 µm.
+  EXPECT_TRUE(throwsError(
+      [&] { loadSceneFile(write("thin.toml", head + "[[object]]\nname='t'\nshape='lens'\nfront_radius_mm=0\n"
+                                                    "back_radius_mm=0\ncentre_thickness_mm=1e-6\ndiameter_mm=5\n")); },
+      Errc::Config, {"thin.toml:", "object[0].centre_thickness_mm", "outside [0.001"}));
+  // A biconcave lens crosses a line in up to three pieces: two cut-outs fewer than a sphere takes.
+  std::string biconcave = head + "[[object]]\nname='b'\nshape='lens'\nfront_radius_mm=-15\nback_radius_mm=15\n"
+                                 "centre_thickness_mm=1\ndiameter_mm=20\n";
+  for (int i = 0; i < 13; ++i) biconcave += fmt::format("[[object.cut]]\nposition_mm=[0, {}, 4]\nradius_mm=0.1\n", i - 6);
+  EXPECT_TRUE(throwsError([&] { loadSceneFile(write("biconcave.toml", biconcave)); }, Errc::Config,
+                          {"biconcave.toml:", "object[0].cut", "13 cut-outs", "at most 12 for this lens"}));
+  // A camera focused so far away (b a hair past f) that its field leaves any bench: refused at image_distance_mm.
+  std::string far = std::string("format = \"lfi-scene\"\nversion = 1\n") + kCamera + ball;
+  far.replace(far.find("image_distance_mm = 200"), 23, "image_distance_mm = 100.0000001");
+  EXPECT_TRUE(throwsError([&] { loadSceneFile(write("far-focus.toml", far)); }, Errc::Config,
+                          {"far-focus.toml:", "camera.image_distance_mm", "past 1e+09 mm"}));
   // A light field emitter is a rectangle of the light field's extent: 4 x 3 elements of 2 x 0.5 mm.
   writeLightFieldExr(dir_ / "good.exr", LightField({.spatialX = 4, .spatialY = 3, .angular = 2, .pixelPitch_mm = 0.5,
                                                     .distance_mm = 30}));
