@@ -174,22 +174,40 @@ void analyticIntersect(const RTCIntersectFunctionNArguments* args) {
   noteLanes(ctx, g, bits);
 }
 
+// How far along a ray Embree's copy of it starts: a ray from farther than
+// twice the scene's radius starts where it comes within that radius of the
+// scene's centre, before which it cannot have met anything. Embree takes
+// origins, and gives a mesh's t, in float: from a far sensor (1 km) its t
+// would be off by 0.06 mm, and its rounded origins would pass beside the
+// parts' padded boxes. The exact crossings take the whole ray in double;
+// Embree's t of a mesh gets the shift back in double.
+inline double embreeStart(const Vec3& centre, double radius, double ox, double oy, double oz, double dx, double dy,
+                          double dz) {
+  const double cx = centre.x - ox, cy = centre.y - oy, cz = centre.z - oz;
+  const double along = cx * dx + cy * dy + cz * dz;
+  const bool far = cx * cx + cy * cy + cz * cz > 4 * radius * radius && along > radius;
+  return far ? along - radius : 0.0;
+}
+
 // Embree's packet for the lanes in `traced` (the others invalid), every lane
 // at once (vectorised). An invalid lane also gets tfar < tnear: on a CPU
 // without AVX-512, Embree 3.13 answers rtcIntersect16 through its ray-stream
 // path, which ignores the valid mask and skips only such rays (it traced all
 // sixteen, and the callbacks noted lanes nobody asked for).
-LFI_SIMD_CLONES void embreePacket(const RayLanes& __restrict r, std::uint32_t traced, double tMin,
-                                  int* __restrict valid, RTCRayHit16& __restrict rh) {
+LFI_SIMD_CLONES void embreePacket(const RayLanes& __restrict r, std::uint32_t traced, double tMin, Vec3 centre,
+                                  double radius, int* __restrict valid, double* __restrict start,
+                                  RTCRayHit16& __restrict rh) {
   for (int k = 0; k < RayLanes::kSize; ++k) {
     valid[k] = (traced >> k & 1) != 0 ? -1 : 0;
-    rh.ray.org_x[k] = static_cast<float>(r.ox[k]);
-    rh.ray.org_y[k] = static_cast<float>(r.oy[k]);
-    rh.ray.org_z[k] = static_cast<float>(r.oz[k]);
+    const double t0 = embreeStart(centre, radius, r.ox[k], r.oy[k], r.oz[k], r.dx[k], r.dy[k], r.dz[k]);
+    start[k] = t0;
+    rh.ray.org_x[k] = static_cast<float>(r.ox[k] + t0 * r.dx[k]);
+    rh.ray.org_y[k] = static_cast<float>(r.oy[k] + t0 * r.dy[k]);
+    rh.ray.org_z[k] = static_cast<float>(r.oz[k] + t0 * r.dz[k]);
     rh.ray.dir_x[k] = static_cast<float>(r.dx[k]);
     rh.ray.dir_y[k] = static_cast<float>(r.dy[k]);
     rh.ray.dir_z[k] = static_cast<float>(r.dz[k]);
-    rh.ray.tnear[k] = static_cast<float>(tMin);
+    rh.ray.tnear[k] = static_cast<float>(t0 > 0 ? 0.0 : tMin);  // (a shifted ray starts short of the scene)
     rh.ray.tfar[k] = (traced >> k & 1) != 0 ? std::numeric_limits<float>::infinity()
                                             : -std::numeric_limits<float>::infinity();
     rh.ray.time[k] = 0;
@@ -280,6 +298,8 @@ struct Scene::Impl {
   std::vector<const AnalyticGeometry*> isolated;
   std::vector<const AnalyticGeometry*> convex;  // per object: its solid if convex, else null
   bool meshes = false;                          // whether any object is a triangle mesh
+  Vec3 centre;                                  // of a ball holding every object (embreeStart)
+  double radius = 0;
   ~Impl() {
     if (scene) rtcReleaseScene(scene);
     if (device) rtcReleaseDevice(device);
@@ -366,6 +386,11 @@ Scene::Scene(std::vector<Object> objects, double ambientIor)
     rtcReleaseGeometry(geom);
   }
   rtcCommitScene(impl_->scene);
+  Bounds all;
+  for (const auto& g : impl_->analytic) all = all.unite(g->box);
+  for (const Object& obj : objects_)
+    if (std::holds_alternative<TriangleMesh>(obj.shape)) all = all.unite(paddedWorldBounds(worldBounds(obj), {}));
+  if (all.finite()) impl_->centre = (all.lo + all.hi) * 0.5, impl_->radius = 0.5 * (all.hi - all.lo).length();
   impl_->isolated = isolatedSolids(objects_, impl_->analytic);
   impl_->convex.assign(objects_.size(), nullptr);
   for (const auto& g : impl_->analytic)
@@ -389,14 +414,16 @@ Hit Scene::intersect(const Ray& ray, double tMin, double tMax) const {
   ctx.skip = skip;
   ctx.objects = 0;
   RTCRayHit rh;
-  rh.ray.org_x = static_cast<float>(ray.origin.x);
-  rh.ray.org_y = static_cast<float>(ray.origin.y);
-  rh.ray.org_z = static_cast<float>(ray.origin.z);
-  rh.ray.dir_x = static_cast<float>(ray.direction.x);
-  rh.ray.dir_y = static_cast<float>(ray.direction.y);
-  rh.ray.dir_z = static_cast<float>(ray.direction.z);
-  rh.ray.tnear = static_cast<float>(tMin);
-  rh.ray.tfar = std::isfinite(tMax) ? static_cast<float>(tMax) : std::numeric_limits<float>::infinity();
+  const Vec3 &o = ray.origin, &d = ray.direction;
+  const double t0 = embreeStart(impl_->centre, impl_->radius, o.x, o.y, o.z, d.x, d.y, d.z);
+  rh.ray.org_x = static_cast<float>(o.x + t0 * d.x);
+  rh.ray.org_y = static_cast<float>(o.y + t0 * d.y);
+  rh.ray.org_z = static_cast<float>(o.z + t0 * d.z);
+  rh.ray.dir_x = static_cast<float>(d.x);
+  rh.ray.dir_y = static_cast<float>(d.y);
+  rh.ray.dir_z = static_cast<float>(d.z);
+  rh.ray.tnear = static_cast<float>(t0 > 0 ? 0.0 : tMin);
+  rh.ray.tfar = std::isfinite(tMax) ? static_cast<float>(tMax - t0) : std::numeric_limits<float>::infinity();
   rh.ray.time = 0;
   rh.ray.mask = 0xffffffffu;
   rh.ray.id = 0;
@@ -406,7 +433,7 @@ Hit Scene::intersect(const Ray& ray, double tMin, double tMax) const {
   rtcIntersect1(impl_->scene, &ctx.embree, &rh);
   resolveLanes(ctx);
   if (rh.hit.geomID != RTC_INVALID_GEOMETRY_ID)
-    meshHit(0, ray.direction, rh.hit.geomID, rh.hit.primID, rh.ray.tfar, {rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z},
+    meshHit(0, ray.direction, rh.hit.geomID, rh.hit.primID, t0 + rh.ray.tfar, {rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z},
             rh.hit.u, rh.hit.v, best);
   Hit hit;
   if (best.object[0] < 0) return hit;
@@ -487,18 +514,20 @@ void Scene::intersect(const RayPacket& packet, std::uint32_t lanes, HitPacket& h
   // its packet traversal (measured: 17 % of a render of the reference scene).
   ctx.embree.flags = RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT;
   alignas(64) int valid[kPacket];
+  alignas(64) double start[kPacket];
   alignas(64) RTCRayHit16 rh;
-  embreePacket(packet.rays, traced, tMin, valid, rh);
+  embreePacket(packet.rays, traced, tMin, impl_->centre, impl_->radius, valid, start, rh);
   rtcIntersect16(valid, impl_->scene, &ctx.embree, &rh);
   resolveLanes(ctx);
   if (!impl_->meshes) return;
   for (std::uint32_t bits = traced; bits; bits &= bits - 1)
     if (const int k = std::countr_zero(bits); rh.hit.geomID[k] != RTC_INVALID_GEOMETRY_ID)
       meshHit(k, {packet.rays.dx[k], packet.rays.dy[k], packet.rays.dz[k]}, rh.hit.geomID[k], rh.hit.primID[k],
-              rh.ray.tfar[k], {rh.hit.Ng_x[k], rh.hit.Ng_y[k], rh.hit.Ng_z[k]}, rh.hit.u[k], rh.hit.v[k], hits);
+              start[k] + rh.ray.tfar[k], {rh.hit.Ng_x[k], rh.hit.Ng_y[k], rh.hit.Ng_z[k]}, rh.hit.u[k], rh.hit.v[k],
+              hits);
 }
 
-void Scene::meshHit(int k, const Vec3& direction, unsigned geomID, unsigned primID, float tfar, const Vec3& ng,
+void Scene::meshHit(int k, const Vec3& direction, unsigned geomID, unsigned primID, double tfar, const Vec3& ng,
                     float u, float v, HitPacket& hits) const {
   if (!(tfar <= hits.t[k])) return;  // an analytic object is nearer (or tMax is); a tie goes to keepNearest
   Vec3 normal = ng.normalized();

@@ -27,9 +27,9 @@ public:
            sceneFile_.string(), settings_.beamHalfAngle_rad);
     // (As a scene file's positions and samples per pixel: a beam at infinity would light nothing.)
     if (!(settings_.beamDistance_mm > 0 && settings_.beamDistance_mm <= kFarthest_mm))
-      fail(Errc::InvalidArgument, "sim light field capture of '{}': beam_distance_mm = {} is outside (0, 1e9]",
+      fail(Errc::InvalidArgument, "sim light field capture of '{}': beam_distance_mm = {} is outside (0, 1e6]",
            sceneFile_.string(), settings_.beamDistance_mm);
-    static_assert(kFarthest_mm == 1e9, "the message above states the bound");
+    static_assert(kFarthest_mm == 1e6, "the message above states the bound");
     if (settings_.samplesPerPixel < 1 || settings_.samplesPerPixel > kMostSamplesPerPixel)
       fail(Errc::InvalidArgument, "sim light field capture of '{}': spp = {} is outside 1 .. 2^20",
            sceneFile_.string(), settings_.samplesPerPixel);

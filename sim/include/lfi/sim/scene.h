@@ -237,7 +237,7 @@ public:
 private:
   // A mesh's hit (Embree's, in float) of a ray along `direction` where it is
   // nearer than the analytic objects' in `hits`.
-  void meshHit(int k, const Vec3& direction, unsigned geomID, unsigned primID, float tfar, const Vec3& ng, float u,
+  void meshHit(int k, const Vec3& direction, unsigned geomID, unsigned primID, double tfar, const Vec3& ng, float u,
                float v, HitPacket& hits) const;
 
   struct Impl;

@@ -63,15 +63,18 @@ SceneDescription loadSceneFile(const std::filesystem::path& path);
 // stay flat. Vertices that meshClosureFault counts as one are one for the
 // normals; of the faces on one edge any two may join (an edge of more than 8
 // is sharp), faces of no area none. The file's coordinates times `scale` are
-// millimetres (a vertex then more than 1e9 mm from the origin is refused);
+// millimetres (a vertex then more than kFarthest_mm from the origin is refused);
 // faces must wind outwards.
 inline constexpr double kDefaultCreaseAngle_deg = 30;
 
-// The bounds a scene file and the sim: devices' URIs keep to. No coordinate
-// or size of a bench is this far out: such a value is a wrong unit or a
-// stand-in for "infinite" (Embree, in float, drops a primitive past about
-// 1.8e18, and the object vanished without a word).
-inline constexpr double kFarthest_mm = 1e9;
+// The bounds a scene file and the sim: devices' URIs keep to, 1 km. No
+// coordinate or size of a bench is this far out: such a value is a wrong unit
+// or a stand-in for "infinite". Farther out the tracer loses what it is for:
+// a ray's crossing with a millimetre part, computed in double from the ray's
+// origin, is off by micrometres from 1e7 mm (measured: test
+// RaysFromTheFarthestSensorMeetWhatNearbyRaysMeet), and Embree, which takes
+// origins in float, passed beside whole parts from 1e8 mm on.
+inline constexpr double kFarthest_mm = 1e6;
 inline constexpr int kMostSamplesPerPixel = 1 << 20;
 // The largest seed: TOML's largest integer, so that any seed `lfi render --seed` takes can be written in a scene file.
 inline constexpr std::int64_t kLargestSeed = std::numeric_limits<std::int64_t>::max();
