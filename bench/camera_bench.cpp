@@ -9,6 +9,7 @@
 #include "lfi/drivers/aravis_camera.h"
 #include "lfi/drivers/registry.h"
 
+#include "bench_util.h"
 #include "gige_device_process.h"
 
 #include <CLI/CLI.hpp>
@@ -21,6 +22,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <memory>
 #include <string>
 #include <thread>
 #include <vector>
@@ -101,13 +103,21 @@ void check(GError* error, const char* call) {
 // the host's own addresses: Aravis's discovery may find a device on 127.0.0.1
 // through eth0 too, and then (as root) its packet socket, bound to eth0, never
 // sees the stream, which goes through lo (drivers/src/aravis_camera.cpp).
+// (Owned GObjects, released however the client ends, with its acquisition stopped.)
+struct Unref {
+  void operator()(gpointer object) const { g_object_unref(object); }
+};
+template <typename T>
+using Owned = std::unique_ptr<T, Unref>;
+
 Result benchPlain(int frames, double rate, int size, lfi::PixelFormat format) {
   GError* error = nullptr;
   GInetAddress* loopback = g_inet_address_new_loopback(G_SOCKET_FAMILY_IPV4);
   ArvDevice* device = arv_gv_device_new(loopback, loopback, &error);
   g_object_unref(loopback);
   check(error, "arv_gv_device_new (127.0.0.1)");
-  ArvCamera* camera = arv_camera_new_with_device(device, &error);
+  const Owned<ArvCamera> owner(arv_camera_new_with_device(device, &error));
+  ArvCamera* camera = owner.get();
   g_object_unref(device);  // (the camera holds its own reference)
   check(error, "arv_camera_new_with_device");
   arv_camera_set_region(camera, 0, 0, size, size, &error);
@@ -121,13 +131,18 @@ Result benchPlain(int frames, double rate, int size, lfi::PixelFormat format) {
   check(error, "arv_camera_set_frame_rate");
   arv_camera_gv_auto_packet_size(camera, &error);
   check(error, "arv_camera_gv_auto_packet_size");
-  ArvStream* stream = arv_camera_create_stream(camera, nullptr, nullptr, &error);
+  const Owned<ArvStream> streamOwner(arv_camera_create_stream(camera, nullptr, nullptr, &error));
+  ArvStream* stream = streamOwner.get();
   check(error, "arv_camera_create_stream");
   const unsigned payload = arv_camera_get_payload(camera, &error);
   check(error, "arv_camera_get_payload");
   for (int i = 0; i < kBuffers; ++i) arv_stream_push_buffer(stream, arv_buffer_new_allocate(payload));
   arv_camera_start_acquisition(camera, &error);
   check(error, "arv_camera_start_acquisition");
+  struct StopAcquisition {
+    ArvCamera* camera;
+    ~StopAcquisition() { arv_camera_stop_acquisition(camera, nullptr); }
+  } const stop{camera};
   ArvBuffer* buffer = arv_stream_timeout_pop_buffer(stream, 5'000'000);
   if (buffer == nullptr) throw std::runtime_error("plain Aravis client: no first frame in 5 s");
   std::uint64_t previous = arv_buffer_get_frame_id(buffer);
@@ -160,28 +175,20 @@ Result benchPlain(int frames, double rate, int size, lfi::PixelFormat format) {
   }
   r.readyGrab_us = seconds(g0, Clock::now()) * 1e6 / (kBuffers / 2);
   r.lost = lost;
-  arv_camera_stop_acquisition(camera, &error);
-  g_clear_error(&error);
-  g_object_unref(stream);
-  g_object_unref(camera);
   return r;
 }
 
-}  // namespace
 
-int main(int argc, char** argv) {
-  int frames = 500, size = 512;
-  double rate = 100;
-  std::string formatName = "Mono8";
-  CLI::App app("lfi-camera-bench: the simulated GigE Vision camera through our Aravis backend and a plain client");
-  app.add_option("--frames", frames, "Frames per client and round")->check(CLI::Range(1, 1000000));
-  app.add_option("--rate", rate, "Frame rate asked of the device, Hz")->check(CLI::Range(0.1, 10000.0));
-  app.add_option("--size", size, "Sensor width and height, px")->check(CLI::Range(8, 4096));
-  app.add_option("--format", formatName, "Pixel format")->check(CLI::IsMember({"Mono8", "Mono16"}));
-  CLI11_PARSE(app, argc, argv);
-  const lfi::PixelFormat format = formatName == "Mono16" ? lfi::PixelFormat::Mono16 : lfi::PixelFormat::Mono8;
+int run(int frames, double rate, int size, lfi::PixelFormat format) {
   // The reference lens over its back light, size x size pixels over the same 60 mm field, 4 samples per pixel.
-  const fs::path dir = fs::temp_directory_path() / fmt::format("lfi-camera-bench-{}", ::getpid());
+  struct Folder {  // (removed however the bench ends)
+    fs::path path;
+    ~Folder() {
+      std::error_code ignored;
+      fs::remove_all(path, ignored);
+    }
+  } const folder{fs::temp_directory_path() / fmt::format("lfi-camera-bench-{}", ::getpid())};
+  const fs::path& dir = folder.path;
   fs::create_directories(dir);
   const fs::path scene = dir / "bench.toml";
   std::ifstream reference(fs::path(LFI_SOURCE_DIR) / "data/scenes/reference.toml");
@@ -200,8 +207,7 @@ int main(int argc, char** argv) {
   // One GigE Vision device on 127.0.0.1 at a time (the loopback tests hold the same lock).
   const lfi::testing_support::LoopbackGigeLock lock;
   const std::string serial = fmt::format("BENCH{}", ::getpid() % 100000);
-  int status = 0;
-  try {
+  {
     lfi::testing_support::GigeDeviceProcess server(
         {LFI_EXECUTABLE, "-q", "serve-camera", scene.string(), "--serial", serial}, std::chrono::seconds(60), false);
     lfi::registerBuiltinBackends();
@@ -237,11 +243,22 @@ int main(int argc, char** argv) {
       fmt::print("per-frame overhead: not measured (the device did not keep up with {} Hz, no frames were waiting)\n",
                  rate);
     server.signal(SIGTERM);
-  } catch (const std::exception& e) {
-    fmt::print(stderr, "lfi-camera-bench: {}\n", e.what());
-    status = 1;
   }
-  std::error_code ignored;
-  fs::remove_all(dir, ignored);
-  return status;
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  int frames = 500, size = 512;
+  double rate = 100;
+  std::string formatName = "Mono8";
+  CLI::App app("lfi-camera-bench: the simulated GigE Vision camera through our Aravis backend and a plain client");
+  app.add_option("--frames", frames, "Frames per client and round")->check(CLI::Range(1, 1000000));
+  app.add_option("--rate", rate, "Frame rate asked of the device, Hz")->check(CLI::Range(0.1, 10000.0));
+  app.add_option("--size", size, "Sensor width and height, px")->check(CLI::Range(8, 4096));
+  app.add_option("--format", formatName, "Pixel format")->check(CLI::IsMember({"Mono8", "Mono16"}));
+  CLI11_PARSE(app, argc, argv);
+  const lfi::PixelFormat format = formatName == "Mono16" ? lfi::PixelFormat::Mono16 : lfi::PixelFormat::Mono8;
+  return lfi::bench::runGuarded("lfi-camera-bench", [&] { return run(frames, rate, size, format); });
 }

@@ -3,10 +3,14 @@
 //
 //   tracer   samples/s of lfi::sim::render on data/scenes/reference.toml
 //            (analytic lens, Fresnel sampling), 1 thread and all threads;
-//            also the three study illuminations on the reference bench.
+//            also the reference scene's lens under the study's three
+//            illuminations (the study's own bench is another lens).
 //   bound    bare Embree rays/s, 1 thread, for the same rays (the refraction
-//            paths of the same camera samples, in packets as the tracer sees
-//            them) and the same back light: rtcIntersect1 and rtcIntersect16
+//            paths of the same camera samples, sixteen at a time in the order
+//            the tracer makes them; a packet may hold two segments of a path,
+//            which the tracer's never do; every segment, also those the tracer
+//            answers without Embree inside the lens) and the same back light:
+//            rtcIntersect1 and rtcIntersect16
 //            with the lens as a fine triangle mesh, and rtcIntersect16 with
 //            the lens and the back light as user primitives whose callbacks do
 //            nothing, coherent and incoherent (the traversal alone: the floor
@@ -15,10 +19,11 @@
 //            exact intersection, the shading and the sampling cost on top.
 //   queries  the tracer's own ray queries (Scene::intersect: Embree, the exact
 //            crossings, the lens answering the rays inside it) on the same rays
-//            in the same packets, each with where it starts; checked against
+//            in the same sixteens, each with where it starts; checked against
 //            the one-ray query first. Its ratio to the tracer is what the
 //            sampling, the shading and the bookkeeping cost on top.
-//   ceiling  samples/s on all threads if the fastest bound were all the work.
+//   ceiling  samples/s on all threads if the fastest bound were all the work
+//            (scaled as the machine's independent renders scale).
 //   scaling  1 thread to all threads, next to the machine's own bound: as many
 //            independent 1-thread renders at once as there are threads (no
 //            parallel render can do better than copies sharing nothing).
@@ -52,6 +57,7 @@
 #include <cstring>
 #include <functional>
 #include <numbers>
+#include <stdexcept>
 #include <thread>
 
 using namespace lfi;
@@ -169,14 +175,18 @@ RayBatch recordRays(const Scene& scene, const TelecentricCamera& cam, int spp) {
 }  // namespace
 
 // Mean of (R+G+B)/3 per pixel of any EXR that OpenEXR's RGBA interface reads
-// (luminance-only files come back as R = G = B = Y).
+// (luminance-only files come back as R = G = B = Y) whose data window starts
+// at (0, 0), as lfi's and Blender's do.
 std::vector<double> readLuminance(const char* path, int& width, int& height) {
   Imf::RgbaInputFile file(path);
   const Imath::Box2i dw = file.dataWindow();
-  width = dw.max.x - dw.min.x + 1;
-  height = dw.max.y - dw.min.y + 1;
+  if (dw.min.x != 0 || dw.min.y != 0)
+    throw std::runtime_error(fmt::format("{}: its data window starts at ({}, {}), not (0, 0)", path, dw.min.x,
+                                         dw.min.y));
+  width = dw.max.x + 1;
+  height = dw.max.y + 1;
   std::vector<Imf::Rgba> pixels(static_cast<size_t>(width) * static_cast<size_t>(height));
-  file.setFrameBuffer(pixels.data() - dw.min.x - static_cast<long>(dw.min.y) * width, 1, static_cast<size_t>(width));
+  file.setFrameBuffer(pixels.data(), 1, static_cast<size_t>(width));
   file.readPixels(dw.min.y, dw.max.y);
   std::vector<double> y;
   y.reserve(pixels.size());
@@ -198,6 +208,10 @@ int rmse(const char* a, const char* b) {
     mean += yb[k];
   }
   mean /= static_cast<double>(yb.size());
+  if (!(mean > 0) || !std::isfinite(mean)) {  // (the RMSE is relative to B's mean)
+    fmt::print(stderr, "lfi-bench: {} has mean {}: no relative RMSE against it\n", b, mean);
+    return 1;
+  }
   fmt::print("rmse_rel={:.6f}\n", std::sqrt(sq / static_cast<double>(ya.size())) / mean);
   return 0;
 }
@@ -307,6 +321,9 @@ static int run(int argc, char** argv) {
   RayBatch batch = recordRays(scene, small, quick ? 2 : 8);
   const double raysPerSample = static_cast<double>(batch.rays.size()) / batch.samples;
   RTCDevice device = rtcNewDevice(nullptr);
+  if (device == nullptr)
+    throw std::runtime_error(fmt::format("embree: cannot create a device (error {})",
+                                         static_cast<int>(rtcGetDeviceError(nullptr))));
   RTCScene raw = rtcNewScene(device);
   const TriangleMesh lens = tessellateLens(100, -100, 7, 50, 256, 512);
   {
@@ -346,7 +363,7 @@ static int run(int argc, char** argv) {
       rtcIntersect1(target, &ctx, &work[k]);
     }
   };
-  // The same rays as packets of 16, in recording order (one pixel's samples).
+  // The same rays as packets of 16, in recording order (neighbouring samples' segments).
   auto intersectPackets = [&](RTCScene target, RTCIntersectContextFlags flags) {
     RTCIntersectContext ctx;
     rtcInitIntersectContext(&ctx);
@@ -466,8 +483,9 @@ static int run(int argc, char** argv) {
              "packets; {:.0f} % hit)\n", best(5) / 1e6, 100.0 * static_cast<double>(hitCount) / n);
   fmt::print("  ratio    queries / tracer per ray, 1 thread: {:.2f} (median of {} turns; {:.2f}-{:.2f}; what "
              "sampling, shading and bookkeeping add)\n", queries.median, turns, queries.low, queries.high);
-  fmt::print("  ceiling  {} threads at the fastest bound: {:.1f} M samples/s (Embree alone, zero shading)\n", threads,
-             std::max({best(1), best(2), best(3), best(4)}) * threads / raysPerSample / 1e6);
+  fmt::print("  ceiling  {} threads at the fastest bound: {:.1f} M samples/s (Embree alone, zero shading, scaled as the "
+             "machine's independent renders)\n", threads,
+             std::max({best(1), best(2), best(3), best(4)}) * machine.median / raysPerSample / 1e6);
   rtcReleaseScene(raw);
   rtcReleaseDevice(device);
   return 0;
