@@ -523,7 +523,9 @@ int main(int argc, char** argv) {
       d.render.cancel = &gCancel;
       ProgressBar bar;
       if (!quiet) d.render.progress = [&bar](double f) { bar("rendering", f); };
-      std::signal(SIGINT, onInterrupt);
+      // (A run started with SIGINT ignored, as a background job is, keeps it ignored.)
+      const auto previousSigint = std::signal(SIGINT, SIG_IGN);
+      if (previousSigint != SIG_IGN) std::signal(SIGINT, onInterrupt);
       // Where the images go must take them before the render, not after.
       const auto overwrite = renderForce ? lfi::Overwrite::Allow : lfi::Overwrite::Refuse;
       const bool lightField = std::holds_alternative<lfi::sim::LightFieldSensor>(d.sensor);
@@ -541,9 +543,9 @@ int main(int argc, char** argv) {
         if (e.code() != lfi::Errc::Config) throw;
         throw lfi::Error(e.code(), fmt::format("{}: {}", sceneFile.string(), e.what()));
       }
-      // From here Ctrl-C ends the process again (a write in progress removes its temporary): the render it
-      // would have cancelled is done.
-      std::signal(SIGINT, SIG_DFL);
+      // From here Ctrl-C does what it did before (by default: ends the process; a write in progress removes its
+      // temporary): the render it would have cancelled is done.
+      std::signal(SIGINT, previousSigint == SIG_ERR ? SIG_DFL : previousSigint);
       if (gCancel) lfi::fail(lfi::Errc::Cancelled, "render: interrupted");
       const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
       bar.finish();

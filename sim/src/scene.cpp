@@ -207,7 +207,7 @@ LFI_SIMD_CLONES void embreePacket(const RayLanes& __restrict r, std::uint32_t tr
     rh.ray.dir_x[k] = static_cast<float>(r.dx[k]);
     rh.ray.dir_y[k] = static_cast<float>(r.dy[k]);
     rh.ray.dir_z[k] = static_cast<float>(r.dz[k]);
-    rh.ray.tnear[k] = static_cast<float>(t0 > 0 ? 0.0 : tMin);  // (a shifted ray starts short of the scene)
+    rh.ray.tnear[k] = static_cast<float>(std::max(tMin - t0, 0.0));
     rh.ray.tfar[k] = (traced >> k & 1) != 0 ? std::numeric_limits<float>::infinity()
                                             : -std::numeric_limits<float>::infinity();
     rh.ray.time[k] = 0;
@@ -422,7 +422,7 @@ Hit Scene::intersect(const Ray& ray, double tMin, double tMax) const {
   rh.ray.dir_x = static_cast<float>(d.x);
   rh.ray.dir_y = static_cast<float>(d.y);
   rh.ray.dir_z = static_cast<float>(d.z);
-  rh.ray.tnear = static_cast<float>(t0 > 0 ? 0.0 : tMin);
+  rh.ray.tnear = static_cast<float>(std::max(tMin - t0, 0.0));
   rh.ray.tfar = std::isfinite(tMax) ? static_cast<float>(tMax - t0) : std::numeric_limits<float>::infinity();
   rh.ray.time = 0;
   rh.ray.mask = 0xffffffffu;

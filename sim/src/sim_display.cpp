@@ -35,15 +35,15 @@ class SimDisplay final : public Display {
     if (!bench->claimDisplay())
       fail(Errc::Device, "display '{}': already open in this process (one display drives a scene file's panel; "
            "close the other first)", name_);
-    info_ = bench->description().display->info;
-    info_.serial = bench->description().name;
-    info_.deviceId = sceneFile_.string();
     bench_ = std::move(bench);  // (holds the claim: close() releases it)
-    sequence_ = 0;              // frames count from 1 after each open, as the USB protocol's do
     try {
+      info_ = bench_->description().display->info;
+      info_.serial = bench_->description().name;
+      info_.deviceId = sceneFile_.string();
+      sequence_ = 0;  // frames count from 1 after each open, as the USB protocol's do
       bench_->blankPanel();
       bench_->setBacklight(info_.brightnessMax);
-    } catch (...) {  // (a camera's change listener failed: the display stays closed, its claim released)
+    } catch (...) {  // (e.g. a camera's change listener failed: the display stays closed, its claim released)
       close();
       throw;
     }

@@ -22,8 +22,9 @@ public:
     } catch (const Error& e) {
       fail(e.code(), "sim light field capture of '{}': {}", sceneFile_.string(), e.what());
     }
-    if (!(settings_.beamHalfAngle_rad > 0 && settings_.beamHalfAngle_rad < 1.5))
-      fail(Errc::InvalidArgument, "sim light field capture of '{}': beam_half_angle_rad = {} is outside (0, 1.5)",
+    // (As a scene file's parallel emitter: below 1e-6 rad a cosine rounds towards 1 and the beam lights nothing.)
+    if (!(settings_.beamHalfAngle_rad >= 1e-6 && settings_.beamHalfAngle_rad < 1.5))
+      fail(Errc::InvalidArgument, "sim light field capture of '{}': beam_half_angle_rad = {} is outside [1e-6, 1.5)",
            sceneFile_.string(), settings_.beamHalfAngle_rad);
     // (As a scene file's positions and samples per pixel: a beam at infinity would light nothing.)
     if (!(settings_.beamDistance_mm > 0 && settings_.beamDistance_mm <= kFarthest_mm))

@@ -382,6 +382,7 @@ struct EmulatedUsbDisplay::Impl {
         u.status = -ESHUTDOWN;
         done.push_back(u);
         failAll();
+        state.plugged = state.claimed = false;
       } else if (silent) {
         held.push_back(u);
       } else {

@@ -235,8 +235,9 @@ public:
   double ambientIor() const { return ambientIor_; }
 
 private:
-  // A mesh's hit (Embree's, in float) of a ray along `direction` where it is
-  // nearer than the analytic objects' in `hits`.
+  // A mesh's hit (Embree's; `tfar` from the ray's own origin: Embree's float t
+  // plus where its copy of the ray started) of a ray along `direction` where it
+  // is nearer than the analytic objects' in `hits`.
   void meshHit(int k, const Vec3& direction, unsigned geomID, unsigned primID, double tfar, const Vec3& ng, float u,
                float v, HitPacket& hits) const;
 
