@@ -655,7 +655,7 @@ Object readObject(ConfigTable& t) {
     const std::string e = t.string("emitter", std::nullopt, {"parallel", "lambertian", "light_field"});
     if (e == "parallel") {
       obj.emission = ParallelEmission{t.number("radiance", 1.0, 0, 1e12),
-                                      t.number("half_angle_rad", std::nullopt, 1e-6, std::numbers::pi / 2)};
+                                      t.number("half_angle_rad", std::nullopt, kNarrowestCone_rad, std::numbers::pi / 2)};
     } else if (e == "lambertian") {
       obj.emission = LambertianEmission{t.number("radiance", 1.0, 0, 1e12)};
     } else {
@@ -814,11 +814,10 @@ SceneDescription loadSceneFile(const fs::path& path) {
       fail(Errc::Config, "{}: [camera]: {}", path.string(), e.what());
     }
     // b just past f puts the focused plane, and the field with it, out of any bench's reach.
-    if (const TelecentricCamera::RayMap map(cam);
-        !(map.pixel * std::max(map.halfW, map.halfH) + map.stop <= kFarthest_mm))
+    const TelecentricCamera::RayMap map(cam);
+    if (const double reach = map.pixel * std::max(map.halfW, map.halfH) + map.stop; !(reach <= kFarthest_mm))
       fail(Errc::Config, "{} = {}: with focal_length_mm = {}, the field reaches {:g} mm from the axis, past {:g} mm",
-           c.where("image_distance_mm"), cam.imageDistance_mm, cam.focalLength_mm,
-           map.pixel * std::max(map.halfW, map.halfH) + map.stop, kFarthest_mm);
+           c.where("image_distance_mm"), cam.imageDistance_mm, cam.focalLength_mm, reach, kFarthest_mm);
     d.sensor = cam;
   } else {
     ConfigTable c = root.table("light_field_sensor");

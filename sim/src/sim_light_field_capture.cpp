@@ -22,15 +22,14 @@ public:
     } catch (const Error& e) {
       fail(e.code(), "sim light field capture of '{}': {}", sceneFile_.string(), e.what());
     }
-    // (As a scene file's parallel emitter: below 1e-6 rad a cosine rounds towards 1 and the beam lights nothing.)
-    if (!(settings_.beamHalfAngle_rad >= 1e-6 && settings_.beamHalfAngle_rad < 1.5))
+    if (!(settings_.beamHalfAngle_rad >= kNarrowestCone_rad && settings_.beamHalfAngle_rad < 1.5))
       fail(Errc::InvalidArgument, "sim light field capture of '{}': beam_half_angle_rad = {} is outside [1e-6, 1.5)",
            sceneFile_.string(), settings_.beamHalfAngle_rad);
     // (As a scene file's positions and samples per pixel: a beam at infinity would light nothing.)
     if (!(settings_.beamDistance_mm > 0 && settings_.beamDistance_mm <= kFarthest_mm))
       fail(Errc::InvalidArgument, "sim light field capture of '{}': beam_distance_mm = {} is outside (0, 1e6]",
            sceneFile_.string(), settings_.beamDistance_mm);
-    static_assert(kFarthest_mm == 1e6, "the message above states the bound");
+    static_assert(kFarthest_mm == 1e6 && kNarrowestCone_rad == 1e-6, "the messages above state the bounds");
     if (settings_.samplesPerPixel < 1 || settings_.samplesPerPixel > kMostSamplesPerPixel)
       fail(Errc::InvalidArgument, "sim light field capture of '{}': spp = {} is outside 1 .. 2^20",
            sceneFile_.string(), settings_.samplesPerPixel);

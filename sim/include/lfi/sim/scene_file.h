@@ -78,6 +78,9 @@ inline constexpr double kDefaultCreaseAngle_deg = 30;
 // 1e8 mm on.
 inline constexpr double kFarthest_mm = 1e6;
 inline constexpr int kMostSamplesPerPixel = 1 << 20;
+// The narrowest cone a parallel emitter (and the sim capture's beam) takes: below
+// about 1e-8 rad its cosine rounds to 1 and it lights nothing.
+inline constexpr double kNarrowestCone_rad = 1e-6;
 // The largest seed: TOML's largest integer, so that any seed `lfi render --seed` takes can be written in a scene file.
 inline constexpr std::int64_t kLargestSeed = std::numeric_limits<std::int64_t>::max();
 
