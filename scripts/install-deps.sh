@@ -19,6 +19,8 @@ PACKAGES=(
   libassimp-dev
   # small libraries instead of hand-written code
   libcli11-dev libtomlplusplus-dev nlohmann-json3-dev libspdlog-dev libfmt-dev
+  # exact Poisson draws for the camera sensor model (Boost.Random, header-only)
+  libboost-dev
   # tests (the emulated USB display: umockdev)
   libgtest-dev libgmock-dev umockdev libumockdev-dev udev
 )

@@ -16,23 +16,26 @@ void unpackMono12(const std::uint8_t* data, std::size_t size, int width, int hei
   if (size < needed)
     fail(Errc::InvalidArgument, "unpackMono12: {} x {} pixels need {} bytes, the buffer has {}", width, height, needed,
          size);
-  out.create(height, width, CV_16UC1);
-  // The packing runs across line ends, so walk the pixels as one sequence.
-  const bool pfnc = packing == Mono12Packing::Pfnc;
-  std::size_t index = 0;
-  for (int row = 0; row < height; ++row) {
-    auto* dst = out.ptr<std::uint16_t>(row);
-    for (int col = 0; col < width; ++col, ++index) {
-      const std::uint8_t* triple = data + (index / 2) * 3;
-      std::uint16_t value;
-      if (index % 2 == 0)
-        value = pfnc ? static_cast<std::uint16_t>(triple[0] | ((triple[1] & 0x0F) << 8))
-                     : static_cast<std::uint16_t>((triple[0] << 4) | (triple[1] & 0x0F));
-      else
-        value = pfnc ? static_cast<std::uint16_t>((triple[1] >> 4) | (triple[2] << 4))
-                     : static_cast<std::uint16_t>((triple[2] << 4) | (triple[1] >> 4));
-      dst[col] = value;
+  if (!out.isContinuous()) out.release();  // (a view into a larger image)
+  out.create(height, width, CV_16UC1);      // continuous: the pixels are one sequence, as on the wire
+  auto* dst = out.ptr<std::uint16_t>(0);
+  const std::size_t pixels = static_cast<std::size_t>(width) * static_cast<std::size_t>(height);
+  // Two pixels per three bytes; an odd last pixel has the first two bytes of a triple.
+  auto pair = [&](const std::uint8_t* t, std::uint16_t& p0, std::uint16_t& p1) {
+    if (packing == Mono12Packing::Pfnc) {
+      p0 = static_cast<std::uint16_t>(t[0] | ((t[1] & 0x0F) << 8));
+      p1 = static_cast<std::uint16_t>((t[1] >> 4) | (t[2] << 4));
+    } else {
+      p0 = static_cast<std::uint16_t>((t[0] << 4) | (t[1] & 0x0F));
+      p1 = static_cast<std::uint16_t>((t[2] << 4) | (t[1] >> 4));
     }
+  };
+  const std::size_t pairs = pixels / 2;
+  for (std::size_t i = 0; i < pairs; ++i) pair(data + 3 * i, dst[2 * i], dst[2 * i + 1]);
+  if (pixels % 2) {
+    const std::uint8_t last[3] = {data[3 * pairs], data[3 * pairs + 1], 0};
+    std::uint16_t unused;
+    pair(last, dst[pixels - 1], unused);
   }
 }
 

@@ -62,8 +62,7 @@ double PanelEmission::radiance(const Vec2& q, const Vec3& d) const {
 
 cv::Mat panelLevels(const DisplayInfo& info, const cv::Mat& panel) {
   const int sub = info.subpixelsPerPixel();
-  cv::Mat levels(info.panelHeight_px, info.panelWidth_px * sub, CV_32FC1, cv::Scalar(0));
-  if (panel.empty()) return levels;
+  if (panel.empty()) return {};  // dark: no level image (a 16384² panel's would take 3.2 GB)
   if (panel.cols != info.panelWidth_px || panel.rows != info.panelHeight_px || panel.channels() != sub ||
       (panel.depth() != CV_8U && panel.depth() != CV_32F))
     fail(Errc::InvalidArgument,
@@ -72,6 +71,7 @@ cv::Mat panelLevels(const DisplayInfo& info, const cv::Mat& panel) {
          info.panelWidth_px, info.panelHeight_px, sub, panel.cols, panel.rows, panel.channels(), panel.depth());
   // Interleaved channels are already the subpixels left to right: view as one channel.
   const cv::Mat flat = panel.reshape(1, panel.rows);
+  cv::Mat levels;  // allocated by the conversion: not zero-filled first
   if (panel.depth() == CV_8U)
     flat.convertTo(levels, CV_32F, 1.0 / 255.0);
   else

@@ -6,8 +6,10 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <vector>
 
 namespace {
 
@@ -82,6 +84,46 @@ TEST(CameraSensorModel, FlatFieldNoiseMatchesNoiseDn) {
   meanStd(model.capture(flat(256, 4000.0f), 22), mean, sd);
   const double scale = model.maxDigitalNumber() / model.fullWell_e;
   EXPECT_NEAR(sd, std::sqrt(4000 * scale * scale + 1.0 / 12), 0.03 * sd);
+}
+
+// Without read noise and with one DN per electron, the digital numbers are the
+// shot noise's draws: their histogram must be Poisson's, both where the sampler
+// inverts the distribution (means below 10) and where it rejects (above).
+TEST(CameraSensorModel, ShotNoiseIsPoissonDistributed) {
+  CameraSensorModel model;
+  model.readNoise_e = 0;
+  model.fullWell_e = model.maxDigitalNumber();  // 1 DN per electron
+  model.electronsPerUnit = 1;
+  for (double mu : {0.5, 3.0, 9.5, 10.5, 40.0, 900.0}) {
+    const cv::Mat dn = model.capture(flat(256, static_cast<float>(mu)), 51);
+    std::vector<double> counts(static_cast<size_t>(model.maxDigitalNumber()) + 1, 0.0);
+    for (auto it = dn.begin<std::uint16_t>(); it != dn.end<std::uint16_t>(); ++it) counts[*it] += 1;
+    // Pearson's chi-square against the Poisson pmf (computed in logs), over bins
+    // of at least 20 expected counts: neighbours merged, the upper tail into the last.
+    const double n = static_cast<double>(dn.total());
+    std::vector<double> expectedBins{0}, observedBins{0};
+    for (size_t k = 0; k < counts.size(); ++k) {
+      if (expectedBins.back() >= 20) expectedBins.push_back(0), observedBins.push_back(0);
+      const double kd = static_cast<double>(k);
+      expectedBins.back() += n * std::exp(kd * std::log(mu) - mu - std::lgamma(kd + 1));
+      observedBins.back() += counts[k];
+    }
+    if (expectedBins.size() > 1 && expectedBins.back() < 20) {
+      expectedBins[expectedBins.size() - 2] += expectedBins.back();
+      observedBins[observedBins.size() - 2] += observedBins.back();
+      expectedBins.pop_back(), observedBins.pop_back();
+    }
+    double chi2 = 0;
+    for (size_t b = 0; b < expectedBins.size(); ++b)
+      chi2 += (observedBins[b] - expectedBins[b]) * (observedBins[b] - expectedBins[b]) / expectedBins[b];
+    const int bins = static_cast<int>(expectedBins.size());
+    // Degrees of freedom: bins - 1. Six standard deviations of chi-square above its mean.
+    const double dof = bins - 1;
+    EXPECT_LT(chi2, dof + 6 * std::sqrt(2 * dof)) << "mean " << mu << " e-: " << bins << " bins";
+    double mean, sd;
+    meanStd(dn, mean, sd);
+    EXPECT_NEAR(mean, mu, 5 * std::sqrt(mu / n)) << "mean " << mu << " e-";
+  }
 }
 
 TEST(CameraSensorModel, SaturationClampsAtTheMaximumDigitalNumber) {

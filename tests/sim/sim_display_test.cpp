@@ -106,6 +106,10 @@ TEST_F(SimDisplayTest, StateMachineThroughTheSimBackend) {
 
   auto bench = SimBench::open(file, "test");
   EXPECT_FALSE(bench->lit());
+  // Dark until shown, without a level image (a large panel's would take gigabytes).
+  ASSERT_TRUE(bench->emission().levels);
+  EXPECT_TRUE(bench->emission().levels->empty());
+  EXPECT_EQ(bench->emission().radiance({0, 0}, {0, 0, 1}), 0.0);
   const std::uint64_t v0 = bench->version();
 
   EXPECT_TRUE(throwsError([&] { display->show(cv::Mat(10, 10, CV_8UC1)); }, Errc::InvalidArgument,
@@ -120,6 +124,8 @@ TEST_F(SimDisplayTest, StateMachineThroughTheSimBackend) {
   EXPECT_TRUE(bench->lit());
   EXPECT_GT(bench->version(), v0);
   EXPECT_DOUBLE_EQ(bench->emission().brightness, 2.0);
+  EXPECT_EQ(bench->emission().levels->size(), cv::Size(320, 200));
+  EXPECT_EQ(bench->emission().levels->at<float>(199, 319), 1.0f);  // level 255 → 1
   EXPECT_EQ(display->show(cv::Mat(200, 320, CV_8UC1, cv::Scalar(10))).sequence, 2u);
   DisplayStatus s = display->status();
   EXPECT_TRUE(s.showing);

@@ -22,7 +22,8 @@ enum class Mono12Packing { GigEVisionPacked, Pfnc };
 std::size_t mono12PackedSize(int width, int height);
 
 // Unpacks width × height pixels from `data` (at least mono12PackedSize bytes)
-// into `out`, which is (re)allocated only if its size or type differ.
+// into `out`, which is (re)allocated only if its size or type differ or it is
+// not continuous (a view into a larger image).
 void unpackMono12(const std::uint8_t* data, std::size_t size, int width, int height, Mono12Packing packing,
                   cv::Mat& out);
 

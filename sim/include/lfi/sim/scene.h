@@ -106,8 +106,9 @@ private:
 };
 
 // Emission of a display object: the level image is what the panel shows, one float
-// per subpixel (CV_32FC1, panelHeight x panelWidth · subpixels, drive level 0..1),
-// `brightness` the radiance at drive level 1. Build it with makePanelEmission().
+// per subpixel (CV_32FC1, panelHeight x panelWidth · subpixels, drive level 0..1;
+// empty for a dark panel), `brightness` the radiance at drive level 1. Build it
+// with makePanelEmission().
 struct PanelEmission {
   std::shared_ptr<const PanelOptics> optics;
   std::shared_ptr<const cv::Mat> levels;
@@ -117,8 +118,8 @@ struct PanelEmission {
 };
 
 // `panel`: panelWidth x panelHeight, channels = subpixels per pixel in subpixel order,
-// CV_8U (level / 255) or CV_32F (level as is, clamped to >= 0); empty = a dark panel.
-// Throws Errc::InvalidArgument for a wrong size or type.
+// CV_8U (level / 255) or CV_32F (level as is, clamped to >= 0); empty = a dark panel,
+// whose level image is empty too. Throws Errc::InvalidArgument for a wrong size or type.
 cv::Mat panelLevels(const DisplayInfo& info, const cv::Mat& panel);
 PanelEmission makePanelEmission(std::shared_ptr<const PanelOptics> optics, const cv::Mat& panel, double brightness);
 
