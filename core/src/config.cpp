@@ -112,7 +112,9 @@ std::vector<ConfigTable> ConfigTable::tables(const std::string& key) {
   if (!n) return out;
   const std::string path = path_.empty() ? key : path_ + "." + key;
   const toml::array* a = n->as_array();
-  if (!a || !a->is_array_of_tables()) fail(Errc::Config, "{} must be an array of tables ([[{}]])", where(key), path);
+  // (An empty array is none: toml++ does not count it as an array of tables.)
+  if (!a || (!a->empty() && !a->is_array_of_tables()))
+    fail(Errc::Config, "{} must be an array of tables ([[{}]])", where(key), path);
   for (size_t i = 0; i < a->size(); ++i)
     out.push_back(ConfigTable(root_, a->get(i)->as_table(), file_, fmt::format("{}[{}]", path, i)));
   return out;

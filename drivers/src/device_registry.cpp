@@ -9,6 +9,35 @@ bool validDeviceScheme(const std::string& scheme) {
   });
 }
 
+namespace {
+
+// RFC 3986's percent-encoding: "%XX" is the byte 0xXX, so that a path or a
+// value can hold the characters that split a URI ('?', '&', '=', '%').
+std::string percentDecoded(std::string_view part, std::string_view kind, std::string_view text) {
+  auto hex = [](char c) {
+    if (c >= '0' && c <= '9') return c - '0';
+    if (c >= 'a' && c <= 'f') return c - 'a' + 10;
+    if (c >= 'A' && c <= 'F') return c - 'A' + 10;
+    return -1;
+  };
+  std::string out;
+  for (std::size_t i = 0; i < part.size(); ++i) {
+    if (part[i] != '%') {
+      out += part[i];
+      continue;
+    }
+    const int h = i + 1 < part.size() ? hex(part[i + 1]) : -1, l = i + 2 < part.size() ? hex(part[i + 2]) : -1;
+    if (h < 0 || l < 0 || h + l == 0)
+      fail(Errc::Config, "{} URI '{}': '%' must be followed by two hex digits of a byte 01..FF (write %25 for a '%')",
+           kind, text);
+    out += static_cast<char>(h * 16 + l);
+    i += 2;
+  }
+  return out;
+}
+
+}  // namespace
+
 DeviceUri parseDeviceUri(std::string_view text, std::string_view kind, std::string_view example) {
   DeviceUri uri;
   uri.text = std::string(text);
@@ -18,7 +47,7 @@ DeviceUri parseDeviceUri(std::string_view text, std::string_view kind, std::stri
   uri.scheme = std::string(text.substr(0, colon));
   std::string_view rest = text.substr(colon + 1);
   const std::size_t question = rest.find('?');
-  uri.path = std::string(rest.substr(0, question));
+  uri.path = percentDecoded(rest.substr(0, question), kind, text);
   if (question == std::string_view::npos) return uri;
 
   std::string_view query = rest.substr(question + 1);
@@ -29,9 +58,9 @@ DeviceUri parseDeviceUri(std::string_view text, std::string_view kind, std::stri
     const std::size_t eq = item.find('=');
     if (eq == std::string_view::npos || eq == 0)
       fail(Errc::Config, "{} URI '{}': query item '{}' is not <key>=<value>", kind, text, item);
-    std::string key(item.substr(0, eq));
+    std::string key = percentDecoded(item.substr(0, eq), kind, text);
     if (uri.query.contains(key)) fail(Errc::Config, "{} URI '{}': key '{}' is given twice", kind, text, key);
-    uri.query.emplace(std::move(key), std::string(item.substr(eq + 1)));
+    uri.query.emplace(std::move(key), percentDecoded(item.substr(eq + 1), kind, text));
     if (amp == std::string_view::npos) break;
     query = query.substr(amp + 1);
     if (query.empty()) fail(Errc::Config, "{} URI '{}' ends with '&'", kind, text);

@@ -54,25 +54,6 @@ std::string serialInUri(std::string_view serial) {
   return out;
 }
 
-std::string decodeSerial(std::string_view text, const std::string& uri) {
-  std::string out;
-  for (std::size_t i = 0; i < text.size(); ++i) {
-    if (text[i] != '%') {
-      out += text[i];
-      continue;
-    }
-    unsigned value = 0;
-    const char* first = text.data() + i + 1;
-    const auto [end, ec] = std::from_chars(first, first + std::min<std::size_t>(2, text.size() - i - 1), value, 16);
-    if (ec != std::errc() || end != first + 2 || value == 0)
-      fail(Errc::Config, "display URI '{}': serial '{}' has a '%' not followed by two hex digits of a byte 01..FF",
-           uri, text);
-    out += static_cast<char>(value);
-    i += 2;
-  }
-  return out;
-}
-
 SubpixelLayout toLayout(proto::SubpixelCode code) {
   switch (code) {
     case proto::SubpixelCode::RgbStripe: return SubpixelLayout::RgbStripe;
@@ -656,11 +637,10 @@ UsbDisplaySelector parseUsbDisplayPath(std::string_view path, const std::string&
   s.vendorId = parseHex16(ids.substr(0, colon), "vendor id", uri);
   s.productId = parseHex16(ids.substr(colon + 1), "product id", uri);
   if (slash != std::string_view::npos) {
-    const std::string_view text = path.substr(slash + 1);
-    s.serial = decodeSerial(text, uri);
+    s.serial = std::string(path.substr(slash + 1));  // (decoded with the rest of the URI: it may hold a '/')
     if (s.serial.empty() || s.serial.size() > 126)
-      fail(Errc::Config, "display URI '{}': serial '{}' must be 1..126 bytes (write a space, '/', '%', '?', '&', '#', "
-           "'=' or a non-ASCII byte as %XX)", uri, text);
+      fail(Errc::Config, "display URI '{}': the serial must be 1..126 bytes, not {} (write a space, '/', '%', '?', "
+           "'&', '#', '=' or a non-ASCII byte as %XX)", uri, s.serial.size());
   }
   return s;
 }

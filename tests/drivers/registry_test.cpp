@@ -28,6 +28,19 @@ TEST(CameraUri, PathKeepsColonsAndMayBeEmpty) {
   EXPECT_TRUE(empty.query.empty());
 }
 
+// The characters that split a URI, percent-encoded, reach the backend as
+// themselves: in the path, a key and a value (e.g. a calibration file "a&b.toml").
+TEST(CameraUri, PathKeysAndValuesArePercentDecoded) {
+  const CameraUri uri = parseCameraUri("sim:/benches/a%3Fb/100%25.toml?file=x%26y%3Dz.toml&k%3D1=%2f%2F");
+  EXPECT_EQ(uri.path, "/benches/a?b/100%.toml");
+  ASSERT_EQ(uri.query.size(), 2u);
+  EXPECT_EQ(uri.query.at("file"), "x&y=z.toml");
+  EXPECT_EQ(uri.query.at("k=1"), "//");
+  EXPECT_EQ(parseCameraUri("aravis:%C3%A9").path, "\xC3\xA9");  // any byte but NUL
+  for (const char* bad : {"sim:100%.toml", "sim:a%2", "sim:a%zz", "sim:a%00b", "aravis:x?a=%", "aravis:x?%g1=2"})
+    EXPECT_TRUE(throwsError([&] { parseCameraUri(bad); }, Errc::Config, {bad, "two hex digits", "%25"})) << bad;
+}
+
 TEST(CameraUri, MalformedUrisAreConfigErrors) {
   EXPECT_TRUE(throwsError([] { parseCameraUri("Aravis-Fake-GV01"); }, Errc::Config, {"Aravis-Fake-GV01", "no scheme"}));
   EXPECT_TRUE(throwsError([] { parseCameraUri(":x"); }, Errc::Config, {"no scheme"}));

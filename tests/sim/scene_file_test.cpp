@@ -87,6 +87,25 @@ radius_mm = 3
   EXPECT_TRUE(solid.contains({0, 0, 6.5}));
   EXPECT_FALSE(solid.contains({0, 0, 8}));  // inside the cut sphere
   EXPECT_TRUE(solid.contains({0, 8, 0}));
+  // An empty list of cut-outs is none (inline, as TOML writes an empty array of tables).
+  const SceneDescription none = loadSceneFile(write("no-cut.toml", std::string("format = \"lfi-scene\"\nversion = 1\n") +
+                                                                      kCamera + R"(
+[[object]]
+name = "ball"
+shape = "sphere"
+radius_mm = 10
+cut = []
+)"));
+  const auto& whole = *std::get<std::shared_ptr<const Solid>>(none.objects[0].shape);
+  EXPECT_TRUE(whole.contains({0, 0, 8}));
+  // An array of anything else is still refused.
+  EXPECT_TRUE(throwsError(
+      [&] {
+        loadSceneFile(write("bad-cut.toml", std::string("format = \"lfi-scene\"\nversion = 1\n") + kCamera +
+                                                "[[object]]\nname = \"ball\"\nshape = \"sphere\"\nradius_mm = 10\n"
+                                                "cut = [1, 2]\n"));
+      },
+      Errc::Config, {"bad-cut.toml:", "cut", "array of tables"}));
 }
 
 TEST_F(SceneFile, UnknownKeyNamesFileLineAndKey) {

@@ -24,16 +24,21 @@
 
 namespace lfi {
 
+// A device URI, <scheme>:<path>[?<key>=<value>[&...]]. The path, keys and
+// values are percent-decoded (RFC 3986: "%XX" is the byte 0xXX), so that they
+// can hold the characters that split a URI: a file "a&b.toml" is "a%26b.toml"
+// in a query value, a '%' is "%25", a '?' in a path "%3F".
 struct DeviceUri {
-  std::string text;                          // the whole URI, for messages
+  std::string text;                          // the whole URI as given, for messages
   std::string scheme;                        // before the first ':'
-  std::string path;                          // between the first ':' and '?'
-  std::map<std::string, std::string> query;  // key → value, keys unique
+  std::string path;                          // between the first ':' and '?', decoded
+  std::map<std::string, std::string> query;  // key → value, decoded, keys unique
 };
 
 // Splits a URI. Throws Errc::Config naming the URI (as a "<kind> URI") for a
 // missing scheme (the message shows `example`), an empty key, a key without '=',
-// a repeated key or a trailing '&'.
+// a repeated key, a trailing '&', or a '%' not followed by two hex digits of a
+// byte 01..FF.
 DeviceUri parseDeviceUri(std::string_view text, std::string_view kind, std::string_view example);
 
 // Non-empty and only [a-z0-9+.-].

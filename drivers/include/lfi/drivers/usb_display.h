@@ -40,8 +40,9 @@ struct UsbDisplaySelector {
   std::string uri() const;
 };
 
-// Parses "<vid>:<pid>[/<serial>]" (4 hex digits each; the serial percent-decoded,
-// 1..126 bytes). Throws Errc::Config naming `uriForMessages`.
+// Parses a usb: URI's decoded path (DeviceUri::path), "<vid>:<pid>[/<serial>]"
+// (4 hex digits each; the serial, 1..126 bytes, is all after the first '/').
+// Throws Errc::Config naming `uriForMessages`.
 UsbDisplaySelector parseUsbDisplayPath(std::string_view path, const std::string& uriForMessages);
 
 struct UsbDisplayOptions {
