@@ -38,6 +38,7 @@ std::unique_ptr<Display> openUsbFromUri(const DisplayUri& uri) {
 DisplayUri parseDisplayUri(std::string_view text) { return registry().parse(text); }
 
 void registerDisplayBackend(DisplayBackend backend) { registry().add(std::move(backend)); }
+bool registerDisplayBackendIfAbsent(DisplayBackend backend) { return registry().addOnce(std::move(backend)); }
 
 void registerBuiltinDisplayBackends() {
   registry().addOnce(DisplayBackend{

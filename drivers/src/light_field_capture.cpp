@@ -11,6 +11,9 @@ DeviceRegistry<LightFieldCapture>& registry() {
 }  // namespace
 
 void registerLightFieldCaptureBackend(LightFieldCaptureBackend backend) { registry().add(std::move(backend)); }
+bool registerLightFieldCaptureBackendIfAbsent(LightFieldCaptureBackend backend) {
+  return registry().addOnce(std::move(backend));
+}
 
 std::vector<std::string> lightFieldCaptureSchemes() { return registry().schemes(); }
 

@@ -33,6 +33,7 @@ std::unique_ptr<Camera> openAravisFromUri(const CameraUri& uri) {
 CameraUri parseCameraUri(std::string_view text) { return registry().parse(text); }
 
 void registerCameraBackend(CameraBackend backend) { registry().add(std::move(backend)); }
+bool registerCameraBackendIfAbsent(CameraBackend backend) { return registry().addOnce(std::move(backend)); }
 
 void registerBuiltinBackends() {
   registry().addOnce(CameraBackend{

@@ -451,18 +451,12 @@ std::unique_ptr<Camera> openSimCamera(const fs::path& sceneFile) {
 void registerSimBackends() {
   registerSimDisplayBackend();
   registerSimLightFieldCapture();
-  const std::vector<std::string> schemes = cameraSchemes();
-  if (std::ranges::find(schemes, std::string("sim")) != schemes.end()) return;
-  try {
-    registerCameraBackend(CameraBackend{
-        .scheme = "sim",
-        .queryKeys = {},
-        .description = "sim:<scene-file>  ray-traced camera (the scene file's [camera] and [camera_sensor])",
-        .factory = [](const CameraUri& uri) { return openSimCamera(uri.path); },
-    });
-  } catch (const Error&) {
-    // Registered by another thread in between: fine, the scheme is there.
-  }
+  registerCameraBackendIfAbsent(CameraBackend{
+      .scheme = "sim",
+      .queryKeys = {},
+      .description = "sim:<scene-file>  ray-traced camera (the scene file's [camera] and [camera_sensor])",
+      .factory = [](const CameraUri& uri) { return openSimCamera(uri.path); },
+  });
 }
 
 }  // namespace lfi::sim

@@ -117,18 +117,12 @@ std::unique_ptr<Display> openSimDisplay(const fs::path& sceneFile) {
 }
 
 void registerSimDisplayBackend() {
-  const std::vector<std::string> schemes = displaySchemes();
-  if (std::ranges::find(schemes, std::string("sim")) != schemes.end()) return;
-  try {
-    registerDisplayBackend(DisplayBackend{
-        .scheme = "sim",
-        .queryKeys = {},
-        .description = "sim:<scene-file>  ray-traced light field display (the scene file's [display])",
-        .factory = [](const DisplayUri& uri) { return openSimDisplay(uri.path); },
-    });
-  } catch (const Error&) {
-    // Registered by another thread in between: fine, the scheme is there.
-  }
+  registerDisplayBackendIfAbsent(DisplayBackend{
+      .scheme = "sim",
+      .queryKeys = {},
+      .description = "sim:<scene-file>  ray-traced light field display (the scene file's [display])",
+      .factory = [](const DisplayUri& uri) { return openSimDisplay(uri.path); },
+  });
 }
 
 }  // namespace lfi::sim

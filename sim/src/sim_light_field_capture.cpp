@@ -109,36 +109,29 @@ std::unique_ptr<LightFieldCapture> openSimLightFieldCapture(const std::filesyste
 }
 
 void registerSimLightFieldCapture() {
-  const std::vector<std::string> schemes = lightFieldCaptureSchemes();
-  if (std::ranges::find(schemes, std::string("sim")) != schemes.end()) return;
-  try {
-    registerLightFieldCaptureBackend(LightFieldCaptureBackend{
-        .scheme = "sim",
-        .queryKeys = {"spatial", "angular", "pitch_mm", "distance_mm", "beam_half_angle_rad", "beam_distance_mm",
-                      "spp"},
-        .description = "sim:<scene-file>[?spatial=&angular=&pitch_mm=&distance_mm=&beam_half_angle_rad=&"
-                       "beam_distance_mm=&spp=]  simulated lensless light field sensor",
-        .factory =
-            [](const DeviceUri& uri) -> std::unique_ptr<LightFieldCapture> {
-              SimCaptureSettings s;
-              s.geometry.spatialX = s.geometry.spatialY = parseValue(uri, "spatial", s.geometry.spatialX);
-              s.geometry.angular = parseValue(uri, "angular", s.geometry.angular);
-              s.geometry.pixelPitch_mm = parseValue(uri, "pitch_mm", s.geometry.pixelPitch_mm);
-              s.geometry.distance_mm = parseValue(uri, "distance_mm", s.geometry.distance_mm);
-              s.beamHalfAngle_rad = parseValue(uri, "beam_half_angle_rad", s.beamHalfAngle_rad);
-              s.beamDistance_mm = parseValue(uri, "beam_distance_mm", s.beamDistance_mm);
-              s.samplesPerPixel = parseValue(uri, "spp", s.samplesPerPixel);
-              try {
-                return openSimLightFieldCapture(uri.path, s);
-              } catch (const Error& e) {  // (a setting out of range: the URI's)
-                if (e.code() != Errc::InvalidArgument) throw;
-                fail(Errc::Config, "light field capture URI '{}': {}", uri.text, e.what());
-              }
-            },
-    });
-  } catch (const Error&) {
-    // Registered by another thread in between: fine, the scheme is there.
-  }
+  registerLightFieldCaptureBackendIfAbsent(LightFieldCaptureBackend{
+      .scheme = "sim",
+      .queryKeys = {"spatial", "angular", "pitch_mm", "distance_mm", "beam_half_angle_rad", "beam_distance_mm", "spp"},
+      .description = "sim:<scene-file>[?spatial=&angular=&pitch_mm=&distance_mm=&beam_half_angle_rad=&"
+                     "beam_distance_mm=&spp=]  simulated lensless light field sensor",
+      .factory =
+          [](const DeviceUri& uri) -> std::unique_ptr<LightFieldCapture> {
+            SimCaptureSettings s;
+            s.geometry.spatialX = s.geometry.spatialY = parseValue(uri, "spatial", s.geometry.spatialX);
+            s.geometry.angular = parseValue(uri, "angular", s.geometry.angular);
+            s.geometry.pixelPitch_mm = parseValue(uri, "pitch_mm", s.geometry.pixelPitch_mm);
+            s.geometry.distance_mm = parseValue(uri, "distance_mm", s.geometry.distance_mm);
+            s.beamHalfAngle_rad = parseValue(uri, "beam_half_angle_rad", s.beamHalfAngle_rad);
+            s.beamDistance_mm = parseValue(uri, "beam_distance_mm", s.beamDistance_mm);
+            s.samplesPerPixel = parseValue(uri, "spp", s.samplesPerPixel);
+            try {
+              return openSimLightFieldCapture(uri.path, s);
+            } catch (const Error& e) {  // (a setting out of range: the URI's)
+              if (e.code() != Errc::InvalidArgument) throw;
+              fail(Errc::Config, "light field capture URI '{}': {}", uri.text, e.what());
+            }
+          },
+  });
 }
 
 }  // namespace lfi::sim

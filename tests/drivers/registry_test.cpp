@@ -96,6 +96,22 @@ TEST(CameraRegistry, OtherLibrariesRegisterTheirSchemes) {
             {.scheme = "Bad Scheme", .factory = [](const CameraUri&) { return std::unique_ptr<Camera>(); }});
       },
       Errc::InvalidArgument, {"'Bad Scheme'"}));
+  // Registering unless the scheme is taken: the first backend stays, and a bad one is still refused.
+  int opened = 0;
+  auto counting = [&opened](int by) {
+    return [&opened, by](const CameraUri&) {
+      opened += by;
+      return std::unique_ptr<Camera>();
+    };
+  };
+  EXPECT_TRUE(registerCameraBackendIfAbsent({.scheme = "test-if-absent", .factory = counting(1)}));
+  EXPECT_FALSE(registerCameraBackendIfAbsent({.scheme = "test-if-absent", .factory = counting(10)}));
+  EXPECT_FALSE(registerCameraBackendIfAbsent({.scheme = "test-registry", .factory = counting(100)}));
+  openCamera("test-if-absent:x");
+  openCamera("test-registry:x");
+  EXPECT_EQ(opened, 1);
+  EXPECT_TRUE(throwsError([&] { registerCameraBackendIfAbsent({.scheme = "test-no-factory"}); },
+                          Errc::InvalidArgument, {"no factory"}));
 }
 
 TEST(CameraState, WrongStateErrorNamesMethodStateAndAllowedStates) {

@@ -73,12 +73,13 @@ public:
     backends_.emplace(std::move(scheme), std::move(backend));
   }
 
-  // Adds the backend unless its scheme is taken (idempotent built-in registration).
-  void addOnce(DeviceBackend<Device> backend) {
+  // Adds the backend unless its scheme is taken (idempotent registration);
+  // returns whether it was added. Throws as add() for a bad scheme or factory.
+  bool addOnce(DeviceBackend<Device> backend) {
     std::lock_guard lock(mutex_);
     check(backend);
     std::string scheme = backend.scheme;
-    backends_.try_emplace(std::move(scheme), std::move(backend));
+    return backends_.try_emplace(std::move(scheme), std::move(backend)).second;
   }
 
   std::vector<std::string> schemes() const {

@@ -32,6 +32,8 @@ DisplayUri parseDisplayUri(std::string_view uri);
 // Throws Errc::InvalidArgument if the scheme is empty, has characters other than
 // [a-z0-9+.-], has no factory, or is taken.
 void registerDisplayBackend(DisplayBackend backend);
+// The same, but a taken scheme is left as it is: returns whether this backend was added.
+bool registerDisplayBackendIfAbsent(DisplayBackend backend);
 
 // Registers the display backends built into lfi_drivers ("usb"). Idempotent.
 void registerBuiltinDisplayBackends();

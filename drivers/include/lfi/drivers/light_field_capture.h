@@ -44,6 +44,8 @@ using LightFieldCaptureBackend = DeviceBackend<LightFieldCapture>;
 
 // Throws Errc::InvalidArgument for a bad or taken scheme.
 void registerLightFieldCaptureBackend(LightFieldCaptureBackend backend);
+// The same, but a taken scheme is left as it is: returns whether this backend was added.
+bool registerLightFieldCaptureBackendIfAbsent(LightFieldCaptureBackend backend);
 std::vector<std::string> lightFieldCaptureSchemes();
 // Unknown scheme or key: Errc::Config listing what is known.
 std::unique_ptr<LightFieldCapture> openLightFieldCapture(std::string_view uri);

@@ -32,6 +32,9 @@ CameraUri parseCameraUri(std::string_view uri);
 // Throws Errc::InvalidArgument if the scheme is empty, has characters other than
 // [a-z0-9+.-], has no factory, or is taken.
 void registerCameraBackend(CameraBackend backend);
+// The same, but a taken scheme is left as it is (idempotent registration, as
+// from several threads or libraries): returns whether this backend was added.
+bool registerCameraBackendIfAbsent(CameraBackend backend);
 
 // Registers the backends built into lfi_drivers. Idempotent.
 void registerBuiltinBackends();
