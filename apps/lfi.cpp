@@ -623,7 +623,8 @@ int main(int argc, char** argv) {
       const std::vector<lfi::AravisDeviceInfo> cameras = lfi::listAravisDevices();
       fmt::print("GenICam cameras: {}\n", cameras.empty() ? "none" : std::to_string(cameras.size()));
       for (const lfi::AravisDeviceInfo& c : cameras)
-        fmt::print("  aravis:{}  ({} {}, serial {}, {} at {})\n", c.id, c.vendor, c.model, c.serial, c.protocol,
+        fmt::print("  aravis:{}  ({} {}, serial {}, {} at {})\n", lfi::percentEncodeUriPart(c.id), c.vendor, c.model,
+                   c.serial, c.protocol,
                    c.address);
       if (!listed) return 1;
     } else if (*lfInfo) {

@@ -193,9 +193,9 @@ void writePlainExr(const fs::path& path, const cv::Mat& pixels, bool sync) {
   }
   if (sync) {
     const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
-    if (fd < 0 || ::fsync(fd) != 0) throw std::runtime_error(fmt::format("fsync '{}': {}", path.string(),
-                                                                         std::strerror(errno)));
-    ::close(fd);
+    const int rc = fd < 0 ? -1 : ::fsync(fd), err = errno;
+    if (fd >= 0) ::close(fd);
+    if (rc != 0) throw std::runtime_error(fmt::format("fsync '{}': {}", path.string(), std::strerror(err)));
   }
 }
 

@@ -334,6 +334,7 @@ static int run(int argc, char** argv) {
                                          static_cast<int>(rtcGetDeviceError(nullptr))));
   RTCScene raw = rtcNewScene(device);
   const TriangleMesh lens = tessellateLens(100, -100, 7, 50, 256, 512);
+  const float quadCorners[12] = {-200, -200, -100, 200, -200, -100, 200, 200, -100, -200, 200, -100};  // the back light
   {
     RTCGeometry g = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
     auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
@@ -350,8 +351,7 @@ static int run(int argc, char** argv) {
     RTCGeometry q = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_QUAD);
     auto* qv = static_cast<float*>(
         rtcSetNewGeometryBuffer(q, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), 4));
-    const float corners[12] = {-200, -200, -100, 200, -200, -100, 200, 200, -100, -200, 200, -100};
-    std::memcpy(qv, corners, sizeof(corners));
+    std::memcpy(qv, quadCorners, sizeof(quadCorners));
     auto* qi = static_cast<unsigned*>(
         rtcSetNewGeometryBuffer(q, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT4, 4 * sizeof(unsigned), 1));
     qi[0] = 0, qi[1] = 1, qi[2] = 2, qi[3] = 3;
@@ -432,9 +432,23 @@ static int run(int argc, char** argv) {
   // that only the traversal and the callback dispatch are timed; packets
   // traced coherently and incoherently (the tracer's mode).
   RTCScene hull = rtcNewScene(device);
-  std::array<RTCBounds, 2> hullBounds = {
-      RTCBounds{-25.001f, -25.001f, -3.501f, 0, 25.001f, 25.001f, 3.501f, 0},             // the lens
-      RTCBounds{-200.001f, -200.001f, -100.001f, 0, 200.001f, 200.001f, -99.999f, 0}};  // the back light
+  // Their boxes: the checked triangle lens's and quad's, a micrometre wider.
+  std::array<RTCBounds, 2> hullBounds;
+  auto boxOf = [](const std::vector<std::array<float, 3>>& points) {
+    RTCBounds b{1e30f, 1e30f, 1e30f, 0, -1e30f, -1e30f, -1e30f, 0};
+    for (const auto& p : points) {
+      b.lower_x = std::min(b.lower_x, p[0] - 1e-3f), b.upper_x = std::max(b.upper_x, p[0] + 1e-3f);
+      b.lower_y = std::min(b.lower_y, p[1] - 1e-3f), b.upper_y = std::max(b.upper_y, p[1] + 1e-3f);
+      b.lower_z = std::min(b.lower_z, p[2] - 1e-3f), b.upper_z = std::max(b.upper_z, p[2] + 1e-3f);
+    }
+    return b;
+  };
+  std::vector<std::array<float, 3>> lensPoints, quadPoints;
+  for (const auto& v : lens.vertices)
+    lensPoints.push_back({static_cast<float>(v[0]), static_cast<float>(v[1]), static_cast<float>(v[2])});
+  for (int k = 0; k < 4; ++k) quadPoints.push_back({quadCorners[3 * k], quadCorners[3 * k + 1], quadCorners[3 * k + 2]});
+  hullBounds[0] = boxOf(lensPoints);
+  hullBounds[1] = boxOf(quadPoints);
   for (RTCBounds& bounds : hullBounds) {
     RTCGeometry g = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_USER);
     rtcSetGeometryUserPrimitiveCount(g, 1);

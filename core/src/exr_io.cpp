@@ -83,8 +83,12 @@ std::string canonicalAttributes(const fs::path& path, const Imf::Header& header)
 void configureOpenExr() {
   static const bool configured = [] {
     Imf::Header::setMaxImageSize(static_cast<int>(kMaxExrSide), static_cast<int>(kMaxExrSide));
-    if (Imf::globalThreadCount() == 0)
-      Imf::setGlobalThreadCount(static_cast<int>(std::max(1u, std::thread::hardware_concurrency())));
+    try {
+      if (Imf::globalThreadCount() == 0)
+        Imf::setGlobalThreadCount(static_cast<int>(std::max(1u, std::thread::hardware_concurrency())));
+    } catch (const std::exception&) {
+      // An OpenEXR built without threads: files are written on the calling thread.
+    }
     return true;
   }();
   (void)configured;

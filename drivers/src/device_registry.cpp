@@ -38,6 +38,18 @@ std::string percentDecoded(std::string_view part, std::string_view kind, std::st
 
 }  // namespace
 
+std::string percentEncodeUriPart(std::string_view part, std::string_view alsoEncode) {
+  std::string out;
+  for (const char c : part) {
+    if (c > 0x20 && c < 0x7f && std::string_view("%?&=#").find(c) == std::string_view::npos &&
+        alsoEncode.find(c) == std::string_view::npos)
+      out += c;
+    else
+      out += fmt::format("%{:02X}", static_cast<unsigned char>(c));
+  }
+  return out;
+}
+
 DeviceUri parseDeviceUri(std::string_view text, std::string_view kind, std::string_view example) {
   DeviceUri uri;
   uri.text = std::string(text);

@@ -3,6 +3,7 @@
 #include "lfi/drivers/display_calibration_file.h"
 
 #include "lfi/core/error.h"
+#include "lfi/drivers/device_registry.h"
 #include "lfi/drivers/usb_display_protocol.h"
 
 #include <fmt/format.h>
@@ -41,18 +42,8 @@ std::string serialOf(libusb_device_handle* handle, const libusb_device_descripto
   return n > 0 ? std::string(reinterpret_cast<char*>(text), static_cast<std::size_t>(n)) : std::string();
 }
 
-// A serial as it stands in a URI: bytes other than printable ASCII, and the
-// URI's own delimiters, percent-encoded.
-std::string serialInUri(std::string_view serial) {
-  std::string out;
-  for (const char c : serial) {
-    if (c > 0x20 && c < 0x7f && std::string_view("%/?&#=").find(c) == std::string_view::npos)
-      out += c;
-    else
-      out += fmt::format("%{:02X}", static_cast<unsigned char>(c));
-  }
-  return out;
-}
+// A serial as it stands in a URI ('/' too: the serial follows the ids after one).
+std::string serialInUri(std::string_view serial) { return percentEncodeUriPart(serial, "/"); }
 
 SubpixelLayout toLayout(proto::SubpixelCode code) {
   switch (code) {

@@ -365,7 +365,7 @@ class SimCamera final : public Camera {
     double exposure_us, gain;  // likewise: a frame exposed before ExposureTime or Gain changed keeps the old ones
   };
 
-  std::string name() const { return "sim:" + sceneFile_.string(); }
+  std::string name() const { return "sim:" + percentEncodeUriPart(sceneFile_.string()); }  // (a URI that reopens it)
 
   // ExposureTime and Gain are written; other features are NotFound or read-only.
   void requireWritable(const std::string& feature) {

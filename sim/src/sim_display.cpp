@@ -9,7 +9,6 @@
 
 #include <fmt/format.h>
 
-#include <algorithm>
 
 namespace lfi::sim {
 
@@ -19,7 +18,7 @@ namespace {
 
 class SimDisplay final : public Display {
  public:
-  explicit SimDisplay(fs::path sceneFile) : sceneFile_(std::move(sceneFile)), name_("sim:" + sceneFile_.string()) {
+  explicit SimDisplay(fs::path sceneFile) : sceneFile_(std::move(sceneFile)), name_("sim:" + percentEncodeUriPart(sceneFile_.string())) {
     open();
   }
   ~SimDisplay() override { close(); }

@@ -114,7 +114,7 @@ TEST_F(AtomicFile, ASignalThatEndsTheProcessMidWriteLeavesNoTemporary) {
     const fs::path target = dir_ / "lightfield.exr";
     const pid_t child = ::fork();
     ASSERT_GE(child, 0);
-    if (child == 0) {  // (a single-threaded test process: the child may use the library)
+    if (child == 0) {  // (the child only writes through the atomic writer: no lock another thread may hold)
       std::signal(signal, SIG_DFL);  // (a shell may have started the tests with SIGINT ignored)
       lfi::writeFileAtomically(target, Overwrite::Refuse, [signal](const fs::path& temporary) {
         std::ofstream(temporary, std::ios::binary) << "half a light field";

@@ -67,7 +67,7 @@ TEST(Mono12, ReusesOutputAndRejectsShortBuffers) {
   EXPECT_EQ(out.at<std::uint16_t>(1, 1), 0xfff);
   EXPECT_TRUE(throwsError([&] { unpackMono12(bytes.data(), 5, 2, 2, Mono12Packing::Pfnc, out); }, Errc::InvalidArgument,
                           {"need 6 bytes", "has 5"}));
-  // A view into a larger image is not written through: its rows are not one sequence.
+  // A view whose rows are not one sequence (columns of a larger image) is not written through.
   cv::Mat big(4, 4, CV_16UC1, cv::Scalar(7));
   cv::Mat view = big(cv::Rect(0, 0, 2, 2));
   unpackMono12(bytes.data(), bytes.size(), 2, 2, Mono12Packing::Pfnc, view);

@@ -41,6 +41,18 @@ TEST(CameraUri, PathKeysAndValuesArePercentDecoded) {
     EXPECT_TRUE(throwsError([&] { parseCameraUri(bad); }, Errc::Config, {bad, "two hex digits", "%25"})) << bad;
 }
 
+// Every byte but NUL survives the way through a URI, in the path and in a value.
+TEST(CameraUri, PercentEncodingRoundTrips) {
+  std::string all;
+  for (int c = 1; c < 256; ++c) all += static_cast<char>(c);
+  const std::string encoded = percentEncodeUriPart(all);
+  EXPECT_EQ(encoded.find_first_of("?&=# \x7f"), std::string::npos);
+  EXPECT_EQ(parseCameraUri("sim:" + encoded).path, all);
+  EXPECT_EQ(parseCameraUri("sim:x?file=" + encoded).query.at("file"), all);
+  EXPECT_EQ(percentEncodeUriPart("a/b", "/"), "a%2Fb");
+  EXPECT_EQ(percentEncodeUriPart("data/benches/a:b.toml"), "data/benches/a:b.toml");  // as it was
+}
+
 TEST(CameraUri, MalformedUrisAreConfigErrors) {
   EXPECT_TRUE(throwsError([] { parseCameraUri("Aravis-Fake-GV01"); }, Errc::Config, {"Aravis-Fake-GV01", "no scheme"}));
   EXPECT_TRUE(throwsError([] { parseCameraUri(":x"); }, Errc::Config, {"no scheme"}));
@@ -69,11 +81,11 @@ TEST(CameraRegistry, UnknownQueryKeyListsAcceptedKeys) {
 
 TEST(CameraRegistry, OtherLibrariesRegisterTheirSchemes) {
   registerBuiltinBackends();
-  CameraUri seen;
+  static CameraUri seen;  // (static: the process-wide registry keeps the factory)
   registerCameraBackend({.scheme = "test-registry",
                          .queryKeys = {"seed"},
                          .description = "test-registry:<anything>",
-                         .factory = [&seen](const CameraUri& uri) -> std::unique_ptr<Camera> {
+                         .factory = [](const CameraUri& uri) -> std::unique_ptr<Camera> {
                            seen = uri;
                            return nullptr;
                          }});
@@ -97,9 +109,9 @@ TEST(CameraRegistry, OtherLibrariesRegisterTheirSchemes) {
       },
       Errc::InvalidArgument, {"'Bad Scheme'"}));
   // Registering unless the scheme is taken: the first backend stays, and a bad one is still refused.
-  int opened = 0;
-  auto counting = [&opened](int by) {
-    return [&opened, by](const CameraUri&) {
+  static int opened = 0;
+  auto counting = [](int by) {
+    return [by](const CameraUri&) {
       opened += by;
       return std::unique_ptr<Camera>();
     };

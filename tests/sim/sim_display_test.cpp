@@ -86,6 +86,20 @@ class SimDisplayTest : public ::testing::Test {
   fs::path dir_;
 };
 
+// A scene file whose path holds the URI's delimiters opens percent-encoded, and
+// the display names itself by a URI that opens it again.
+TEST_F(SimDisplayTest, APathWithTheUrisDelimitersIsPercentEncoded) {
+  const fs::path file = write("100% a&b=c?.toml", sceneText("panel_width_px = 32\npanel_height_px = 20\n"));
+  const std::string encoded = "sim:" + percentEncodeUriPart(file.string());
+  EXPECT_NE(encoded.find("100%25%20a%26b%3Dc%3F.toml"), std::string::npos) << encoded;
+  auto display = openDisplay(encoded);
+  EXPECT_EQ(display->name(), encoded);
+  EXPECT_EQ(display->info().deviceId, file.string());
+  display->close();
+  EXPECT_EQ(openDisplay(display->name())->info().deviceId, file.string());
+  EXPECT_TRUE(throwsError([&] { openDisplay(uri(file)); }, Errc::Config, {"two hex digits"}));  // not encoded
+}
+
 TEST_F(SimDisplayTest, StateMachineThroughTheSimBackend) {
   const fs::path file =
       write("mono.toml", sceneText("panel_width_px = 320\npanel_height_px = 200\nsubpixels = \"mono\"\n"

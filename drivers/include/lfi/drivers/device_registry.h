@@ -41,6 +41,12 @@ struct DeviceUri {
 // byte 01..FF.
 DeviceUri parseDeviceUri(std::string_view text, std::string_view kind, std::string_view example);
 
+// `part` as it stands in a URI, so that parseDeviceUri gives it back: bytes
+// outside printable ASCII, spaces and the delimiters "%?&=#", and the bytes in
+// `alsoEncode` (e.g. "/" for a usb: serial), as %XX. For names that are shown
+// as URIs: a scene path, an Aravis id, a USB serial.
+std::string percentEncodeUriPart(std::string_view part, std::string_view alsoEncode = {});
+
 // Non-empty and only [a-z0-9+.-].
 bool validDeviceScheme(const std::string& scheme);
 
