@@ -3,11 +3,19 @@
 // whatever else the machine does) for speeds, and the median of ratios taken
 // turn by turn for ratios between two runs.
 
+#include <stdlib.h>
+
 #include <algorithm>
+#include <cerrno>
 #include <chrono>
 #include <cstdio>
+#include <cstring>
 #include <exception>
+#include <filesystem>
 #include <functional>
+#include <stdexcept>
+#include <string>
+#include <system_error>
 #include <vector>
 
 namespace lfi::bench {
@@ -65,6 +73,28 @@ inline std::vector<double> bestSecondsInTurns(int repeats, const std::vector<std
   for (size_t i = 0; i < fs.size(); ++i) best.push_back(bestOf(seconds, i));
   return best;
 }
+
+// A fresh folder `<parent>/<prefix>-XXXXXX` for a benchmark's files, removed
+// with everything in it at the end.
+class TemporaryFolder {
+public:
+  TemporaryFolder(const std::filesystem::path& parent, const std::string& prefix) {
+    std::string pattern = (parent / (prefix + "-XXXXXX")).string();
+    if (!::mkdtemp(pattern.data()))
+      throw std::runtime_error("cannot make a folder in '" + parent.string() + "': " + std::strerror(errno));
+    path_ = pattern;
+  }
+  ~TemporaryFolder() {
+    std::error_code ignored;
+    std::filesystem::remove_all(path_, ignored);
+  }
+  TemporaryFolder(const TemporaryFolder&) = delete;
+  TemporaryFolder& operator=(const TemporaryFolder&) = delete;
+  const std::filesystem::path& path() const { return path_; }
+
+private:
+  std::filesystem::path path_;
+};
 
 // A benchmark's main: an error (a device that is missing, a self-check that
 // fails) is printed with the benchmark's name and exits 1, rather than abort.

@@ -245,27 +245,6 @@ void exrFiles(const char* what, const cv::Mat& pixels, const std::function<void(
   printRatio("read / OpenEXR alone", s, 3, 4);
 }
 
-// A fresh folder for the files, removed at the end.
-class TemporaryFolder {
-public:
-  explicit TemporaryFolder(const fs::path& parent) {
-    std::string pattern = (parent / "lfi-frame-bench-XXXXXX").string();
-    if (!::mkdtemp(pattern.data()))
-      throw std::runtime_error(fmt::format("cannot make a folder in '{}': {}", parent.string(), std::strerror(errno)));
-    path_ = pattern;
-  }
-  ~TemporaryFolder() {
-    std::error_code ec;
-    fs::remove_all(path_, ec);
-  }
-  TemporaryFolder(const TemporaryFolder&) = delete;
-  TemporaryFolder& operator=(const TemporaryFolder&) = delete;
-  const fs::path& path() const { return path_; }
-
-private:
-  fs::path path_;
-};
-
 int run(int argc, char** argv) {
   bool quick = false;
   int turns = 7;
@@ -284,7 +263,7 @@ int run(int argc, char** argv) {
   sensorModel(width, height, turns);
   mono12(width, height, turns);
 
-  const TemporaryFolder dir(parent);
+  const lfi::bench::TemporaryFolder dir(parent, "lfi-frame-bench");
   const LightFieldGeometry g = quick ? LightFieldGeometry{40, 40, 16, 0.05, 30} : LightFieldGeometry{292, 164, 16, 1.0 / 16, 30};
   LightField lightField(g);
   cv::RNG(11).fill(lightField.lensletImage(), cv::RNG::UNIFORM, 0.0, 1.0);
