@@ -222,8 +222,10 @@ int run(int frames, double rate, int size, lfi::PixelFormat format, int rounds) 
     std::uint64_t lostOurs = 0, lostPlain = 0;  // over all rounds
     std::vector<double> fpsRatio, grabExtra_us;
     for (int round = 0; round < rounds; ++round) {
-      const Result p = benchPlain(frames, rate, size, format);
-      const Result o = benchOurs(id, frames, rate, size, format);
+      Result p, o;  // the clients in alternating order
+      if (round % 2 == 0) p = benchPlain(frames, rate, size, format);
+      o = benchOurs(id, frames, rate, size, format);
+      if (round % 2 == 1) p = benchPlain(frames, rate, size, format);
       fmt::print("round {}\n", round + 1);
       printResult("plain Aravis client", p);
       printResult("lfi Aravis backend", o);

@@ -18,12 +18,14 @@ void CameraSensorModel::validate() const {
   // (At most 1e12 e-: a draw's mean past 2^63 electrons would not fit the sampler's integer.)
   if (!(fullWell_e > 0 && fullWell_e <= 1e12))
     fail(Errc::InvalidArgument, "camera sensor: fullWell_e = {} is outside (0, 1e12]", fullWell_e);
-  if (!(readNoise_e >= 0)) fail(Errc::InvalidArgument, "camera sensor: readNoise_e = {} must be >= 0", readNoise_e);
+  if (!(readNoise_e >= 0 && std::isfinite(readNoise_e)))
+    fail(Errc::InvalidArgument, "camera sensor: readNoise_e = {} must be finite and >= 0", readNoise_e);
   if (bitDepth < 8 || bitDepth > 16)
     fail(Errc::InvalidArgument, "camera sensor: bitDepth = {} is outside [8, 16]", bitDepth);
   if (!(electronsPerUnit > 0 && std::isfinite(electronsPerUnit)))
     fail(Errc::InvalidArgument, "camera sensor: electronsPerUnit = {} must be finite and > 0", electronsPerUnit);
-  if (!(gain > 0)) fail(Errc::InvalidArgument, "camera sensor: gain = {} must be > 0", gain);
+  if (!(gain > 0 && std::isfinite(gain)))
+    fail(Errc::InvalidArgument, "camera sensor: gain = {} must be finite and > 0", gain);
 }
 
 void CameraSensorModel::exposeFor(double brightest, double fraction) {

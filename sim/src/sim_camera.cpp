@@ -48,12 +48,12 @@ std::uint64_t frameNoiseSeed(std::uint64_t sceneSeed, std::uint64_t frameId) {
 }
 
 SimImager::SimImager(const fs::path& sceneFile) : sceneFile_(sceneFile) {
-  bench_ = SimBench::open(sceneFile, fmt::format("camera 'sim:{}'", sceneFile.string()));
+  bench_ = SimBench::open(sceneFile, fmt::format("camera 'sim:{}'", percentEncodeUriPart(sceneFile.string())));
   description_ = bench_->description();
   const auto* camera = std::get_if<TelecentricCamera>(&description_.sensor);
   if (camera == nullptr)
     fail(Errc::Config, "camera 'sim:{}': the scene has a [light_field_sensor], the sim camera needs a [camera]",
-         sceneFile.string());
+         percentEncodeUriPart(sceneFile.string()));
   camera_ = *camera;
   scene_ = std::make_unique<Scene>(std::move(description_.objects), description_.ambientIor);
   description_.objects.clear();

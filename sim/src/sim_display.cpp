@@ -9,7 +9,6 @@
 
 #include <fmt/format.h>
 
-
 namespace lfi::sim {
 
 namespace fs = std::filesystem;
@@ -18,7 +17,8 @@ namespace {
 
 class SimDisplay final : public Display {
  public:
-  explicit SimDisplay(fs::path sceneFile) : sceneFile_(std::move(sceneFile)), name_("sim:" + percentEncodeUriPart(sceneFile_.string())) {
+  explicit SimDisplay(fs::path sceneFile)
+      : sceneFile_(std::move(sceneFile)), name_("sim:" + percentEncodeUriPart(sceneFile_.string())) {
     open();
   }
   ~SimDisplay() override { close(); }

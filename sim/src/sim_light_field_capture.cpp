@@ -59,7 +59,7 @@ public:
   std::string description() const override {
     const auto& g = settings_.geometry;
     return fmt::format("sim:{} ({}x{} elements of {}x{}, pitch {} mm, Δ = {} mm, beam {} rad, {} spp)",
-                       sceneFile_.string(), g.spatialX, g.spatialY, g.angular, g.angular, g.pixelPitch_mm,
+                       percentEncodeUriPart(sceneFile_.string()), g.spatialX, g.spatialY, g.angular, g.angular, g.pixelPitch_mm,
                        g.distance_mm, settings_.beamHalfAngle_rad, settings_.samplesPerPixel);
   }
 

@@ -188,9 +188,15 @@ TEST(CameraSensorModel, ZeroRadianceGivesOnlyReadNoise) {
     bad.fullWell_e = well;
     EXPECT_TRUE(throwsError([&] { bad.capture(flat(4, 1.0f), 1); }, Errc::InvalidArgument, {"fullWell_e"})) << well;
   }
-  CameraSensorModel endless;
-  endless.electronsPerUnit = std::numeric_limits<double>::infinity();
-  EXPECT_TRUE(throwsError([&] { endless.capture(flat(4, 0.0f), 1); }, Errc::InvalidArgument, {"electronsPerUnit"}));
+  const std::pair<const char*, double CameraSensorModel::*> infinite[] = {
+      {"electronsPerUnit", &CameraSensorModel::electronsPerUnit},
+      {"readNoise_e", &CameraSensorModel::readNoise_e},
+      {"gain", &CameraSensorModel::gain}};
+  for (const auto& [field, member] : infinite) {
+    CameraSensorModel endless;
+    endless.*member = std::numeric_limits<double>::infinity();
+    EXPECT_TRUE(throwsError([&] { endless.capture(flat(4, 0.0f), 1); }, Errc::InvalidArgument, {field})) << field;
+  }
 }
 
 }  // namespace
