@@ -42,9 +42,11 @@
 
 #include <opencv2/core.hpp>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <filesystem>
+#include <functional>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -98,25 +100,26 @@ int run(int argc, char** argv) {
   std::vector<double> captureTime, emitTime, inspectTime, captureBound, inspectBound;
   std::vector<double> captureRatio, inspectRatio, cycleRatio;
   cv::Mat image;
+  // A step and its bound, in alternating order from turn to turn (the first of the two may pay for caches).
+  auto inTurn = [](bool boundFirst, const std::function<void()>& step, const std::function<void()>& bound) {
+    double s = 0, b = 0;
+    if (boundFirst) b = secondsOf(bound);
+    s = secondsOf(step);
+    if (!boundFirst) b = secondsOf(bound);
+    return std::pair{s, b};
+  };
   for (int turn = 0; turn < turns; ++turn) {
-    // Each step and its bound run in turn, in alternating order (the first of two runs may pay for the caches).
-    const bool boundFirst = turn % 2 == 1;
     LightField reference;
-    double capture0 = 0, capture1 = 0, inspect0 = 0, inspect1 = 0;
-    if (boundFirst) capture1 = secondsOf([&] { (void)capture->capture({}); });
-    capture0 = secondsOf([&] { reference = controller.captureReference(); });
-    if (!boundFirst) capture1 = secondsOf([&] { (void)capture->capture({}); });
+    const auto [c, cb] = inTurn(turn % 2 == 1, [&] { reference = controller.captureReference(); },
+                                [&] { (void)capture->capture({}); });
     emitTime.push_back(secondsOf([&] { controller.emit(reference); }));
     // The display's version changed with this emit: the camera and the bound's imager each render it anew.
-    if (boundFirst) inspect1 = secondsOf([&] { imager.capture(imagerSettings, 1000 + turn, boundFrame); });
-    inspect0 = secondsOf([&] { image = controller.inspect(); });
-    if (!boundFirst) inspect1 = secondsOf([&] { imager.capture(imagerSettings, 1000 + turn, boundFrame); });
-    captureTime.push_back(capture0), captureBound.push_back(capture1);
-    inspectTime.push_back(inspect0), inspectBound.push_back(inspect1);
-    captureRatio.push_back(captureTime.back() / captureBound.back());
-    inspectRatio.push_back(inspectTime.back() / inspectBound.back());
-    cycleRatio.push_back((captureTime.back() + emitTime.back() + inspectTime.back()) /
-                         (captureBound.back() + inspectBound.back()));
+    const auto [i, ib] = inTurn(turn % 2 == 1, [&] { image = controller.inspect(); },
+                                [&] { imager.capture(imagerSettings, 1000 + turn, boundFrame); });
+    captureTime.push_back(c), captureBound.push_back(cb), inspectTime.push_back(i), inspectBound.push_back(ib);
+    captureRatio.push_back(c / cb);
+    inspectRatio.push_back(i / ib);
+    cycleRatio.push_back((c + emitTime.back() + i) / (cb + ib));
   }
   // Self-check: the bound rendered what the camera saw. The same radiance and sensor model with other noise
   // draws: the two images' means agree to their noise, and they are lit (a dark panel reads about 0.4 DN).
