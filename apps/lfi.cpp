@@ -502,6 +502,7 @@ int main(int argc, char** argv) {
       lfi::study::StudyOptions options;
       options.quality = lfi::study::parseQuality(quality);
       options.threads = threads;
+      lfi::setExrThreads(threads);  // (the light fields and images it writes)
       options.seed = seed;
       options.overwrite = force;
       if (sweepOn) options.sweep = lfi::study::defaultSweep();
@@ -520,6 +521,7 @@ int main(int argc, char** argv) {
       if (spp > 0) d.render.samplesPerPixel = spp;
       if (renderSeed) d.render.seed = *renderSeed;
       d.render.threads = renderThreads;
+      lfi::setExrThreads(renderThreads);
       d.render.cancel = &gCancel;
       ProgressBar bar;
       if (!quiet) d.render.progress = [&bar](double f) { bar("rendering", f); };
@@ -606,6 +608,7 @@ int main(int argc, char** argv) {
       calibrateDistance(calibrateBench, scanCandidates(scanFrom, scanTo, scanStep), roiBox, calibrateOut,
                         calibrateForce, quiet);
     } else if (*serve) {
+      lfi::setExrThreads(serveThreads);
       serveCamera(serveScene, serveOptions, serveThreads, quiet);
     } else if (*devices) {
       // Displays first: their listing is instant, the cameras' discovery waits about 1 s for answers.

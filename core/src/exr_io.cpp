@@ -14,6 +14,7 @@
 #include <OpenEXR/ImfOutputFile.h>
 #include <OpenEXR/ImfStringAttribute.h>
 #include <OpenEXR/ImfThreading.h>
+#include <sched.h>
 #include <zlib.h>
 
 #include <algorithm>
@@ -72,23 +73,37 @@ std::string canonicalAttributes(const fs::path& path, const Imf::Header& header)
   return text;
 }
 
+// The CPUs this process may run on: its affinity mask, which a cpuset (a
+// container's CPU limit) or taskset narrows; hardware_concurrency() counts
+// the machine's.
+int usableCpus() {
+  cpu_set_t set;
+  CPU_ZERO(&set);
+  if (sched_getaffinity(0, sizeof set, &set) == 0) return std::max(1, CPU_COUNT(&set));
+  return static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));  // (more than CPU_SETSIZE CPUs)
+}
+
+void setOpenExrThreads(int threads) {
+  try {
+    Imf::setGlobalThreadCount(threads > 0 ? threads : usableCpus());
+  } catch (const std::exception&) {
+    // An OpenEXR built without threads: files are written on the calling thread.
+  }
+}
+
 // Process-wide OpenEXR settings, made once before lfi's first file:
 // - OpenEXR sizes its per-line tables from a file's data window when it opens
 //   the file; with a maximum image size its sanity check refuses a larger one
 //   first (no lfi file is larger);
 // - OpenEXR compresses and decompresses on a global thread pool that has no
-//   threads unless the application gives it some: one per hardware thread,
-//   unless the application already chose a count (lfi-frame-bench measures
-//   it: a 49 MB light field's write and read take about half as long on 2).
+//   threads unless the application gives it some: one per CPU the process may
+//   run on, unless the application already chose a count (setExrThreads;
+//   lfi-frame-bench measures it: a 49 MB light field's write and read take
+//   about half as long on 2).
 void configureOpenExr() {
   static const bool configured = [] {
     Imf::Header::setMaxImageSize(static_cast<int>(kMaxExrSide), static_cast<int>(kMaxExrSide));
-    try {
-      if (Imf::globalThreadCount() == 0)
-        Imf::setGlobalThreadCount(static_cast<int>(std::max(1u, std::thread::hardware_concurrency())));
-    } catch (const std::exception&) {
-      // An OpenEXR built without threads: files are written on the calling thread.
-    }
+    if (Imf::globalThreadCount() == 0) setOpenExrThreads(0);
     return true;
   }();
   (void)configured;
@@ -345,6 +360,12 @@ cv::Mat readRadianceExr(const fs::path& path, RadianceImageInfo* info) {
     info->pixelUnit = u && u->value().starts_with(prefix) ? u->value().substr(prefix.size()) : std::string();
   }
   return exr.pixels;
+}
+
+void setExrThreads(int threads) {
+  if (threads < 0) fail(Errc::InvalidArgument, "setExrThreads: {} threads; give 0 (one per CPU) or more", threads);
+  configureOpenExr();
+  setOpenExrThreads(threads);
 }
 
 }  // namespace lfi

@@ -11,11 +11,13 @@
 #include <OpenEXR/ImfIntAttribute.h>
 #include <OpenEXR/ImfOutputFile.h>
 #include <OpenEXR/ImfStringAttribute.h>
+#include <OpenEXR/ImfThreading.h>
 #include <OpenEXR/ImfVecAttribute.h>
 #include <fmt/format.h>
 #include "lfi_test_support.h"
 
 #include <gtest/gtest.h>
+#include <sched.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -674,3 +676,34 @@ TEST(PixelChecksum, IsCrc32OfPixelBytesRowByRow) {
 }
 
 }  // namespace
+
+// OpenEXR's pool has one thread per CPU the process may run on (a container's
+// cpuset narrows it; hardware_concurrency() would not), or the count a
+// program's --threads gives; files still round-trip on one thread.
+TEST_F(ExrIo, OpenExrThreadsFollowTheProcessCpusOrTheGivenCount) {
+  cpu_set_t all;
+  ASSERT_EQ(sched_getaffinity(0, sizeof all, &all), 0);
+  int first = 0;
+  while (!CPU_ISSET(first, &all)) ++first;
+  cpu_set_t one;
+  CPU_ZERO(&one);
+  CPU_SET(first, &one);
+  ASSERT_EQ(sched_setaffinity(0, sizeof one, &one), 0);
+  lfi::setExrThreads(0);
+  const int onOneCpu = Imf::globalThreadCount();
+  ASSERT_EQ(sched_setaffinity(0, sizeof all, &all), 0);
+  EXPECT_EQ(onOneCpu, 1);
+
+  lfi::setExrThreads(3);
+  EXPECT_EQ(Imf::globalThreadCount(), 3);
+  lfi::setExrThreads(1);
+  cv::Mat image(300, 200, CV_32FC1);
+  cv::randu(image, 0.0f, 2.0f);
+  lfi::writeRadianceExr(file("one-thread.exr"), image, {});
+  EXPECT_EQ(cv::norm(lfi::readRadianceExr(file("one-thread.exr")), image, cv::NORM_INF), 0.0);
+
+  lfi::setExrThreads(0);
+  EXPECT_EQ(Imf::globalThreadCount(), CPU_COUNT(&all));
+  EXPECT_TRUE(throwsError([] { lfi::setExrThreads(-1); }, Errc::InvalidArgument, {"-1"}));
+  EXPECT_EQ(Imf::globalThreadCount(), CPU_COUNT(&all));
+}

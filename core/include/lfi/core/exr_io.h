@@ -56,4 +56,11 @@ unsigned long pixelChecksum(const cv::Mat& image, unsigned long crc = 0);
 // followed by the pixel bytes.
 unsigned long fileChecksum(std::string_view attributes, const cv::Mat& pixels);
 
+// The threads OpenEXR compresses and decompresses a file's lines on, for the
+// whole process: `threads`, or with 0 one per CPU the process may run on (its
+// affinity mask, which a container's cpuset or taskset narrows), which is
+// also the default. For a program's --threads; not while a file is being
+// read or written. Throws Errc::InvalidArgument for a negative count.
+void setExrThreads(int threads);
+
 }  // namespace lfi
