@@ -110,6 +110,13 @@ public:
       if (!clearHalt())
         fail(Errc::Timeout, "{}: CLEAR_HALT of endpoint 0x{:02x} got no answer ({}): the device does not answer",
              name_, endpoint_, clearHaltError_);
+      // Open is dark at the backlight's maximum (display.h), whatever an earlier
+      // host left on the panel: it may have died showing a frame.
+      stallsCleared_ = 0, uncertain_ = false, lastPresented_ = 0;
+      requireOk(control(LIBUSB_ENDPOINT_OUT, proto::Request::Blank, 0, nullptr, 0), proto::Request::Blank);
+      requireOk(control(LIBUSB_ENDPOINT_OUT, proto::Request::SetBrightness,
+                        static_cast<std::uint16_t>(info_.brightnessMax), nullptr, 0),
+                proto::Request::SetBrightness);
     } catch (...) {
       close();
       throw;
@@ -119,6 +126,10 @@ public:
 
   void close() noexcept override {
     if (handle_) {
+      // The panel goes dark, as after blank() (best effort: a device that does
+      // not answer keeps its frame until the next open() blanks it).
+      if (claimed_ && state_ == State::Showing)
+        control(LIBUSB_ENDPOINT_OUT, proto::Request::Blank, 0, nullptr, 0);
       if (claimed_) libusb_release_interface(handle_, interface_);
       libusb_close(handle_);
     }
@@ -460,6 +471,7 @@ private:
 
   [[noreturn]] void vanished(const std::string& request) {
     const std::string name = name_;
+    state_ = State::Closed;  // (close() sends nothing to a device that is gone)
     close();
     fail(Errc::Device, "{}: the device vanished during {}; the display is closed, open() it again when it is back",
          name, request);

@@ -402,6 +402,36 @@ TEST_F(UsbDisplayTest, AnInterfaceAnotherProgramHoldsIsNamed) {
   EXPECT_EQ(display->state(), Display::State::Open);
 }
 
+// An open display is dark at full backlight, as display.h says and the sim:
+// display is: close() blanks a panel that shows a frame, and open() blanks
+// whatever an earlier host left (here one whose BLANK at close went unanswered).
+TEST_F(UsbDisplayTest, ADisplayOpensDarkAtFullBacklightWhateverTheLastHostLeft) {
+  EmulatedUsbDisplay device;
+  device.plug();
+  auto display = openDisplay("usb:1209:4c46?timeout_ms=300");
+  EXPECT_FALSE(device.state().showing);
+  EXPECT_EQ(device.state().brightness, device.config().brightnessMax);
+  display->setBrightness(7);
+  ASSERT_EQ(display->show(randomPanel(display->info(), 30)).status, PresentStatus::Presented);
+  display->close();
+  EXPECT_FALSE(device.state().showing);
+  EXPECT_EQ(device.state().brightness, 7);
+
+  display->open();
+  ASSERT_EQ(display->show(randomPanel(display->info(), 31)).status, PresentStatus::Presented);
+  device.setSilent(true);
+  display->close();  // its BLANK times out: the device still shows the frame
+  device.setSilent(false);
+  EXPECT_TRUE(device.state().showing);
+  display->open();
+  EXPECT_FALSE(device.state().showing);
+  EXPECT_EQ(device.state().brightness, device.config().brightnessMax);
+  const DisplayStatus status = display->status();
+  EXPECT_FALSE(status.showing);
+  EXPECT_EQ(status.brightness, device.config().brightnessMax);
+  EXPECT_EQ(status.stallsCleared, 0u);
+}
+
 // The device vanishes at each request the host sends, at open and after: each
 // is an error naming the device and the request, the display is closed, and
 // it opens again once the device is back.
@@ -416,6 +446,8 @@ TEST_F(UsbDisplayTest, ADeviceThatVanishesAtAnyRequestIsNamedAndOpensAgainWhenBa
       {Request::GetProtocolVersion, true, {}},
       {Request::GetDeviceInfo, true, {}},
       {Request::GetCalibration, true, {}},
+      {Request::Blank, true, {}},
+      {Request::SetBrightness, true, {}},
       {Request::SetBrightness, false, [](Display& d, const cv::Mat&) { d.setBrightness(7); }},
       {Request::Present, false, [](Display& d, const cv::Mat& panel) { d.show(panel); }},
       {Request::GetStatus, false, [](Display& d, const cv::Mat&) { d.status(); }},

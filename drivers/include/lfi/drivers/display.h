@@ -12,7 +12,8 @@
 //      │               │                        └────┘
 //      └──── close() from any state; a device that vanishes also ends in Closed
 //
-// Open: connected, the panel is dark (blank). Showing: the panel shows the last
+// Open: connected, the panel is dark (blank); open() also sets the backlight to
+// its maximum, and close() blanks the panel. Showing: the panel shows the last
 // presented frame. A display returned by openDisplay() is Open. Calling a method in
 // a state it does not list throws lfi::Error(Errc::InvalidArgument) naming the
 // method and the state.
