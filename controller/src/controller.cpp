@@ -65,8 +65,10 @@ void Controller::emit(const LightField& reference, double white) {
   if (!(white > 0) || !std::isfinite(white))
     fail(Errc::InvalidArgument, "emit: white = {} must be positive and finite", white);
   white_ = white;
-  // From here on, frames the camera has exposed show the old panel: inspect() restarts the stream.
-  if (camera_.state() == Camera::State::Streaming) staleFrames_ = true;
+  // From here on, frames the camera has exposed show the old panel, and frames
+  // of a stream started before the panel settles may too (the caller may start
+  // one after this): inspect() waits for the panel and (re)starts the stream.
+  staleFrames_ = true;
   const PresentResult r = display_.show(reference, white_);
   if (r.status != PresentStatus::Presented)
     fail(Errc::Device, "emit: display '{}' did not show the light field ({}{}{})", displayName(display_),

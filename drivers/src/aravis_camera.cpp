@@ -314,6 +314,13 @@ class AravisCamera final : public Camera {
     requireCameraState(state_, {State::Open, State::Configured}, "configure", name());
     state_ = State::Open;  // until every field is applied
     requireSaneSettings(s, name());
+    onDevice([&] { apply(s); });
+    settings_ = s;
+    state_ = State::Configured;
+  }
+
+  // Sets every field of `s` on the device (configure()).
+  void apply(const CameraSettings& s) {
     applyPixelFormat(s.pixelFormat);
     applyBinning(s.binning);
     applyRegion(s);
@@ -331,8 +338,6 @@ class AravisCamera final : public Camera {
     applyExposureAndGain(s);
     if (!rateFirst) applyFrameRate(s);
     applyTrigger(s);
-    settings_ = s;
-    state_ = State::Configured;
   }
 
   CameraSettings settings() const override {
@@ -364,6 +369,11 @@ class AravisCamera final : public Camera {
     requireCameraState(state_, {State::Configured}, "start", name());
     if (bufferCount < 1 || bufferCount > 1024)
       fail(Errc::InvalidArgument, "camera '{}': start(bufferCount = {}) needs 1..1024 buffers", name(), bufferCount);
+    onDevice([&] { startStream(bufferCount); });
+  }
+
+  // start() on the device: the stream, its buffers, the acquisition.
+  void startStream(int bufferCount) {
     GError* error = nullptr;
     if (arv_camera_is_gv_device(camera_)) {
       ArvGvDevice* gv = ARV_GV_DEVICE(arv_camera_get_device(camera_));
@@ -398,9 +408,10 @@ class AravisCamera final : public Camera {
       g_clear_object(&stream_);
       check(error, name(), "arv_camera_get_region");
     }
-    if (width <= 0 || height <= 0) {  // nonsense: every frame would come out Incomplete
-      g_clear_object(&stream_);
-      fail(Errc::Device, "camera '{}': the device reports a {} x {} px region", name(), width, height);
+    if (width <= 0 || height <= 0 || width > info_.sensorWidth_px || height > info_.sensorHeight_px) {
+      g_clear_object(&stream_);  // (nonsense: no frame would fit, or the buffers would be absurd)
+      fail(Errc::Device, "camera '{}': the device reports a {} x {} px region on its {} x {} px sensor", name(),
+           width, height, info_.sensorWidth_px, info_.sensorHeight_px);
     }
     const std::uint64_t image = static_cast<std::uint64_t>(std::max(width, 0)) * static_cast<std::uint64_t>(
         std::max(height, 0)) * bitsOnTheWire(settings_.pixelFormat) / 8;
@@ -418,6 +429,7 @@ class AravisCamera final : public Camera {
       check(error, name(), call);
     }
     statistics_ = {};
+    frameWidth_ = width, frameHeight_ = height;
     state_ = State::Streaming;
   }
 
@@ -440,9 +452,11 @@ class AravisCamera final : public Camera {
     if (settings_.trigger != TriggerMode::Software)
       fail(Errc::InvalidArgument, "camera '{}': softwareTrigger() needs TriggerMode::Software, the camera is in {}",
            name(), toString(settings_.trigger));
-    GError* error = nullptr;
-    arv_camera_software_trigger(camera_, &error);
-    check(error, name(), "arv_camera_software_trigger");
+    onDevice([&] {
+      GError* error = nullptr;
+      arv_camera_software_trigger(camera_, &error);
+      check(error, name(), "arv_camera_software_trigger");
+    });
   }
 
   void grabInto(Frame& frame, std::chrono::milliseconds timeout) override {
@@ -496,47 +510,59 @@ class AravisCamera final : public Camera {
 
   std::string getFeature(const std::string& feature) override {
     ArvGcFeatureNode* node = featureNode("getFeature", feature);
-    GError* error = nullptr;
-    const char* value = arv_gc_feature_node_get_value_as_string(node, &error);
-    check(error, name(), fmt::format("reading feature '{}'", feature));
-    return orEmpty(value);
+    return onDevice([&] {
+      GError* error = nullptr;
+      const char* value = arv_gc_feature_node_get_value_as_string(node, &error);
+      check(error, name(), fmt::format("reading feature '{}'", feature));
+      return orEmpty(value);
+    });
   }
 
   void setFeature(const std::string& feature, const std::string& value) override {
     ArvGcFeatureNode* node = featureNode("setFeature", feature);
-    GError* error = nullptr;
-    arv_gc_feature_node_set_value_from_string(node, value.c_str(), &error);
-    check(error, name(), fmt::format("setting feature '{}' to '{}'", feature, value));
+    onDevice([&] {
+      GError* error = nullptr;
+      arv_gc_feature_node_set_value_from_string(node, value.c_str(), &error);
+      check(error, name(), fmt::format("setting feature '{}' to '{}'", feature, value));
+    });
   }
 
   std::int64_t getIntegerFeature(const std::string& feature) override {
     featureNode("getIntegerFeature", feature);
-    GError* error = nullptr;
-    const gint64 value = arv_camera_get_integer(camera_, feature.c_str(), &error);
-    check(error, name(), fmt::format("reading integer feature '{}'", feature));
-    return value;
+    return onDevice([&] {
+      GError* error = nullptr;
+      const gint64 value = arv_camera_get_integer(camera_, feature.c_str(), &error);
+      check(error, name(), fmt::format("reading integer feature '{}'", feature));
+      return value;
+    });
   }
 
   void setIntegerFeature(const std::string& feature, std::int64_t value) override {
     featureNode("setIntegerFeature", feature);
-    GError* error = nullptr;
-    arv_camera_set_integer(camera_, feature.c_str(), value, &error);
-    check(error, name(), fmt::format("setting integer feature '{}' to {}", feature, value));
+    onDevice([&] {
+      GError* error = nullptr;
+      arv_camera_set_integer(camera_, feature.c_str(), value, &error);
+      check(error, name(), fmt::format("setting integer feature '{}' to {}", feature, value));
+    });
   }
 
   double getFloatFeature(const std::string& feature) override {
     featureNode("getFloatFeature", feature);
-    GError* error = nullptr;
-    const double value = arv_camera_get_float(camera_, feature.c_str(), &error);
-    check(error, name(), fmt::format("reading float feature '{}'", feature));
-    return value;
+    return onDevice([&] {
+      GError* error = nullptr;
+      const double value = arv_camera_get_float(camera_, feature.c_str(), &error);
+      check(error, name(), fmt::format("reading float feature '{}'", feature));
+      return value;
+    });
   }
 
   void setFloatFeature(const std::string& feature, double value) override {
     featureNode("setFloatFeature", feature);
-    GError* error = nullptr;
-    arv_camera_set_float(camera_, feature.c_str(), value, &error);
-    check(error, name(), fmt::format("setting float feature '{}' to {}", feature, value));
+    onDevice([&] {
+      GError* error = nullptr;
+      arv_camera_set_float(camera_, feature.c_str(), value, &error);
+      check(error, name(), fmt::format("setting float feature '{}' to {}", feature, value));
+    });
   }
 
   void executeCommand(const std::string& feature) override {
@@ -589,8 +615,23 @@ class AravisCamera final : public Camera {
   [[noreturn]] void declareLost(const std::string& why) {
     statistics_ = readStatistics();
     lost_ = true;
+    const bool streaming = state_ == State::Streaming;
     state_ = State::Closed;
-    fail(Errc::Device, "camera '{}': device lost while streaming: {}", name(), why);
+    fail(Errc::Device, "camera '{}': device lost{}: {}; the camera is closed, open() it again when it is back", name(),
+         streaming ? " while streaming" : "", why);
+  }
+
+  // Runs a request to the device: a device error from a device that no longer
+  // answers at all closes the camera (camera.h: a device that vanishes ends
+  // in Closed), as a grab or stop() that finds it gone does.
+  template <typename Call>
+  auto onDevice(Call&& call) -> decltype(call()) {
+    try {
+      return call();
+    } catch (const Error& e) {
+      if (e.code() != Errc::Device || deviceAnswers()) throw;
+      declareLost(fmt::format("{} (it does not answer control requests)", e.what()));
+    }
   }
 
   bool deviceAnswers() {
@@ -876,6 +917,9 @@ class AravisCamera final : public Camera {
     if (std::none_of(wire.begin(), wire.end(), [&](const WireFormat& w) { return w.code == format; }))
       return fmt::format("its pixel format is 0x{:08x}, not one of {} (configured {})", static_cast<unsigned>(format),
                          fmt::join(wireFormatNames(settings_.pixelFormat), ", "), toString(settings_.pixelFormat));
+    if (width != frameWidth_ || height != frameHeight_)  // (the buffers were sized for the region)
+      return fmt::format("its image is {} x {} px, not the {} x {} px region the stream started with", width, height,
+                         frameWidth_, frameHeight_);
     int xPadding = 0;  // bytes after each line
     arv_buffer_get_image_padding(buffer, &xPadding, nullptr);
     if (!out.empty() && (out.u == nullptr || out.u->refcount > 1 || !out.isContinuous() || out.isSubmatrix()))
@@ -933,6 +977,7 @@ class AravisCamera final : public Camera {
   CameraInfo info_;
   CameraSettings settings_;
   StreamStatistics statistics_;
+  int frameWidth_ = 0, frameHeight_ = 0;  // the region start() found: every frame must be of it
 };
 
 }  // namespace

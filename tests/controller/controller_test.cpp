@@ -289,6 +289,16 @@ TEST_F(ControllerTest, FramesAfterAnEmitStartOnlyAfterTheSettleTime) {
   ASSERT_EQ(camera.timestamps_ns.size(), static_cast<size_t>(options.frames));
   for (const std::int64_t t : camera.timestamps_ns)
     EXPECT_GE(std::chrono::nanoseconds(t), (emitting + options.settle).time_since_epoch());
+  // The same for a stream the caller starts between emit() and inspect().
+  camera.stop();
+  const auto emittingAgain = std::chrono::steady_clock::now();
+  controller.emit(reference);
+  camera.start(4);
+  camera.timestamps_ns.clear();
+  controller.inspect();
+  ASSERT_EQ(camera.timestamps_ns.size(), static_cast<size_t>(options.frames));
+  for (const std::int64_t t : camera.timestamps_ns)
+    EXPECT_GE(std::chrono::nanoseconds(t), (emittingAgain + options.settle).time_since_epoch());
   options.settle = std::chrono::milliseconds(-1);
   EXPECT_TRUE(throwsError([&] { Controller(*rig.capture, *rig.display, *rig.camera, options); },
                           Errc::InvalidArgument, {"settle"}));

@@ -574,6 +574,33 @@ TEST_F(AravisCameraTest, AFrameInAnotherPixelFormatIsAnError) {
   EXPECT_EQ(frame.image.type(), CV_8UC1);
 }
 
+// The buffers are sized for the region the stream started with: a device that
+// sends frames of another size (here one whose region changes while it
+// streams; real ones lock it) gives an error naming both sizes, not a frame
+// of a size the settings do not say.
+TEST_F(AravisCameraTest, AFrameOfAnotherSizeThanTheStreamsRegionIsAnError) {
+  auto camera = openFake();
+  camera->configure(smallSettings());
+  camera->start(4);
+  Frame frame;
+  camera->grabInto(frame, 2s);
+  ASSERT_EQ(frame.status, FrameStatus::Complete);
+  ASSERT_EQ(frame.image.size(), cv::Size(256, 256));
+  camera->setFeature("Width", "128");
+  std::string refused;
+  for (int i = 0; i < 50 && refused.empty(); ++i) {  // (frames already on their way are still 256 wide)
+    try {
+      camera->grabInto(frame, 2s);
+      ASSERT_EQ(frame.image.size(), cv::Size(256, 256));
+    } catch (const Error& e) {
+      EXPECT_EQ(e.code(), Errc::Device);
+      refused = e.what();
+    }
+  }
+  EXPECT_NE(refused.find(fake_->id()), std::string::npos) << refused;
+  EXPECT_NE(refused.find("128 x 256 px, not the 256 x 256 px region"), std::string::npos) << refused;
+}
+
 TEST_F(AravisCameraTest, StreamsContinuousCompleteFramesIntoReusedMemory) {
   auto camera = openFake();
   camera->configure(smallSettings());
@@ -692,6 +719,32 @@ TEST_F(AravisCameraTest, KilledDeviceIsReportedWithinTheTimeoutAndReopens) {
   const auto t2 = Clock::now();
   camera.reset();
   std::printf("[ info     ] destroyed after %.3f s\n", secondsSince(t2));
+}
+
+// Gone outside a grab or stop(): a software trigger, a configure() or a
+// feature that finds the device gone closes the camera too (camera.h), and it
+// reopens when the device is back.
+TEST_F(AravisCameraTest, ADeviceGoneAtAnyRequestClosesTheCamera) {
+  CameraSettings triggered = smallSettings();
+  triggered.trigger = TriggerMode::Software;
+  const std::vector<std::pair<std::string, std::function<void(Camera&)>>> requests = {
+      {"software trigger", [&](Camera& c) { c.softwareTrigger(); }},
+      {"configure", [&](Camera& c) { c.configure(smallSettings()); }},
+      {"feature", [&](Camera& c) { c.getIntegerFeature("Width"); }},
+  };
+  auto camera = openFake();
+  for (const auto& [what, request] : requests) {
+    SCOPED_TRACE(what);
+    camera->configure(triggered);
+    if (what == "software trigger") camera->start(4);
+    fake_->kill();
+    const auto t0 = Clock::now();
+    EXPECT_TRUE(throwsError([&] { request(*camera); }, Errc::Device, {fake_->id(), "device lost", "closed"}));
+    std::printf("[ info     ] %s found the device gone after %.3f s\n", what.c_str(), secondsSince(t0));
+    EXPECT_EQ(camera->state(), Camera::State::Closed);
+    fake_->start(binary_);
+    camera->open();
+  }
 }
 
 // A device that stalls longer than its heartbeat timeout (3 s here, the fake

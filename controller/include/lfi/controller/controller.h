@@ -83,7 +83,7 @@ private:
   Camera& camera_;
   ControllerOptions options_;
   bool startedCamera_ = false;
-  bool staleFrames_ = false;  // the display changed while the camera was streaming
+  bool staleFrames_ = false;  // the display changed since the stream inspect() last used started
   std::chrono::steady_clock::time_point shown_;  // when the last emit() returned
   double white_ = 0;
 };
