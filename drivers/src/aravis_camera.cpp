@@ -6,6 +6,7 @@
 #include "lfi/drivers/aravis_camera.h"
 
 #include "lfi/core/error.h"
+#include "lfi/drivers/device_registry.h"
 #include "lfi/drivers/pixel_unpack.h"
 
 #include <arpa/inet.h>
@@ -362,6 +363,12 @@ class AravisCamera final : public Camera {
       s.frameRate_hz = arv_camera_get_frame_rate(camera_, &error);
       check(error, name(), "arv_camera_get_frame_rate");
     }
+    // What the device says must be settings at all (the controller sizes its waits by the exposure).
+    try {
+      requireSaneSettings(s, name());
+    } catch (const Error& e) {
+      fail(Errc::Device, "{} (as the device reports it)", e.what());
+    }
     return s;
   }
 
@@ -652,7 +659,7 @@ class AravisCamera final : public Camera {
     check(error, name(), "arv_camera_get_model_name");
     info_.serial = orEmpty(arv_camera_get_device_serial_number(camera_, &error));
     check(error, name(), "arv_camera_get_device_serial_number");
-    info_.deviceId = deviceId_;
+    info_.deviceId = percentEncodeUriPart(deviceId_);  // (reopens it after "aravis:")
     readSensorSize();
     if (arv_camera_is_feature_available(camera_, "SensorPixelWidth", nullptr)) {
       const double pitch = arv_camera_get_float(camera_, "SensorPixelWidth", &error);
@@ -665,6 +672,8 @@ class AravisCamera final : public Camera {
   // is the largest image (WidthMax and HeightMax, else the bounds of Width and
   // Height) times the binning in force.
   void readSensorSize() {
+    constexpr std::int64_t kMaxSide = 1 << 20;  // far beyond any sensor: a larger value is a misreading
+    constexpr int kMaxBinning = 1 << 10;
     GError* error = nullptr;
     auto has = [&](const char* feature) { return arv_camera_is_feature_available(camera_, feature, nullptr) != FALSE; };
     auto integer = [&](const char* feature) {
@@ -690,10 +699,13 @@ class AravisCamera final : public Camera {
         int bx = 1, by = 1;
         arv_camera_get_binning(camera_, &bx, &by, &error);
         check(error, name(), "arv_camera_get_binning");
+        // (Checked before the product: a misread image size times the binning could wrap into range.)
+        if (width < 1 || height < 1 || width > kMaxSide || height > kMaxSide || bx > kMaxBinning || by > kMaxBinning)
+          fail(Errc::Device, "camera '{}': the device reports a {} x {} px image at binning {} x {}", name(), width,
+               height, bx, by);
         width *= std::max(bx, 1), height *= std::max(by, 1);
       }
     }
-    constexpr std::int64_t kMaxSide = 1 << 20;  // far beyond any sensor: a larger value is a misreading
     if (width < 1 || height < 1 || width > kMaxSide || height > kMaxSide)
       fail(Errc::Device, "camera '{}': the device reports a {} x {} px sensor", name(), width, height);
     info_.sensorWidth_px = static_cast<int>(width), info_.sensorHeight_px = static_cast<int>(height);

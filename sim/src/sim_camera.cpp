@@ -181,7 +181,7 @@ class SimCamera final : public Camera {
         .vendor = "lfi",
         .model = "SimCamera",
         .serial = imager_->sceneName(),
-        .deviceId = sceneFile_.string(),
+        .deviceId = percentEncodeUriPart(sceneFile_.string()),  // (reopens it after "sim:")
         .sensorWidth_px = cam.width,
         .sensorHeight_px = cam.height,
         .pixelSize_um = cam.pixelPitch_mm * 1000,

@@ -38,7 +38,7 @@ class SimDisplay final : public Display {
     try {
       info_ = bench_->description().display->info;
       info_.serial = bench_->description().name;
-      info_.deviceId = sceneFile_.string();
+      info_.deviceId = percentEncodeUriPart(sceneFile_.string());  // (reopens it after "sim:")
       sequence_ = 0;  // frames count from 1 after each open, as the USB protocol's do
       bench_->blankPanel();
       bench_->setBacklight(info_.brightnessMax);

@@ -4,8 +4,8 @@
 //
 //   <scheme>:<path>[?<key>=<value>[&<key>=<value>...]]
 //
-// The path goes to the backend as is (no percent-decoding); each backend
-// declares the query keys it accepts and any other key is an error. Backends
+// The path, keys and values reach the backend percent-decoded (parseDeviceUri);
+// each backend declares the query keys it accepts and any other key is an error. Backends
 // are registered explicitly; a registry is process-wide and thread-safe.
 
 #include "lfi/core/error.h"

@@ -4,9 +4,10 @@
 //   <scheme>:<path>[?<key>=<value>[&<key>=<value>...]]
 //
 // e.g. "aravis:Aravis-Fake-GV01", "aravis:192.168.1.20?packetSize=1400",
-// "sim:data/scenes/inspection_bench.toml". The path is passed to the backend as is
-// (no percent-decoding); each backend declares the query keys it accepts and
-// any other key is an error. Backends are registered explicitly:
+// "sim:data/scenes/inspection_bench.toml". The path, keys and values reach the
+// backend percent-decoded (parseDeviceUri: "%26" for a literal '&', "%25" for
+// '%'); each backend declares the query keys it accepts and any other key is
+// an error. Backends are registered explicitly:
 // registerBuiltinBackends() adds the ones in lfi_drivers ("aravis"), and other
 // libraries add theirs (lfi_sim adds "sim") with registerCameraBackend().
 // The registry is process-wide and thread-safe.
