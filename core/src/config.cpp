@@ -136,4 +136,16 @@ void ConfigTable::finish() const {
   }
 }
 
+void ConfigTable::requireKnownKeys(const std::vector<std::string>& known) const {
+  const toml::node* first = nullptr;
+  std::string firstKey;
+  for (const auto& [k, v] : *table_)
+    if (std::find(known.begin(), known.end(), k.str()) == known.end() &&
+        (!first || v.source().begin.line < first->source().begin.line))
+      first = &v, firstKey = k.str();
+  if (first)
+    fail(Errc::Config, "{}:{}: unknown key '{}' (known here: {})", file_, first->source().begin.line,
+         path_.empty() ? firstKey : path_ + "." + firstKey, fmt::join(known, ", "));
+}
+
 }  // namespace lfi

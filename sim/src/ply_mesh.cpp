@@ -448,6 +448,8 @@ TriangleMesh readPly(const fs::path& path) {
             in.fail("vertex index {} is not among the {} vertices", index, vertex->count);
           polygon.push_back(index);
         }
+        if (polygon.size() > 2 && mesh.triangles.size() + polygon.size() - 2 > kMostTriangles)
+          in.fail("the faces so far make more than {} triangles, the most a mesh may have", kMostTriangles);
         for (size_t k = 2; k < polygon.size(); ++k)  // a fan of n - 2 triangles; points and lines have no surface
           mesh.triangles.push_back({static_cast<unsigned>(polygon[0]), static_cast<unsigned>(polygon[k - 1]),
                                     static_cast<unsigned>(polygon[k])});

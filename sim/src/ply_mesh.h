@@ -15,6 +15,7 @@
 
 #include "lfi/sim/scene.h"
 
+#include <cstdint>
 #include <filesystem>
 #include <string_view>
 
@@ -26,6 +27,11 @@ bool isPly(std::string_view head);
 // such a file is read, and refused, by lfi's reader, never by Assimp's PLY
 // importer (which fuzzing hung and crashed).
 bool looksLikePly(std::string_view head);
+
+// The most triangles a mesh file may make (a 100 MB file may fan one face into
+// 10^8 of them): 2^26, about 5 GB of triangles, normals and their bookkeeping
+// while loading; an optical part's mesh has far fewer.
+inline constexpr std::uint64_t kMostTriangles = std::uint64_t{1} << 26;
 
 // The mesh's vertices and triangles (no normals). Throws Errc::InvalidFile.
 TriangleMesh readPly(const std::filesystem::path& path);

@@ -6,6 +6,7 @@
 #include "lfi/core/input_file.h"
 #include "lfi/drivers/display_optics.h"
 
+#include <assimp/DefaultIOSystem.h>
 #include <assimp/Importer.hpp>
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
@@ -39,9 +40,31 @@ Rigid3 placement(const std::vector<double>& p, const std::vector<double>& r) {
 
 namespace {
 
-// Any format Assimp reads but PLY (detail::readPly reads those).
-TriangleMesh importMesh(const fs::path& path) {
+// Assimp opens the files a mesh file names (a glTF file's buffers, an OBJ
+// file's materials) itself: only regular files, so that a FIFO or a device
+// there fails instead of blocking the load.
+// (DefaultIOSystem's Exists() opens the file too: a FIFO blocked there.)
+class RegularFilesOnly final : public Assimp::DefaultIOSystem {
+public:
+  bool Exists(const char* file) const override {
+    std::error_code ec;
+    return fs::is_regular_file(file, ec);
+  }
+  Assimp::IOStream* Open(const char* file, const char* mode) override {
+    return Exists(file) ? DefaultIOSystem::Open(file, mode) : nullptr;
+  }
+};
+
+// A format Assimp reads but PLY (detail::readPly reads those), known by the
+// file's extension: Assimp guesses the format of a file of another name from
+// its content, and could hand it to its PLY importer after all.
+TriangleMesh importMesh(const fs::path& path, const std::string& extension) {
   Assimp::Importer importer;
+  if (extension.empty() || !importer.IsExtensionSupported(extension))
+    fail(Errc::InvalidFile, "'{}': not a mesh format lfi reads ({}): name the file by its format: .ply (lfi's own "
+         "reader), or .obj, .stl, .gltf, .glb or another extension Assimp reads", path.string(),
+         extension.empty() ? std::string("no extension") : "'" + extension + "'");
+  importer.SetIOHandler(new RegularFilesOnly);  // (the importer owns it)
   // Triangles with shared vertices; the data structure is checked (indices in
   // range, no empty meshes) before anything reads it.
   const aiScene* scene = importer.ReadFile(
@@ -50,6 +73,11 @@ TriangleMesh importMesh(const fs::path& path) {
                          aiProcess_PreTransformVertices);  // the file's node transforms (glTF, COLLADA) applied
   if (!scene || (scene->mFlags & AI_SCENE_FLAGS_INCOMPLETE) || !scene->HasMeshes())
     fail(Errc::InvalidFile, "'{}': not a readable mesh: {}", path.string(), importer.GetErrorString());
+  std::uint64_t triangles = 0;
+  for (unsigned m = 0; m < scene->mNumMeshes; ++m) triangles += scene->mMeshes[m]->mNumFaces;
+  if (triangles > detail::kMostTriangles)
+    fail(Errc::InvalidFile, "'{}': {} faces, more than the {} triangles a mesh may have", path.string(), triangles,
+         detail::kMostTriangles);
   TriangleMesh mesh;
   for (unsigned m = 0; m < scene->mNumMeshes; ++m) {
     const aiMesh* in = scene->mMeshes[m];
@@ -192,7 +220,7 @@ TriangleMesh loadMesh(const fs::path& path, double creaseAngle_rad, double scale
   std::string extension = path.extension().string();
   for (char& c : extension) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
   TriangleMesh mesh =
-      detail::looksLikePly(head(path, 8)) || extension == ".ply" ? detail::readPly(path) : importMesh(path);
+      detail::looksLikePly(head(path, 8)) || extension == ".ply" ? detail::readPly(path) : importMesh(path, extension);
   for (size_t v = 0; v < mesh.vertices.size(); ++v) {
     Vec3& p = mesh.vertices[v];
     p *= scale;
@@ -204,6 +232,11 @@ TriangleMesh loadMesh(const fs::path& path, double creaseAngle_rad, double scale
            kFarthest_mm, scale);
   }
   if (mesh.triangles.empty()) fail(Errc::InvalidFile, "'{}': the mesh has no faces", path.string());
+  if (std::none_of(mesh.triangles.begin(), mesh.triangles.end(), [&](const auto& f) {
+        return (mesh.vertices[f[1]] - mesh.vertices[f[0]]).cross(mesh.vertices[f[2]] - mesh.vertices[f[0]]).length() > 0;
+      }))
+    fail(Errc::InvalidFile, "'{}': none of the mesh's {} faces has an area (its vertices lie on a line)", path.string(),
+         mesh.triangles.size());
   weldMesh(mesh);
   smoothNormals(mesh, creaseAngle_rad);
   return mesh;
@@ -514,7 +547,7 @@ namespace {
 
 Rigid3 readPlacement(ConfigTable& t) {
   return placement(t.numbers("position_mm", 3, std::vector<double>{0, 0, 0}, -kFarthest_mm, kFarthest_mm),
-                   t.numbers("rotation_deg", 3, std::vector<double>{0, 0, 0}));
+                   t.numbers("rotation_deg", 3, std::vector<double>{0, 0, 0}, -360, 360));
 }
 
 // Whether any of the kGridLines x kGridLines lines along x, along y and along
@@ -590,8 +623,7 @@ Object readObject(ConfigTable& t) {
   if ((kind == "rectangle" || kind == "mesh") && t.has("cut"))  // (else it would be an unknown key)
     fail(Errc::Config, "{}: cut-outs apply to solids (sphere, lens, cylinder), not to a {}", t.where("cut"), kind);
   if (kind == "rectangle") {
-    const auto size = t.numbers("size_mm", 2, std::nullopt, -kFarthest_mm, kFarthest_mm);
-    if (!(size[0] > 0 && size[1] > 0)) fail(Errc::Config, "{} must be positive", t.where("size_mm"));
+    const auto size = t.numbers("size_mm", 2, std::nullopt, kSmallest_mm, 2 * kFarthest_mm);
     obj.shape = Rectangle{size[0], size[1]};
   } else if (kind == "mesh") {
     const double crease = t.number("crease_angle_deg", kDefaultCreaseAngle_deg, 0, 180) * std::numbers::pi / 180;
@@ -772,6 +804,8 @@ void requireOutsideSolids(const std::vector<Object>& objects, const Rigid3& worl
 
 SceneDescription loadSceneFile(const fs::path& path) {
   ConfigTable root = ConfigTable::parseFile(path);
+  root.requireKnownKeys({"format", "version", "ambient_ior", "render", "camera", "light_field_sensor", "camera_sensor",
+                         "object", "display"});
   root.string("format", std::nullopt, {"lfi-scene"});
   root.integer("version", std::nullopt, 1, 1);
   SceneDescription d;
@@ -835,6 +869,11 @@ SceneDescription loadSceneFile(const fs::path& path) {
     } catch (const Error& e) {
       fail(Errc::Config, "{} (with spatial_x, spatial_y): {}", c.where("angular"), e.what());
     }
+    if (const double reach = std::max(lfs.geometry.extentX_mm(), lfs.geometry.extentY_mm()) / 2;
+        !(reach <= kFarthest_mm))
+      fail(Errc::Config, "{} = {}: with spatial_x = {}, spatial_y = {} and angular = {}, the sensor reaches {:g} mm "
+           "from its centre, past {:g} mm", c.where("pixel_pitch_mm"), lfs.geometry.pixelPitch_mm,
+           lfs.geometry.spatialX, lfs.geometry.spatialY, lfs.geometry.angular, reach, kFarthest_mm);
     d.sensor = lfs;
   }
   if (root.has("camera_sensor")) {

@@ -80,6 +80,7 @@ void checkGeometry(const Bench& b, const ConfigTable& cameraTable, const ConfigT
 
 Bench Bench::load(const std::filesystem::path& path) {
   ConfigTable root = ConfigTable::parseFile(path);
+  root.requireKnownKeys({"format", "version", "lens", "camera", "parallel", "area", "inverse_schlieren", "defects"});
   root.string("format", std::nullopt, {"lfi-bench"});
   root.integer("version", std::nullopt, 1, 1);
   Bench b;

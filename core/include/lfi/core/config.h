@@ -43,6 +43,10 @@ public:
   // Throws Errc::Config for the first key of this table that was not read
   // (call it on every subtable too).
   void finish() const;
+  // Throws Errc::Config, listing `known`, for the first key of this table (by
+  // line) that is not among them: before anything is read, so that a
+  // misspelt table ("[camra]") is named as such rather than as a missing one.
+  void requireKnownKeys(const std::vector<std::string>& known) const;
 
   const std::string& file() const { return file_; }
   std::string where(const std::string& key) const;  // "file:line: key 'a.b'"
