@@ -94,9 +94,10 @@ TEST_F(SimDisplayTest, APathWithTheUrisDelimitersIsPercentEncoded) {
   EXPECT_NE(encoded.find("100%25%20a%26b%3Dc%3F.toml"), std::string::npos) << encoded;
   auto display = openDisplay(encoded);
   EXPECT_EQ(display->name(), encoded);
-  EXPECT_EQ("sim:" + display->info().deviceId, encoded);  // the part that reopens it
+  const std::string deviceId = display->info().deviceId;
+  EXPECT_EQ("sim:" + deviceId, encoded);  // the part that reopens it
   display->close();
-  EXPECT_EQ(openDisplay("sim:" + display->info().deviceId)->name(), encoded);
+  EXPECT_EQ(openDisplay("sim:" + deviceId)->name(), encoded);
   auto camera = openCamera(encoded);  // (the camera of the same scene file)
   EXPECT_EQ("sim:" + camera->info().deviceId, encoded);
   EXPECT_TRUE(throwsError([&] { openDisplay(uri(file)); }, Errc::Config, {"two hex digits"}));  // not encoded
