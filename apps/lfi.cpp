@@ -278,7 +278,8 @@ void refuseExisting(const std::vector<fs::path>& files, bool force, const char* 
 // --from, --to and --step as the candidate errors; Errc::Config naming them.
 std::vector<double> scanCandidates(double from, double to, double step) {
   const double count = std::isfinite(from) && std::isfinite(to) && step > 0 ? (to - from) / step : -1;
-  if (!(count >= 2 && count <= 1000) || std::abs(count - std::round(count)) > 1e-6)
+  // (Whole steps within rounding: 0.1 to 0.3 by 0.1 is 1.9999999999999998 steps.)
+  if (!(std::round(count) >= 2 && std::round(count) <= 1000) || !(std::abs(count - std::round(count)) <= 1e-6))
     lfi::fail(lfi::Errc::Config,
               "calibrate-distance: --from {} --to {} --step {} must give 3 to 1001 candidates, the range a whole "
               "number of steps", from, to, step);
@@ -316,6 +317,8 @@ void calibrateDistance(const BenchOptions& o, const std::vector<double>& candida
   lfi::ControllerOptions options;
   options.frames = o.frames;
   options.settle = std::chrono::milliseconds(o.settle_ms);
+  // The candidates against the reference's distance before a capture, not after it.
+  lfi::calib::checkDisplayDistanceCandidates(bench.capture->geometry(), candidates);
   lfi::Controller controller(*bench.capture, *bench.display, *bench.camera, options);
   ProgressBar bar;
   const lfi::LightField reference = controller.captureReference([&](const char* step, double f) {
@@ -336,7 +339,7 @@ void calibrateDistance(const BenchOptions& o, const std::vector<double>& candida
           controller.emit(shown, white);
           return controller.inspect();
         },
-        candidates, roi, 1 / std::sqrt(12.0 * o.frames));  // a digital number's quantisation, averaged
+        candidates, roi, 1 / std::sqrt(12.0));  // a digital number's quantisation (alike frames keep it)
   } catch (const lfi::Error& e) {
     if (!bench.captured) throw;
     throw lfi::Error(e.code(), fmt::format("{} (the captured reference is kept: --light-field {} scans again "
@@ -377,6 +380,7 @@ void calibrateDistance(const BenchOptions& o, const std::vector<double>& candida
   result["roi_px"] = roiBox.empty() ? nlohmann::ordered_json(nullptr) : nlohmann::ordered_json(roiBox);
   result["dark"] = scan.dark;
   result["noise"] = scan.noise;
+  result["dark_noise"] = scan.darkNoise;
   result["candidates_mm"] = scan.candidates_mm;
   result["brightness"] = scan.brightness;
   result["level"] = scan.level;

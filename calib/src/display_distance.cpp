@@ -52,21 +52,26 @@ std::string scanTable(const std::vector<double>& candidates, const std::vector<d
 
 }  // namespace
 
-DisplayDistanceScan calibrateDisplayDistance(const LightField& captured, const InspectFunction& inspect,
-                                             const std::vector<double>& candidates, const cv::Mat& roi,
-                                             double pixelNoiseFloor) {
+void checkDisplayDistanceCandidates(const LightFieldGeometry& reference, const std::vector<double>& candidates) {
   constexpr const char* kWhat = "display distance calibration";
   if (candidates.size() < 3)
     fail(Errc::InvalidArgument, "{} needs at least 3 candidates (got {})", kWhat, candidates.size());
   if (!std::all_of(candidates.begin(), candidates.end(), [](double c) { return std::isfinite(c); }) ||
       std::adjacent_find(candidates.begin(), candidates.end(), std::greater_equal<>()) != candidates.end())
     fail(Errc::InvalidArgument, "{}: candidates must be finite and strictly increasing", kWhat);
-  if (captured.geometry().distance_mm <= 0)
+  if (reference.distance_mm <= 0)
     fail(Errc::InvalidArgument, "{}: the reference light field does not say how far from the part it was captured "
          "(its distance_mm, the file's lfi.distance_mm, is 0: not set); the scan moves the display from there", kWhat);
-  if (const double distance = captured.geometry().distance_mm; distance + candidates.front() <= 0)
+  if (const double distance = reference.distance_mm; distance + candidates.front() <= 0)
     fail(Errc::InvalidArgument, "{}: candidate {:+g} mm would put the display at or past the part ({} mm away)", kWhat,
          candidates.front(), distance);
+}
+
+DisplayDistanceScan calibrateDisplayDistance(const LightField& captured, const InspectFunction& inspect,
+                                             const std::vector<double>& candidates, const cv::Mat& roi,
+                                             double pixelNoiseFloor) {
+  constexpr const char* kWhat = "display distance calibration";
+  checkDisplayDistanceCandidates(captured.geometry(), candidates);
   if (!roi.empty() && roi.type() != CV_8UC1)
     fail(Errc::InvalidArgument, "{}: the ROI must be a CV_8UC1 mask (it is of OpenCV type {})", kWhat, roi.type());
   if (!roi.empty() && cv::countNonZero(roi) == 0)
@@ -122,6 +127,7 @@ DisplayDistanceScan calibrateDisplayDistance(const LightField& captured, const I
   const double pixels = roi.empty() ? static_cast<double>(dark1.image.total()) : cv::countNonZero(roi);
   // Never below the caller's floor: identical dark images (an 8-bit camera with little read noise) do not make
   // every rise significant.
+  scan.darkNoise = spread[0] / std::sqrt(2.0) / std::sqrt(pixels);
   scan.noise = std::max(spread[0] / std::sqrt(2.0), pixelNoiseFloor) / std::sqrt(pixels);
   // The display is ε further away: show the field as it is ε further away.
   auto shownFor = [&](double epsilon) { return propagateLightField(captured, -epsilon); };

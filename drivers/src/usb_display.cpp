@@ -331,7 +331,7 @@ private:
            rc != LIBUSB_ERROR_BUSY ? ""
            : wedged_ ? " (this process still holds it: transfers of an earlier frame never completed nor were "
                        "cancelled; restart the process)"
-                     : " (another program has it)");
+                     : " (another program, or another display object of this process, has it)");
     }
     claimed_ = true;
     if (altSetting != 0)  // the endpoint is in an alternate setting: select it

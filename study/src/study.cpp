@@ -8,8 +8,11 @@
 
 #include <fmt/format.h>
 #include <opencv2/imgproc.hpp>
+#include <unistd.h>
 
+#include <cerrno>
 #include <cmath>
+#include <cstring>
 #include <numbers>
 
 namespace lfi::study {
@@ -472,7 +475,12 @@ std::vector<SweepVariant> sweepVariants(const Bench& bench, const std::vector<Sw
     } else {
       refuse("unknown series (angular, element, delta_error)");
     }
-    g.spatialX = g.spatialY = std::max(2, static_cast<int>(std::ceil(2 * footprint / g.elementPitch_mm())));
+    // (In double first: a tiny element would make a count past int, and LightFieldGeometry refuses past 2^15.)
+    const double elements = std::ceil(2 * footprint / g.elementPitch_mm());
+    if (!(elements <= 1 << 15))
+      refuse(fmt::format("the lens's {:.4g} mm footprint needs {:g} elements a side, more than 32768",
+                         2 * footprint, elements));
+    g.spatialX = g.spatialY = std::max(2, static_cast<int>(elements));
     try {
       g.validate();
     } catch (const Error& e) {
@@ -524,6 +532,10 @@ nlohmann::ordered_json runStudy(const Bench& bench, const fs::path& outDir, cons
   if (std::error_code ec; !fs::create_directories(outDir / "images", ec) && ec)
     fail(Errc::Io, "study: cannot make the folder '{}' for its results: {}", (outDir / "images").string(),
          ec.message());
+  // Both folders must take files before the work, not after it (they may have been there, read-only).
+  for (const fs::path& folder : {outDir, outDir / "images"})
+    if (::access(folder.c_str(), W_OK | X_OK) != 0)
+      fail(Errc::Io, "study: cannot write into '{}' for its results: {}", folder.string(), std::strerror(errno));
   // Replacing an earlier study: its results go first, so that a run that fails
   // leaves no study.json of other inputs beside this run's files.
   if (options.overwrite)
@@ -574,13 +586,13 @@ nlohmann::ordered_json runStudy(const Bench& bench, const fs::path& outDir, cons
   study["provenance"] = {{"bench", bench.source}, {"seed", options.seed}};  // (results do not depend on threads)
   study["camera"] = {{"width", camera.width}, {"height", camera.height}, {"object_pixel_mm", camera.objectPixel_mm()},
                      {"acceptance_half_angle_rad", camera.acceptanceHalfAngle_rad()},
-                     {"samples_per_pixel", q.samplesPerPixel}};
+                     {"samples_per_pixel", q.samplesPerPixel}, {"bit_depth", bench.sensorModel().bitDepth}};
   study["light_field"] = {{"spatial", lightField->geometry().spatialX}, {"angular", lightField->geometry().angular},
                           {"pixel_pitch_mm", lightField->geometry().pixelPitch_mm},
                           {"distance_mm", lightField->geometry().distance_mm},
                           {"capture_samples_per_pixel", q.captureSamples}};
   study["criterion"] = {{"cnr", "sqrt(max(0, mean over the defect mask of z^2 - s^2)) / s; z = (frame - intact frame) "
-                                "/ per-pixel sensor noise of that difference; s = robust std of z outside the masks"},
+                                "/ per-pixel sensor noise of that difference; s = robust std of z outside the masks, at least 1"},
                         {"detected_at_least", kDetectedCnr},
                         {"weak_at_least", kWeakCnr},
                         {"flag_sigma", kFlagSigma},
@@ -678,17 +690,31 @@ nlohmann::ordered_json sweepAnswers(const nlohmann::ordered_json& sweep) {
   for (const char* lookup : {"nearest", "interpolated"}) {
     std::map<std::string, double> coarsestElement, fewestAngular, deltaTolerance;
     std::vector<nlohmann::ordered_json> deltaPoints;
+    // Per defect, series and setting: whether every point there detects it.
+    std::map<std::string, std::map<double, bool>> byElement, byAngular;
+    auto note = [](std::map<double, bool>& at, double value, bool detected) {
+      auto [it, fresh] = at.try_emplace(value, true);
+      it->second = it->second && detected;
+    };
     for (const auto& p : sweep["points"]) {
       for (const auto& [defect, cnr] : p["cnr"][lookup].items()) {
         const bool detected = cnr.get<double>() >= kDetectedCnr;
         const double value = p["value"].get<double>();
-        if (p["series"] == "element" && detected)
-          coarsestElement[defect] = std::max(coarsestElement.count(defect) ? coarsestElement[defect] : 0.0, value);
-        if (p["series"] == "angular" && detected)
-          fewestAngular[defect] = std::min(fewestAngular.count(defect) ? fewestAngular[defect] : 1e9, value);
+        if (p["series"] == "element") note(byElement[defect], value, detected);
+        if (p["series"] == "angular") note(byAngular[defect], value, detected);
       }
       if (p["series"] == "delta_error") deltaPoints.push_back(p);
     }
+    // From the finest setting towards coarser ones, up to the first that misses
+    // the defect: a coarse setting that detects it beyond one that does not
+    // (capture noise) is no answer.
+    for (const auto& [defect, at] : byElement)
+      for (const auto& [element, detected] : at) {  // ascending element size
+        if (!detected) break;
+        coarsestElement[defect] = element;
+      }
+    for (const auto& [defect, at] : byAngular)
+      for (auto it = at.rbegin(); it != at.rend() && it->second; ++it) fewestAngular[defect] = it->first;
     // Per defect: for each |error|, whether every point at that |error| detects.
     std::map<std::string, std::map<double, bool>> detectedAt;
     for (const auto& p : deltaPoints)
@@ -832,7 +858,9 @@ std::string htmlReport(const nlohmann::ordered_json& study) {
 img{width:200px;image-rendering:pixelated}.detected{background:#cfc}.weak{background:#ffc}.missed{background:#fcc}</style></head><body>
 <h1>Inverse schlieren reference study</h1>
 <p>Each defect scene is compared with the intact lens under the same illumination; the criterion is in docs/study.md
-and in study.json ("criterion"). Images are camera frames (12-bit DN shown linearly); the second row of each cell is the
+and in study.json ("criterion"). Images are camera frames ()" +
+                  std::to_string(study["camera"]["bit_depth"].get<int>()) +
+                  R"(-bit DN shown linearly); the second row of each cell is the
 difference with the intact lens (grey = 0, &plusmn;8&sigma; full scale).</p><table><tr><th>scene</th>)";
   for (const auto& s : study["setups"]) h += "<th>" + s.get<std::string>() + "</th>";
   h += "</tr>";

@@ -396,7 +396,8 @@ TEST_F(UsbDisplayTest, AnInterfaceAnotherProgramHoldsIsNamed) {
   device.plug();
   device.failClaim(EBUSY);
   EXPECT_TRUE(throwsError([&] { openDisplay("usb:1209:4c46"); }, Errc::Device,
-                          {"usb:1209:4c46", "cannot claim interface 0", "LIBUSB_ERROR_BUSY", "another program has it"}));
+                          {"usb:1209:4c46", "cannot claim interface 0", "LIBUSB_ERROR_BUSY",
+                           "another program, or another display object of this process, has it"}));
   device.failClaim(0);
   auto display = openDisplay("usb:1209:4c46");
   EXPECT_EQ(display->state(), Display::State::Open);

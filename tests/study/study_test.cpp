@@ -180,8 +180,10 @@ TEST(QuickStudy, AnErrorNamesItsSetupAndLeavesNoOtherResults) {
 }
 
 TEST(Sweep, AnswersFollowTheDeclaredThreshold) {
-  // Synthetic sweep: the answers are the coarsest/fewest settings that reach
-  // CNR 3, and the largest |error| up to which every point (both signs) does.
+  // Synthetic sweep: the answers are the coarsest/fewest settings up to which
+  // every finer one reaches CNR 3 (a coarser one that reaches it past a miss,
+  // capture noise, is no answer), and the largest |error| up to which every
+  // point (both signs) does.
   auto point = [](const char* series, double value, double cnr) {
     nlohmann::ordered_json p = {{"series", series}, {"value", value}};
     p["cnr"]["nearest"]["d"] = cnr;
@@ -190,15 +192,16 @@ TEST(Sweep, AnswersFollowTheDeclaredThreshold) {
   };
   nlohmann::ordered_json sweep;
   sweep["points"] = {point("element", 0.4, 20), point("element", 0.8, 5), point("element", 1.6, 2.9),
-                     point("angular", 4, 1), point("angular", 8, 3.0), point("angular", 16, 9),
+                     point("element", 3.2, 9), point("angular", 2, 5), point("angular", 4, 1),
+                     point("angular", 8, 3.0), point("angular", 16, 9),
                      point("delta_error", -2, 4), point("delta_error", -1, 6), point("delta_error", 0, 9),
                      point("delta_error", 1, 5), point("delta_error", 2, 2), point("delta_error", 4, 9)};
   const auto a = lfi::study::sweepAnswers(sweep);
-  EXPECT_EQ(a["d"]["nearest"]["coarsest_element_mm"], 0.8);
-  EXPECT_EQ(a["d"]["nearest"]["fewest_angular"], 8);
+  EXPECT_EQ(a["d"]["nearest"]["coarsest_element_mm"], 0.8);  // 1.6 misses, so 3.2 does not count
+  EXPECT_EQ(a["d"]["nearest"]["fewest_angular"], 8);          // 4 misses, so 2 does not count
   EXPECT_EQ(a["d"]["nearest"]["delta_tolerance_mm"], 1.0);  // +2 fails, so 4 does not count
-  EXPECT_EQ(a["d"]["interpolated"]["coarsest_element_mm"], 1.6);
-  EXPECT_EQ(a["d"]["interpolated"]["fewest_angular"], 4);
+  EXPECT_EQ(a["d"]["interpolated"]["coarsest_element_mm"], 3.2);
+  EXPECT_EQ(a["d"]["interpolated"]["fewest_angular"], 2);
   EXPECT_EQ(a["d"]["interpolated"]["delta_tolerance_mm"], 4.0);
 }
 

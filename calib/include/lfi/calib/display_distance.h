@@ -44,6 +44,7 @@ struct DisplayDistanceScan {
   double dark = 0;                    // the same with the display dark (a light field of zeros)
   double noise = 0;  // the frame-to-frame noise of a mean over the region: the larger from two dark images and
                      // from the brightest candidate's two images
+  double darkNoise = 0;  // the same from the two dark images alone, without the caller's floor
   double level = 0;                   // the brightness at which the peak's flanks are located
   double estimate_mm = 0;             // ε at the centre of the peak
   double width_mm = 0;                // the peak's width at `level`
@@ -55,8 +56,9 @@ struct DisplayDistanceScan {
 // first, and the brightest candidate again after the scan: the spread of the
 // difference of each pair over the region sets the noise of a mean (the larger;
 // the dark pair's, a pixel's share of it, never below `pixelNoiseFloor`, in the
-// image's units; for a camera's averaged digital numbers, a DN's quantisation
-// over the frames averaged, 1/√(12·frames)). Throws, with the scan's brightness
+// image's units; for a camera's averaged digital numbers, a DN's quantisation,
+// whatever the frames averaged, 1/√12: frames that are all alike, the case the
+// floor is for, do not average their rounding away). Throws, with the scan's brightness
 // per candidate where there is one:
 //   Errc::InvalidArgument  a reference without its distance (0: not set), fewer
 //                          than three candidates, candidates not finite and
@@ -74,6 +76,12 @@ struct DisplayDistanceScan {
 //                          brightest candidate whose two means differ by more
 //                          than five times the noise of their difference (drift)
 //   (and whatever `inspect` throws, with its code, naming the candidate)
+// What calibrateDisplayDistance checks of the reference's geometry and the
+// candidates before it shows anything (a distance set, at least three finite,
+// strictly increasing candidates, none at or past the part), for a caller to
+// check before it captures the reference. Throws Errc::InvalidArgument.
+void checkDisplayDistanceCandidates(const LightFieldGeometry& reference, const std::vector<double>& candidates_mm);
+
 DisplayDistanceScan calibrateDisplayDistance(const LightField& captured, const InspectFunction& inspect,
                                              const std::vector<double>& candidates_mm, const cv::Mat& roi = {},
                                              double pixelNoiseFloor = 0);
