@@ -112,6 +112,17 @@ void configureOpenExr() {
 // What loadExr() refuses is refused here too, before anything is written: a
 // file that could not be read back must not replace a good one.
 constexpr const char* kUnitsPrefix = "lengths mm, angles rad, pixels ";
+// The conventions in words (docs/file-formats.md), written into every file and
+// required of every file read: lfi reads no other parametrisation.
+constexpr const char* kLightFieldFrameText =
+    "plane frame: origin at the grid centre, +z the viewing/emitting side; "
+    "pixel (col,row) = (ex*n+u, ey*n+v), row increases with +y";
+constexpr const char* kLightFieldParametrisationText =
+    "lenslet image of SxxSy spatial elements of nxn angular elements; "
+    "in-element position (px,py) in [-1,1]^2 sees direction "
+    "normalise(-px,-py,sqrt(1-px^2-py^2)); px^2+py^2>=1 is 0";
+constexpr const char* kRadianceFrameText = "camera image: row 0 at world +y, columns along world +x";
+
 
 void writeExr(const fs::path& path, const cv::Mat& image, Imf::Header header, Overwrite overwrite,
               const std::string& pixelUnit = RadianceImageInfo{}.pixelUnit) {
@@ -166,6 +177,14 @@ const Attribute& requireAttribute(const fs::path& path, const Imf::Header& heade
     fail(Errc::InvalidFile, "'{}': attribute '{}' has type '{}', expected '{}'", path.string(), name,
          any->typeName(), Attribute::staticTypeName());
   return *typed;
+}
+
+// A string attribute that states a convention must state lfi's, word for word.
+void requireConvention(const fs::path& path, const Imf::Header& header, const char* name, const std::string& text) {
+  const std::string& value = requireAttribute<Imf::StringAttribute>(path, header, name).value();
+  if (value != text)
+    fail(Errc::InvalidFile, "'{}': attribute '{}' is '{}', not lfi's convention '{}': the file is in another "
+         "parametrisation, which lfi does not read", path.string(), name, shown(value), text);
 }
 
 // Walks the (first) header of an OpenEXR file as the file format lays it out:
@@ -295,13 +314,8 @@ void writeLightFieldExr(const fs::path& path, const LightField& lightField, Over
   header.insert(kAngular, Imf::IntAttribute(g.angular));
   header.insert(kPixelPitch, Imf::DoubleAttribute(g.pixelPitch_mm));
   header.insert(kDistance, Imf::DoubleAttribute(g.distance_mm));
-  header.insert(kFrame, Imf::StringAttribute(
-                            "plane frame: origin at the grid centre, +z the viewing/emitting side; "
-                            "pixel (col,row) = (ex*n+u, ey*n+v), row increases with +y"));
-  header.insert(kParametrisation,
-                Imf::StringAttribute("lenslet image of SxxSy spatial elements of nxn angular elements; "
-                                     "in-element position (px,py) in [-1,1]^2 sees direction "
-                                     "normalise(-px,-py,sqrt(1-px^2-py^2)); px^2+py^2>=1 is 0"));
+  header.insert(kFrame, Imf::StringAttribute(kLightFieldFrameText));
+  header.insert(kParametrisation, Imf::StringAttribute(kLightFieldParametrisationText));
   writeExr(path, lightField.lensletImage(), std::move(header), overwrite);
 }
 
@@ -313,6 +327,9 @@ LightField readLightFieldExr(const fs::path& path) {
   g.angular = requireAttribute<Imf::IntAttribute>(path, exr.header, kAngular).value();
   g.pixelPitch_mm = requireAttribute<Imf::DoubleAttribute>(path, exr.header, kPixelPitch).value();
   g.distance_mm = requireAttribute<Imf::DoubleAttribute>(path, exr.header, kDistance).value();
+  requireConvention(path, exr.header, kFrame, kLightFieldFrameText);
+  requireConvention(path, exr.header, kParametrisation, kLightFieldParametrisationText);
+  requireConvention(path, exr.header, kUnits, kUnitsPrefix + RadianceImageInfo{}.pixelUnit);
   try {
     g.validate();
   } catch (const Error& e) {
@@ -338,7 +355,7 @@ void writeRadianceExr(const fs::path& path, const cv::Mat& image, const Radiance
   Imf::Header header(image.cols, image.rows);
   header.insert(kKind, Imf::StringAttribute(kRadianceKind));
   header.insert(kObjectPixel, Imf::DoubleAttribute(info.objectPixel_mm));
-  header.insert(kFrame, Imf::StringAttribute("camera image: row 0 at world +y, columns along world +x"));
+  header.insert(kFrame, Imf::StringAttribute(kRadianceFrameText));
   header.insert(kDescription, Imf::StringAttribute(info.description));
   if (info.pixelUnit.empty())
     fail(Errc::InvalidArgument, "cannot write '{}': the pixels' unit is empty", path.string());
@@ -351,13 +368,17 @@ cv::Mat readRadianceExr(const fs::path& path, RadianceImageInfo* info) {
   if (!(objectPixel >= 0) || !std::isfinite(objectPixel))
     fail(Errc::InvalidFile, "'{}': attribute '{}' = {} must be finite and >= 0", path.string(), kObjectPixel,
          objectPixel);
+  requireConvention(path, exr.header, kFrame, kRadianceFrameText);
+  const std::string& units = requireAttribute<Imf::StringAttribute>(path, exr.header, kUnits).value();
+  const std::string prefix = kUnitsPrefix;
+  if (!units.starts_with(prefix) || units.size() == prefix.size())
+    fail(Errc::InvalidFile, "'{}': attribute '{}' is '{}', not lfi's '{}<the pixels' unit>'", path.string(), kUnits,
+         shown(units), prefix);
   if (info) {
     info->objectPixel_mm = objectPixel;
     const auto* d = exr.header.findTypedAttribute<Imf::StringAttribute>(kDescription);
     info->description = d ? d->value() : std::string();
-    const auto* u = exr.header.findTypedAttribute<Imf::StringAttribute>(kUnits);
-    const std::string prefix = kUnitsPrefix;
-    info->pixelUnit = u && u->value().starts_with(prefix) ? u->value().substr(prefix.size()) : std::string();
+    info->pixelUnit = units.substr(prefix.size());
   }
   return exr.pixels;
 }

@@ -207,10 +207,10 @@ GvCameraServer::GvCameraServer(const GvCameraServerOptions& options, ServedFrame
 }
 
 GvCameraServer::~GvCameraServer() {
-  if (impl_ && impl_->gvCamera != nullptr) {
-    arv_fake_camera_set_fill_pattern(impl_->camera, nullptr, nullptr);
-    g_object_unref(impl_->gvCamera);  // stops Aravis's device thread
-  }
+  // Stops and joins Aravis's device thread, which may fill one more frame on
+  // its way out: with the filler, alive until the join (no NULL fill pattern
+  // first: Aravis would send that frame as its diagonal test ramp).
+  if (impl_ && impl_->gvCamera != nullptr) g_object_unref(impl_->gvCamera);
 }
 
 std::string GvCameraServer::deviceId() const {

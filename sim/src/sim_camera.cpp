@@ -192,6 +192,7 @@ class SimCamera final : public Camera {
 
   void close() noexcept override {
     displayChanges_.reset();
+    listening_ = false;  // (no listener left to race with)
     queue_.clear();
     imager_.reset();
     state_ = State::Closed;
@@ -219,6 +220,13 @@ class SimCamera final : public Camera {
     if (bufferCount < 1 || bufferCount > 1024)
       fail(Errc::InvalidArgument, "camera '{}': start(bufferCount = {}) needs 1..1024 buffers", name(), bufferCount);
     imager_->radiance(settings_.binning);  // render now, not in the first grab
+    // Before the display changes, the frames exposed until then are taken with
+    // it as it was. Listening before the stream starts, so that no change falls
+    // between the two (one before the start concerns no frame).
+    displayChanges_ = imager_->bench().onDisplayChange([this] {
+      std::lock_guard lock(mutex_);
+      if (listening_) produceDueFrames(Clock::now());
+    });
     {
       std::lock_guard lock(mutex_);
       bufferCount_ = static_cast<std::size_t>(bufferCount);
@@ -228,19 +236,19 @@ class SimCamera final : public Camera {
       start_ = Clock::now();
       freeRun_ = settings_.trigger == TriggerMode::FreeRun;
       frameRate_hz_ = settings_.frameRate_hz;
+      listening_ = true;
     }
-    // Before the display changes, the frames exposed until then are taken with it as it was.
-    displayChanges_ = imager_->bench().onDisplayChange([this] {
-      std::lock_guard lock(mutex_);
-      produceDueFrames(Clock::now());
-    });
     state_ = State::Streaming;
   }
 
   void stop() override {
     requireCameraState(state_, {State::Streaming}, "stop", name());
     displayChanges_.reset();
-    queue_.clear();
+    {
+      std::lock_guard lock(mutex_);
+      listening_ = false;
+      queue_.clear();
+    }
     state_ = State::Configured;
   }
 
@@ -440,6 +448,7 @@ class SimCamera final : public Camera {
   bool freeRun_ = false;      // settings_ at start(), for the listener
   double frameRate_hz_ = 25;
   std::shared_ptr<void> displayChanges_;  // the bench's change listener while streaming
+  bool listening_ = false;                // the stream has started: the listener produces its due frames
 };
 
 }  // namespace

@@ -165,11 +165,27 @@ void writeRawExr(const fs::path& path, const cv::Mat& pixels, const std::functio
   out.writePixels(pixels.rows);
 }
 
+// The conventions a light field file states in words (docs/file-formats.md).
+const char* kLightFieldFrame =
+    "plane frame: origin at the grid centre, +z the viewing/emitting side; pixel (col,row) = (ex*n+u, ey*n+v), row "
+    "increases with +y";
+const char* kLightFieldParametrisation =
+    "lenslet image of SxxSy spatial elements of nxn angular elements; in-element position (px,py) in [-1,1]^2 sees "
+    "direction normalise(-px,-py,sqrt(1-px^2-py^2)); px^2+py^2>=1 is 0";
+const char* kLightFieldUnits = "lengths mm, angles rad, pixels linear relative radiance";
+
+void insertConventions(Imf::Header& h) {
+  h.insert("lfi.frame", Imf::StringAttribute(kLightFieldFrame));
+  h.insert("lfi.parametrisation", Imf::StringAttribute(kLightFieldParametrisation));
+  h.insert("lfi.units", Imf::StringAttribute(kLightFieldUnits));
+}
+
 // The attributes of a light field file as lfi writes them, each optional.
 struct RawLightFieldAttributes {
   LightFieldGeometry geometry = ::geometry();
   bool withAngular = true;
   std::string checksum;  // empty: the correct one
+  std::function<void(Imf::Header&)> conventions = insertConventions;  // lfi.frame, lfi.parametrisation, lfi.units
 };
 
 void writeRawLightField(const fs::path& path, const cv::Mat& pixels, const RawLightFieldAttributes& a) {
@@ -182,6 +198,7 @@ void writeRawLightField(const fs::path& path, const cv::Mat& pixels, const RawLi
     if (a.withAngular) h.insert("lfi.angular", Imf::IntAttribute(a.geometry.angular));
     h.insert("lfi.pixelPitch_mm", Imf::DoubleAttribute(a.geometry.pixelPitch_mm));
     h.insert("lfi.distance_mm", Imf::DoubleAttribute(a.geometry.distance_mm));
+    a.conventions(h);
   });
 }
 
@@ -264,6 +281,58 @@ TEST_F(ExrIo, RawWriterProducesReadableFiles) {
   const LightField loaded = lfi::readLightFieldExr(file("raw.exr"));
   EXPECT_TRUE(loaded.geometry() == g);
   EXPECT_TRUE(bitIdentical(loaded.lensletImage(), pixels));
+}
+
+// A file that states another convention, or none, is refused: lfi would read
+// it in its own and get every ray wrong.
+TEST_F(ExrIo, ALightFieldInAnotherParametrisationIsRefused) {
+  const LightFieldGeometry g = geometry();
+  const cv::Mat pixels = randomFloats(g.height(), g.width(), 40);
+  struct Case {
+    std::string name, attribute;
+    std::function<void(Imf::Header&)> conventions;
+    std::string says;
+  };
+  const std::vector<Case> cases = {
+      {"no-frame", "lfi.frame",
+       [](Imf::Header& h) {
+         insertConventions(h);
+         h.erase("lfi.frame");
+       },
+       "missing"},
+      {"z-away", "lfi.frame",
+       [](Imf::Header& h) {
+         insertConventions(h);
+         h.insert("lfi.frame", Imf::StringAttribute("plane frame: +z away from the part"));
+       },
+       "not lfi's convention"},
+      {"no-parametrisation", "lfi.parametrisation",
+       [](Imf::Header& h) {
+         insertConventions(h);
+         h.erase("lfi.parametrisation");
+       },
+       "missing"},
+      {"two-plane", "lfi.parametrisation",
+       [](Imf::Header& h) {
+         insertConventions(h);
+         h.insert("lfi.parametrisation", Imf::StringAttribute("two-plane (u,v,s,t)"));
+       },
+       "not lfi's convention"},
+      {"inches", "lfi.units",
+       [](Imf::Header& h) {
+         insertConventions(h);
+         h.insert("lfi.units", Imf::StringAttribute("lengths in, angles deg, pixels linear relative radiance"));
+       },
+       "not lfi's convention"},
+  };
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.name);
+    RawLightFieldAttributes a;
+    a.conventions = c.conventions;
+    writeRawLightField(file(c.name + ".exr"), pixels, a);  // (with the checksum of what it says)
+    EXPECT_TRUE(throwsError([&] { lfi::readLightFieldExr(file(c.name + ".exr")); }, Errc::InvalidFile,
+                            {file(c.name + ".exr").string(), "'" + c.attribute + "'", c.says}));
+  }
 }
 
 TEST_F(ExrIo, TruncatedFileIsInvalid) {
@@ -488,6 +557,7 @@ TEST_F(ExrIo, VersionOneFilesStillReadAndLaterVersionsAreRefused) {
     h.insert("lfi.angular", Imf::IntAttribute(g.angular));
     h.insert("lfi.pixelPitch_mm", Imf::DoubleAttribute(g.pixelPitch_mm));
     h.insert("lfi.distance_mm", Imf::DoubleAttribute(g.distance_mm));
+    insertConventions(h);  // (in the same words since the first version)
   });
   const LightField loaded = lfi::readLightFieldExr(file("v1.exr"));
   EXPECT_TRUE(loaded.geometry() == g);
