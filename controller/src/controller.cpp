@@ -104,8 +104,8 @@ cv::Mat Controller::inspect() {
   const bool software = settings.trigger == TriggerMode::Software;
   // A frame takes its exposure, and as long again for readout and transfer at most, beyond the option's wait.
   // (At most a day more, checkedGrabTimeout's cap; none for an exposure that is not a number.)
-  const auto timeout = options_.grabTimeout + std::chrono::milliseconds(static_cast<std::int64_t>(std::ceil(
-                                                  std::min(std::max(0.0, 2 * settings.exposure_us / 1000), 86'400'000.0))));
+  const double extra_ms = std::min(std::max(0.0, 2 * settings.exposure_us / 1000), 86'400'000.0);
+  const auto timeout = options_.grabTimeout + std::chrono::milliseconds(static_cast<std::int64_t>(std::ceil(extra_ms)));
   const std::string camera = camera_.info().deviceId;
   cv::Mat sum;  // (in double: a float sum of 16-bit frames stops being exact past 256 of them)
   int good = 0, bad = 0, timeouts = 0;

@@ -233,7 +233,8 @@ TriangleMesh loadMesh(const fs::path& path, double creaseAngle_rad, double scale
   }
   if (mesh.triangles.empty()) fail(Errc::InvalidFile, "'{}': the mesh has no faces", path.string());
   if (std::none_of(mesh.triangles.begin(), mesh.triangles.end(), [&](const auto& f) {
-        return (mesh.vertices[f[1]] - mesh.vertices[f[0]]).cross(mesh.vertices[f[2]] - mesh.vertices[f[0]]).length() > 0;
+        const Vec3 &a = mesh.vertices[f[0]], &b = mesh.vertices[f[1]], &c = mesh.vertices[f[2]];
+        return (b - a).cross(c - a).length() > 0;
       }))
     fail(Errc::InvalidFile, "'{}': none of the mesh's {} faces has an area (its vertices lie on a line)", path.string(),
          mesh.triangles.size());

@@ -592,7 +592,8 @@ nlohmann::ordered_json runStudy(const Bench& bench, const fs::path& outDir, cons
                           {"distance_mm", lightField->geometry().distance_mm},
                           {"capture_samples_per_pixel", q.captureSamples}};
   study["criterion"] = {{"cnr", "sqrt(max(0, mean over the defect mask of z^2 - s^2)) / s; z = (frame - intact frame) "
-                                "/ per-pixel sensor noise of that difference; s = robust std of z outside the masks, at least 1"},
+                                "/ per-pixel sensor noise of that difference; s = robust std of z outside the masks, "
+                                "at least 1"},
                         {"detected_at_least", kDetectedCnr},
                         {"weak_at_least", kWeakCnr},
                         {"flag_sigma", kFlagSigma},
@@ -719,9 +720,7 @@ nlohmann::ordered_json sweepAnswers(const nlohmann::ordered_json& sweep) {
     std::map<std::string, std::map<double, bool>> detectedAt;
     for (const auto& p : deltaPoints)
       for (const auto& [defect, cnr] : p["cnr"][lookup].items()) {
-        const double level = std::abs(p["value"].get<double>());
-        auto [it, fresh] = detectedAt[defect].try_emplace(level, true);
-        it->second = it->second && cnr.get<double>() >= kDetectedCnr;
+        note(detectedAt[defect], std::abs(p["value"].get<double>()), cnr.get<double>() >= kDetectedCnr);
       }
     for (const auto& [defect, levels] : detectedAt)
       for (const auto& [level, detected] : levels) {  // ascending |error|

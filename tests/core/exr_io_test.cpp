@@ -178,7 +178,8 @@ const char* kLightFieldUnits = "lengths mm, angles rad, pixels linear relative r
 // All but `leftOut`. (Not inserted and erased: OpenEXR 3.1's Header::erase leaks the attribute.)
 void insertConventions(Imf::Header& h, const std::string& leftOut = {}) {
   for (const auto& [name, text] : {std::pair{"lfi.frame", kLightFieldFrame},
-                                   {"lfi.parametrisation", kLightFieldParametrisation}, {"lfi.units", kLightFieldUnits}})
+                                   {"lfi.parametrisation", kLightFieldParametrisation},
+                                   {"lfi.units", kLightFieldUnits}})
     if (name != leftOut) h.insert(name, Imf::StringAttribute(text));
 }
 

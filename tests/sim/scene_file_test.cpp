@@ -173,7 +173,9 @@ TEST_F(SceneFile, BadValuesAreErrors) {
       },
       Errc::Config, {"wide.toml:7:", "light_field_sensor.pixel_pitch_mm", "reaches 6.5536e+06 mm"}));
   EXPECT_TRUE(throwsError(
-      [&] { loadSceneFile(write("thin.toml", head + "[[object]]\nname='r'\nshape='rectangle'\nsize_mm=[5e-324,10]\n")); },
+      [&] {
+        loadSceneFile(write("thin.toml", head + "[[object]]\nname='r'\nshape='rectangle'\nsize_mm=[5e-324,10]\n"));
+      },
       Errc::Config, {"thin.toml:", "object[0].size_mm"}));
   EXPECT_TRUE(throwsError(
       [&] {
