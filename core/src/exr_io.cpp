@@ -45,6 +45,17 @@ constexpr const char* kDistance = "lfi.distance_mm";
 constexpr const char* kObjectPixel = "lfi.objectPixel_mm";
 constexpr const char* kDescription = "lfi.description";
 
+// The conventions in words (docs/file-formats.md), written into every file and
+// required of every file read: lfi reads no other parametrisation.
+constexpr const char* kLightFieldFrameText =
+    "plane frame: origin at the grid centre, +z the viewing/emitting side; "
+    "pixel (col,row) = (ex*n+u, ey*n+v), row increases with +y";
+constexpr const char* kLightFieldParametrisationText =
+    "lenslet image of SxxSy spatial elements of nxn angular elements; "
+    "in-element position (px,py) in [-1,1]^2 sees direction "
+    "normalise(-px,-py,sqrt(1-px^2-py^2)); px^2+py^2>=1 is 0";
+constexpr const char* kRadianceFrameText = "camera image: row 0 at world +y, columns along world +x";
+
 constexpr const char* kLightFieldKind = "light-field";
 constexpr const char* kRadianceKind = "radiance-image";
 
@@ -112,17 +123,6 @@ void configureOpenExr() {
 // What loadExr() refuses is refused here too, before anything is written: a
 // file that could not be read back must not replace a good one.
 constexpr const char* kUnitsPrefix = "lengths mm, angles rad, pixels ";
-// The conventions in words (docs/file-formats.md), written into every file and
-// required of every file read: lfi reads no other parametrisation.
-constexpr const char* kLightFieldFrameText =
-    "plane frame: origin at the grid centre, +z the viewing/emitting side; "
-    "pixel (col,row) = (ex*n+u, ey*n+v), row increases with +y";
-constexpr const char* kLightFieldParametrisationText =
-    "lenslet image of SxxSy spatial elements of nxn angular elements; "
-    "in-element position (px,py) in [-1,1]^2 sees direction "
-    "normalise(-px,-py,sqrt(1-px^2-py^2)); px^2+py^2>=1 is 0";
-constexpr const char* kRadianceFrameText = "camera image: row 0 at world +y, columns along world +x";
-
 
 void writeExr(const fs::path& path, const cv::Mat& image, Imf::Header header, Overwrite overwrite,
               const std::string& pixelUnit = RadianceImageInfo{}.pixelUnit) {

@@ -48,12 +48,12 @@ std::uint64_t frameNoiseSeed(std::uint64_t sceneSeed, std::uint64_t frameId) {
 }
 
 SimImager::SimImager(const fs::path& sceneFile) : sceneFile_(sceneFile) {
-  bench_ = SimBench::open(sceneFile, fmt::format("camera 'sim:{}'", percentEncodeUriPart(sceneFile.string())));
+  const std::string name = "sim:" + percentEncodeUriPart(sceneFile.string());  // (a URI that opens it)
+  bench_ = SimBench::open(sceneFile, fmt::format("camera '{}'", name));
   description_ = bench_->description();
   const auto* camera = std::get_if<TelecentricCamera>(&description_.sensor);
   if (camera == nullptr)
-    fail(Errc::Config, "camera 'sim:{}': the scene has a [light_field_sensor], the sim camera needs a [camera]",
-         percentEncodeUriPart(sceneFile.string()));
+    fail(Errc::Config, "camera '{}': the scene has a [light_field_sensor], the sim camera needs a [camera]", name);
   camera_ = *camera;
   scene_ = std::make_unique<Scene>(std::move(description_.objects), description_.ambientIor);
   description_.objects.clear();
@@ -192,7 +192,6 @@ class SimCamera final : public Camera {
 
   void close() noexcept override {
     displayChanges_.reset();
-    listening_ = false;  // (no listener left to race with)
     queue_.clear();
     imager_.reset();
     state_ = State::Closed;
@@ -223,6 +222,7 @@ class SimCamera final : public Camera {
     // Before the display changes, the frames exposed until then are taken with
     // it as it was. Listening before the stream starts, so that no change falls
     // between the two (one before the start concerns no frame).
+    listening_ = false;  // (no listener yet: an earlier stream's was removed by stop() or close())
     displayChanges_ = imager_->bench().onDisplayChange([this] {
       std::lock_guard lock(mutex_);
       if (listening_) produceDueFrames(Clock::now());
@@ -244,11 +244,7 @@ class SimCamera final : public Camera {
   void stop() override {
     requireCameraState(state_, {State::Streaming}, "stop", name());
     displayChanges_.reset();
-    {
-      std::lock_guard lock(mutex_);
-      listening_ = false;
-      queue_.clear();
-    }
+    queue_.clear();
     state_ = State::Configured;
   }
 

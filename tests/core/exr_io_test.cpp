@@ -316,6 +316,34 @@ TEST_F(ExrIo, ALightFieldInAnotherParametrisationIsRefused) {
   }
 }
 
+// The same for a radiance image: its frame in lfi's words, and units with a pixel unit after lfi's prefix.
+TEST_F(ExrIo, ARadianceImageInAnotherConventionIsRefused) {
+  const cv::Mat pixels = randomFloats(6, 5, 41);
+  auto write = [&](const std::string& name, const std::string& frame, const std::string& units) {
+    writeRawExr(file(name), pixels, [&](Imf::Header& h) {
+      h.insert("lfi.kind", Imf::StringAttribute("radiance-image"));
+      h.insert("lfi.formatVersion", Imf::IntAttribute(lfi::kExrFormatVersion));
+      h.insert("lfi.objectPixel_mm", Imf::DoubleAttribute(0.1));
+      h.insert("lfi.frame", Imf::StringAttribute(frame));
+      h.insert("lfi.units", Imf::StringAttribute(units));
+    });
+  };
+  const std::string frame = "camera image: row 0 at world +y, columns along world +x";
+  write("good.exr", frame, "lengths mm, angles rad, pixels camera digital numbers (DN)");
+  lfi::RadianceImageInfo info;
+  EXPECT_TRUE(bitIdentical(lfi::readRadianceExr(file("good.exr"), &info), pixels));
+  EXPECT_EQ(info.pixelUnit, "camera digital numbers (DN)");
+  write("flipped.exr", "camera image: row 0 at world -y", "lengths mm, angles rad, pixels linear relative radiance");
+  EXPECT_TRUE(throwsError([&] { lfi::readRadianceExr(file("flipped.exr")); }, Errc::InvalidFile,
+                          {file("flipped.exr").string(), "'lfi.frame'", "not lfi's convention"}));
+  write("inches.exr", frame, "lengths in, pixels linear relative radiance");
+  EXPECT_TRUE(throwsError([&] { lfi::readRadianceExr(file("inches.exr")); }, Errc::InvalidFile,
+                          {file("inches.exr").string(), "'lfi.units'"}));
+  write("no-unit.exr", frame, "lengths mm, angles rad, pixels ");
+  EXPECT_TRUE(throwsError([&] { lfi::readRadianceExr(file("no-unit.exr")); }, Errc::InvalidFile,
+                          {file("no-unit.exr").string(), "'lfi.units'"}));
+}
+
 TEST_F(ExrIo, TruncatedFileIsInvalid) {
   const LightFieldGeometry g = geometry();
   const fs::path valid = file("valid.exr");
