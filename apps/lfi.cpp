@@ -5,16 +5,17 @@
 #include "lfi/calib/display_distance.h"
 #include "lfi/core/atomic_file.h"
 #include "lfi/core/error.h"
+#include "lfi/drivers/capture_registry.h"
 #include "lfi/core/exr_io.h"
 #include "lfi/core/log.h"
 #include "lfi/core/image.h"
 #include "lfi/controller/controller.h"
-#include "lfi/drivers/aravis_camera.h"
+#include "lfi/drivers/aravis/aravis_camera.h"
 #include "lfi/drivers/display_registry.h"
-#include "lfi/drivers/gv_camera_server.h"
-#include "lfi/drivers/registry.h"
-#include "lfi/drivers/usb_display.h"
-#include "lfi/sim/sim_camera.h"
+#include "lfi/drivers/aravis/gv_camera_server.h"
+#include "lfi/drivers/camera_registry.h"
+#include "lfi/drivers/usb/usb_display.h"
+#include "lfi/sim/devices/sim_camera.h"
 #include "lfi/sim/scene_file.h"
 #include "lfi/study/study.h"
 
@@ -232,8 +233,7 @@ struct OpenBench {
 OpenBench openBench(const BenchOptions& o, const char* command) {
   if (o.capture.empty() && o.lightField.empty())
     lfi::fail(lfi::Errc::Config, "{}: give --capture <uri> or --light-field <file>", command);
-  lfi::registerBuiltinBackends();
-  lfi::registerBuiltinDisplayBackends();
+  lfi::registerDriverBackends();
   lfi::sim::registerSimBackends();
   OpenBench bench;
   bench.camera = lfi::openCamera(o.camera);

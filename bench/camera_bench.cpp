@@ -6,8 +6,8 @@
 //
 //   lfi-camera-bench [--frames N] [--rate HZ] [--size PX] [--format Mono8|Mono16] [--rounds N]
 
-#include "lfi/drivers/aravis_camera.h"
-#include "lfi/drivers/registry.h"
+#include "lfi/drivers/aravis/aravis_camera.h"
+#include "lfi/drivers/camera_registry.h"
 
 #include "bench_util.h"
 #include "gige_device_process.h"
@@ -102,7 +102,7 @@ void check(GError* error, const char* call) {
 // opens the device through 127.0.0.1, as our backend does for a device at one of
 // the host's own addresses: Aravis's discovery may find a device on 127.0.0.1
 // through eth0 too, and then (as root) its packet socket, bound to eth0, never
-// sees the stream, which goes through lo (drivers/src/aravis_camera.cpp).
+// sees the stream, which goes through lo (drivers/src/aravis/).
 // (Owned GObjects, released however the client ends, with its acquisition stopped.)
 struct Unref {
   void operator()(gpointer object) const { g_object_unref(object); }
@@ -210,7 +210,7 @@ int run(int frames, double rate, int size, lfi::PixelFormat format, int rounds) 
   {
     lfi::testing_support::GigeDeviceProcess server(
         {LFI_EXECUTABLE, "-q", "serve-camera", scene.string(), "--serial", serial}, std::chrono::seconds(60), false);
-    lfi::registerBuiltinBackends();
+    lfi::registerDriverBackends();
     const std::string id = "lfi-SimCamera-" + serial;
     const double megabytes = size * size * (format == lfi::PixelFormat::Mono8 ? 1.0 : 2.0) / 1e6;
     fmt::print("lfi-camera-bench: {} frames of {} x {} {} ({:.3f} MB) at {} Hz from '{}' on 127.0.0.1\n", frames, size,

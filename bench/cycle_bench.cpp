@@ -28,11 +28,12 @@
 
 #include "lfi/controller/controller.h"
 #include "lfi/drivers/camera.h"
+#include "lfi/drivers/capture_registry.h"
 #include "lfi/drivers/display_registry.h"
 #include "lfi/drivers/light_field_capture.h"
-#include "lfi/drivers/registry.h"
-#include "lfi/sim/sim_bench.h"
-#include "lfi/sim/sim_camera.h"
+#include "lfi/drivers/camera_registry.h"
+#include "lfi/sim/devices/sim_bench.h"
+#include "lfi/sim/devices/sim_camera.h"
 
 #include "bench_util.h"
 

@@ -26,7 +26,7 @@
 #include "lfi/core/exr_io.h"
 #include "lfi/core/light_field.h"
 #include "lfi/drivers/pixel_unpack.h"
-#include "lfi/sim/camera_sensor_model.h"
+#include "lfi/sim/devices/camera_sensor_model.h"
 
 #include "bench_util.h"
 

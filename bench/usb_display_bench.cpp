@@ -10,7 +10,7 @@
 
 #include "lfi/core/error.h"
 #include "lfi/drivers/display_registry.h"
-#include "lfi/drivers/usb_display.h"
+#include "lfi/drivers/usb/usb_display.h"
 
 #include "bench_util.h"
 #include "emulated_usb_display.h"

@@ -2,9 +2,10 @@
 // the same sim: URIs a user would give, and the errors it reports.
 
 #include "lfi/controller/controller.h"
+#include "lfi/drivers/capture_registry.h"
 #include "lfi/drivers/display_registry.h"
-#include "lfi/drivers/registry.h"
-#include "lfi/sim/sim_camera.h"
+#include "lfi/drivers/camera_registry.h"
+#include "lfi/sim/devices/sim_camera.h"
 
 #include "lfi_test_support.h"
 
@@ -108,8 +109,7 @@ private:
 class ControllerTest : public testing::Test {
 protected:
   void SetUp() override {
-    registerBuiltinBackends();
-    registerBuiltinDisplayBackends();
+    registerDriverBackends();
     sim::registerSimBackends();  // camera, display and light field capture
     dir_ = fs::path(testing::TempDir()) / ("lfi_controller_" + std::to_string(::getpid()));
     fs::create_directories(dir_);
@@ -165,9 +165,9 @@ protected:
 // process: the registry is process-wide, and the other tests here want lfi's.
 TEST(SimBackends, RegisterWhenAnotherLibraryTookTheCaptureScheme) {
   auto body = [] {
-    const std::vector<std::string> captures = lightFieldCaptureSchemes();
+    const std::vector<std::string> captures = backendRegistry<LightFieldCapture>().schemes();
     if (std::ranges::find(captures, std::string("sim")) != captures.end()) std::_Exit(2);  // (not a fresh registry)
-    registerLightFieldCaptureBackend(LightFieldCaptureBackend{
+    backendRegistry<LightFieldCapture>().add(LightFieldCaptureBackend{
         .scheme = "sim",
         .queryKeys = {},
         .description = "another library's",
@@ -177,7 +177,7 @@ TEST(SimBackends, RegisterWhenAnotherLibraryTookTheCaptureScheme) {
     });
     sim::registerSimBackends();
     sim::registerSimBackends();
-    const std::vector<std::string> cameras = cameraSchemes(), displays = displaySchemes();
+    const std::vector<std::string> cameras = backendRegistry<Camera>().schemes(), displays = backendRegistry<Display>().schemes();
     const bool registered = std::ranges::find(cameras, std::string("sim")) != cameras.end() &&
                             std::ranges::find(displays, std::string("sim")) != displays.end();
     std::_Exit(registered ? 0 : 1);

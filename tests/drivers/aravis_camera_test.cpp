@@ -7,8 +7,8 @@
 // lock file while its camera runs, which serialises these tests across the
 // processes `ctest -j` starts. Each camera gets a serial unique to the process.
 
-#include "lfi/drivers/aravis_camera.h"
-#include "lfi/drivers/registry.h"
+#include "lfi/drivers/aravis/aravis_camera.h"
+#include "lfi/drivers/camera_registry.h"
 
 #include "aravis_discovery.h"
 #include "gige_device_process.h"
@@ -130,7 +130,7 @@ class AravisCameraTest : public ::testing::Test {
       LFI_SKIP_WITHOUT_TOOL(kFakeCameraBinary << " not found in PATH: install Debian's aravis-tools "
                                               << "(scripts/install-deps.sh) to run the GigE Vision loopback tests");
     lock_ = std::make_unique<LoopbackGigeLock>();
-    registerBuiltinBackends();
+    registerDriverBackends();
     fake_ = std::make_unique<FakeGvCamera>("LFI" + std::to_string(::getpid()));
     fake_->start(binary_);
   }

@@ -6,7 +6,7 @@
 #include "lfi/drivers/display.h"
 #include "lfi/drivers/display_calibration_file.h"
 #include "lfi/drivers/display_optics.h"
-#include "lfi/drivers/usb_display_protocol.h"
+#include "lfi/drivers/usb/usb_display_protocol.h"
 
 #include <gtest/gtest.h>
 #include <unistd.h>

@@ -17,7 +17,7 @@
 // Frames are validated like firmware would: header magic/version/CRC, sizes against
 // the panel, payload CRC, exact byte count; the last valid presented frame is kept.
 
-#include "lfi/drivers/usb_display_protocol.h"
+#include "lfi/drivers/usb/usb_display_protocol.h"
 
 #include <opencv2/core.hpp>
 

@@ -7,9 +7,9 @@
 // fixture holds /tmp/lfi-fake-gv-camera.lock (shared with aravis_camera_test)
 // while its server runs.
 
-#include "lfi/drivers/aravis_camera.h"
-#include "lfi/drivers/registry.h"
-#include "lfi/sim/sim_camera.h"
+#include "lfi/drivers/aravis/aravis_camera.h"
+#include "lfi/drivers/camera_registry.h"
+#include "lfi/sim/devices/sim_camera.h"
 #include "aravis_discovery.h"
 #include "gige_device_process.h"
 #include "lfi_test_support.h"
@@ -120,7 +120,7 @@ class ServedCameraTest : public ::testing::Test {
     scene_ = dir_ / "served.toml";
     std::ofstream(scene_) << kScene;
     lock_ = std::make_unique<LoopbackGigeLock>();
-    registerBuiltinBackends();
+    registerDriverBackends();
     server_ = std::make_unique<ServedCamera>(scene_, "LFIS" + std::to_string(::getpid() % 100000));
     server_->start();
   }

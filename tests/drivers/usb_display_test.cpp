@@ -8,7 +8,7 @@
 #include "lfi/drivers/display.h"
 #include "lfi/drivers/display_optics.h"
 #include "lfi/drivers/display_registry.h"
-#include "lfi/drivers/usb_display.h"
+#include "lfi/drivers/usb/usb_display.h"
 
 #include <gtest/gtest.h>
 
@@ -41,7 +41,7 @@ protected:
     ASSERT_TRUE(testing_support::umockdevPreloadActive())
         << "umockdev's preload library is not active: run this test through ctest, umockdev-wrapper or "
            "LD_PRELOAD=libumockdev-preload.so.0";
-    registerBuiltinDisplayBackends();
+    registerDriverBackends();
   }
 
   static cv::Mat randomPanel(const DisplayInfo& info, unsigned seed) {

@@ -6,7 +6,7 @@
 #include "lfi/sim/scene.h"
 #include "lfi/sim/sensors.h"
 
-#include "camera_samples.h"  // sim/src: the renderer's vectorised sample pass
+#include "camera_samples.h"  // sim/src/tracer: the renderer's vectorised sample pass
 #include "lfi_test_support.h"
 
 #include <fmt/format.h>

@@ -1,6 +1,6 @@
 // The camera sensor model against its own statistics: exposure, shot + read +
 // quantisation noise, saturation, linearity, reproducibility.
-#include "lfi/sim/camera_sensor_model.h"
+#include "lfi/sim/devices/camera_sensor_model.h"
 
 #include "lfi_test_support.h"
 

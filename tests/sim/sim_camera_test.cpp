@@ -2,8 +2,8 @@
 // response and noise against the analytic model, the state machine, the frame
 // clock and reproducibility per frame id.
 
-#include "lfi/drivers/registry.h"
-#include "lfi/sim/sim_camera.h"
+#include "lfi/drivers/camera_registry.h"
+#include "lfi/sim/devices/sim_camera.h"
 #include "lfi_test_support.h"
 
 #include <gtest/gtest.h>

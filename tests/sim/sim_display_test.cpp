@@ -4,13 +4,13 @@
 // the source light field, the light a parallax barrier loses, and a SimCamera on
 // the same scene file seeing what the SimDisplay shows.
 
-#include "lfi/sim/sim_display.h"
+#include "lfi/sim/devices/sim_display.h"
 #include "lfi/drivers/display_optics.h"
 #include "lfi/drivers/display_registry.h"
-#include "lfi/drivers/registry.h"
+#include "lfi/drivers/camera_registry.h"
 #include "lfi/sim/render.h"
-#include "lfi/sim/sim_bench.h"
-#include "lfi/sim/sim_camera.h"
+#include "lfi/sim/devices/sim_bench.h"
+#include "lfi/sim/devices/sim_camera.h"
 #include "lfi_test_support.h"
 
 #include <fmt/format.h>

@@ -1,7 +1,7 @@
 #pragma once
 // Finding a device by Aravis discovery in the loopback tests.
 
-#include "lfi/drivers/aravis_camera.h"
+#include "lfi/drivers/aravis/aravis_camera.h"
 
 #include <optional>
 #include <string>

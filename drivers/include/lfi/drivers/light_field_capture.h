@@ -8,12 +8,10 @@
 //   sim:    the simulated lensless light field sensor         lfi_sim (registerSimBackends)
 //           behind the part of a scene file, lit by a
 //           collimated beam from the camera side
-//   (later) structured light through the bench's own display and camera
 //
-// Opened by URI from the registry below, like cameras and displays.
+// Opened by URI from its registry (capture_registry.h), like cameras and displays.
 
 #include "lfi/core/light_field.h"
-#include "lfi/drivers/device_registry.h"
 
 #include <functional>
 #include <memory>
@@ -39,15 +37,5 @@ public:
   // One line naming the source, for logs and file headers.
   virtual std::string description() const = 0;
 };
-
-using LightFieldCaptureBackend = DeviceBackend<LightFieldCapture>;
-
-// Throws Errc::InvalidArgument for a bad or taken scheme.
-void registerLightFieldCaptureBackend(LightFieldCaptureBackend backend);
-// The same, but a taken scheme is left as it is: returns whether this backend was added.
-bool registerLightFieldCaptureBackendIfAbsent(LightFieldCaptureBackend backend);
-std::vector<std::string> lightFieldCaptureSchemes();
-// Unknown scheme or key: Errc::Config listing what is known.
-std::unique_ptr<LightFieldCapture> openLightFieldCapture(std::string_view uri);
 
 }  // namespace lfi

@@ -18,7 +18,7 @@
 namespace lfi::sim {
 
 // [camera_sensor]: the camera's sensor as the `sim:` camera backend models it
-// (lfi/sim/camera_sensor_model.h). The exposure scale turns relative radiance
+// (lfi/sim/devices/camera_sensor_model.h). The exposure scale turns relative radiance
 // into electrons: electronsPerUnit = electronsPerUnitPerUs * exposure_us.
 struct CameraSensorParameters {
   double fullWell_e = 10500;           // e-

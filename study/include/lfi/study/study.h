@@ -5,7 +5,7 @@
 // illumination by one declared criterion (docs/study.md).
 
 #include "lfi/core/light_field.h"
-#include "lfi/sim/camera_sensor_model.h"
+#include "lfi/sim/devices/camera_sensor_model.h"
 #include "lfi/sim/scene.h"
 #include "lfi/sim/sensors.h"
 

@@ -46,4 +46,7 @@ struct AravisOptions {
 // Errc::NotFound listing the devices found.
 std::unique_ptr<Camera> openAravisCamera(const std::string& deviceId, const AravisOptions& options = {});
 
+// Adds the aravis: scheme to the camera registry (registerDriverBackends() calls it). Idempotent.
+void registerAravisBackend();
+
 }  // namespace lfi

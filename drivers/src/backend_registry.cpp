@@ -1,4 +1,10 @@
-#include "lfi/drivers/device_registry.h"
+#include "lfi/drivers/backend_registry.h"
+
+#include "lfi/drivers/aravis/aravis_camera.h"
+#include "lfi/drivers/camera_registry.h"
+#include "lfi/drivers/capture_registry.h"
+#include "lfi/drivers/display_registry.h"
+#include "lfi/drivers/usb/usb_display.h"
 
 namespace lfi {
 
@@ -78,6 +84,30 @@ DeviceUri parseDeviceUri(std::string_view text, std::string_view kind, std::stri
     if (query.empty()) fail(Errc::Config, "{} URI '{}' ends with '&'", kind, text);
   }
   return uri;
+}
+
+template <>
+BackendRegistry<Camera>& backendRegistry<Camera>() {
+  static BackendRegistry<Camera> instance("camera", "aravis:<device-id>", "registerDriverBackends");
+  return instance;
+}
+
+template <>
+BackendRegistry<Display>& backendRegistry<Display>() {
+  static BackendRegistry<Display> instance("display", "usb:1209:4c46", "registerDriverBackends");
+  return instance;
+}
+
+template <>
+BackendRegistry<LightFieldCapture>& backendRegistry<LightFieldCapture>() {
+  static BackendRegistry<LightFieldCapture> instance("light field capture", "sim:<scene-file>",
+                                                     "lfi::sim::registerSimBackends");
+  return instance;
+}
+
+void registerDriverBackends() {
+  registerAravisBackend();
+  registerUsbBackend();
 }
 
 }  // namespace lfi

@@ -34,9 +34,9 @@
 // is camera -y (sensors.h).
 
 #include "lfi/drivers/camera.h"
-#include "lfi/sim/camera_sensor_model.h"
+#include "lfi/sim/devices/camera_sensor_model.h"
 #include "lfi/sim/scene_file.h"
-#include "lfi/sim/sim_bench.h"
+#include "lfi/sim/devices/sim_bench.h"
 
 #include <opencv2/core.hpp>
 

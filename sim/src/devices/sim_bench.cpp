@@ -1,4 +1,4 @@
-#include "lfi/sim/sim_bench.h"
+#include "lfi/sim/devices/sim_bench.h"
 
 #include "lfi/core/error.h"
 

@@ -1,11 +1,11 @@
 // The ray-traced display backend (sim_display.h): the Display state machine over
 // the shared SimBench's panel.
 
-#include "lfi/sim/sim_display.h"
+#include "lfi/sim/devices/sim_display.h"
 
 #include "lfi/core/error.h"
 #include "lfi/drivers/display_registry.h"
-#include "lfi/sim/sim_bench.h"
+#include "lfi/sim/devices/sim_bench.h"
 
 #include <fmt/format.h>
 
@@ -116,11 +116,11 @@ std::unique_ptr<Display> openSimDisplay(const fs::path& sceneFile) {
 }
 
 void registerSimDisplayBackend() {
-  registerDisplayBackendIfAbsent(DisplayBackend{
+  backendRegistry<Display>().addOnce(DisplayBackend{
       .scheme = "sim",
       .queryKeys = {},
       .description = "sim:<scene-file>  ray-traced light field display (the scene file's [display])",
-      .factory = [](const DisplayUri& uri) { return openSimDisplay(uri.path); },
+      .factory = [](const DeviceUri& uri) { return openSimDisplay(uri.path); },
   });
 }
 

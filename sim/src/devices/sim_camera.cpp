@@ -2,16 +2,16 @@
 // with a simulated frame clock and buffer pool, so that timing, underruns and
 // software triggers behave like a streaming device's.
 
-#include "lfi/sim/sim_camera.h"
+#include "lfi/sim/devices/sim_camera.h"
 
-#include "lfi/sim/sim_light_field_capture.h"
+#include "lfi/sim/devices/sim_light_field_capture.h"
 
 #include "lfi/core/error.h"
-#include "lfi/drivers/registry.h"
+#include "lfi/drivers/camera_registry.h"
 #include "lfi/sim/render.h"
 #include "lfi/sim/scene.h"
-#include "lfi/sim/sim_bench.h"
-#include "lfi/sim/sim_display.h"
+#include "lfi/sim/devices/sim_bench.h"
+#include "lfi/sim/devices/sim_display.h"
 
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
@@ -456,11 +456,11 @@ std::unique_ptr<Camera> openSimCamera(const fs::path& sceneFile) {
 void registerSimBackends() {
   registerSimDisplayBackend();
   registerSimLightFieldCapture();
-  registerCameraBackendIfAbsent(CameraBackend{
+  backendRegistry<Camera>().addOnce(CameraBackend{
       .scheme = "sim",
       .queryKeys = {},
       .description = "sim:<scene-file>  ray-traced camera (the scene file's [camera] and [camera_sensor])",
-      .factory = [](const CameraUri& uri) { return openSimCamera(uri.path); },
+      .factory = [](const DeviceUri& uri) { return openSimCamera(uri.path); },
   });
 }
 

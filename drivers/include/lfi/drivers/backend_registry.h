@@ -1,12 +1,19 @@
 #pragma once
-// Device backends by URI scheme (STYLE.md §2), shared by the camera and the
-// display registries (registry.h, display_registry.h). A URI is
+// Device backends by URI scheme (STYLE.md §2): one registry per device type,
+// all of the one shape below (BackendRegistry<Device>), reached through
+// backendRegistry<Camera>(), backendRegistry<Display>() and
+// backendRegistry<LightFieldCapture>() (camera_registry.h, display_registry.h,
+// capture_registry.h). A URI is
 //
 //   <scheme>:<path>[?<key>=<value>[&<key>=<value>...]]
 //
-// The path, keys and values reach the backend percent-decoded (parseDeviceUri);
-// each backend declares the query keys it accepts and any other key is an error. Backends
-// are registered explicitly; a registry is process-wide and thread-safe.
+// e.g. "aravis:Aravis-Fake-GV01", "usb:1209:4c46/LFI-0001?timeout_ms=500",
+// "sim:data/scenes/inspection_bench.toml". The path, keys and values reach the
+// backend percent-decoded (parseDeviceUri); each backend declares the query
+// keys it accepts and any other key is an error. Backends are registered
+// explicitly, so that static linking cannot drop one: registerDriverBackends()
+// adds lfi_drivers' own (aravis:, usb:), lfi::sim::registerSimBackends() the
+// simulated ones (sim:). A registry is process-wide and thread-safe.
 
 #include "lfi/core/error.h"
 
@@ -59,14 +66,18 @@ struct DeviceBackend {
 };
 
 template <typename Device>
-class DeviceRegistry {
+class BackendRegistry {
 public:
-  // kind: "camera" or "display"; example: a URI for the no-scheme message;
+  // kind: "camera", "display", ...; example: a URI for the no-scheme message;
   // builtinCall: the function that registers the built-in backends, named when
   // nothing is registered.
-  DeviceRegistry(std::string kind, std::string example, std::string builtinCall)
+  BackendRegistry(std::string kind, std::string example, std::string builtinCall)
       : kind_(std::move(kind)), example_(std::move(example)), builtinCall_(std::move(builtinCall)) {}
 
+  BackendRegistry(const BackendRegistry&) = delete;
+  BackendRegistry& operator=(const BackendRegistry&) = delete;
+
+  // Splits a URI (parseDeviceUri, with this registry's kind in messages).
   DeviceUri parse(std::string_view text) const { return parseDeviceUri(text, kind_, example_); }
 
   // Throws Errc::InvalidArgument for a bad scheme, a missing factory or a taken scheme.
@@ -88,6 +99,7 @@ public:
     return backends_.try_emplace(std::move(scheme), std::move(backend)).second;
   }
 
+  // Schemes registered so far, sorted.
   std::vector<std::string> schemes() const {
     std::lock_guard lock(mutex_);
     std::vector<std::string> out;
@@ -132,5 +144,14 @@ private:
   mutable std::mutex mutex_;
   std::map<std::string, DeviceBackend<Device>> backends_;
 };
+
+// The process-wide registry of each device type; specialised (and defined
+// once, in lfi_drivers) for Camera, Display and LightFieldCapture.
+template <typename Device>
+BackendRegistry<Device>& backendRegistry();
+
+// Registers the backends built into lfi_drivers: aravis: (cameras) and usb:
+// (displays). Idempotent.
+void registerDriverBackends();
 
 }  // namespace lfi

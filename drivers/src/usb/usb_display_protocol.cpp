@@ -1,4 +1,4 @@
-#include "lfi/drivers/usb_display_protocol.h"
+#include "lfi/drivers/usb/usb_display_protocol.h"
 
 #include "lfi/core/error.h"
 

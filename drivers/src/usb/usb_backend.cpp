@@ -1,19 +1,15 @@
-#include "lfi/drivers/display_registry.h"
-
+// The usb: scheme in the display registry:
+// usb:<vid>:<pid>[/<serial>][?timeout_ms=<ms>&calibration=<file>].
 #include "lfi/core/error.h"
-#include "lfi/drivers/usb_display.h"
+#include "lfi/drivers/display_registry.h"
+#include "lfi/drivers/usb/usb_display.h"
 
 #include <charconv>
 
 namespace lfi {
 namespace {
 
-DeviceRegistry<Display>& registry() {
-  static DeviceRegistry<Display> instance("display", "usb:1209:4c46", "registerBuiltinDisplayBackends");
-  return instance;
-}
-
-std::unique_ptr<Display> openUsbFromUri(const DisplayUri& uri) {
+std::unique_ptr<Display> openUsbFromUri(const DeviceUri& uri) {
   const UsbDisplaySelector selector = parseUsbDisplayPath(uri.path, uri.text);
   UsbDisplayOptions options;
   if (auto it = uri.query.find("timeout_ms"); it != uri.query.end()) {
@@ -35,13 +31,8 @@ std::unique_ptr<Display> openUsbFromUri(const DisplayUri& uri) {
 
 }  // namespace
 
-DisplayUri parseDisplayUri(std::string_view text) { return registry().parse(text); }
-
-void registerDisplayBackend(DisplayBackend backend) { registry().add(std::move(backend)); }
-bool registerDisplayBackendIfAbsent(DisplayBackend backend) { return registry().addOnce(std::move(backend)); }
-
-void registerBuiltinDisplayBackends() {
-  registry().addOnce(DisplayBackend{
+void registerUsbBackend() {
+  backendRegistry<Display>().addOnce(DisplayBackend{
       .scheme = "usb",
       .queryKeys = {"timeout_ms", "calibration"},
       .description = "usb:<vid>:<pid>[/<serial>][?timeout_ms=<ms>&calibration=<file>]  light field display over USB "
@@ -49,9 +40,5 @@ void registerBuiltinDisplayBackends() {
       .factory = openUsbFromUri,
   });
 }
-
-std::vector<std::string> displaySchemes() { return registry().schemes(); }
-
-std::unique_ptr<Display> openDisplay(std::string_view text) { return registry().open(text); }
 
 }  // namespace lfi

@@ -1,6 +1,6 @@
 // GvCameraServer (gv_camera_server.h) on Aravis's ArvGvFakeCamera.
 
-#include "lfi/drivers/gv_camera_server.h"
+#include "lfi/drivers/aravis/gv_camera_server.h"
 
 #include "lfi/core/error.h"
 

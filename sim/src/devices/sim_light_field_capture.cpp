@@ -1,6 +1,7 @@
-#include "lfi/sim/sim_light_field_capture.h"
+#include "lfi/sim/devices/sim_light_field_capture.h"
 
 #include "lfi/core/error.h"
+#include "lfi/drivers/capture_registry.h"
 #include "lfi/sim/render.h"
 #include "lfi/sim/scene_file.h"
 
@@ -109,7 +110,7 @@ std::unique_ptr<LightFieldCapture> openSimLightFieldCapture(const std::filesyste
 }
 
 void registerSimLightFieldCapture() {
-  registerLightFieldCaptureBackendIfAbsent(LightFieldCaptureBackend{
+  backendRegistry<LightFieldCapture>().addOnce(LightFieldCaptureBackend{
       .scheme = "sim",
       .queryKeys = {"spatial", "angular", "pitch_mm", "distance_mm", "beam_half_angle_rad", "beam_distance_mm", "spp"},
       .description = "sim:<scene-file>[?spatial=&angular=&pitch_mm=&distance_mm=&beam_half_angle_rad=&"

@@ -1,10 +1,10 @@
-#include "lfi/drivers/usb_display.h"
+#include "lfi/drivers/usb/usb_display.h"
 
 #include "lfi/drivers/display_calibration_file.h"
 
 #include "lfi/core/error.h"
-#include "lfi/drivers/device_registry.h"
-#include "lfi/drivers/usb_display_protocol.h"
+#include "lfi/drivers/backend_registry.h"
+#include "lfi/drivers/usb/usb_display_protocol.h"
 
 #include <fmt/format.h>
 #include <fmt/ranges.h>

@@ -3,10 +3,10 @@
 // process-wide device list is not thread-safe, so discovery and opening are
 // serialised by one mutex.
 
-#include "lfi/drivers/aravis_camera.h"
+#include "lfi/drivers/aravis/aravis_camera.h"
 
 #include "lfi/core/error.h"
-#include "lfi/drivers/device_registry.h"
+#include "lfi/drivers/backend_registry.h"
 #include "lfi/drivers/pixel_unpack.h"
 
 #include <arpa/inet.h>

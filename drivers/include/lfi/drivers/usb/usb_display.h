@@ -73,4 +73,7 @@ std::vector<UsbDisplayInfo> listUsbDisplays();
 // device refuses to be claimed or answers nonsense, Errc::Timeout when it does not answer.
 std::unique_ptr<Display> openUsbDisplay(const UsbDisplaySelector& selector, const UsbDisplayOptions& options = {});
 
+// Adds the usb: scheme to the display registry (registerDriverBackends() calls it). Idempotent.
+void registerUsbBackend();
+
 }  // namespace lfi

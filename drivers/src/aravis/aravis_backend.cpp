@@ -1,20 +1,14 @@
-#include "lfi/drivers/registry.h"
-
+// The aravis: scheme in the camera registry: aravis:<device-id>[?packetSize=<bytes>].
 #include "lfi/core/error.h"
-#include "lfi/drivers/aravis_camera.h"
+#include "lfi/drivers/aravis/aravis_camera.h"
+#include "lfi/drivers/camera_registry.h"
 
 #include <charconv>
-#include <string>
 
 namespace lfi {
 namespace {
 
-DeviceRegistry<Camera>& registry() {
-  static DeviceRegistry<Camera> instance("camera", "aravis:<device-id>", "registerBuiltinBackends");
-  return instance;
-}
-
-std::unique_ptr<Camera> openAravisFromUri(const CameraUri& uri) {
+std::unique_ptr<Camera> openAravisFromUri(const DeviceUri& uri) {
   AravisOptions options;
   if (auto it = uri.query.find("packetSize"); it != uri.query.end()) {
     int value = 0;
@@ -30,22 +24,13 @@ std::unique_ptr<Camera> openAravisFromUri(const CameraUri& uri) {
 
 }  // namespace
 
-CameraUri parseCameraUri(std::string_view text) { return registry().parse(text); }
-
-void registerCameraBackend(CameraBackend backend) { registry().add(std::move(backend)); }
-bool registerCameraBackendIfAbsent(CameraBackend backend) { return registry().addOnce(std::move(backend)); }
-
-void registerBuiltinBackends() {
-  registry().addOnce(CameraBackend{
+void registerAravisBackend() {
+  backendRegistry<Camera>().addOnce(CameraBackend{
       .scheme = "aravis",
       .queryKeys = {"packetSize"},
       .description = "aravis:<device-id>[?packetSize=<bytes>]  GenICam camera via Aravis",
       .factory = openAravisFromUri,
   });
 }
-
-std::vector<std::string> cameraSchemes() { return registry().schemes(); }
-
-std::unique_ptr<Camera> openCamera(std::string_view text) { return registry().open(text); }
 
 }  // namespace lfi

@@ -1,4 +1,4 @@
-#include "lfi/sim/camera_sensor_model.h"
+#include "lfi/sim/devices/camera_sensor_model.h"
 
 #include "lfi/core/error.h"
 #include "lfi/core/image.h"

@@ -1,0 +1,24 @@
+#pragma once
+// The camera registry: camera backends by URI scheme (backend_registry.h has
+// the URI grammar and the rules). Schemes: aravis:<device-id> (lfi_drivers,
+// docs/camera.md), sim:<scene-file> (lfi_sim).
+
+#include "lfi/drivers/backend_registry.h"
+#include "lfi/drivers/camera.h"
+
+#include <memory>
+#include <string_view>
+
+namespace lfi {
+
+using CameraBackend = DeviceBackend<Camera>;
+
+template <>
+BackendRegistry<Camera>& backendRegistry<Camera>();
+
+// Parses `uri`, checks its query keys against the backend's and runs the
+// factory. An unknown scheme throws Errc::Config listing the known schemes; an
+// unknown key throws Errc::Config listing the accepted keys.
+inline std::unique_ptr<Camera> openCamera(std::string_view uri) { return backendRegistry<Camera>().open(uri); }
+
+}  // namespace lfi
