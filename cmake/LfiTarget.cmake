@@ -1,4 +1,5 @@
-# Compiler flags shared by every lfi target.
+# Compiler flags shared by every lfi target. Linked as a build-only dependency:
+# an installed lfi library does not impose them on its users.
 add_library(lfi_options INTERFACE)
 target_compile_options(lfi_options INTERFACE -Wall -Wextra -Wpedantic -Wshadow -Wnon-virtual-dtor
                        -Wconversion-null -Wno-unused-parameter
@@ -20,12 +21,19 @@ if(LFI_SANITIZE)
   target_link_options(lfi_options INTERFACE -fsanitize=address,undefined)
 endif()
 
-# lfi_library(<name> SOURCES ... DEPS ...): one folder, one library, public
-# headers in <folder>/include/lfi/<name>/.
+# lfi_library(<name> SOURCES ... PUBLIC_DEPS ... PRIVATE_DEPS ...): one folder,
+# one library lfi_<name> (lfi::<name>), public headers in
+# <folder>/include/lfi/<name>/. `cmake --install` installs the library, its
+# headers and its target in the lfi CMake package (cmake/LfiInstall.cmake).
 function(lfi_library name)
   cmake_parse_arguments(ARG "" "" "SOURCES;PUBLIC_DEPS;PRIVATE_DEPS" ${ARGN})
   add_library(lfi_${name} ${ARG_SOURCES})
   add_library(lfi::${name} ALIAS lfi_${name})
-  target_include_directories(lfi_${name} PUBLIC ${CMAKE_CURRENT_SOURCE_DIR}/include)
-  target_link_libraries(lfi_${name} PUBLIC ${ARG_PUBLIC_DEPS} PRIVATE lfi_options ${ARG_PRIVATE_DEPS})
+  set_target_properties(lfi_${name} PROPERTIES EXPORT_NAME ${name})
+  target_include_directories(lfi_${name} PUBLIC $<BUILD_INTERFACE:${CMAKE_CURRENT_SOURCE_DIR}/include>
+                                                $<INSTALL_INTERFACE:${CMAKE_INSTALL_INCLUDEDIR}>)
+  target_link_libraries(lfi_${name} PUBLIC ${ARG_PUBLIC_DEPS} PRIVATE $<BUILD_INTERFACE:lfi_options>
+                        ${ARG_PRIVATE_DEPS})
+  install(TARGETS lfi_${name} EXPORT lfiTargets)
+  install(DIRECTORY ${CMAKE_CURRENT_SOURCE_DIR}/include/ DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})
 endfunction()
