@@ -8,59 +8,38 @@
 #include "lfi/sim/devices/sim_camera.h"
 
 #include "lfi_test_support.h"
+#include "scene_text.h"
+#include "test_folder.h"
 
 #include <gtest/gtest.h>
 #include <opencv2/imgproc.hpp>
-#include <unistd.h>
 
 #include <algorithm>
 #include <cstdlib>
 #include <filesystem>
-#include <fstream>
 #include <thread>
 
 namespace {
 
-namespace fs = std::filesystem;
 using namespace lfi;
+using lfi::testing_support::cameraSceneText;
+using lfi::testing_support::lensObject;
+using lfi::testing_support::TestFolder;
 using lfi::testing_support::throwsError;
 
 // The reference lens (N-BK7, R = 51.5 mm, Ø25.4) under a 0.243x telecentric
 // camera (object NA 0.0152, 0.5 mm object pixels); a lenticular display of the
 // default class 30 mm below the lens, 640 x 400 pixels (48 x 30 mm).
 std::string sceneText(bool inclusion) {
-  std::string text = R"(format = "lfi-scene"
-version = 1
-[render]
-samples_per_pixel = 8
-seed = 5
-[camera]
-focal_length_mm = 20.03
-image_distance_mm = 24.9075
-stop_diameter_mm = 0.609
-pixel_pitch_mm = 0.1215
-width = 56
-height = 56
-position_mm = [0, 0, 102.5]
-rotation_deg = [180, 0, 0]
-[camera_sensor]
-full_well_e = 10500
-read_noise_e = 2.4
-bit_depth = 12
-[display]
+  std::string text =
+      cameraSceneText({.samplesPerPixel = 8, .seed = 5, .focalLength_mm = 20.03, .imageDistance_mm = 24.9075,
+                       .stopDiameter_mm = 0.609, .pixelPitch_mm = 0.1215, .width_px = 56, .height_px = 56,
+                       .positionZ_mm = 102.5, .fullWell_e = 10500, .readNoise_e = 2.4, .bitDepth = 12}) +
+      R"([display]
 position_mm = [0, 0, -30]
 panel_width_px = 640
 panel_height_px = 400
-[[object]]
-name = "lens"
-shape = "lens"
-front_radius_mm = 51.5
-back_radius_mm = -51.5
-centre_thickness_mm = 5
-diameter_mm = 25.4
-material = "dielectric"
-ior = 1.5168
-)";
+)" + lensObject({.radius_mm = 51.5, .centreThickness_mm = 5, .diameter_mm = 25.4, .ior = 1.5168});
   if (inclusion)
     text += R"([[object]]
 name = "particle"
@@ -111,12 +90,9 @@ protected:
   void SetUp() override {
     registerDriverBackends();
     sim::registerSimBackends();  // camera, display and light field capture
-    dir_ = fs::path(testing::TempDir()) / ("lfi_controller_" + std::to_string(::getpid()));
-    fs::create_directories(dir_);
-    std::ofstream(dir_ / "intact.toml") << sceneText(false);
-    std::ofstream(dir_ / "particle.toml") << sceneText(true);
+    dir_.write("intact.toml", sceneText(false));
+    dir_.write("particle.toml", sceneText(true));
   }
-  void TearDown() override { fs::remove_all(dir_); }
 
   std::string uri(const char* scene) const { return "sim:" + (dir_ / scene).string(); }
   std::string captureUri() const { return uri("intact.toml") + "?spatial=16&angular=16&spp=32"; }
@@ -156,7 +132,7 @@ protected:
     return rig;
   }
 
-  fs::path dir_;
+  TestFolder dir_{"lfi-controller"};
 };
 
 // registerSimBackends() may be called again and again, also when another

@@ -4,7 +4,7 @@
 // locally for the same frame id.
 //
 // Every GigE Vision device listens on UDP port 3956 of its address, so the
-// fixture holds /tmp/lfi-fake-gv-camera.lock (shared with aravis_camera_test)
+// fixture holds /tmp/lfi-fake-gv-camera.lock (shared with the aravis_*_test files)
 // while its server runs.
 
 #include "lfi/drivers/aravis/aravis_camera.h"
@@ -13,6 +13,8 @@
 #include "aravis_discovery.h"
 #include "gige_device_process.h"
 #include "lfi_test_support.h"
+#include "scene_text.h"
+#include "test_folder.h"
 
 #include <fcntl.h>
 #include <gtest/gtest.h>
@@ -24,7 +26,6 @@
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
-#include <fstream>
 #include <string>
 #include <thread>
 #include <vector>
@@ -41,6 +42,10 @@ using lfi::testing_support::gigeDeviceAnswers;
 using lfi::testing_support::GigeDeviceProcess;
 using lfi::testing_support::LoopbackGigeLock;
 using lfi::testing_support::missingBlockIds;
+using lfi::testing_support::cameraSceneText;
+using lfi::testing_support::kBackLightObject;
+using lfi::testing_support::lensObject;
+using lfi::testing_support::TestFolder;
 namespace fs = std::filesystem;
 
 double secondsSince(Clock::time_point t0) {
@@ -48,42 +53,10 @@ double secondsSince(Clock::time_point t0) {
 }
 
 // A small bench: the reference lens over a Lambertian back light, 96 x 64 px.
-constexpr const char* kScene = R"(format = "lfi-scene"
-version = 1
-[render]
-samples_per_pixel = 2
-seed = 7
-[camera]
-focal_length_mm = 100
-image_distance_mm = 200
-stop_diameter_mm = 2
-pixel_pitch_mm = 0.625
-width = 96
-height = 64
-position_mm = [0, 0, 200]
-rotation_deg = [180, 0, 0]
-[camera_sensor]
-full_well_e = 10000
-read_noise_e = 3
-bit_depth = 12
-electrons_per_unit_per_us = 1.0
-[[object]]
-name = "lens"
-shape = "lens"
-front_radius_mm = 100
-back_radius_mm = -100
-centre_thickness_mm = 7
-diameter_mm = 40
-material = "dielectric"
-ior = 1.5
-[[object]]
-name = "back light"
-shape = "rectangle"
-size_mm = [400, 400]
-position_mm = [0, 0, -100]
-emitter = "lambertian"
-radiance = 1
-)";
+const std::string kScene =
+    cameraSceneText({.samplesPerPixel = 2, .seed = 7, .pixelPitch_mm = 0.625, .width_px = 96, .height_px = 64,
+                     .fullWell_e = 10000, .readNoise_e = 3, .bitDepth = 12, .electronsPerUnitPerUs = 1.0}) +
+    lensObject({.radius_mm = 100, .centreThickness_mm = 7, .diameter_mm = 40, .ior = 1.5}) + kBackLightObject;
 
 bool answersGvcp() { return gigeDeviceAnswers(); }
 
@@ -115,10 +88,7 @@ class ServedCameraTest : public ::testing::Test {
  protected:
   void SetUp() override {
     if (::access(LFI_EXECUTABLE, X_OK) != 0) LFI_SKIP_WITHOUT_TOOL(LFI_EXECUTABLE << " is not built");
-    dir_ = fs::temp_directory_path() / ("lfi-served-camera-" + std::to_string(::getpid()));
-    fs::create_directories(dir_);
-    scene_ = dir_ / "served.toml";
-    std::ofstream(scene_) << kScene;
+    scene_ = dir_.write("served.toml", kScene);
     lock_ = std::make_unique<LoopbackGigeLock>();
     registerDriverBackends();
     server_ = std::make_unique<ServedCamera>(scene_, "LFIS" + std::to_string(::getpid() % 100000));
@@ -128,8 +98,6 @@ class ServedCameraTest : public ::testing::Test {
   void TearDown() override {
     server_.reset();
     lock_.reset();
-    std::error_code ignored;
-    fs::remove_all(dir_, ignored);
   }
 
   std::unique_ptr<Camera> openServed() { return openCamera("aravis:" + server_->id()); }
@@ -184,7 +152,8 @@ class ServedCameraTest : public ::testing::Test {
     EXPECT_GT(cv::mean(frame.image)[0], 1.0);
   }
 
-  fs::path dir_, scene_;
+  TestFolder dir_{"lfi-served-camera"};
+  fs::path scene_;
   std::unique_ptr<LoopbackGigeLock> lock_;
   std::unique_ptr<ServedCamera> server_;
 };

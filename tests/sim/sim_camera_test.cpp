@@ -5,9 +5,10 @@
 #include "lfi/drivers/camera_registry.h"
 #include "lfi/sim/devices/sim_camera.h"
 #include "lfi_test_support.h"
+#include "scene_text.h"
+#include "test_folder.h"
 
 #include <gtest/gtest.h>
-#include <unistd.h>
 
 #include <chrono>
 #include <cmath>
@@ -20,50 +21,23 @@ namespace lfi::sim {
 namespace {
 
 using namespace std::chrono_literals;
+using testing_support::cameraSceneText;
+using testing_support::kBackLightObject;
+using testing_support::TestFolder;
 using testing_support::throwsError;
 namespace fs = std::filesystem;
 
 // The camera looks straight at a Lambertian back light of radiance 1 that fills
 // its field: every pixel's radiance is exactly 1.
-constexpr const char* kUniformScene = R"(format = "lfi-scene"
-version = 1
-[render]
-samples_per_pixel = 1
-seed = 3
-[camera]
-focal_length_mm = 100
-image_distance_mm = 200
-stop_diameter_mm = 2
-pixel_pitch_mm = 0.5
-width = 64
-height = 64
-position_mm = [0, 0, 200]
-rotation_deg = [180, 0, 0]
-[camera_sensor]
-full_well_e = 20000
-read_noise_e = 5
-bit_depth = 12
-electrons_per_unit_per_us = 2.0
-[[object]]
-name = "back light"
-shape = "rectangle"
-size_mm = [400, 400]
-position_mm = [0, 0, -100]
-emitter = "lambertian"
-radiance = 1
-)";
+const std::string kUniformScene =
+    cameraSceneText({.samplesPerPixel = 1, .seed = 3, .pixelPitch_mm = 0.5, .width_px = 64, .height_px = 64,
+                     .fullWell_e = 20000, .readNoise_e = 5, .bitDepth = 12, .electronsPerUnitPerUs = 2.0}) +
+    kBackLightObject;
 
 class SimCameraTest : public ::testing::Test {
  protected:
   void SetUp() override {
-    dir_ = fs::temp_directory_path() / ("lfi-sim-camera-" + std::to_string(::getpid()));
-    fs::create_directories(dir_);
-    scene_ = dir_ / "uniform.toml";
-    std::ofstream(scene_) << kUniformScene;
-  }
-  void TearDown() override {
-    std::error_code ignored;
-    fs::remove_all(dir_, ignored);
+    scene_ = dir_.write("uniform.toml", kUniformScene);
   }
 
   static CameraSettings mono16(double exposure_us, double gain_dB = 0) {
@@ -93,7 +67,8 @@ class SimCameraTest : public ::testing::Test {
     return {mean[0], stddev[0]};
   }
 
-  fs::path dir_, scene_;
+  TestFolder dir_{"lfi-sim-camera"};
+  fs::path scene_;
 };
 
 TEST_F(SimCameraTest, TheSceneIsUniform) {

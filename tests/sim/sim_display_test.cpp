@@ -12,15 +12,15 @@
 #include "lfi/sim/devices/sim_bench.h"
 #include "lfi/sim/devices/sim_camera.h"
 #include "lfi_test_support.h"
+#include "scene_text.h"
+#include "test_folder.h"
 
 #include <fmt/format.h>
 #include <gtest/gtest.h>
-#include <unistd.h>
 
 #include <atomic>
 #include <cmath>
 #include <filesystem>
-#include <fstream>
 #include <numbers>
 #include <random>
 #include <string>
@@ -30,51 +30,25 @@ namespace lfi::sim {
 namespace {
 
 using namespace std::chrono_literals;
+using testing_support::cameraSceneText;
+using testing_support::TestFolder;
 using testing_support::throwsError;
 namespace fs = std::filesystem;
 
 // A telecentric camera (magnification 1, 16 mm field) looking down at a display
 // in the plane z = 0; `display` is the [display] table's body.
 std::string sceneText(const std::string& display) {
-  return R"(format = "lfi-scene"
-version = 1
-[render]
-samples_per_pixel = 16
-seed = 5
-[camera]
-focal_length_mm = 100
-image_distance_mm = 200
-stop_diameter_mm = 2
-pixel_pitch_mm = 0.25
-width = 64
-height = 64
-position_mm = [0, 0, 200]
-rotation_deg = [180, 0, 0]
-[camera_sensor]
-full_well_e = 20000
-read_noise_e = 2
-bit_depth = 12
-electrons_per_unit_per_us = 2.0
-[display]
-)" + display;
+  return cameraSceneText({.samplesPerPixel = 16, .seed = 5, .pixelPitch_mm = 0.25, .width_px = 64, .height_px = 64,
+                          .fullWell_e = 20000, .readNoise_e = 2, .bitDepth = 12, .electronsPerUnitPerUs = 2.0}) +
+         "[display]\n" + display;
 }
 
 class SimDisplayTest : public ::testing::Test {
  protected:
   void SetUp() override {
     registerSimBackends();
-    dir_ = fs::temp_directory_path() / ("lfi-sim-display-" + std::to_string(::getpid()));
-    fs::create_directories(dir_);
   }
-  void TearDown() override {
-    std::error_code ignored;
-    fs::remove_all(dir_, ignored);
-  }
-  fs::path write(const std::string& name, const std::string& text) {
-    const fs::path file = dir_ / name;
-    std::ofstream(file) << text;
-    return file;
-  }
+  fs::path write(const std::string& name, const std::string& text) { return dir_.write(name, text); }
   static std::string uri(const fs::path& file) { return "sim:" + file.string(); }
   // A camera and a 400 x 300 mono display of brightness 1 on one bench.
   std::pair<std::unique_ptr<Camera>, std::unique_ptr<Display>> openMonoBench() {
@@ -83,7 +57,7 @@ class SimDisplayTest : public ::testing::Test {
     return {openCamera(uri(file)), openDisplay(uri(file))};
   }
 
-  fs::path dir_;
+  TestFolder dir_{"lfi-sim-display"};
 };
 
 // A scene file whose path holds the URI's delimiters opens percent-encoded, and
