@@ -1,0 +1,161 @@
+#pragma once
+// The fixture of the Aravis backend's tests (aravis_*_test.cpp): Aravis's own
+// simulated GigE Vision camera (arv-fake-gv-camera-0.8, Debian package
+// aravis-tools) on loopback: the real driver code path, GVCP control and GVSP
+// streaming over UDP.
+//
+// Every GigE Vision device listens on UDP port 3956, so two fake cameras on
+// 127.0.0.1 would answer each other's requests: the fixture holds an exclusive
+// lock file while its camera runs, which serialises these tests across the
+// processes `ctest -j` starts. Each camera gets a serial unique to the process.
+
+#include "lfi/drivers/aravis/aravis_camera.h"
+#include "lfi/drivers/camera_registry.h"
+
+#include "gige_device_process.h"
+#include "lfi_test_support.h"
+
+#include <gtest/gtest.h>
+#include <signal.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cstdlib>
+#include <filesystem>
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <thread>
+#include <utility>
+#include <vector>
+
+namespace lfi {
+
+using namespace std::chrono_literals;
+using testing_support::throwsError;
+using Clock = std::chrono::steady_clock;
+using lfi::testing_support::gigeDeviceAnswers;
+using lfi::testing_support::GigeDeviceProcess;
+using lfi::testing_support::gigeWriteRegister;
+using lfi::testing_support::kHeartbeatTimeoutRegister;
+using lfi::testing_support::LoopbackGigeLock;
+
+inline constexpr const char* kFakeCameraBinary = "arv-fake-gv-camera-0.8";
+
+inline std::string findInPath(const std::string& name) {
+  const char* path = std::getenv("PATH");
+  std::string dirs = path != nullptr ? path : "/usr/bin:/bin";
+  std::size_t start = 0;
+  while (start <= dirs.size()) {
+    const std::size_t end = dirs.find(':', start);
+    const std::filesystem::path candidate =
+        std::filesystem::path(dirs.substr(start, end == std::string::npos ? std::string::npos : end - start)) / name;
+    if (::access(candidate.c_str(), X_OK) == 0) return candidate.string();
+    if (end == std::string::npos) break;
+    start = end + 1;
+  }
+  return {};
+}
+
+inline double secondsSince(Clock::time_point t0) {
+  return std::chrono::duration<double>(Clock::now() - t0).count();
+}
+
+// One arv-fake-gv-camera-0.8 process serving on 127.0.0.1.
+class FakeGvCamera {
+ public:
+  explicit FakeGvCamera(std::string serial) : serial_(std::move(serial)) {}
+
+  std::string id() const { return "Aravis-Fake-" + serial_; }
+  const std::string& serial() const { return serial_; }
+
+  // Starts the process and waits (up to 5 s) until it answers GVCP.
+  // genicam: a GenICam description to serve instead of the built-in one (it
+  // must address the fake device's registers).
+  void start(const std::string& binary, int lostPacketsPerThousand = 0, const std::string& genicam = {},
+             const std::string& address = "127.0.0.1") {
+    std::vector<std::string> args = {binary, "-i", address, "-s", serial_};
+    if (lostPacketsPerThousand > 0) {
+      args.push_back("-r");
+      args.push_back(std::to_string(lostPacketsPerThousand));
+    }
+    if (!genicam.empty()) {
+      args.push_back("-g");
+      args.push_back(genicam);
+    }
+    process_ = std::make_unique<GigeDeviceProcess>(args, 5s, /*quietStderr=*/true, address);
+    address_ = address;
+    // The fake device drops a controller that has not sent a heartbeat for 3 s (its default), as a real one does;
+    // a client process stalled that long on a loaded CI host would lose its stream. 10 s, as `lfi serve-camera`.
+    setHeartbeatTimeout(10s);
+  }
+
+  // Sets the device's heartbeat timeout (GigE Vision bootstrap register 0x0938); no controller may hold it.
+  void setHeartbeatTimeout(std::chrono::milliseconds timeout) {
+    if (!gigeWriteRegister(kHeartbeatTimeoutRegister, static_cast<std::uint32_t>(timeout.count()), address_))
+      throw std::runtime_error("the fake device at " + address_ + " did not take its heartbeat timeout");
+  }
+
+  static bool answersGvcp() { return gigeDeviceAnswers(); }
+
+  // SIGKILL: the device vanishes without a word, like a pulled cable.
+  void kill() { process_.reset(); }
+
+  // SIGSTOP, then SIGCONT after `duration`: the device stalls and comes back.
+  void stall(std::chrono::milliseconds duration) {
+    ::kill(process_->pid(), SIGSTOP);
+    std::this_thread::sleep_for(duration);
+    ::kill(process_->pid(), SIGCONT);
+  }
+
+ private:
+  std::string serial_;
+  std::string address_;
+  std::unique_ptr<GigeDeviceProcess> process_;
+};
+
+class AravisCameraTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    binary_ = findInPath(kFakeCameraBinary);
+    if (binary_.empty())
+      LFI_SKIP_WITHOUT_TOOL(kFakeCameraBinary << " not found in PATH: install Debian's aravis-tools "
+                                              << "(scripts/install-deps.sh) to run the GigE Vision loopback tests");
+    lock_ = std::make_unique<LoopbackGigeLock>();
+    registerDriverBackends();
+    fake_ = std::make_unique<FakeGvCamera>("LFI" + std::to_string(::getpid()));
+    fake_->start(binary_);
+  }
+
+  void TearDown() override {
+    fake_.reset();
+    lock_.reset();
+  }
+
+  std::unique_ptr<Camera> openFake() { return openCamera("aravis:" + fake_->id()); }
+
+  // Replaces the fake device by one serving the GenICam description `xml`
+  // (serial `prefix` + pid), and opens it.
+  std::unique_ptr<Camera> openFakeWith(const std::string& prefix, const std::filesystem::path& xml) {
+    fake_.reset();
+    fake_ = std::make_unique<FakeGvCamera>(prefix + std::to_string(::getpid()));
+    fake_->start(binary_, 0, xml.string());
+    return openFake();
+  }
+
+  // A small free-running Mono8 set-up that streams fast on loopback.
+  static CameraSettings smallSettings() {
+    CameraSettings s;
+    s.exposure_us = 1000;
+    s.roiWidth_px = 256;
+    s.roiHeight_px = 256;
+    s.frameRate_hz = 200;
+    return s;
+  }
+
+  std::string binary_;
+  std::unique_ptr<LoopbackGigeLock> lock_;
+  std::unique_ptr<FakeGvCamera> fake_;
+};
+
+}  // namespace lfi
