@@ -1,7 +1,7 @@
 #pragma once
 // The lfi light field display's USB vendor protocol, version 1.0
 // (docs/usb-display-protocol.md is the normative text; this header is its code).
-// Shared by the host backend (usb_display.cpp) and the emulated device of the tests,
+// Shared by the host backend (drivers/src/usb/) and the emulated device of the tests,
 // so both sides encode and check the same bytes. Every multi-byte field is
 // little-endian; every length is bounded by a constant below, and the decoders
 // reject anything outside those bounds with Errc::Device naming the field.
