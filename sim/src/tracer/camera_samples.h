@@ -4,7 +4,7 @@
 // samples and every sample's stratified Fresnel choices. A camera sample is:
 // its random stream, two draws as pairs (pixel area, stop), the jittered strata,
 // Shirley's concentric map of the stop draw and the ray of sight of
-// TelecentricCamera::RayMap. render.cpp's concentricDisc() and this batch
+// TelecentricCamera::RayMap. path_walk.cpp's concentricDisc() and this batch
 // share the disc arithmetic below, so both give the same bits.
 
 #include "lfi/sim/render.h"

@@ -1,5 +1,5 @@
 #pragma once
-// Internal to lfi_sim: the light field emitter (SPEC §2) for a packet's lanes
+// Internal to lfi_sim: the light field emitter (docs/architecture.md) for a packet's lanes
 // at once. Where each lane's ray meets the emitter's plane and from which
 // direction — the hit point and the direction back towards the sensor in the
 // plane frame, its disc position and the spatial coordinates — is computed for
