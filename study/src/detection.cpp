@@ -1,0 +1,248 @@
+// Detection: where each defect is on the camera (ground truth from the
+// geometry), and the declared criterion that judges a scene's frame against
+// the intact lens's (contrast-to-noise per defect, verdicts, flagged regions).
+
+#include "study_internal.h"
+
+#include "lfi/sim/render.h"
+
+#include <opencv2/imgproc.hpp>
+
+#include <cmath>
+
+namespace lfi::study::detail {
+
+namespace fs = std::filesystem;
+using sim::Object;
+using sim::Solid;
+
+namespace {
+
+cv::Mat defectMask(const sim::Scene& scene, const sim::TelecentricCamera& camera, const Solid& marker) {
+  cv::Mat mask(camera.height, camera.width, CV_8UC1, cv::Scalar(0));
+  sim::IntervalList list;
+  for (int j = 0; j < camera.height; ++j)
+    for (int i = 0; i < camera.width; ++i) {
+      const auto path = sim::refractionPath(scene, camera.ray(i, j, {0.5, 0.5}, {0, 0}));
+      for (size_t k = 0; k + 1 < path.size() && !mask.at<uchar>(j, i); ++k) {
+        const Vec3 seg = path[k + 1] - path[k];
+        const double len = seg.length();
+        if (len <= 0) continue;
+        marker.intervals({path[k], seg / len}, list);
+        // A path that ends on the defect (an absorber) or turns on its surface
+        // (total internal reflection off a bubble) touches it only at a
+        // segment's end, where rounding decides: a touch within the tracer's
+        // own step off a surface counts.
+        constexpr double kTouch = sim::Scene::kTMin;
+        for (int m = 0; m < list.size(); ++m)
+          if (list[m].exit.t > -kTouch && list[m].enter.t < len + kTouch) mask.at<uchar>(j, i) = 255;
+      }
+    }
+  return mask;
+}
+
+}  // namespace
+
+GroundTruth traceGroundTruth(const Bench& bench, const std::vector<SceneSpec>& specs,
+                             const sim::TelecentricCamera& camera) {
+  GroundTruth truth;
+  for (const SceneSpec& spec : specs) {
+    const std::vector<Object> part = partObjects(bench, spec);
+    if (spec.name == "intact")
+      truth.lens = defectMask(sim::Scene(part), camera, *std::get<std::shared_ptr<const Solid>>(part[0].shape));
+    const sim::Scene scene(part);
+    cv::Mat all = cv::Mat::zeros(camera.height, camera.width, CV_8UC1);
+    std::vector<cv::Mat> masks;
+    for (const Defect& defect : spec.defects) {
+      cv::Mat m = defectMask(scene, camera, *defect.marker);
+      if (cv::countNonZero(m) == 0) {
+        const sim::Bounds b = defect.marker->bounds();
+        const Vec2 p = camera.project((b.lo + b.hi) * 0.5);
+        const cv::Point px(static_cast<int>(p.x), static_cast<int>(p.y));
+        if (px.inside(cv::Rect(0, 0, m.cols, m.rows))) m.at<uchar>(px) = 255;
+      }
+      cv::dilate(m, m, cv::Mat::ones(3, 3, CV_8U));
+      masks.push_back(m);
+      all |= m;
+    }
+    truth.masks.push_back(std::move(masks));
+    truth.allDefects.push_back(all);
+  }
+  return truth;
+}
+
+namespace {
+
+double robustSigma(const cv::Mat& values, const cv::Mat& exclude) {
+  std::vector<float> v;
+  for (int r = 0; r < values.rows; ++r)
+    for (int c = 0; c < values.cols; ++c)
+      if (exclude.empty() || !exclude.at<uchar>(r, c)) v.push_back(values.at<float>(r, c));
+  if (v.size() < 16) return 0;
+  auto median = [](std::vector<float> x) {
+    std::nth_element(x.begin(), x.begin() + x.size() / 2, x.end());
+    return static_cast<double>(x[x.size() / 2]);
+  };
+  const double m = median(v);
+  for (float& x : v) x = static_cast<float>(std::abs(x - m));
+  return 1.4826 * median(v);
+}
+
+// Flagged regions (3x3 mean of z above kFlagSigma of its own spread) away from the defects'
+// masks, split by cause. With common random numbers a pixel's rendered
+// radiance is bit-identical to the intact lens's unless some light path of it
+// touched the defect: a flagged region where nothing changed is a false
+// positive (the camera's noise alone); one where the radiance changed is a
+// secondary image of the defect (light that met the defect and landed
+// elsewhere, e.g. after internal reflection), real but away from it.
+struct FlaggedRegions {
+  int falsePositives = 0;
+  int secondary = 0;
+};
+
+FlaggedRegions flaggedRegions(const cv::Mat& z, double sigma, const cv::Mat& defects, const cv::Mat& changed) {
+  // The mean over the 3x3 neighbours inside the frame (9, 6 at an edge, 4 in a
+  // corner): its sigma is sigma / sqrt(n). A reflected border would count
+  // pixels twice and raise the spread of edge means above the threshold's
+  // assumption (many more false positives along the frame's edge).
+  cv::Mat sum3, count3;
+  cv::boxFilter(z, sum3, CV_32F, {3, 3}, {-1, -1}, false, cv::BORDER_CONSTANT);
+  cv::boxFilter(cv::Mat::ones(z.size(), CV_32F), count3, CV_32F, {3, 3}, {-1, -1}, false, cv::BORDER_CONSTANT);
+  cv::Mat standardised;
+  cv::sqrt(count3, count3);
+  cv::divide(sum3, count3, standardised);  // (n mean) / sqrt(n) = mean / (1 / sqrt(n)), unit variance
+  const cv::Mat flagged = cv::abs(standardised) > kFlagSigma * sigma;
+  cv::Mat labels;
+  const int n = cv::connectedComponents(flagged, labels, 8, CV_32S);
+  std::vector<char> onDefect(static_cast<size_t>(n), 0), onChange(static_cast<size_t>(n), 0);
+  for (int r = 0; r < labels.rows; ++r)
+    for (int c = 0; c < labels.cols; ++c) {
+      const auto l = static_cast<size_t>(labels.at<int>(r, c));
+      onDefect[l] |= defects.at<uchar>(r, c) ? 1 : 0;
+      onChange[l] |= changed.at<uchar>(r, c) ? 1 : 0;
+    }
+  FlaggedRegions out;
+  for (size_t l = 1; l < static_cast<size_t>(n); ++l) {
+    if (onDefect[l]) continue;
+    (onChange[l] ? out.secondary : out.falsePositives) += 1;
+  }
+  return out;
+}
+
+cv::Mat toFloat(const cv::Mat& frame) {
+  cv::Mat f;
+  frame.convertTo(f, CV_32F);
+  return f;
+}
+
+}  // namespace
+
+Evaluation evaluate(const Bench& bench, const Illumination& light, const std::vector<SceneSpec>& specs,
+                    const GroundTruth& truth, const sim::TelecentricCamera& camera, sim::CameraSensorModel sensor,
+                    sim::RenderOptions ro, std::uint64_t seed, Progress& progress, double renderUnits,
+                    const fs::path* imagesDir, Overwrite overwrite) {
+  auto renderScene = [&](const SceneSpec& spec, std::uint64_t mcSeed, const std::string& label) {
+    std::vector<Object> objects = partObjects(bench, spec);
+    objects.push_back(backlight(bench, light));
+    const sim::Scene scene(std::move(objects));
+    ro.seed = mcSeed;
+    ro.progress = progress.step(light.setup + ": " + label, renderUnits);
+    return sim::render(scene, camera, ro);
+  };
+  // Common random numbers: every scene of an illumination is rendered with the
+  // same seed, so paths that never touch a defect are identical and the Monte
+  // Carlo noise of the simulation cancels in every difference; what remains
+  // is the camera's own noise, drawn independently for every frame, as on a
+  // real bench. The intact reference sets the exposure; the same radiance
+  // with a second noise draw is the false-positive control.
+  const cv::Mat intact = renderScene(specs[0], seed, "intact");
+  cv::Mat smooth;
+  cv::blur(intact, smooth, {3, 3});
+  double brightest = 0;
+  cv::minMaxLoc(smooth, nullptr, &brightest);
+  sensor.exposeFor(brightest, bench.camera.exposureFill);
+  const cv::Mat intactFrame = toFloat(sensor.capture(intact, seed * 7919 + 1, ro.threads));
+  const cv::Mat controlFrame = toFloat(sensor.capture(intact, seed * 7919 + 2, ro.threads));
+
+  // Per-pixel noise expected from the sensor model for a difference of two
+  // frames; differences are judged in units of it (z).
+  const double dnPerUnit = sensor.electronsPerUnit * sensor.gain / sensor.fullWell_e * sensor.maxDigitalNumber();
+  auto zScore = [&](const cv::Mat& frame, const cv::Mat& radiance) {
+    cv::Mat z(frame.size(), CV_32FC1);
+    for (int r = 0; r < z.rows; ++r)
+      for (int c = 0; c < z.cols; ++c) {
+        const double a = sensor.noiseDn(intact.at<float>(r, c) * dnPerUnit);
+        const double b = sensor.noiseDn(radiance.at<float>(r, c) * dnPerUnit);
+        z.at<float>(r, c) =
+            static_cast<float>((frame.at<float>(r, c) - intactFrame.at<float>(r, c)) / std::sqrt(a * a + b * b));
+      }
+    return z;
+  };
+  Evaluation out;
+  {
+    const cv::Mat bright = smooth > 0.25 * brightest;
+    out.intactLitFraction =
+        static_cast<double>(cv::countNonZero(bright & truth.lens)) / std::max(1, cv::countNonZero(truth.lens));
+  }
+  if (imagesDir) {
+    // How large the Monte Carlo noise of one rendering is against the camera's
+    // noise, both in DN, where the intact lens is lit: from a second,
+    // independent rendering of the intact lens.
+    const cv::Mat independent = renderScene(specs[0], seed + 99, "intact (independent)");
+    const cv::Mat lit = intact > 0.05 * brightest;
+    const double mcSigma = robustSigma(cv::Mat((independent - intact) * dnPerUnit), ~lit) / std::sqrt(2.0);
+    const double litMean = cv::mean(intact, lit)[0] * dnPerUnit;
+    out.noise = {{"monte_carlo_dn", mcSigma},
+                 {"sensor_dn", sensor.noiseDn(litMean)},
+                 {"mean_lit_signal_dn", litMean},
+                 {"common_random_numbers", true}};
+  }
+
+  for (const SceneSpec& spec : specs) {
+    const bool isIntact = spec.name == "intact";
+    const cv::Mat radiance = isIntact ? intact : renderScene(spec, seed, spec.name);
+    const auto index = static_cast<std::uint64_t>(&spec - specs.data());
+    const cv::Mat frame =
+        isIntact ? controlFrame : toFloat(sensor.capture(radiance, seed * 7919 + 100 * (index + 1), ro.threads));
+    const cv::Mat diff = zScore(frame, radiance);
+    const std::vector<cv::Mat>& masks = truth.masks[index];
+    const cv::Mat& allDefects = truth.allDefects[index];
+    // z has unit variance where the camera's noise is all there is; a larger
+    // spread raises the bar accordingly.
+    const double sigma = std::max(1.0, robustSigma(diff, allDefects));
+    auto& sceneOut = out.scenes[spec.name];
+    sceneOut["defects"] = nlohmann::ordered_json::object();
+    for (size_t k = 0; k < spec.defects.size(); ++k) {
+      const double meanSq = cv::mean(diff.mul(diff), masks[k])[0];
+      const double cnr = std::sqrt(std::max(0.0, meanSq - sigma * sigma)) / sigma;
+      const char* verdict = cnr >= kDetectedCnr ? "detected" : cnr >= kWeakCnr ? "weak" : "missed";
+      sceneOut["defects"][spec.defects[k].name] = {
+          {"verdict", verdict}, {"cnr", cnr}, {"pixels", cv::countNonZero(masks[k])}};
+    }
+    cv::Mat changed = radiance != intact;
+    cv::dilate(changed, changed, cv::Mat::ones(3, 3, CV_8U));
+    const FlaggedRegions regions = flaggedRegions(diff, sigma, allDefects, changed);
+    sceneOut["false_positives"] = regions.falsePositives;
+    sceneOut["secondary_regions"] = regions.secondary;
+
+    if (imagesDir) writeSceneImages(*imagesDir, spec, light, camera, sensor, frame, diff, overwrite);
+  }
+  return out;
+}
+
+nlohmann::ordered_json criterionJson() {
+  return {{"cnr", "sqrt(max(0, mean over the defect mask of z^2 - s^2)) / s; z = (frame - intact frame) "
+                  "/ per-pixel sensor noise of that difference; s = robust std of z outside the masks, "
+                  "at least 1"},
+          {"detected_at_least", kDetectedCnr},
+          {"weak_at_least", kWeakCnr},
+          {"flag_sigma", kFlagSigma},
+          {"false_positives", "flagged regions (mean of z over the n <= 9 pixels of the 3x3 "
+                              "neighbourhood inside the frame > flag_sigma s / sqrt(n)) away from "
+                              "the masks where the rendered radiance equals the intact lens's "
+                              "(common random numbers): the camera's noise alone"},
+          {"secondary_regions", "flagged regions away from the masks where light that touched the "
+                                "defect lands (e.g. after internal reflection)"}};
+}
+
+}  // namespace lfi::study::detail

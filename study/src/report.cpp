@@ -1,0 +1,197 @@
+// The study's report: each scene's camera frame and difference image (EXR,
+// PNG), study.json, report.html with its sweep charts, and the verdict table
+// for the terminal.
+
+#include "study_internal.h"
+
+#include "lfi/core/exr_io.h"
+#include "lfi/core/image.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+
+namespace lfi::study {
+
+namespace fs = std::filesystem;
+using namespace detail;
+
+namespace {
+
+// A CNR-versus-parameter line chart as inline SVG: one colour per defect,
+// solid for nearest lookup, dashed for interpolated; log CNR axis with the
+// detection threshold marked.
+std::string svgPlot(const nlohmann::ordered_json& sweep, const std::string& series, const std::string& xLabel,
+                    bool logX) {
+  std::vector<const nlohmann::ordered_json*> points;
+  for (const auto& p : sweep["points"])
+    if (p["series"] == series) points.push_back(&p);
+  if (points.empty()) return "";
+  std::sort(points.begin(), points.end(), [](auto* a, auto* b) {
+    return (*a)["value"].template get<double>() < (*b)["value"].template get<double>();
+  });
+  const double w = 560, h = 260, left = 50, right = 140, top = 20, bottom = 40;
+  const double x0 = points.front()->at("value").get<double>(), x1 = points.back()->at("value").get<double>();
+  auto fx = [&](double x) {
+    const double t = logX ? std::log(x / x0) / std::log(x1 / x0) : (x - x0) / (x1 - x0);
+    return left + (x1 == x0 ? 0.5 : t) * (w - left - right);
+  };
+  auto fy = [&](double cnr) {
+    const double t = (std::log10(std::clamp(cnr, 0.1, 1000.0)) + 1) / 4;  // 0.1 .. 1000
+    return h - bottom - t * (h - top - bottom);
+  };
+  static const char* colours[] = {"#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd",
+                                  "#8c564b", "#e377c2", "#7f7f7f", "#bcbd22", "#17becf"};
+  std::string svg = fmt::format("<svg width=\"{}\" height=\"{}\" style=\"border:1px solid #ccc;margin:4px\">", w, h);
+  svg += fmt::format("<line x1=\"{0}\" x2=\"{1}\" y1=\"{2}\" y2=\"{2}\" stroke=\"#999\" stroke-dasharray=\"2,2\"/>"
+                     "<text x=\"{3}\" y=\"{4}\" font-size=\"10\" fill=\"#666\">detected (CNR {5})</text>",
+                     left, w - right, fy(kDetectedCnr), w - right - 100, fy(kDetectedCnr) - 3, kDetectedCnr);
+  for (double c : {0.1, 1.0, 10.0, 100.0, 1000.0})
+    svg += fmt::format("<text x=\"4\" y=\"{}\" font-size=\"10\">{}</text>", fy(c) + 3, c);
+  for (const auto* p : points)
+    svg += fmt::format("<text x=\"{}\" y=\"{}\" font-size=\"10\" text-anchor=\"middle\">{}</text>",
+                       fx(p->at("value").get<double>()), h - bottom + 14, p->at("value").get<double>());
+  svg += fmt::format("<text x=\"{}\" y=\"{}\" font-size=\"11\" text-anchor=\"middle\">{}</text>", (left + w) / 2,
+                     h - 6, xLabel);
+  int k = 0;
+  for (const auto& [defect, unused] : points.front()->at("cnr").at("nearest").items()) {
+    const char* colour = colours[k % 10];
+    for (const char* lookup : {"nearest", "interpolated"}) {
+      std::string pts;
+      for (const auto* p : points)
+        pts += fmt::format("{:.1f},{:.1f} ", fx(p->at("value").get<double>()),
+                           fy(p->at("cnr").at(lookup).at(defect).get<double>()));
+      svg += fmt::format("<polyline fill=\"none\" stroke=\"{}\" stroke-width=\"1.5\" {} points=\"{}\"/>", colour,
+                         std::string(lookup) == "nearest" ? "" : "stroke-dasharray=\"5,3\"", pts);
+    }
+    svg += fmt::format("<text x=\"{}\" y=\"{}\" font-size=\"10\" fill=\"{}\">{}</text>", w - right + 6,
+                       top + 10 + 12 * k, colour, defect);
+    ++k;
+  }
+  return svg + "</svg>";
+}
+
+std::string sweepHtml(const nlohmann::ordered_json& sweep) {
+  std::string h = "<h2>How good must the display be?</h2><p>Inverse schlieren setup at the quick camera resolution; "
+                  "CNR per defect (log scale) against the light field's angular resolution (element size fixed at " +
+                  fmt::format("{} mm", sweep["reference"]["element_mm"].get<double>()) +
+                  "), its element size (angular resolution fixed at " +
+                  fmt::format("{}", sweep["reference"]["angular"].get<int>()) +
+                  "), and an error in the display's distance &Delta; (light field captured at &Delta;, display moved "
+                  "away from the lens by the error). Solid: nearest lookup (reference model); dashed: interpolated."
+                  "</p><div>";
+  h += svgPlot(sweep, "angular", "angular elements per side", true);
+  h += svgPlot(sweep, "element", "spatial element pitch (mm)", true);
+  h += svgPlot(sweep, "delta_error", "display distance error (mm)", false);
+  h += "</div><table><tr><th>defect</th><th>lookup</th><th>coarsest element (mm)</th><th>fewest angular elements</th>"
+       "<th>&Delta; tolerance (mm)</th></tr>";
+  auto cell = [](const nlohmann::ordered_json& v) { return v.is_null() ? std::string("never") : v.dump(); };
+  for (const auto& [defect, byLookup] : sweep["answers"].items())
+    for (const auto& [lookup, a] : byLookup.items())
+      h += "<tr><td>" + defect + "</td><td>" + lookup + "</td><td>" + cell(a["coarsest_element_mm"]) + "</td><td>" +
+           cell(a["fewest_angular"]) + "</td><td>" + cell(a["delta_tolerance_mm"]) + "</td></tr>";
+  return h + "</table>";
+}
+
+std::string htmlReport(const nlohmann::ordered_json& study) {
+  std::string h = R"(<!doctype html><html><head><meta charset="utf-8"><title>lfi reference study</title>
+<style>body{font-family:sans-serif;margin:1em}table{border-collapse:collapse}td,th{border:1px solid #ccc;padding:4px;text-align:center}
+img{width:200px;image-rendering:pixelated}.detected{background:#cfc}.weak{background:#ffc}.missed{background:#fcc}</style></head><body>
+<h1>Inverse schlieren reference study</h1>
+<p>Each defect scene is compared with the intact lens under the same illumination; the criterion is in docs/study.md
+and in study.json ("criterion"). Images are camera frames ()" +
+                  std::to_string(study["camera"]["bit_depth"].get<int>()) +
+                  R"(-bit DN shown linearly); the second row of each cell is the
+difference with the intact lens (grey = 0, &plusmn;8&sigma; full scale).</p><table><tr><th>scene</th>)";
+  for (const auto& s : study["setups"]) h += "<th>" + s.get<std::string>() + "</th>";
+  h += "</tr>";
+  for (const auto& [scene, data] : study["scenes"].items()) {
+    h += "<tr><th>" + scene + "</th>";
+    for (const auto& s : study["setups"]) {
+      const std::string stem = "images/" + scene + "_" + s.get<std::string>();
+      h += "<td><img src=\"" + stem + ".png\"><br><img src=\"" + stem + "_diff.png\"><br>";
+      for (const auto& [defect, bySetup] : data["defects"].items()) {
+        const auto& r = bySetup[s.get<std::string>()];
+        h += fmt::format("<span class=\"{0}\">{1}: {0} (CNR {2:.1f})</span><br>", r["verdict"].get<std::string>(),
+                         defect, r["cnr"].get<double>());
+      }
+      h += fmt::format("false positives: {}, secondary regions: {}</td>",
+                       data["false_positives"][s.get<std::string>()].get<int>(),
+                       data["secondary_regions"][s.get<std::string>()].get<int>());
+    }
+    h += "</tr>";
+  }
+  h += "</table>";
+  if (study.contains("sweep")) h += sweepHtml(study["sweep"]);
+  h += "<h2>Noise</h2><pre>" + study["noise"].dump(2) + "</pre></body></html>\n";
+  return h;
+}
+
+}  // namespace
+
+namespace detail {
+
+void writeSceneImages(const fs::path& imagesDir, const SceneSpec& spec, const Illumination& light,
+                      const sim::TelecentricCamera& camera, const sim::CameraSensorModel& sensor,
+                      const cv::Mat& frame, const cv::Mat& diff, Overwrite overwrite) {
+  const std::string stem = spec.name + "_" + light.setup;
+  writeRadianceExr(imagesDir / (stem + ".exr"), frame,
+                   {camera.objectPixel_mm(),
+                    fmt::format("camera frame (DN) of scene {} under {}", spec.name, light.setup),
+                    kCameraDigitalNumbers},
+                   overwrite);
+  cv::Mat png8;
+  frame.convertTo(png8, CV_8U, 255.0 / sensor.maxDigitalNumber());
+  writePngAtomically(imagesDir / (stem + ".png"), png8, overwrite);
+  cv::Mat diff8;
+  diff.convertTo(diff8, CV_8U, 127.0 / 8, 128);  // +-8 sigma fills the range
+  writePngAtomically(imagesDir / (stem + "_diff.png"), diff8, overwrite);
+}
+
+void writeReport(const fs::path& outDir, Overwrite mode, const nlohmann::ordered_json& study) {
+  writeFileAtomically(outDir / "report.html", mode, htmlReport(study));
+  // (The bench's path need not be UTF-8: replace what is not.)
+  writeFileAtomically(outDir / "study.json", mode,
+                      study.dump(2, ' ', false, nlohmann::ordered_json::error_handler_t::replace) + "\n");
+}
+
+}  // namespace detail
+
+std::string verdictTable(const nlohmann::ordered_json& study) {
+  std::string sweepText;
+  if (study.contains("sweep")) {
+    auto cell = [](const nlohmann::ordered_json& v) { return v.is_null() ? std::string("never") : v.dump(); };
+    sweepText = fmt::format("\ndisplay sweep (inverse schlieren)\n{:<32} {:>15} {:>10} {:>14}\n", "defect / lookup",
+                            "coarsest e (mm)", "fewest n", "Δ tol. (mm)");
+    for (const auto& [defect, byLookup] : study["sweep"]["answers"].items())
+      for (const auto& [lookup, a] : byLookup.items())
+        sweepText += fmt::format("{:<32} {:>15} {:>10} {:>14}\n", defect + " / " + lookup,
+                                 cell(a["coarsest_element_mm"]), cell(a["fewest_angular"]),
+                                 cell(a["delta_tolerance_mm"]));
+  }
+  std::string out = fmt::format("{:<14} {:<8}", "scene", "defect");
+  for (const auto& s : study["setups"]) out += fmt::format(" {:>22}", s.get<std::string>());
+  out += "\n";
+  for (const auto& [scene, data] : study["scenes"].items()) {
+    for (const auto& [defect, bySetup] : data["defects"].items()) {
+      out += fmt::format("{:<14} {:<8}", scene, defect);
+      for (const auto& s : study["setups"]) {
+        const auto& r = bySetup[s.get<std::string>()];
+        out +=
+            fmt::format(" {:>22}", fmt::format("{} ({:.1f})", r["verdict"].get<std::string>(), r["cnr"].get<double>()));
+      }
+      out += "\n";
+    }
+    out += fmt::format("{:<14} {:<8}", scene, "false+");
+    for (const auto& s : study["setups"]) {
+      const std::string setup = s.get<std::string>();
+      out += fmt::format(" {:>22}", fmt::format("{} (+{} secondary)", data["false_positives"][setup].get<int>(),
+                                                data["secondary_regions"][setup].get<int>()));
+    }
+    out += "\n";
+  }
+  return out + sweepText;
+}
+
+}  // namespace lfi::study

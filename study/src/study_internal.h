@@ -1,0 +1,143 @@
+#pragma once
+// Internal to lfi_study: what its parts share — the declared detection
+// criterion, the scenes and illuminations, one evaluation of them, the
+// sweep's variants, the report's writers and the study's progress.
+
+#include "lfi/core/atomic_file.h"
+#include "lfi/core/light_field.h"
+#include "lfi/sim/render.h"
+#include "lfi/study/study.h"
+
+#include <nlohmann/json.hpp>
+#include <opencv2/core.hpp>
+
+#include <algorithm>
+#include <cstdint>
+#include <filesystem>
+#include <functional>
+#include <memory>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace lfi::study::detail {
+
+// The declared detection criterion (docs/study.md).
+inline constexpr double kDetectedCnr = 3.0;  // RMS excess signal per defect pixel >= 3 sigma
+inline constexpr double kWeakCnr = 1.5;
+inline constexpr double kFlagSigma = 5.0;    // false-positive flag: |3x3 mean of the difference| > 5 sigma_mean
+
+// Overall progress of a study made of weighted steps.
+class Progress {
+public:
+  Progress(const StudyOptions& options, double totalUnits) : options_(options), total_(totalUnits) {}
+  std::function<void(double)> step(const std::string& label, double units) {
+    const double start = done_;
+    done_ += units;
+    return [this, label, start, units](double f) {
+      if (options_.progress) options_.progress(label, std::min(1.0, (start + f * units) / total_));
+    };
+  }
+
+private:
+  const StudyOptions& options_;
+  double total_;
+  double done_ = 0;
+};
+
+// ---- The scenes and illuminations (scenes.cpp) ---------------------------
+
+struct Defect {
+  std::string name;
+  std::shared_ptr<const sim::Solid> marker;  // world frame: pixels whose chief path touches it show the defect
+};
+
+struct SceneSpec {
+  std::string name;
+  double iorFactor = 1;
+  double lensShift_mm = 0;  // along z
+  std::vector<std::pair<Vec3, double>> cuts;        // centre (lens frame), radius
+  std::vector<std::pair<Vec3, double>> inclusions;  // centre (world), radius
+  bool bubbles = false;
+  std::vector<Defect> defects;
+};
+
+// The seven scenes, the intact lens first.
+std::vector<SceneSpec> sceneSpecs(const Bench& bench);
+// The part of one scene: the lens (cut, shifted, its index changed) and its inclusions.
+std::vector<sim::Object> partObjects(const Bench& bench, const SceneSpec& spec);
+
+// One illumination of the part: which back light, and for the light field
+// display, which light field, lookup and where the display actually sits.
+struct Illumination {
+  std::string setup;
+  std::shared_ptr<const LightField> lightField;
+  LightFieldLookup lookup = LightFieldLookup::Nearest;
+  double displayError_mm = 0;  // display plane moved away from the lens (Δ error)
+};
+
+sim::Object backlight(const Bench& bench, const Illumination& light);
+
+LightField captureLightField(const Bench& bench, const LightFieldGeometry& geometry, int samples, std::uint64_t seed,
+                             int threads, const std::function<void(double)>& progress);
+
+// ---- Detection (detection.cpp) --------------------------------------------
+
+// Ground truth from the geometry, per scene: each defect's pixels (chief rays
+// followed through the part by refraction touch it; a defect smaller than a
+// pixel gets the pixel its centre projects to; dilated by one pixel for the
+// depth-of-field blur), and the intact lens's pixels. It depends on the part
+// and the camera only, not on the illumination, so it is traced once per camera.
+struct GroundTruth {
+  std::vector<std::vector<cv::Mat>> masks;  // [scene][defect]
+  std::vector<cv::Mat> allDefects;          // [scene]
+  cv::Mat lens;                             // the intact lens
+};
+
+GroundTruth traceGroundTruth(const Bench& bench, const std::vector<SceneSpec>& specs,
+                             const sim::TelecentricCamera& camera);
+
+struct Evaluation {
+  // scene -> {defects: {defect: {verdict, cnr, pixels}}, false_positives, secondary_regions}
+  nlohmann::ordered_json scenes;
+  nlohmann::ordered_json noise;
+  double intactLitFraction = 0;   // lens pixels of the intact frame above a quarter of the brightest
+};
+
+// Renders every scene under one illumination, passes each through the camera,
+// and judges it against the intact lens by the declared criterion. Writes the
+// frames and difference images to imagesDir when it is given.
+Evaluation evaluate(const Bench& bench, const Illumination& light, const std::vector<SceneSpec>& specs,
+                    const GroundTruth& truth, const sim::TelecentricCamera& camera, sim::CameraSensorModel sensor,
+                    sim::RenderOptions ro, std::uint64_t seed, Progress& progress, double renderUnits,
+                    const std::filesystem::path* imagesDir, Overwrite overwrite);
+
+// The declared criterion as study.json states it.
+nlohmann::ordered_json criterionJson();
+
+// ---- The display-quality sweep (sweep.cpp) --------------------------------
+
+struct SweepVariant {
+  SweepPoint point;
+  LightFieldGeometry geometry;
+  double displayError_mm = 0;
+};
+
+// The sweep's light field variants, each captured only as large as the
+// lens's footprint on the display plane needs. Every point is checked before
+// the study starts: a known series, a light field that can be made, a display
+// that stays below the lens.
+std::vector<SweepVariant> sweepVariants(const Bench& bench, const std::vector<SweepPoint>& sweep);
+
+// ---- The report (report.cpp) ----------------------------------------------
+
+// One scene's camera frame under one illumination (EXR in DN, PNG) and its
+// difference with the intact lens (PNG), in imagesDir.
+void writeSceneImages(const std::filesystem::path& imagesDir, const SceneSpec& spec, const Illumination& light,
+                      const sim::TelecentricCamera& camera, const sim::CameraSensorModel& sensor,
+                      const cv::Mat& frame, const cv::Mat& diff, Overwrite overwrite);
+
+// OUTDIR/report.html and OUTDIR/study.json from the study's document.
+void writeReport(const std::filesystem::path& outDir, Overwrite mode, const nlohmann::ordered_json& study);
+
+}  // namespace lfi::study::detail
