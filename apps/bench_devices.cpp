@@ -1,0 +1,78 @@
+// The camera, display and reference light field that `lfi inspect` and
+// `lfi calibrate-distance` drive: their options and their opening.
+
+#include "bench_devices.h"
+
+#include "cli_util.h"
+
+#include "lfi/core/error.h"
+#include "lfi/core/exr_io.h"
+#include "lfi/drivers/camera_registry.h"
+#include "lfi/drivers/capture_registry.h"
+#include "lfi/drivers/display_registry.h"
+
+#include <functional>
+#include <utility>
+
+namespace fs = std::filesystem;
+
+namespace lfi::cli {
+
+namespace {
+
+constexpr long long kMostFrames = 100000;
+
+// A reference from a file needs no capture device: step 1 is skipped.
+class FileCapture final : public lfi::LightFieldCapture {
+public:
+  explicit FileCapture(fs::path file) : file_(std::move(file)), lf_(lfi::readLightFieldExr(file_)) {}
+  lfi::LightFieldGeometry geometry() const override { return lf_.geometry(); }
+  lfi::LightField capture(const std::function<void(double)>&) override { return lf_; }
+  std::string description() const override { return "file " + file_.string(); }
+
+private:
+  fs::path file_;
+  lfi::LightField lf_;
+};
+
+}  // namespace
+
+void addBenchOptions(CLI::App& command, BenchOptions& o) {
+  command.add_option("--camera", o.camera, "Camera URI (aravis:<id>, sim:<scene-file>)")->required();
+  command.add_option("--display", o.display, "Display URI (usb:<vid>:<pid>[/<serial>], sim:<scene-file>)")
+      ->required();
+  auto* capture = command.add_option("--capture", o.capture, "Light field capture URI (sim:<scene-file>[?...])");
+  command.add_option("--light-field", o.lightField, "Use this reference light field (EXR) instead of capturing")
+      ->check(CLI::ExistingFile)
+      ->excludes(capture);
+  command.add_option("--frames", o.frames, "Frames averaged per image")->transform(wholeNumberIn(1LL, kMostFrames))
+      ->capture_default_str();
+  command.add_option("--exposure-us", o.exposure_us, "Exposure time (µs)")->capture_default_str();
+  command.add_option("--gain", o.gain, "Gain (device unit, dB for SFNC cameras)")->capture_default_str();
+  command.add_option("--pixel-format", o.pixelFormat, "Mono8 | Mono12 | Mono16")
+      ->check(CLI::IsMember({"Mono8", "Mono12", "Mono16"}))
+      ->capture_default_str();
+  command.add_option("--settle-ms", o.settle_ms, "Wait after the display shows a light field before exposing (ms)")
+      ->transform(wholeNumberIn(0LL, 24LL * 3600 * 1000))
+      ->capture_default_str();
+}
+
+OpenBench openBench(const BenchOptions& o, const char* command) {
+  if (o.capture.empty() && o.lightField.empty())
+    lfi::fail(lfi::Errc::Config, "{}: give --capture <uri> or --light-field <file>", command);
+  OpenBench bench;
+  bench.camera = lfi::openCamera(o.camera);
+  lfi::CameraSettings settings;
+  settings.exposure_us = o.exposure_us;
+  settings.gain = o.gain;
+  settings.pixelFormat = o.pixelFormat == "Mono8"    ? lfi::PixelFormat::Mono8
+                         : o.pixelFormat == "Mono16" ? lfi::PixelFormat::Mono16
+                                                     : lfi::PixelFormat::Mono12;
+  bench.camera->configure(settings);
+  bench.display = lfi::openDisplay(o.display);
+  bench.captured = !o.capture.empty();
+  bench.capture = bench.captured ? lfi::openLightFieldCapture(o.capture) : std::make_unique<FileCapture>(o.lightField);
+  return bench;
+}
+
+}  // namespace lfi::cli

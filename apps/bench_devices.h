@@ -1,0 +1,41 @@
+#pragma once
+// The camera, display and reference light field that `lfi inspect` and
+// `lfi calibrate-distance` drive: their options and their opening.
+
+#include "lfi/drivers/camera.h"
+#include "lfi/drivers/display.h"
+#include "lfi/drivers/light_field_capture.h"
+
+#include <CLI/CLI.hpp>
+
+#include <filesystem>
+#include <memory>
+#include <string>
+
+namespace lfi::cli {
+
+// The devices `lfi inspect` and `lfi calibrate-distance` drive, and how.
+struct BenchOptions {
+  std::string camera, display, capture;
+  std::filesystem::path lightField;
+  int frames = 1;
+  double exposure_us = 10'000, gain = 0;
+  std::string pixelFormat = "Mono12";
+  int settle_ms = 0;
+};
+
+void addBenchOptions(CLI::App& command, BenchOptions& o);
+
+// The devices opened and the camera configured.
+struct OpenBench {
+  std::unique_ptr<lfi::Camera> camera;
+  std::unique_ptr<lfi::Display> display;
+  std::unique_ptr<lfi::LightFieldCapture> capture;  // a device, or FileCapture
+  bool captured = false;                            // a device: the reference is a new capture
+};
+
+// Opens through the device registries, which main.cpp fills before any
+// subcommand runs.
+OpenBench openBench(const BenchOptions& o, const char* command);
+
+}  // namespace lfi::cli

@@ -1,0 +1,180 @@
+// lfi calibrate-distance: the display-to-part distance scan
+// (docs/calibration.md), its table on stdout and its result file (JSON).
+
+#include "bench_devices.h"
+#include "cli_util.h"
+#include "commands.h"
+
+#include "lfi/calib/display_distance.h"
+#include "lfi/controller/controller.h"
+#include "lfi/core/atomic_file.h"
+#include "lfi/core/error.h"
+#include "lfi/core/exr_io.h"
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <memory>
+#include <system_error>
+#include <vector>
+
+namespace fs = std::filesystem;
+
+namespace lfi::cli {
+
+namespace {
+
+// --from, --to and --step as the candidate errors; Errc::Config naming them.
+std::vector<double> scanCandidates(double from, double to, double step) {
+  const double count = std::isfinite(from) && std::isfinite(to) && step > 0 ? (to - from) / step : -1;
+  // (Whole steps within rounding: 0.1 to 0.3 by 0.1 is 1.9999999999999998 steps.)
+  if (!(std::round(count) >= 2 && std::round(count) <= 1000) || !(std::abs(count - std::round(count)) <= 1e-6))
+    lfi::fail(lfi::Errc::Config,
+              "calibrate-distance: --from {} --to {} --step {} must give 3 to 1001 candidates, the range a whole "
+              "number of steps", from, to, step);
+  std::vector<double> candidates;
+  for (int i = 0; i <= static_cast<int>(std::round(count)); ++i) candidates.push_back(from + i * step);
+  return candidates;
+}
+
+// lfi calibrate-distance: the display-to-part distance scan (docs/calibration.md).
+void calibrateDistance(const BenchOptions& o, const std::vector<double>& candidates, const std::vector<int>& roiBox,
+                       const fs::path& out, bool force, bool quiet) {
+  const auto overwrite = force ? lfi::Overwrite::Allow : lfi::Overwrite::Refuse;
+  if (std::error_code ec; out.filename().empty() || fs::is_directory(out, ec))
+    lfi::fail(lfi::Errc::InvalidArgument, "calibrate-distance: --out '{}' must name a file, not a folder",
+              out.string());
+  // A captured reference is kept beside the scan (scan.json: scan.lightfield.exr), as `inspect` keeps its own.
+  const fs::path referenceFile = fs::path(out).replace_extension(".lightfield.exr");
+  std::vector<fs::path> outputs{out};
+  if (!o.capture.empty()) outputs.push_back(referenceFile);
+  refuseExisting(outputs, force, "calibrate-distance");
+  OpenBench bench = openBench(o, "calibrate-distance");
+  // Where the result goes must take it before the scan, not after (and a bad device leaves no folder behind).
+  requireOutputFolder(out.parent_path().empty() ? fs::path(".") : out.parent_path(), "calibrate-distance");
+  const lfi::CameraSettings settings = bench.camera->settings();
+  cv::Mat roi;
+  if (!roiBox.empty()) {
+    const cv::Rect box(roiBox[0], roiBox[1], roiBox[2], roiBox[3]);
+    if (box.x < 0 || box.y < 0 || box.width < 1 || box.height < 1 || box.width > settings.roiWidth_px - box.x ||
+        box.height > settings.roiHeight_px - box.y)
+      lfi::fail(lfi::Errc::Config, "calibrate-distance: --roi {},{},{},{} is not inside the camera's {} x {} image",
+                box.x, box.y, box.width, box.height, settings.roiWidth_px, settings.roiHeight_px);
+    roi = cv::Mat::zeros(settings.roiHeight_px, settings.roiWidth_px, CV_8UC1);
+    roi(box).setTo(255);
+  }
+  lfi::ControllerOptions options;
+  options.frames = o.frames;
+  options.settle = std::chrono::milliseconds(o.settle_ms);
+  // The candidates against the reference's distance before a capture, not after it.
+  lfi::calib::checkDisplayDistanceCandidates(bench.capture->geometry(), candidates);
+  lfi::Controller controller(*bench.capture, *bench.display, *bench.camera, options);
+  ProgressBar bar;
+  const lfi::LightField reference = controller.captureReference([&](const char* step, double f) {
+    if (!quiet) bar(step, f);
+  });
+  if (bench.captured) lfi::writeLightFieldExr(referenceFile, reference, overwrite);
+  // One drive scale for every candidate: the brightness compares the display's position, not the fields' peaks.
+  const double white = lfi::Controller::defaultWhite(reference);
+  size_t done = 0;
+  const size_t images = candidates.size() + 3;  // and two with the display dark, and the brightest again
+  lfi::calib::DisplayDistanceScan scan;
+  try {
+    scan = lfi::calib::calibrateDisplayDistance(
+        reference,
+        [&](const lfi::LightField& shown) {
+          if (!quiet) bar(fmt::format("image {} of {}", done + 1, images), static_cast<double>(done) / images);
+          ++done;
+          controller.emit(shown, white);
+          return controller.inspect();
+        },
+        candidates, roi, 1 / std::sqrt(12.0));  // a digital number's quantisation (alike frames keep it)
+  } catch (const lfi::Error& e) {
+    if (!bench.captured) throw;
+    throw lfi::Error(e.code(), fmt::format("{} (the captured reference is kept: --light-field {} scans again "
+                                           "without capturing)", e.what(), referenceFile.string()));
+  }
+  if (!quiet) bar("scan", 1);
+  bar.finish();
+  // The table first: should the file fail to be written, the scan is not lost.
+  fmt::print("with the display dark: {:.6g} (noise of a mean {:.2g})\n", scan.dark, scan.noise);
+  for (size_t i = 0; i < scan.candidates_mm.size(); ++i)
+    fmt::print("{:+8.3f} mm  {:.6g}\n", scan.candidates_mm[i], scan.brightness[i]);
+  fmt::print("estimate {:+.3f} mm (the display {:.3f} mm {} the part than the reference's {} mm)\n",
+             scan.estimate_mm, std::abs(scan.estimate_mm), scan.estimate_mm >= 0 ? "further from" : "nearer to",
+             reference.geometry().distance_mm);
+  const lfi::CameraInfo camera = bench.camera->info();
+  nlohmann::ordered_json result;
+  result["format"] = "lfi-display-distance-scan";
+  result["version"] = 1;
+  result["units"] = "mm; brightness in the camera's digital numbers";
+  result["convention"] =
+      "epsilon > 0: the display is further from the part than the reference light field's distance_mm; the "
+      "estimate is the centre of the brightness peak, half-way between where it falls below `level` on either "
+      "side (docs/calibration.md)";
+  result["reference"] = {{"source", bench.capture->description()},
+                         {"file", fs::absolute(bench.captured ? referenceFile : o.lightField).string()},
+                         {"distance_mm", reference.geometry().distance_mm}};
+  result["camera"] = {{"uri", o.camera},
+                      {"vendor", camera.vendor},
+                      {"model", camera.model},
+                      {"serial", camera.serial},
+                      {"exposure_us", settings.exposure_us},
+                      {"gain", settings.gain},
+                      {"pixel_format", o.pixelFormat},
+                      {"binning", settings.binning},
+                      {"frames", o.frames},
+                      {"settle_ms", o.settle_ms}};
+  result["display"] = {{"uri", o.display}, {"white", white}};
+  result["roi_px"] = roiBox.empty() ? nlohmann::ordered_json(nullptr) : nlohmann::ordered_json(roiBox);
+  result["dark"] = scan.dark;
+  result["noise"] = scan.noise;
+  result["dark_noise"] = scan.darkNoise;
+  result["candidates_mm"] = scan.candidates_mm;
+  result["brightness"] = scan.brightness;
+  result["level"] = scan.level;
+  result["estimate_mm"] = scan.estimate_mm;
+  result["peak_width_mm"] = scan.width_mm;
+  // Device strings and paths need not be UTF-8: replace what is not.
+  lfi::writeFileAtomically(out, overwrite,
+                           result.dump(2, ' ', false, nlohmann::ordered_json::error_handler_t::replace) + "\n");
+  fmt::print("{}\n", out.string());
+}
+
+struct CalibrateArgs {
+  BenchOptions bench;
+  double scanFrom = -6, scanTo = 6, scanStep = 1;
+  std::vector<int> roiBox;
+  fs::path out;
+  bool force = false;
+};
+
+}  // namespace
+
+Command addCalibrateDistanceCommand(CLI::App& app) {
+  auto* calibrate = app.add_subcommand(
+      "calibrate-distance", "Scan the display-to-part distance error by showing the reference light field "
+      "propagated to candidate distances (docs/calibration.md)");
+  auto a = std::make_shared<CalibrateArgs>();
+  addBenchOptions(*calibrate, a->bench);
+  calibrate->add_option("--from", a->scanFrom, "First candidate error (mm)")->capture_default_str();
+  calibrate->add_option("--to", a->scanTo, "Last candidate error (mm)")->capture_default_str();
+  calibrate->add_option("--step", a->scanStep, "Candidate spacing (mm)")->capture_default_str();
+  calibrate->add_option("--roi", a->roiBox, "The part's pixels in the camera image: x,y,width,height (default: all)")
+      ->delimiter(',')
+      ->expected(4);
+  calibrate->add_option("--out", a->out, "Result file (JSON)")->required();
+  calibrate->add_flag("--force", a->force,
+                      "Replace an existing result file, and the captured reference kept beside it (scan.json: "
+                      "scan.lightfield.exr)");
+  return {calibrate, [a](const GlobalOptions& global) {
+            calibrateDistance(a->bench, scanCandidates(a->scanFrom, a->scanTo, a->scanStep), a->roiBox, a->out,
+                              a->force, global.quiet);
+            return 0;
+          }};
+}
+
+}  // namespace lfi::cli
