@@ -103,7 +103,7 @@ void sensorModel(int width, int height, int turns) {
                 for (long i = 0; i < pixels; ++i) sum += static_cast<double>(shot(engine)) + read(engine);
                 keep(&sum);
               },
-              [&] {  // for comparison: the standard library's Poisson made per pixel, as before session 17
+              [&] {  // for comparison: the standard library's Poisson made per pixel
                 std::mt19937_64 engine(5);
                 std::normal_distribution<double> read(0.0, model.readNoise_e);
                 const float* in = radiance.ptr<float>(0);

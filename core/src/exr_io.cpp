@@ -264,7 +264,7 @@ LoadedExr loadExr(const fs::path& path, const char* expectedKind) {
   } catch (const std::exception& e) {
     fail(Errc::InvalidFile, "'{}': not a readable OpenEXR file (truncated or corrupt): {}", path.string(), e.what());
   }
-  // Version 1 (before 2026-11-22) covered only the pixels; its attributes are read unchecked.
+  // A version 1 file covers only the pixels; its attributes are read unchecked.
   const std::string expected = requireAttribute<Imf::StringAttribute>(path, out.header, kChecksum).value();
   const std::string actual = checksumText(
       version == 1 ? pixelChecksum(out.pixels) : fileChecksum(canonicalAttributes(path, out.header), out.pixels));

@@ -201,7 +201,7 @@ TEST(DisplayDistance, TheCentreOfThePeakIsFoundBetweenCandidates) {
 // What does not change from one image to the next (stray light, a sensor's
 // fixed pattern) is not noise: a dark image with a strong pattern does not
 // hide a small rise. The noise of a mean comes from the difference of two
-// dark images; the dark image's spread (the estimate before) was 2.3 DN here,
+// dark images; a dark image's own spread is 2.3 DN here,
 // and ten times that refused this 1.5 DN rise.
 TEST(DisplayDistance, AFixedPatternInTheDarkIsNotNoise) {
   LightField lf(smallGeometry());

@@ -74,7 +74,7 @@ struct RoundTrip {
   double cv;            // coefficient of variation over the inner lens
 };
 
-// SPEC §1 on a small bench: capture the light field of a collimated beam
+// The method on a small bench: capture the light field of a collimated beam
 // through the intact lens at Δ, emit it from Δ, image with the telecentric camera.
 RoundTrip roundTrip(LightFieldLookup lookup, bool parallelInstead, cv::Mat* imageOut = nullptr) {
   const auto lens = Solid::sphericalLens(51.5, -51.5, 5, 25.4);

@@ -1,5 +1,5 @@
 #pragma once
-// The inverse schlieren cycle, one code path whatever the backends (SPEC §1, §4):
+// The inverse schlieren cycle, one code path whatever the backends (docs/architecture.md):
 //
 //   1. capture  the reference light field of the intact part (LightFieldCapture)
 //   2. emit     it with the light field display (Display::show(LightField))

@@ -1,5 +1,5 @@
 #pragma once
-// The project's one exception type (STYLE.md §4). It is thrown for what stops an
+// The project's one exception type (docs/contributing.md). It is thrown for what stops an
 // operation: a bad file, a bad configuration, a device that is not there, a
 // protocol violation. Its message always names the file and field, or the device
 // and request. What a caller handles in a loop (a frame timeout, an incomplete

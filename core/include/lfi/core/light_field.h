@@ -1,5 +1,5 @@
 #pragma once
-// The 4D light field of a lensless light field sensor or display (SPEC §2).
+// The 4D light field of a lensless light field sensor or display (docs/file-formats.md).
 //
 // Parametrisation (the same in memory and in files):
 //   parameter        symbol  units  meaning

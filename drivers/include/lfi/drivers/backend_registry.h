@@ -1,5 +1,5 @@
 #pragma once
-// Device backends by URI scheme (STYLE.md §2): one registry per device type,
+// Device backends by URI scheme: one registry per device type,
 // all of the one shape below (BackendRegistry<Device>), reached through
 // backendRegistry<Camera>(), backendRegistry<Display>() and
 // backendRegistry<LightFieldCapture>() (camera_registry.h, display_registry.h,

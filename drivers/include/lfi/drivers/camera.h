@@ -1,7 +1,7 @@
 #pragma once
 // The bench camera as the rest of the stack sees it: a GenICam-style area-scan
 // camera delivering monochrome frames. Backends (Aravis, the ray-traced `sim:`
-// camera) implement this interface and are opened by URI (registry.h).
+// camera) implement this interface and are opened by URI (camera_registry.h).
 //
 // State machine (every backend follows it; docs/camera.md draws it):
 //
@@ -65,7 +65,7 @@ struct CameraSettings {
   double frameRate_hz = 0;            // FreeRun only; 0 leaves the device's rate
 };
 
-// Per-frame outcome, a value (STYLE.md §4). Incomplete: packets were lost and
+// Per-frame outcome, a value (docs/contributing.md). Incomplete: packets were lost and
 // not recovered; the image has the right size but the lost parts are undefined.
 // Timeout: nothing arrived in time; the image is not meaningful.
 enum class FrameStatus { Complete, Incomplete, Timeout };

@@ -80,7 +80,7 @@ struct DisplayInfo {
   void validate() const;
 };
 
-// Outcome of one show() (a value, STYLE.md §4): Presented — the device validated and
+// Outcome of one show() (a value, docs/contributing.md): Presented — the device validated and
 // shows the frame; Rejected — the device refused it (CRC, size, truncated transfer),
 // `message` says why and names the device; Timeout — the transfer did not finish in
 // time and was cancelled. The panel keeps showing the previous frame on Rejected and

@@ -1,7 +1,7 @@
 #pragma once
 // The light field display's optics model: which ray each panel (sub)pixel emits
 // through its lenslet or slit, the inverse (ray → panel pixel), and the encoding of a
-// light field (SPEC §2) into a panel image.
+// light field (lfi/core/light_field.h) into a panel image.
 //
 // Frame (display.h): origin at the centre of the panel's active area, x along panel
 // columns, y up the panel (row 0 at the top), z = 0 the lens/barrier plane, +z

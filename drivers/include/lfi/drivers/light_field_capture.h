@@ -1,5 +1,5 @@
 #pragma once
-// The method's reference step (SPEC §1): the light field an intact part
+// The method's reference step (README, "the method"): the light field an intact part
 // produces under a collimated beam, recorded on the plane where the display
 // will sit (plane frame of lfi/core/light_field.h; +z towards the part). One
 // interface whatever records it:

@@ -1,5 +1,5 @@
 #pragma once
-// Path tracer for specular transport (SPEC §2): from a sensor sample through
+// Path tracer for specular transport (the paper's model): from a sensor sample through
 // Fresnel reflection/refraction (chosen at random with probability F), Beer-
 // Lambert absorption, opaque absorbers and Lambertian bounces, to an emitter.
 // Tile-parallel with TBB; within a tile, 16 samples at a time are traced as

@@ -14,7 +14,7 @@
 // Emitters (radiance in relative units; an emitting object is opaque):
 //   ParallelEmission    radiance L, halfAngle_rad θmax   L into the cone around the surface normal
 //   LambertianEmission  radiance L                        L into the whole outer hemisphere
-//   LightFieldEmission  light field, lookup               SPEC §2 light field emitter; the
+//   LightFieldEmission  light field, lookup               the light field emitter; the
 //                                                         object's local frame is the plane frame
 //   PanelEmission       panel optics, drive levels,       the physical light field display: panel
 //                       brightness                        pixels behind lenslets or a barrier (below);

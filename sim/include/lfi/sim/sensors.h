@@ -1,6 +1,6 @@
 #pragma once
 // Sensors of the ray tracer: each maps a pixel sample (and, for the camera, an
-// aperture sample) to a ray of sight in the world frame (SPEC §2, exactly).
+// aperture sample) to a ray of sight in the world frame, exactly as the paper models them.
 //
 // TelecentricCamera (object-side telecentric thin lens with depth of field)
 //   parameter         symbol  units  meaning
@@ -19,7 +19,7 @@
 // A stop sample a (uniform on the disc of diameter D) gives
 //   w = (-(wz/b) sx, -(wz/b) sy, wz), o = line(s, a) ∩ {z = 0}, ray o + α (w - o).
 //
-// LightFieldSensor (lensless; SPEC §2): see lfi/core/light_field.h for the
+// LightFieldSensor (lensless): see lfi/core/light_field.h for the
 // parametrisation; worldFromSensor places the plane frame. A pixel sample p
 // starts at the centre of its spatial element and looks along
 // d = normalise(-px, -py, sqrt(1 - px^2 - py^2)); samples with px^2+py^2 >= 1

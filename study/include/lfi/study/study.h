@@ -1,5 +1,5 @@
 #pragma once
-// The reference study (SPEC §3): the bi-convex lens with six kinds of defect,
+// The reference study (docs/study.md): the bi-convex lens with six kinds of defect,
 // seen by the telecentric camera under three illuminations (parallel, area,
 // inverse schlieren), each image compared with the intact lens under the same
 // illumination by one declared criterion (docs/study.md).

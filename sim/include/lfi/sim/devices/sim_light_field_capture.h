@@ -1,7 +1,7 @@
 #pragma once
-// The sim: light field capture (SPEC §1 step 1): the parts of a scene file,
+// The sim: light field capture (the method's capture step): the parts of a scene file,
 // lit by a collimated beam from the camera side, recorded by the lensless
-// light field sensor of SPEC §2 on the plane Δ below the part.
+// light field sensor (sensors.h) on the plane Δ below the part.
 //
 //   URI: sim:<scene-file>[?<key>=<value>&...]
 //   key                  default  units  meaning
