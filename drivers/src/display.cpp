@@ -25,8 +25,18 @@ const char* toString(SubpixelLayout layout) {
 
 const char* toString(OpticsType type) {
   switch (type) {
-    case OpticsType::Lenslet: return "lenslet";
-    case OpticsType::Barrier: return "barrier";
+    case OpticsType::Lenticular: return "lenticular";
+    case OpticsType::LineBarrier: return "line_barrier";
+    case OpticsType::LensletArray: return "lenslet_array";
+    case OpticsType::PinholeArray: return "pinhole_array";
+  }
+  return "unknown";
+}
+
+const char* toString(LensPacking packing) {
+  switch (packing) {
+    case LensPacking::Square: return "square";
+    case LensPacking::Hexagonal: return "hexagonal";
   }
   return "unknown";
 }
@@ -60,19 +70,45 @@ void DisplayInfo::validate() const {
   check(panelHeight_px >= 1 && panelHeight_px <= 16384, "panelHeight_px", panelHeight_px, "[1, 16384]");
   check(finite(pixelPitch_mm) && pixelPitch_mm > 0 && pixelPitch_mm <= 10, "pixelPitch_mm", pixelPitch_mm,
         "(0, 10]");
-  check(finite(optics.lensPitch_px) && optics.lensPitch_px >= 1 && optics.lensPitch_px <= 1000, "lensPitch_px",
-        optics.lensPitch_px, "[1, 1000]");
-  check(finite(optics.slant_rad) && std::abs(optics.slant_rad) < std::numbers::pi / 4, "slant_rad", optics.slant_rad,
-        "(-pi/4, pi/4)");
-  check(finite(optics.offset_px) && std::abs(optics.offset_px) <= 1e6, "offset_px", optics.offset_px, "[-1e6, 1e6]");
+  const OpticsType type = optics.type;
+  if (type == OpticsType::Lenticular || type == OpticsType::LineBarrier) {
+    check(finite(optics.lensPitch_px) && optics.lensPitch_px >= 1 && optics.lensPitch_px <= 1000, "lensPitch_px",
+          optics.lensPitch_px, "[1, 1000]");
+    check(finite(optics.slant_rad) && std::abs(optics.slant_rad) < std::numbers::pi / 4, "slant_rad",
+          optics.slant_rad, "(-pi/4, pi/4)");
+    check(finite(optics.offset_px) && std::abs(optics.offset_px) <= 1e6, "offset_px", optics.offset_px,
+          "[-1e6, 1e6]");
+  } else if (type == OpticsType::LensletArray || type == OpticsType::PinholeArray) {
+    // At least one panel pixel under each lens, or the display has no directions to give.
+    check(finite(optics.arrayPitch_mm) && optics.arrayPitch_mm >= pixelPitch_mm && optics.arrayPitch_mm <= 100,
+          "arrayPitch_mm", optics.arrayPitch_mm, "[pixelPitch_mm, 100]");
+    check(finite(optics.rotation_rad) && std::abs(optics.rotation_rad) <= std::numbers::pi / 4, "rotation_rad",
+          optics.rotation_rad, "[-pi/4, pi/4]");
+    check(finite(optics.arrayOffsetX_mm) && std::abs(optics.arrayOffsetX_mm) <= 1e4, "arrayOffsetX_mm",
+          optics.arrayOffsetX_mm, "[-1e4, 1e4]");
+    check(finite(optics.arrayOffsetY_mm) && std::abs(optics.arrayOffsetY_mm) <= 1e4, "arrayOffsetY_mm",
+          optics.arrayOffsetY_mm, "[-1e4, 1e4]");
+    if (optics.packing != LensPacking::Square && optics.packing != LensPacking::Hexagonal)
+      fail(Errc::InvalidArgument, "display info packing = {} is neither square nor hexagonal",
+           static_cast<int>(optics.packing));
+    if (type == OpticsType::LensletArray)
+      check(finite(optics.fillFactor) && optics.fillFactor > 0 && optics.fillFactor <= 1, "fillFactor",
+            optics.fillFactor, "(0, 1]");
+    else
+      check(finite(optics.pinholeDiameter_mm) && optics.pinholeDiameter_mm > 0 &&
+                optics.pinholeDiameter_mm <= optics.arrayPitch_mm,
+            "pinholeDiameter_mm", optics.pinholeDiameter_mm, "(0, arrayPitch_mm]");
+  } else {
+    fail(Errc::InvalidArgument, "display info optics type = {} is not a known class", static_cast<int>(type));
+  }
   // (A gap below a micrometre is no display; it would also put the rays' slopes
   // past what double precision maps onto the light field's disc.)
   check(finite(optics.gap_mm) && optics.gap_mm >= 1e-3 && optics.gap_mm <= 100, "gap_mm", optics.gap_mm,
         "[0.001, 100]");
-  if (optics.type == OpticsType::Lenslet)
+  if (type == OpticsType::Lenticular || type == OpticsType::LensletArray)
     check(finite(optics.focalLength_mm) && optics.focalLength_mm > 0, "focalLength_mm", optics.focalLength_mm,
-          "(0, inf) for a lenslet display");
-  else
+          "(0, inf) for a lens display");
+  if (type == OpticsType::LineBarrier)
     check(finite(optics.slitWidth_mm) && optics.slitWidth_mm > 0, "slitWidth_mm", optics.slitWidth_mm,
           "(0, inf) for a barrier display");
   check(viewCount >= 1, "viewCount", viewCount, "[1, inf)");

@@ -200,15 +200,20 @@ TEST_F(LfiCli, BadSceneFilesAreNamedWithTheLineOrKey) {
   EXPECT_FALSE(fs::exists(out));
 }
 
-// The inspection bench (data/scenes/inspection_bench.toml: a lenticular display
-// of the default class 30 mm below the lens) with its display moved by `error`
-// mm away from the lens.
+// The inspection bench (data/scenes/inspection_bench.toml) with its display
+// moved by `error` mm away from the lens, and with the lenticular display of
+// the default class: the distance scan's criterion and tolerances
+// (docs/calibration.md) are those of that display.
 fs::path inspectionBench(const fs::path& dir, double error) {
   std::string text = readBytes(fs::path(LFI_SOURCE_DIR) / "data" / "scenes" / "inspection_bench.toml");
-  const std::string from = "position_mm = [0, 0, -30]";
-  const size_t at = text.find(from);
-  EXPECT_NE(at, std::string::npos);
-  if (at != std::string::npos) text.replace(at, from.size(), fmt::format("position_mm = [0, 0, {}]", -30 - error));
+  const auto replace = [&](const std::string& from, const std::string& to) {
+    const size_t at = text.find(from);
+    EXPECT_NE(at, std::string::npos) << from;
+    if (at != std::string::npos) text.replace(at, from.size(), to);
+  };
+  replace("position_mm = [0, 0, -30]", fmt::format("position_mm = [0, 0, {}]", -30 - error));
+  replace("optics = \"lenslet_array\"\npanel_width_px = 800\npanel_height_px = 800",
+          "optics = \"lenticular\"\npanel_width_px = 640\npanel_height_px = 400");
   const fs::path scene = dir / fmt::format("bench{:+}.toml", error);
   std::ofstream(scene) << text;
   return scene;

@@ -28,6 +28,8 @@ namespace {
 
 using testing_support::throwsError;
 
+const LenticularOptics& lenticular(const DisplayOptics& optics) { return *optics.model<LenticularOptics>(); }
+
 DisplayInfo smallLenticular(SubpixelLayout layout, double slant_rad) {
   DisplayInfo info = defaultLenticularDisplay();
   info.panelWidth_px = 96;
@@ -43,7 +45,7 @@ TEST(DisplayOptics, DefaultsAreALenticularOfTheLookingGlassClass) {
   EXPECT_NEAR(info.optics.lensPitch_px, 7.2, 0.1);                          // ~7 pixels per lens
   EXPECT_NEAR(info.optics.slant_rad * 180 / std::numbers::pi, 10.45, 0.05);  // ~10 degrees
   EXPECT_NEAR(optics.viewCone_rad() * 180 / std::numbers::pi, 40.0, 1e-9);   // 40 degree view cone
-  EXPECT_NEAR(optics.lensPitchPerp_mm(), 25.4 / 47.58427, 1e-12);
+  EXPECT_NEAR(lenticular(optics).lensPitchPerp_mm(), 25.4 / 47.58427, 1e-12);
 }
 
 TEST(DisplayOptics, PixelRayPixelRoundTrip) {
@@ -71,7 +73,7 @@ TEST(DisplayOptics, PixelRayPixelRoundTrip) {
 
 TEST(DisplayOptics, RayGeometryIsTheChiefRayThroughTheLensAxis) {
   const DisplayOptics optics(smallLenticular(SubpixelLayout::Mono, 0.1826));
-  const Vec2 n = optics.lensNormal();
+  const Vec2 n = lenticular(optics).lensNormal();
   const double gap = optics.info().optics.gap_mm;
   for (int col = 10; col < 20; ++col) {
     const DisplayRay ray = optics.rayFromPixel(col, 30, 0);
@@ -82,7 +84,7 @@ TEST(DisplayOptics, RayGeometryIsTheChiefRayThroughTheLensAxis) {
     // The origin moved only across the lens, and by at most half a lens.
     const Vec2 shift(ray.origin_mm.x - p.x, ray.origin_mm.y - p.y);
     EXPECT_NEAR(shift.x * n.y - shift.y * n.x, 0, 1e-12);
-    EXPECT_LE(shift.length(), 0.5 * optics.lensPitchPerp_mm() + 1e-12);
+    EXPECT_LE(shift.length(), 0.5 * lenticular(optics).lensPitchPerp_mm() + 1e-12);
   }
 }
 
@@ -93,7 +95,7 @@ TEST(DisplayOptics, SlantedLenticularSpreadsAPixelColumnOverTheViewCone) {
   const DisplayInfo info = defaultLenticularDisplay();
   const DisplayOptics optics(info);
   const double halfCone = 0.5 * optics.viewCone_rad();
-  const Vec2 n = optics.lensNormal();
+  const Vec2 n = lenticular(optics).lensNormal();
   double lo = 1, hi = -1;
   for (int row = 0; row < 200; ++row) {
     const Vec3 d = optics.rayFromPixel(1000, row, 1).direction;
@@ -120,7 +122,7 @@ TEST(DisplayOptics, SlantedLenticularSpreadsAPixelColumnOverTheViewCone) {
 TEST(DisplayOptics, RaysOutsideTheConeOrPanelMapToNothing) {
   const DisplayOptics optics(smallLenticular(SubpixelLayout::Mono, 0.1826));
   EXPECT_FALSE(optics.pixelFromRay({0, 0, 0}, {0, 0, -1}).has_value());
-  const Vec2 n = optics.lensNormal();
+  const Vec2 n = lenticular(optics).lensNormal();
   const double t = std::tan(0.5 * optics.viewCone_rad() + 0.01);
   EXPECT_FALSE(optics.pixelFromRay({0, 0, 0}, Vec3(t * n.x, t * n.y, 1).normalized()).has_value());
   EXPECT_FALSE(optics.pixelFromRay({1000, 0, 0}, {0, 0, 1}).has_value());
@@ -198,7 +200,7 @@ TEST(DisplayOptics, InvalidParametersNameTheField) {
   info.optics.gap_mm = 0;
   EXPECT_TRUE(throwsError([&] { DisplayOptics optics(info); }, Errc::InvalidArgument, {"gap_mm"}));
   info = defaultLenticularDisplay();
-  info.optics.type = OpticsType::Barrier;
+  info.optics.type = OpticsType::LineBarrier;
   EXPECT_TRUE(throwsError([&] { DisplayOptics optics(info); }, Errc::InvalidArgument, {"slitWidth_mm"}));
   info.optics.slitWidth_mm = 0.05;
   EXPECT_NO_THROW(DisplayOptics optics(info));
@@ -297,7 +299,7 @@ TEST(UsbDisplayProtocol, RepliesThatAreNonsenseNameTheFieldAndTheDevice) {
       {put16(4, 7), "calibration blob version 7"},
       {put16(6, 80), "calibration blob declares 80 bytes"},
       {put8(20, 0x55), "calibration blob CRC-32"},
-      {sealed(put8(8, 2)), "optics code 2"},
+      {sealed(put8(8, 4)), "optics class code 4"},
       {sealed(putF64(16, std::numeric_limits<double>::quiet_NaN())), "pixelPitch"},
       {sealed(putF64(24, 0.5)), "lensPitch"},
       {sealed(putF64(32, 1.0)), "slant"},
@@ -402,8 +404,8 @@ TEST(DisplayCalibrationFile, ValuesTheDisplayWouldRefuseAreNamedInTheFile) {
       {"lens_pitch_px = 0.5\n", "optics.lens_pitch_px", "lensPitch_px",
        [](DisplayInfo& i) { i.optics.lensPitch_px = 0.5; }},
       {"slant_rad = 0.8\n", "optics.slant_rad", "slant_rad", [](DisplayInfo& i) { i.optics.slant_rad = 0.8; }},
-      {"optics = \"barrier\"\n", "optics.slit_width_mm", "slitWidth_mm",
-       [](DisplayInfo& i) { i.optics.type = OpticsType::Barrier; }},
+      {"optics = \"line_barrier\"\n", "optics.slit_width_mm", "slitWidth_mm",
+       [](DisplayInfo& i) { i.optics.type = OpticsType::LineBarrier; }},
       {"gap_mm = 0.0005\n", "optics.gap_mm", "gap_mm", [](DisplayInfo& i) { i.optics.gap_mm = 0.0005; }},
   };
   for (const Case& c : cases) {
@@ -414,7 +416,7 @@ TEST(DisplayCalibrationFile, ValuesTheDisplayWouldRefuseAreNamedInTheFile) {
     EXPECT_TRUE(throwsError([&] { info.validate(); }, Errc::InvalidArgument, {"display info " + c.field}))
         << c.optics;
   }
-  EXPECT_EQ(read("optics = \"barrier\"\nslit_width_mm = 0.05\n").type, OpticsType::Barrier);
+  EXPECT_EQ(read("optics = \"line_barrier\"\nslit_width_mm = 0.05\n").type, OpticsType::LineBarrier);
   std::filesystem::remove(file);
 }
 
@@ -425,8 +427,8 @@ TEST(DisplayCalibrationFile, MutatedValuesGiveOpticsTheDisplayTakesOrAreNamedErr
   const auto file = std::filesystem::path(::testing::TempDir()) / fmt::format("lfi-cal-mut-{}.toml", ::getpid());
   const DisplayInfo device = defaultLenticularDisplay();
   const std::string seed =
-      "format = \"lfi-display-calibration\"\nversion = 1\n[optics]\noptics = \"lenslet\"\nlens_pitch_px = 7.22\n"
-      "slant_rad = 0.1826\noffset_px = 0.30\ngap_mm = 0.7333\nfocal_length_mm = 0.7333\nslit_width_mm = 0.13\n";
+      "format = \"lfi-display-calibration\"\nversion = 1\n[optics]\noptics = \"lenticular\"\nlens_pitch_px = 7.22\n"
+      "slant_rad = 0.1826\noffset_px = 0.30\ngap_mm = 0.7333\nfocal_length_mm = 0.7333\n";
   std::mt19937 rng(20261123);
   int read = 0, refused = 0;
   for (int n = 0; n < 1000; ++n) {

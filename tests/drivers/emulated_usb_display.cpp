@@ -24,7 +24,8 @@ namespace lfi::testing_support {
 EmulatedUsbDisplay::EmulatedUsbDisplay(EmulatedDisplayConfig config) : config_(std::move(config)), impl_(new Impl) {
   if (config_.calibration.pixelPitch_mm == 0) {
     config_.calibration.pixelPitch_mm = 25.4 / 338.0;
-    config_.calibration.optics = usbdisplay::OpticsCode::Lenslet;
+    config_.calibration.version = usbdisplay::kCalibrationVersion1;  // a device of the horizontal-parallax class
+    config_.calibration.optics = usbdisplay::OpticsCode::Lenticular;
     config_.calibration.lensPitch_px = 7.22;
     config_.calibration.slant_rad = 0.1826;
     config_.calibration.offset_px = 0.3;

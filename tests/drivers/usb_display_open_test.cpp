@@ -7,6 +7,7 @@
 
 #include "lfi/drivers/backend_registry.h"
 #include "lfi/drivers/display.h"
+#include "lfi/drivers/display_optics.h"
 #include "lfi/drivers/display_registry.h"
 #include "lfi/drivers/usb/usb_display.h"
 
@@ -46,7 +47,7 @@ TEST_F(UsbDisplayTest, OpenReadsInfoAndCalibrationFromTheDevice) {
   EXPECT_EQ(info.brightnessMax, c.brightnessMax);
   // Doubles travel as IEEE-754 bytes: exact.
   EXPECT_EQ(info.pixelPitch_mm, c.calibration.pixelPitch_mm);
-  EXPECT_EQ(info.optics.type, OpticsType::Lenslet);
+  EXPECT_EQ(info.optics.type, OpticsType::Lenticular);
   EXPECT_EQ(info.optics.lensPitch_px, c.calibration.lensPitch_px);
   EXPECT_EQ(info.optics.slant_rad, c.calibration.slant_rad);
   EXPECT_EQ(info.optics.offset_px, c.calibration.offset_px);
@@ -59,6 +60,34 @@ TEST_F(UsbDisplayTest, OpenReadsInfoAndCalibrationFromTheDevice) {
   EXPECT_NO_THROW(openDisplay("usb:1209:4c46/" + c.serial));
   EXPECT_TRUE(throwsError([] { openDisplay("usb:1209:4c46/NOPE"); }, Errc::NotFound, {"usb:1209:4c46/NOPE"}));
   EXPECT_TRUE(throwsError([] { openDisplay("usb:1209:0001"); }, Errc::NotFound, {"no such USB device", "1209:4c46"}));
+}
+
+// A full-parallax display sends a version 2 calibration block with its lens
+// array; the host reads it into the optics model exactly. A class code the
+// host does not know is refused at open, naming the device and the code.
+TEST_F(UsbDisplayTest, AFullParallaxDisplayReportsItsLensArray) {
+  EmulatedDisplayConfig config;
+  config.model = "emulated lenslet array";
+  config.viewCount = 1024;
+  DisplayOpticsParams optics = defaultLensletArrayDisplay().optics;
+  optics.packing = LensPacking::Hexagonal;
+  optics.rotation_rad = 0.05;
+  optics.arrayOffsetX_mm = 0.25;
+  config.calibration = usbdisplay::toCalibrationBlock(0.0315, optics);
+  {
+    EmulatedUsbDisplay device(config);
+    device.plug();
+    auto display = openDisplay("usb:1209:4c46");
+    const DisplayInfo info = display->info();
+    EXPECT_EQ(info.optics, optics);
+    EXPECT_EQ(info.pixelPitch_mm, 0.0315);
+    EXPECT_TRUE(DisplayOptics(info).fullParallax());
+  }
+  config.calibration.optics = static_cast<usbdisplay::OpticsCode>(7);
+  EmulatedUsbDisplay device(config);
+  device.plug();
+  EXPECT_TRUE(throwsError([] { openDisplay("usb:1209:4c46"); }, Errc::Device,
+                          {"usb:1209:4c46", "optics class code 7 is unknown"}));
 }
 
 // A device without a USB serial string is named by VID:PID alone: the serial

@@ -35,12 +35,17 @@ using testing_support::TestFolder;
 using testing_support::throwsError;
 namespace fs = std::filesystem;
 
+const LenticularOptics& lenticular(const DisplayOptics& optics) { return *optics.model<LenticularOptics>(); }
+
 // A telecentric camera (magnification 1, 16 mm field) looking down at a display
-// in the plane z = 0; `display` is the [display] table's body.
-std::string sceneText(const std::string& display) {
+// in the plane z = 0; `display` is the [display] table's body, with the optics
+// of the default lenticular display (whose 0.075 mm pixels make a panel of a few
+// hundred pixels cover the field) unless it names others.
+std::string sceneText(const std::string& display, bool defaultOptics = false) {
+  const bool lenticular = !defaultOptics && display.find("optics =") == std::string::npos;
   return cameraSceneText({.samplesPerPixel = 16, .seed = 5, .pixelPitch_mm = 0.25, .width_px = 64, .height_px = 64,
                           .fullWell_e = 20000, .readNoise_e = 2, .bitDepth = 12, .electronsPerUnitPerUs = 2.0}) +
-         "[display]\n" + display;
+         "[display]\n" + (lenticular ? "optics = \"lenticular\"\n" : "") + display;
 }
 
 class SimDisplayTest : public ::testing::Test {
@@ -80,7 +85,8 @@ TEST_F(SimDisplayTest, APathWithTheUrisDelimitersIsPercentEncoded) {
 TEST_F(SimDisplayTest, StateMachineThroughTheSimBackend) {
   const fs::path file =
       write("mono.toml", sceneText("panel_width_px = 320\npanel_height_px = 200\nsubpixels = \"mono\"\n"
-                                   "brightness = 2\n"));
+                                   "brightness = 2\n",
+                                   true));
   auto display = openDisplay(uri(file));
   ASSERT_EQ(display->state(), Display::State::Open);
   const DisplayInfo info = display->info();
@@ -91,9 +97,9 @@ TEST_F(SimDisplayTest, StateMachineThroughTheSimBackend) {
   EXPECT_EQ(info.panelHeight_px, 200);
   EXPECT_EQ(info.subpixels, SubpixelLayout::Mono);
   EXPECT_EQ(info.panelType(), CV_8UC1);
-  // Optics default to the lenticular display class of display_optics.h.
-  EXPECT_EQ(info.optics, defaultLenticularDisplay().optics);
-  EXPECT_EQ(info.viewCount, defaultLenticularDisplay().viewCount);
+  // Optics default to the full-parallax lenslet array display of display_optics.h.
+  EXPECT_EQ(info.optics, defaultLensletArrayDisplay().optics);
+  EXPECT_EQ(info.viewCount, defaultLensletArrayDisplay().viewCount);
 
   auto bench = SimBench::open(file, "test");
   EXPECT_FALSE(bench->lit());
@@ -171,9 +177,9 @@ TEST_F(SimDisplayTest, BadUrisAndSceneFilesAreClearErrors) {
   EXPECT_TRUE(throwsError([&] { openDisplay(uri(plain)); }, Errc::Config, {"plain.toml", "[display]"}));
   const fs::path typo = write("typo.toml", sceneText("panel_widht_px = 64\n"));
   EXPECT_TRUE(throwsError([&] { openDisplay(uri(typo)); }, Errc::Config, {"typo.toml", "panel_widht_px"}));
-  const fs::path noSlit = write("noslit.toml", sceneText("optics = \"barrier\"\n"));
+  const fs::path noSlit = write("noslit.toml", sceneText("optics = \"line_barrier\"\n"));
   EXPECT_TRUE(throwsError([&] { openDisplay(uri(noSlit)); }, Errc::Config, {"noslit.toml", "slit_width_mm"}));
-  const fs::path lensKey = write("lenskey.toml", sceneText("optics = \"barrier\"\nslit_width_mm = 0.1\n"
+  const fs::path lensKey = write("lenskey.toml", sceneText("optics = \"line_barrier\"\nslit_width_mm = 0.1\n"
                                                            "focal_length_mm = 1\n"));
   EXPECT_TRUE(throwsError([&] { openDisplay(uri(lensKey)); }, Errc::Config, {"focal_length_mm"}));
   const fs::path badRange = write("range.toml", sceneText("brightness_min = 10\nbrightness_max = 5\n"));
@@ -203,12 +209,12 @@ struct SmoothLightField {
 TEST_F(SimDisplayTest, EncodedLightFieldIsReproducedWithinTheDisplaysResolution) {
   // The default lenticular optics (7.2 px per lens, 10.5° slant, 40° view cone, RGB
   // stripe) on an 800 x 500 panel (60 x 38 mm), placed at z = -30 in the world.
-  const fs::path file = write("lenticular.toml", sceneText("panel_width_px = 800\npanel_height_px = 500\n"
-                                                           "position_mm = [0, 0, -30]\n"));
+  const fs::path file = write("lenticular.toml", sceneText("optics = \"lenticular\"\npanel_width_px = 800\n"
+                                                           "panel_height_px = 500\nposition_mm = [0, 0, -30]\n"));
   auto display = openDisplay(uri(file));
   const DisplayInfo info = display->info();
   const DisplayOptics optics(info);
-  const Vec2 n = optics.lensNormal();
+  const Vec2 n = lenticular(optics).lensNormal();
   const double halfCone = 0.5 * optics.viewCone_rad();
   const SmoothLightField source{n, 20.0, 0.2, 0.25 / std::sin(halfCone)};
 
@@ -238,7 +244,8 @@ TEST_F(SimDisplayTest, EncodedLightFieldIsReproducedWithinTheDisplaysResolution)
   // plus 8-bit quantisation. Each times the light field's gradient gives the bound.
   const double p = info.pixelPitch_mm, s = info.optics.slant_rad, gap = info.optics.gap_mm;
   const double subW = p / info.subpixelsPerPixel();
-  const double positionError = 0.5 * optics.lensPitchPerp_mm() + 0.5 * (subW * std::sin(s) + p * std::cos(s));
+  const double positionError =
+      0.5 * lenticular(optics).lensPitchPerp_mm() + 0.5 * (subW * std::sin(s) + p * std::cos(s));
   const double angularStep = (subW * std::cos(s) + p * std::sin(s)) / gap;  // in tan(angle) across the lens
   const double gradient = source.spatialAmplitude * 2 * std::numbers::pi / source.wavelength_mm;
   const double bound = gradient * positionError + source.angularSlope * 0.5 * angularStep + 0.5 / 255 + 1e-4;
@@ -280,7 +287,9 @@ TEST_F(SimDisplayTest, EncodedLightFieldIsReproducedWithinTheDisplaysResolution)
   // light field comes out worse. That is the crosstalk of a real lens sheet.
   const fs::path blurred =
       write("blurred.toml",
-            sceneText(fmt::format("panel_width_px = 800\npanel_height_px = 500\nfocal_length_mm = {}\n", 2 * gap)));
+            sceneText(fmt::format("optics = \"lenticular\"\npanel_width_px = 800\npanel_height_px = 500\n"
+                                  "focal_length_mm = {}\n",
+                                  2 * gap)));
   auto display2 = openDisplay(uri(blurred));
   display2->show(*lightField);
   auto bench2 = SimBench::open(blurred, "test");
@@ -309,7 +318,7 @@ TEST_F(SimDisplayTest, BarrierLosesTheLightTheSlitsBlock) {
   const double perpPitch = defaults.optics.lensPitch_px * defaults.pixelPitch_mm * std::cos(defaults.optics.slant_rad);
   const double slit = 0.25 * perpPitch;
   const fs::path file = write("barrier.toml", sceneText(fmt::format("panel_width_px = 400\npanel_height_px = 300\n"
-                                                                    "subpixels = \"mono\"\noptics = \"barrier\"\n"
+                                                                    "subpixels = \"mono\"\noptics = \"line_barrier\"\n"
                                                                     "slit_width_mm = {}\nbrightness = 1\n",
                                                                     slit)));
   auto display = openDisplay(uri(file));

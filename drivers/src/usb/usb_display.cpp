@@ -224,13 +224,7 @@ void UsbDisplay::readIdentity() {
   info.panelHeight_px = block.panelHeight_px;
   info.pixelPitch_mm = cal.pixelPitch_mm;
   info.subpixels = toLayout(block.subpixels);
-  info.optics.type = cal.optics == proto::OpticsCode::Barrier ? OpticsType::Barrier : OpticsType::Lenslet;
-  info.optics.lensPitch_px = cal.lensPitch_px;
-  info.optics.slant_rad = cal.slant_rad;
-  info.optics.offset_px = cal.offset_px;
-  info.optics.gap_mm = cal.gap_mm;
-  info.optics.focalLength_mm = cal.focalLength_mm;
-  info.optics.slitWidth_mm = cal.slitWidth_mm;
+  info.optics = proto::toOpticsParams(cal);
   if (!options_.opticsOverride.empty()) info.optics = readDisplayOpticsFile(options_.opticsOverride, info.optics);
   info.viewCount = block.viewCount;
   info.brightnessMin = 0;

@@ -13,8 +13,9 @@ namespace lfi::usbdisplay {
 namespace {
 
 constexpr std::uint16_t kInfoVersion = 1;
-constexpr std::uint16_t kCalibrationVersion = 1;
+// Version 1: header (16 bytes), 7 f64, CRC-32; version 2 adds 6 f64.
 constexpr std::size_t kCalibrationSize = 76;
+constexpr std::size_t kCalibrationSize2 = 124;
 constexpr std::size_t kNameField = 32;
 
 void putName(std::vector<std::uint8_t>& out, const std::string& text) {
@@ -184,16 +185,28 @@ DeviceInfoBlock decodeDeviceInfo(std::span<const std::uint8_t> bytes, const std:
 }
 
 std::vector<std::uint8_t> encodeCalibration(const CalibrationBlock& c) {
+  const bool v1 = c.version == kCalibrationVersion1;
+  if (!v1 && c.version != kCalibrationVersion2)
+    fail(Errc::InvalidArgument, "calibration block version {} is not 1 or 2", c.version);
+  if (v1 && c.optics != OpticsCode::Lenticular && c.optics != OpticsCode::LineBarrier)
+    fail(Errc::InvalidArgument, "a version 1 calibration block cannot hold optics class {}",
+         static_cast<int>(c.optics));
+  const std::size_t size = v1 ? kCalibrationSize : kCalibrationSize2;
   std::vector<std::uint8_t> out;
-  out.reserve(kCalibrationSize);
+  out.reserve(size);
   putU32(out, kCalibrationMagic);
-  putU16(out, kCalibrationVersion);
-  putU16(out, kCalibrationSize);
+  putU16(out, c.version);
+  putU16(out, static_cast<std::uint16_t>(size));
   out.push_back(static_cast<std::uint8_t>(c.optics));
+  if (!v1) out.push_back(static_cast<std::uint8_t>(c.packing));
   out.resize(16, 0);
   for (double v : {c.pixelPitch_mm, c.lensPitch_px, c.slant_rad, c.offset_px, c.gap_mm, c.focalLength_mm,
                    c.slitWidth_mm})
     putF64(out, v);
+  if (!v1)
+    for (double v : {c.arrayPitch_mm, c.rotation_rad, c.arrayOffsetX_mm, c.arrayOffsetY_mm, c.fillFactor,
+                     c.pinholeDiameter_mm})
+      putF64(out, v);
   putU32(out, crc32Of(out));
   return out;
 }
@@ -206,18 +219,27 @@ CalibrationBlock decodeCalibration(std::span<const std::uint8_t> bytes, const st
   if (getU32(p) != kCalibrationMagic)
     fail(Errc::Device, "{}: calibration blob has magic 0x{:08x}, expected 0x{:08x}", device, getU32(p),
          kCalibrationMagic);
-  if (getU16(p + 4) != kCalibrationVersion)
-    fail(Errc::Device, "{}: calibration blob version {} is not supported (expected {})", device, getU16(p + 4),
-         kCalibrationVersion);
+  CalibrationBlock c;
+  c.version = getU16(p + 4);
+  if (c.version != kCalibrationVersion1 && c.version != kCalibrationVersion2)
+    fail(Errc::Device, "{}: calibration blob version {} is not supported (this host reads 1 and 2)", device,
+         c.version);
+  const bool v1 = c.version == kCalibrationVersion1;
+  const std::size_t expected = v1 ? kCalibrationSize : kCalibrationSize2;
   const std::size_t size = getU16(p + 6);
-  if (size != kCalibrationSize || size > bytes.size())
-    fail(Errc::Device, "{}: calibration blob declares {} bytes, expected {}", device, size, kCalibrationSize);
+  if (size != expected || size > bytes.size())
+    fail(Errc::Device, "{}: calibration blob declares {} bytes, expected {} for version {}", device, size, expected,
+         c.version);
   const std::uint32_t stored = getU32(p + size - 4);
   const std::uint32_t computed = crc32Of(bytes.first(size - 4));
   if (stored != computed)
     fail(Errc::Device, "{}: calibration blob CRC-32 is 0x{:08x}, computed 0x{:08x}", device, stored, computed);
-  CalibrationBlock c;
-  if (p[8] > 1) fail(Errc::Device, "{}: calibration optics code {} is unknown (0 lenslet, 1 barrier)", device, p[8]);
+  const int known = v1 ? 1 : 3;
+  if (p[8] > known)
+    fail(Errc::Device,
+         "{}: calibration optics class code {} is unknown to this host (version {} blocks: 0 lenticular, "
+         "1 line barrier{})",
+         device, p[8], c.version, v1 ? "" : ", 2 lenslet array, 3 pinhole array");
   c.optics = static_cast<OpticsCode>(p[8]);
   c.pixelPitch_mm = getF64(p + 16);
   c.lensPitch_px = getF64(p + 24);
@@ -226,13 +248,89 @@ CalibrationBlock decodeCalibration(std::span<const std::uint8_t> bytes, const st
   c.gap_mm = getF64(p + 48);
   c.focalLength_mm = getF64(p + 56);
   c.slitWidth_mm = getF64(p + 64);
+  if (!v1) {
+    if (p[9] > 1) fail(Errc::Device, "{}: calibration packing code {} is unknown (0 square, 1 hexagonal)", device, p[9]);
+    c.packing = static_cast<PackingCode>(p[9]);
+    c.arrayPitch_mm = getF64(p + 72);
+    c.rotation_rad = getF64(p + 80);
+    c.arrayOffsetX_mm = getF64(p + 88);
+    c.arrayOffsetY_mm = getF64(p + 96);
+    c.fillFactor = getF64(p + 104);
+    c.pinholeDiameter_mm = getF64(p + 112);
+  }
   requireRange(c.pixelPitch_mm, 1e-4, 10, "pixelPitch", "mm", device);
-  requireRange(c.lensPitch_px, 1, 1000, "lensPitch", "px", device);
-  requireRange(c.slant_rad, -0.785, 0.785, "slant", "rad", device);
-  requireRange(c.offset_px, -1e4, 1e4, "offset", "px", device);
   requireRange(c.gap_mm, 1e-3, 100, "gap", "mm", device);
-  if (c.optics == OpticsCode::Lenslet) requireRange(c.focalLength_mm, 1e-3, 100, "focalLength", "mm", device);
-  else requireRange(c.slitWidth_mm, 1e-5, 100, "slitWidth", "mm", device);
+  switch (c.optics) {
+    case OpticsCode::Lenticular:
+    case OpticsCode::LineBarrier:
+      requireRange(c.lensPitch_px, 1, 1000, "lensPitch", "px", device);
+      requireRange(c.slant_rad, -0.785, 0.785, "slant", "rad", device);
+      requireRange(c.offset_px, -1e4, 1e4, "offset", "px", device);
+      break;
+    case OpticsCode::LensletArray:
+    case OpticsCode::PinholeArray:
+      requireRange(c.arrayPitch_mm, c.pixelPitch_mm, 100, "arrayPitch", "mm", device);
+      requireRange(c.rotation_rad, -0.785, 0.785, "rotation", "rad", device);
+      requireRange(c.arrayOffsetX_mm, -1e4, 1e4, "arrayOffsetX", "mm", device);
+      requireRange(c.arrayOffsetY_mm, -1e4, 1e4, "arrayOffsetY", "mm", device);
+      break;
+  }
+  if (c.optics == OpticsCode::Lenticular || c.optics == OpticsCode::LensletArray)
+    requireRange(c.focalLength_mm, 1e-3, 100, "focalLength", "mm", device);
+  if (c.optics == OpticsCode::LineBarrier) requireRange(c.slitWidth_mm, 1e-5, 100, "slitWidth", "mm", device);
+  if (c.optics == OpticsCode::LensletArray) requireRange(c.fillFactor, 1e-3, 1, "fillFactor", "", device);
+  if (c.optics == OpticsCode::PinholeArray)
+    requireRange(c.pinholeDiameter_mm, 1e-4, c.arrayPitch_mm, "pinholeDiameter", "mm", device);
+  return c;
+}
+
+DisplayOpticsParams toOpticsParams(const CalibrationBlock& c) {
+  DisplayOpticsParams o;
+  switch (c.optics) {
+    case OpticsCode::Lenticular: o.type = OpticsType::Lenticular; break;
+    case OpticsCode::LineBarrier: o.type = OpticsType::LineBarrier; break;
+    case OpticsCode::LensletArray: o.type = OpticsType::LensletArray; break;
+    case OpticsCode::PinholeArray: o.type = OpticsType::PinholeArray; break;
+  }
+  o.lensPitch_px = c.lensPitch_px;
+  o.slant_rad = c.slant_rad;
+  o.offset_px = c.offset_px;
+  o.packing = c.packing == PackingCode::Hexagonal ? LensPacking::Hexagonal : LensPacking::Square;
+  o.arrayPitch_mm = c.arrayPitch_mm;
+  o.rotation_rad = c.rotation_rad;
+  o.arrayOffsetX_mm = c.arrayOffsetX_mm;
+  o.arrayOffsetY_mm = c.arrayOffsetY_mm;
+  o.fillFactor = c.fillFactor;
+  o.pinholeDiameter_mm = c.pinholeDiameter_mm;
+  o.gap_mm = c.gap_mm;
+  o.focalLength_mm = c.focalLength_mm;
+  o.slitWidth_mm = c.slitWidth_mm;
+  return o;
+}
+
+CalibrationBlock toCalibrationBlock(double pixelPitch_mm, const DisplayOpticsParams& o) {
+  CalibrationBlock c;
+  c.pixelPitch_mm = pixelPitch_mm;
+  switch (o.type) {
+    case OpticsType::Lenticular: c.optics = OpticsCode::Lenticular; break;
+    case OpticsType::LineBarrier: c.optics = OpticsCode::LineBarrier; break;
+    case OpticsType::LensletArray: c.optics = OpticsCode::LensletArray; break;
+    case OpticsType::PinholeArray: c.optics = OpticsCode::PinholeArray; break;
+  }
+  c.version = fullParallax(o.type) ? kCalibrationVersion2 : kCalibrationVersion1;
+  c.lensPitch_px = o.lensPitch_px;
+  c.slant_rad = o.slant_rad;
+  c.offset_px = o.offset_px;
+  c.packing = o.packing == LensPacking::Hexagonal ? PackingCode::Hexagonal : PackingCode::Square;
+  c.arrayPitch_mm = o.arrayPitch_mm;
+  c.rotation_rad = o.rotation_rad;
+  c.arrayOffsetX_mm = o.arrayOffsetX_mm;
+  c.arrayOffsetY_mm = o.arrayOffsetY_mm;
+  c.fillFactor = o.fillFactor;
+  c.pinholeDiameter_mm = o.pinholeDiameter_mm;
+  c.gap_mm = o.gap_mm;
+  c.focalLength_mm = o.focalLength_mm;
+  c.slitWidth_mm = o.slitWidth_mm;
   return c;
 }
 

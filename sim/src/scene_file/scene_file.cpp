@@ -7,6 +7,7 @@
 #include "lfi/core/config.h"
 #include "lfi/core/error.h"
 #include "lfi/core/exr_io.h"
+#include "lfi/drivers/display_calibration_file.h"
 #include "lfi/drivers/display_optics.h"
 
 #include "scene_file_internal.h"
@@ -46,7 +47,12 @@ Rigid3 readPlacement(ConfigTable& t) {
 namespace {
 
 DisplayParameters readDisplay(ConfigTable& t) {
-  const DisplayInfo defaults = defaultLenticularDisplay();
+  // The class's default display (display_optics.h) gives what the table leaves out.
+  const std::string kind = t.string("optics", "lenslet_array",
+                                    {"lenticular", "line_barrier", "lenslet_array", "pinhole_array"});
+  const DisplayInfo defaults = kind == "lenslet_array"   ? defaultLensletArrayDisplay()
+                               : kind == "pinhole_array" ? defaultPinholeArrayDisplay()
+                                                         : defaultLenticularDisplay();
   DisplayParameters d;
   DisplayInfo& info = d.info;
   info.vendor = "lfi";
@@ -58,17 +64,7 @@ DisplayParameters readDisplay(ConfigTable& t) {
   const std::string sub = t.string("subpixels", "rgb", {"mono", "rgb", "bgr"});
   info.subpixels = sub == "mono" ? SubpixelLayout::Mono : sub == "rgb" ? SubpixelLayout::RgbStripe
                                                                         : SubpixelLayout::BgrStripe;
-  DisplayOpticsParams& o = info.optics;
-  const bool barrier = t.string("optics", "lenslet", {"lenslet", "barrier"}) == "barrier";
-  o.type = barrier ? OpticsType::Barrier : OpticsType::Lenslet;
-  o.lensPitch_px = t.number("lens_pitch_px", defaults.optics.lensPitch_px, 1, 1000);
-  o.slant_rad = t.number("slant_rad", defaults.optics.slant_rad, -0.785, 0.785);
-  o.offset_px = t.number("offset_px", defaults.optics.offset_px, -1e6, 1e6);
-  o.gap_mm = t.number("gap_mm", defaults.optics.gap_mm, 1e-3, 100);  // (DisplayInfo::validate's range)
-  if (barrier)
-    o.slitWidth_mm = t.number("slit_width_mm", std::nullopt, 1e-6, 1e3);
-  else
-    o.focalLength_mm = t.number("focal_length_mm", o.gap_mm, 1e-6, 1e6);
+  info.optics = readDisplayOpticsTable(t, defaults.optics);
   info.viewCount = t.integer("view_count", defaults.viewCount, 1, 1 << 20);
   info.brightnessMin = t.integer("brightness_min", defaults.brightnessMin, 0, 1 << 20);
   info.brightnessMax = t.integer("brightness_max", defaults.brightnessMax, 0, 1 << 20);

@@ -1,6 +1,8 @@
 #pragma once
 // The bench's light field display as the rest of the stack sees it: a flat panel
-// behind a lenslet (lenticular) sheet or a parallax barrier. Backends (the libusb
+// behind 2-D optics that give full parallax (a lenslet array or a pinhole array:
+// integral imaging) or 1-D optics that give horizontal parallax only (a slanted
+// lenticular sheet or a line barrier). Backends (the libusb
 // `usb:` display, the ray-traced `sim:` display) implement this interface and are
 // opened by URI (display_registry.h).
 //
@@ -36,22 +38,46 @@ namespace lfi {
 
 // Order of the colour subpixels inside one panel pixel, left to right.
 enum class SubpixelLayout { Mono, RgbStripe, BgrStripe };
-enum class OpticsType { Lenslet, Barrier };
+// The optics over the panel (display_optics.h has the models, one header per class
+// under optics/ with its parameter table):
+//   Lenticular    slanted cylinder lenses: horizontal parallax only (lenticular_optics.h)
+//   LineBarrier   slanted slits, the same geometry without lenses (lenticular_optics.h)
+//   LensletArray  a 2-D microlens array, square or hexagonal packing (lenslet_array_optics.h)
+//   PinholeArray  a 2-D array of pinholes (pinhole_array_optics.h)
+enum class OpticsType { Lenticular, LineBarrier, LensletArray, PinholeArray };
+// How a lens or pinhole array is packed: centres on a square grid, or on a
+// hexagonal grid (rows of pitch p, every other row shifted by p/2, rows p√3/2 apart).
+enum class LensPacking { Square, Hexagonal };
 
 const char* toString(SubpixelLayout layout);
 const char* toString(OpticsType type);
+const char* toString(LensPacking packing);
+// Whether the optics send light in every direction of a 2-D grid from each lens.
+inline bool fullParallax(OpticsType type) {
+  return type == OpticsType::LensletArray || type == OpticsType::PinholeArray;
+}
 
-// The optics in front of the panel (display_optics.h has the model and the defaults'
-// sources). Lens axes are lines on the panel tilted by `slant_rad` from the panel's
-// vertical (positive: the axis leans towards +x going up, +y).
+// The optics in front of the panel. Which fields count depends on the class; the
+// others are ignored. Units: mm, rad, panel pixels where the name says _px.
 struct DisplayOpticsParams {
-  OpticsType type = OpticsType::Lenslet;
-  double lensPitch_px = 0;    // distance between neighbouring lens axes along a panel row, in panel pixels
-  double slant_rad = 0;       // lens axis angle from the panel vertical
-  double offset_px = 0;       // x of lens 0's axis on the panel's centre row, from the panel centre, in pixels
-  double gap_mm = 0;          // panel (pixel plane) to lens/barrier plane
-  double focalLength_mm = 0;  // lenslet only: focal length of each lens
-  double slitWidth_mm = 0;    // barrier only: width of each slit
+  OpticsType type = OpticsType::Lenticular;
+  // Lenticular and line barrier. Lens axes are lines on the panel tilted by
+  // `slant_rad` from the panel's vertical (positive: the axis leans towards +x going up, +y).
+  double lensPitch_px = 0;  // distance between neighbouring lens axes along a panel row, in panel pixels
+  double slant_rad = 0;     // lens axis angle from the panel vertical
+  double offset_px = 0;     // x of lens 0's axis on the panel's centre row, from the panel centre, in pixels
+  // Lenslet and pinhole arrays.
+  LensPacking packing = LensPacking::Square;
+  double arrayPitch_mm = 0;       // centre distance of neighbouring lenses (pinholes) along a lattice row
+  double rotation_rad = 0;        // the lattice rows' angle from the panel rows (+x towards +y)
+  double arrayOffsetX_mm = 0;     // centre of lens (0, 0) from the panel centre
+  double arrayOffsetY_mm = 0;
+  double fillFactor = 1;          // lenslet array: the clear aperture, as a linear fraction of a lens's cell
+  double pinholeDiameter_mm = 0;  // pinhole array
+  // Every class.
+  double gap_mm = 0;          // panel (pixel plane) to lens/barrier/pinhole plane
+  double focalLength_mm = 0;  // lenticular and lenslet array: focal length of each lens
+  double slitWidth_mm = 0;    // line barrier: width of each slit
   friend bool operator==(const DisplayOpticsParams&, const DisplayOpticsParams&) = default;
 };
 
@@ -72,7 +98,6 @@ struct DisplayInfo {
   int brightnessMin = 0;
   int brightnessMax = 0;
 
-  double lensPitch_mm() const { return optics.lensPitch_px * pixelPitch_mm; }
   int subpixelsPerPixel() const { return subpixels == SubpixelLayout::Mono ? 1 : 3; }
   // The panel image type show() takes: CV_8UC1 for Mono, CV_8UC3 otherwise.
   int panelType() const;

@@ -24,6 +24,7 @@
 #include "lfi/core/geometry.h"
 #include "lfi/core/light_field.h"
 #include "lfi/drivers/display.h"
+#include "lfi/drivers/display_optics.h"
 #include "lfi/sim/solid.h"
 
 #include <opencv2/core.hpp>
@@ -60,49 +61,32 @@ struct LightFieldEmission {
   LightFieldLookup lookup = LightFieldLookup::Nearest;
 };
 
-// The physical model of a light field display (issue 6), precomputed from its
-// DisplayInfo. Frame: the display frame of display.h (origin at the panel's
-// centre, x along columns, y up, z = 0 the lens/barrier plane, +z the emitting
-// side); the pixel plane is at z = -gap. Millimetres, radians.
+// The physical model of a light field display: every class of display.h's
+// OpticsType, followed back through its own lens, slit or pinhole
+// (DisplayOptics::sourceOfRay; the classes' models and what they leave out are
+// in lfi/drivers/optics/). Frame: the display frame of display.h (origin at the
+// panel's centre, x along columns, y up, z = 0 the lens/barrier plane, +z the
+// emitting side); the pixel plane is at z = -gap. Millimetres, radians.
 //
-//   parameter (DisplayInfo)     meaning here
-//   panel size, pixelPitch_mm   the pixel plane; subpixels are pitch/3 wide stripes (RGB/BGR) or
-//                               whole pixels (mono), 100 % fill factor, each a uniform emitter
-//   lensPitch_px, slant_rad,    lens axes / slit centre lines w = n·x = w0 + m P (display_optics.h)
-//   offset_px
-//   gap_mm                      lens/barrier plane to pixel plane (optical, air-equivalent)
-//   focalLength_mm (lenslet)    f of each cylindrical lens (power across its axis only)
-//   slitWidth_mm (barrier)      open width of each slit; the barrier between slits is black
-//
-// A ray leaving the plane at q in direction d (dz > 0) is followed back to the
-// pixel plane: across the lens (coordinate w, lens m nearest to q, h = w(q) - w_m,
-// tan across t = d·n / dz) an ideal thin lens gives w_p = w_m + h (1 - gap/f) - gap t
-// — with f = gap every point of a lens sees the same pixel for a given direction;
-// f ≠ gap blurs neighbouring views together; a slit is the same with 1/f = 0 and
-// passes only |h| <= slitWidth/2. Along the axis (no power) u_p = u(q) - gap (d·a)/dz.
-// The ray gets the radiance of the subpixel at (u_p, w_p): nearest, no lens
-// aberrations or diffraction. Pixels under the neighbouring lens are reached at
-// steep angles (the repeated view zones of a real lenticular display); the bezel
-// around the panel is black. Finite angular resolution (a subpixel spans
-// ≈ pitch / gap across), slant crosstalk and barrier loss follow from this geometry.
+// A ray leaving the plane at q in direction d (dz > 0) gets the radiance of the
+// subpixel it comes from: subpixels are pitch/3 wide stripes (RGB/BGR) or whole
+// pixels (mono), 100 % fill factor, each a uniform emitter; the bezel around the
+// panel and the opaque parts of a barrier or pinhole array are black. Pixels
+// under the neighbouring lens are reached at steep angles (the repeated view
+// zones of a real display). Finite angular resolution (a subpixel spans
+// ≈ pitch / gap), defocus blur, crosstalk and barrier loss follow from this geometry.
 class PanelOptics {
 public:
   // Validates `info` (Errc::InvalidArgument naming the field).
-  explicit PanelOptics(const DisplayInfo& info);
-  const DisplayInfo& info() const { return info_; }
+  explicit PanelOptics(const DisplayInfo& info) : optics_(info) {}
+  const DisplayInfo& info() const { return optics_.info(); }
   // Column in the level image (col · subpixels + subpixel) and row of the subpixel
   // that the ray (q on z = 0, direction d, display frame) comes from; false when the
-  // barrier blocks it, d points backwards or the pixel is off the panel.
+  // array blocks it, d points backwards or the pixel is off the panel.
   bool subpixelOfRay(const Vec2& q, const Vec3& d, int& column, int& row) const;
 
 private:
-  DisplayInfo info_;
-  Vec2 axis_, normal_;                // lens axis direction a and in-plane normal n
-  double pitch_ = 0, w0_ = 0;         // perpendicular lens pitch P and axis 0's w, mm
-  double gap_ = 0, defocus_ = 1;      // gap and 1 - gap / f (1 for a barrier)
-  double halfSlit_ = 0;               // barrier: half the slit width; lenslet: infinity
-  double invPitch_ = 0, halfWidth_ = 0, halfHeight_ = 0;  // 1 / pixel pitch; panel half size in pixels
-  int subpixels_ = 1;
+  DisplayOptics optics_;
 };
 
 // Emission of a display object: the level image is what the panel shows, one float

@@ -6,6 +6,8 @@
 // little-endian; every length is bounded by a constant below, and the decoders
 // reject anything outside those bounds with Errc::Device naming the field.
 
+#include "lfi/drivers/display.h"
+
 #include <cstddef>
 #include <cstdint>
 #include <optional>
@@ -57,7 +59,15 @@ inline constexpr std::uint32_t kCalibrationMagic = 0x4243464c;  // "LFCB"
 
 enum class Format : std::uint16_t { Mono8 = 1, Rgb888 = 2 };
 enum class SubpixelCode : std::uint8_t { Mono = 0, RgbStripe = 1, BgrStripe = 2 };
-enum class OpticsCode : std::uint8_t { Lenslet = 0, Barrier = 1 };
+// The optics class in the calibration block. Version 1 blocks know codes 0 and 1 only.
+enum class OpticsCode : std::uint8_t { Lenticular = 0, LineBarrier = 1, LensletArray = 2, PinholeArray = 3 };
+enum class PackingCode : std::uint8_t { Square = 0, Hexagonal = 1 };
+
+// Calibration block versions: 1 (76 bytes: the lenticular and line-barrier
+// classes) and 2 (124 bytes: every class). A host reads both; a device sends
+// the lowest version that holds its class.
+inline constexpr std::uint16_t kCalibrationVersion1 = 1;
+inline constexpr std::uint16_t kCalibrationVersion2 = 2;
 
 // Device-side rejection reasons (GetLastError / GetStatus lastError).
 enum class DeviceError : std::uint32_t {
@@ -92,11 +102,22 @@ struct DeviceInfoBlock {
 };
 
 struct CalibrationBlock {
+  std::uint16_t version = kCalibrationVersion2;  // as encoded or decoded
   double pixelPitch_mm = 0;
-  OpticsCode optics = OpticsCode::Lenslet;
+  OpticsCode optics = OpticsCode::Lenticular;
+  // Lenticular, line barrier.
   double lensPitch_px = 0;
   double slant_rad = 0;
   double offset_px = 0;
+  // Lenslet and pinhole arrays (version 2).
+  PackingCode packing = PackingCode::Square;
+  double arrayPitch_mm = 0;
+  double rotation_rad = 0;
+  double arrayOffsetX_mm = 0;
+  double arrayOffsetY_mm = 0;
+  double fillFactor = 0;
+  double pinholeDiameter_mm = 0;
+  // Every class.
   double gap_mm = 0;
   double focalLength_mm = 0;
   double slitWidth_mm = 0;
@@ -130,7 +151,11 @@ std::vector<std::uint8_t> encodeDeviceInfo(const DeviceInfoBlock& info);
 // unknown version, or a field outside its bound.
 DeviceInfoBlock decodeDeviceInfo(std::span<const std::uint8_t> bytes, const std::string& device);
 
+// Encodes `calibration` as its `version` (Errc::InvalidArgument for a class
+// version 1 cannot hold).
 std::vector<std::uint8_t> encodeCalibration(const CalibrationBlock& calibration);
+// Throws Errc::Device naming the device and field for a short or corrupt block,
+// an unknown version or optics class, or a value out of range.
 CalibrationBlock decodeCalibration(std::span<const std::uint8_t> bytes, const std::string& device);
 
 std::vector<std::uint8_t> encodeStatus(const StatusBlock& status);
@@ -140,6 +165,11 @@ StatusBlock decodeStatus(std::span<const std::uint8_t> bytes, const std::string&
 std::vector<std::uint8_t> encodeFrameHeader(const FrameHeader& header);
 // Device side: returns the error a device reports for a malformed header.
 DeviceError decodeFrameHeader(std::span<const std::uint8_t> bytes, FrameHeader& header);
+
+// The calibration block's optics as the display model's parameters, and back
+// (the lowest block version that holds the class).
+DisplayOpticsParams toOpticsParams(const CalibrationBlock& calibration);
+CalibrationBlock toCalibrationBlock(double pixelPitch_mm, const DisplayOpticsParams& optics);
 
 // GetLastError reply: u32 code, u32 sequence, then the message (no NUL), at most kMaxErrorText bytes.
 std::vector<std::uint8_t> encodeLastError(DeviceError code, std::uint32_t sequence, const std::string& message);

@@ -1,0 +1,69 @@
+#pragma once
+// A 2-D microlens array over the panel (integral imaging): full parallax. Every
+// lens sends the panel pixels under it out as beams in a 2-D grid of
+// directions, so a round part is lit from every direction it needs.
+//
+//   parameter         units  meaning
+//   packing           -      square or hexagonal lens centres (lens_lattice.h)
+//   arrayPitch_mm     mm     centre distance of neighbouring lenses, >= one pixel
+//   rotation_rad      rad    the lattice rows' angle from the panel rows, |θ| <= π/4
+//   arrayOffsetX/Y    mm     centre of lens (0, 0) from the panel centre
+//   gap_mm            mm     pixel plane to lens plane
+//   focalLength_mm    mm     each lens's focal length (= gap: focused on the panel)
+//   fillFactor        -      clear aperture as a linear fraction of the lens's cell
+//                            (1: the whole square or hexagon transmits)
+//
+// Frame (display.h): origin at the panel centre, x along the columns, y up, z = 0
+// the lens plane, +z towards the part; the pixel plane is z = -gap. Millimetres.
+//
+// Model. A panel point p belongs to the lens whose cell holds it (centre c, the
+// lens straight above). Its chief ray leaves the lens centre with direction
+// ∝ ((c - p) / gap, 1): a lens focused on the panel (f = gap) turns every point
+// of the pixel into a collimated beam, the pixel's centre into the beam along
+// the chief ray. The view cone across a lattice row is 2 atan(P / (2 gap)),
+// wider along the cell's diagonals. The inverse (panelPointFromRay) takes the
+// lens whose clear aperture the ray crosses and the point p = c - gap (dx, dy)/dz
+// under it; a direction whose point lies under another lens is outside the view
+// cone. Physically (sourceOfRay), a ray leaving the lens plane at q = c + h with
+// slope t = (dx, dy)/dz came through a thin lens from the panel point
+// p = c + h (1 - gap/f) - gap t, which may lie under a neighbouring lens: the
+// repeated view zones (crosstalk) of a real integral-imaging display. A ray
+// through the opaque part between clear apertures is blocked.
+// Not modelled: lens aberrations (each lens is ideal and thin), diffraction at
+// the apertures (a 1 mm lens at 550 nm spreads a beam by about 1.22 λ / D =
+// 0.7 mrad, well below the default display's 23 mrad per pixel), reflections and stray light between
+// panel and array, the panel's own angular emission profile.
+
+#include "lfi/core/geometry.h"
+#include "lfi/drivers/display.h"
+#include "lfi/drivers/optics/lens_lattice.h"
+#include "lfi/drivers/optics/panel_grid.h"
+
+#include <optional>
+
+namespace lfi {
+
+class LensletArrayOptics {
+public:
+  // `info` validated; its optics are a LensletArray.
+  explicit LensletArrayOptics(const DisplayInfo& info);
+
+  DisplayRay rayFromPanelPoint(const Vec2& p) const;
+  std::optional<Vec2> panelPointFromRay(const Vec2& q, const Vec3& d) const;
+  std::optional<Vec2> sourceOfRay(const Vec2& q, const Vec3& d) const;
+  // The centre of the lens whose cell holds q.
+  Vec2 apertureCentre(const Vec2& q) const { return lattice_.nearestCentre(q); }
+  // Whether two points of the panel or lens plane lie in the same lens's cell
+  // (points on the border between two cells are in both).
+  bool sameAperture(const Vec2& a, const Vec2& b) const {
+    return lattice_.insideCell(b, lattice_.nearestCentre(a), 1);
+  }
+  double viewCone_rad() const;
+  const LensLattice& lattice() const { return lattice_; }
+
+private:
+  LensLattice lattice_;
+  double gap_, defocus_, fill_;
+};
+
+}  // namespace lfi
