@@ -139,7 +139,8 @@ int run(int argc, char** argv) {
   app.add_option("--class", only, "Only this display class")
       ->check(CLI::IsMember({"lenticular", "lenslet_array", "pinhole_array"}));
   CLI11_PARSE(app, argc, argv);
-  for (const DisplayInfo& info : {defaultLenticularDisplay(), defaultLensletArrayDisplay(), defaultPinholeArrayDisplay()})
+  for (const DisplayInfo& info :
+       {defaultLenticularDisplay(), defaultLensletArrayDisplay(), defaultPinholeArrayDisplay()})
     if (only.empty() || only == toString(info.optics.type)) benchClass(info, mono, repeats);
   return 0;
 }

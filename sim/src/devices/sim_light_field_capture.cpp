@@ -5,9 +5,10 @@
 #include "lfi/sim/render.h"
 #include "lfi/sim/scene_file.h"
 
+#include "capture_beam.h"
+
 #include <algorithm>
 #include <charconv>
-#include <numbers>
 #include <string>
 #include <vector>
 
@@ -65,13 +66,9 @@ public:
   }
 
   LightField capture(const std::function<void(double)>& progress) override {
-    std::vector<Object> objects = parts_;
     const double size = 4 * std::max(settings_.geometry.extentX_mm(), settings_.geometry.extentY_mm()) + 200;
-    Rigid3 facingDown = Rigid3::rotation({1, 0, 0}, std::numbers::pi);
-    facingDown.t = {0, 0, settings_.beamDistance_mm};
-    objects.push_back({"collimated beam", Rectangle{size, size}, facingDown, Absorber{},
-                       ParallelEmission{1.0, settings_.beamHalfAngle_rad}});
-    const Scene scene(std::move(objects), ambientIor_);
+    const Scene scene = detail::captureScene(parts_, ambientIor_, settings_.beamDistance_mm,
+                                             settings_.beamHalfAngle_rad, size);
     const LightFieldSensor sensor{settings_.geometry,
                                   Rigid3::translation({0, 0, -settings_.geometry.distance_mm})};
     RenderOptions ro;

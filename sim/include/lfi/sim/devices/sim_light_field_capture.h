@@ -19,7 +19,10 @@
 
 #include "lfi/drivers/light_field_capture.h"
 
+#include <opencv2/core.hpp>
+
 #include <filesystem>
+#include <functional>
 #include <memory>
 
 namespace lfi::sim {
@@ -34,6 +37,20 @@ struct SimCaptureSettings {
 
 std::unique_ptr<LightFieldCapture> openSimLightFieldCapture(const std::filesystem::path& sceneFile,
                                                             const SimCaptureSettings& settings);
+
+// The reference in the display's own ray space, the other way to capture it:
+// for every panel subpixel of the scene file's [display] (a lenslet or pinhole
+// array), the radiance the collimated capture beam sends back along the rays
+// that subpixel emits through its own lens or pinhole (by reversibility),
+// traced through the scene's parts from `samplesPerPixel` points spread over
+// the subpixel and over the lens's clear aperture (or pinhole). Nothing is
+// resampled through the light field's parametrisation: this panel image, scaled
+// to drive levels, is what the display shows. CV_32FC1 of panelHeight x
+// (panelWidth · subpixels), relative radiance (the beam's is 1), the layout of
+// the sim: display's level image (scene.h, panelLevels). Uses the settings'
+// beam and spp, not its light field geometry.
+cv::Mat capturePanelReference(const std::filesystem::path& sceneFile, const SimCaptureSettings& settings,
+                              const std::function<void(double)>& progress = {});
 
 // Registers the "sim" light field capture scheme. Idempotent.
 void registerSimLightFieldCapture();
