@@ -9,12 +9,12 @@ namespace lfi {
 
 namespace {
 
-std::variant<LenticularOptics, LensletArrayOptics, PinholeArrayOptics> makeModel(const DisplayInfo& info) {
+std::variant<LenticularOptics, LensArrayOptics> makeModel(const DisplayInfo& info) {
   switch (info.optics.type) {
     case OpticsType::Lenticular:
     case OpticsType::LineBarrier: return LenticularOptics(info);
-    case OpticsType::LensletArray: return LensletArrayOptics(info);
-    case OpticsType::PinholeArray: return PinholeArrayOptics(info);
+    case OpticsType::LensletArray:
+    case OpticsType::PinholeArray: return LensArrayOptics(info);
   }
   fail(Errc::InvalidArgument, "display info optics type {} is not a known class", static_cast<int>(info.optics.type));
 }

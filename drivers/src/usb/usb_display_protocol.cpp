@@ -8,6 +8,7 @@
 #include <bit>
 #include <cmath>
 #include <cstring>
+#include <utility>
 
 namespace lfi::usbdisplay {
 namespace {
@@ -284,53 +285,49 @@ CalibrationBlock decodeCalibration(std::span<const std::uint8_t> bytes, const st
   return c;
 }
 
+namespace {
+
+// The optics values the calibration block and the display model share.
+constexpr std::pair<double CalibrationBlock::*, double DisplayOpticsParams::*> kSharedOptics[] = {
+    {&CalibrationBlock::lensPitch_px, &DisplayOpticsParams::lensPitch_px},
+    {&CalibrationBlock::slant_rad, &DisplayOpticsParams::slant_rad},
+    {&CalibrationBlock::offset_px, &DisplayOpticsParams::offset_px},
+    {&CalibrationBlock::arrayPitch_mm, &DisplayOpticsParams::arrayPitch_mm},
+    {&CalibrationBlock::rotation_rad, &DisplayOpticsParams::rotation_rad},
+    {&CalibrationBlock::arrayOffsetX_mm, &DisplayOpticsParams::arrayOffsetX_mm},
+    {&CalibrationBlock::arrayOffsetY_mm, &DisplayOpticsParams::arrayOffsetY_mm},
+    {&CalibrationBlock::fillFactor, &DisplayOpticsParams::fillFactor},
+    {&CalibrationBlock::pinholeDiameter_mm, &DisplayOpticsParams::pinholeDiameter_mm},
+    {&CalibrationBlock::gap_mm, &DisplayOpticsParams::gap_mm},
+    {&CalibrationBlock::focalLength_mm, &DisplayOpticsParams::focalLength_mm},
+    {&CalibrationBlock::slitWidth_mm, &DisplayOpticsParams::slitWidth_mm},
+};
+
+// The wire codes are the model's enumerators in order.
+static_assert(static_cast<int>(OpticsType::Lenticular) == static_cast<int>(OpticsCode::Lenticular) &&
+              static_cast<int>(OpticsType::LineBarrier) == static_cast<int>(OpticsCode::LineBarrier) &&
+              static_cast<int>(OpticsType::LensletArray) == static_cast<int>(OpticsCode::LensletArray) &&
+              static_cast<int>(OpticsType::PinholeArray) == static_cast<int>(OpticsCode::PinholeArray));
+static_assert(static_cast<int>(LensPacking::Square) == static_cast<int>(PackingCode::Square) &&
+              static_cast<int>(LensPacking::Hexagonal) == static_cast<int>(PackingCode::Hexagonal));
+
+}  // namespace
+
 DisplayOpticsParams toOpticsParams(const CalibrationBlock& c) {
   DisplayOpticsParams o;
-  switch (c.optics) {
-    case OpticsCode::Lenticular: o.type = OpticsType::Lenticular; break;
-    case OpticsCode::LineBarrier: o.type = OpticsType::LineBarrier; break;
-    case OpticsCode::LensletArray: o.type = OpticsType::LensletArray; break;
-    case OpticsCode::PinholeArray: o.type = OpticsType::PinholeArray; break;
-  }
-  o.lensPitch_px = c.lensPitch_px;
-  o.slant_rad = c.slant_rad;
-  o.offset_px = c.offset_px;
-  o.packing = c.packing == PackingCode::Hexagonal ? LensPacking::Hexagonal : LensPacking::Square;
-  o.arrayPitch_mm = c.arrayPitch_mm;
-  o.rotation_rad = c.rotation_rad;
-  o.arrayOffsetX_mm = c.arrayOffsetX_mm;
-  o.arrayOffsetY_mm = c.arrayOffsetY_mm;
-  o.fillFactor = c.fillFactor;
-  o.pinholeDiameter_mm = c.pinholeDiameter_mm;
-  o.gap_mm = c.gap_mm;
-  o.focalLength_mm = c.focalLength_mm;
-  o.slitWidth_mm = c.slitWidth_mm;
+  o.type = static_cast<OpticsType>(c.optics);
+  o.packing = static_cast<LensPacking>(c.packing);
+  for (const auto& [block, model] : kSharedOptics) o.*model = c.*block;
   return o;
 }
 
 CalibrationBlock toCalibrationBlock(double pixelPitch_mm, const DisplayOpticsParams& o) {
   CalibrationBlock c;
-  c.pixelPitch_mm = pixelPitch_mm;
-  switch (o.type) {
-    case OpticsType::Lenticular: c.optics = OpticsCode::Lenticular; break;
-    case OpticsType::LineBarrier: c.optics = OpticsCode::LineBarrier; break;
-    case OpticsType::LensletArray: c.optics = OpticsCode::LensletArray; break;
-    case OpticsType::PinholeArray: c.optics = OpticsCode::PinholeArray; break;
-  }
   c.version = fullParallax(o.type) ? kCalibrationVersion2 : kCalibrationVersion1;
-  c.lensPitch_px = o.lensPitch_px;
-  c.slant_rad = o.slant_rad;
-  c.offset_px = o.offset_px;
-  c.packing = o.packing == LensPacking::Hexagonal ? PackingCode::Hexagonal : PackingCode::Square;
-  c.arrayPitch_mm = o.arrayPitch_mm;
-  c.rotation_rad = o.rotation_rad;
-  c.arrayOffsetX_mm = o.arrayOffsetX_mm;
-  c.arrayOffsetY_mm = o.arrayOffsetY_mm;
-  c.fillFactor = o.fillFactor;
-  c.pinholeDiameter_mm = o.pinholeDiameter_mm;
-  c.gap_mm = o.gap_mm;
-  c.focalLength_mm = o.focalLength_mm;
-  c.slitWidth_mm = o.slitWidth_mm;
+  c.pixelPitch_mm = pixelPitch_mm;
+  c.optics = static_cast<OpticsCode>(o.type);
+  c.packing = static_cast<PackingCode>(o.packing);
+  for (const auto& [block, model] : kSharedOptics) c.*block = o.*model;
   return c;
 }
 

@@ -43,11 +43,8 @@ cv::Mat capturePanelReference(const std::filesystem::path& sceneFile, const SimC
   const PanelGrid& grid = optics.grid();
   const int sub = grid.subpixels();
   const double gap = o.gap_mm, subWidth = info.pixelPitch_mm / sub, height = info.pixelPitch_mm;
-  const bool lens = o.type == OpticsType::LensletArray;
-  const double inverseFocal = lens ? 1 / o.focalLength_mm : 0;
-  const LensLattice& lattice =
-      lens ? optics.model<LensletArrayOptics>()->lattice() : optics.model<PinholeArrayOptics>()->lattice();
-  const double reach = lens ? lattice.circumradius_mm() : 0.5 * o.pinholeDiameter_mm;
+  const LensArrayOptics& array = *optics.model<LensArrayOptics>();
+  const double reach = array.apertureReach_mm(), power = array.power_per_mm();
   const std::uint64_t seed = d.render.seed ^ 0x50414e45ull;  // "PANE"
   cv::Mat levels(info.panelHeight_px, info.panelWidth_px * sub, CV_32FC1);
   std::atomic<int> rowsDone = 0;
@@ -57,7 +54,7 @@ cv::Mat capturePanelReference(const std::filesystem::path& sceneFile, const SimC
       for (int col = 0; col < info.panelWidth_px; ++col)
         for (int k = 0; k < sub; ++k) {
           const Vec2 centre = grid.subpixelCentre(col, row, k);
-          const Vec2 c = lattice.nearestCentre(centre);
+          const Vec2 c = array.apertureCentre(centre);
           Sampler sampler(seed, (static_cast<std::uint64_t>(row) * info.panelWidth_px + col) * sub + k);
           double sum = 0;
           for (int n = 0; n < settings.samplesPerPixel; ++n) {
@@ -66,9 +63,9 @@ cv::Mat capturePanelReference(const std::filesystem::path& sceneFile, const SimC
             const Vec2 p = centre + Vec2((sampler.next() - 0.5) * subWidth, (sampler.next() - 0.5) * height);
             Vec2 q;
             do q = c + reach * Vec2(2 * sampler.next() - 1, 2 * sampler.next() - 1);
-            while (lens ? !lattice.insideCell(q, c, o.fillFactor) : (q - c).length2() > reach * reach);
+            while (!array.insideAperture(q, c));
             // From p through the thin lens at q (a pinhole bends nothing).
-            const Vec2 slope = (q - p) / gap - (q - c) * inverseFocal;
+            const Vec2 slope = (q - p) / gap - (q - c) * power;
             const Ray ray{worldFromDisplay.point({q.x, q.y, 0}),
                           worldFromDisplay.vector(Vec3(slope.x, slope.y, 1).normalized())};
             sum += traceRadiance(scene, ray, sampler, 64, 4);

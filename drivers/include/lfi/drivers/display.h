@@ -42,8 +42,8 @@ enum class SubpixelLayout { Mono, RgbStripe, BgrStripe };
 // under optics/ with its parameter table):
 //   Lenticular    slanted cylinder lenses: horizontal parallax only (lenticular_optics.h)
 //   LineBarrier   slanted slits, the same geometry without lenses (lenticular_optics.h)
-//   LensletArray  a 2-D microlens array, square or hexagonal packing (lenslet_array_optics.h)
-//   PinholeArray  a 2-D array of pinholes (pinhole_array_optics.h)
+//   LensletArray  a 2-D microlens array, square or hexagonal packing (lens_array_optics.h)
+//   PinholeArray  a 2-D array of pinholes, square or hexagonal packing (lens_array_optics.h)
 enum class OpticsType { Lenticular, LineBarrier, LensletArray, PinholeArray };
 // How a lens or pinhole array is packed: centres on a square grid, or on a
 // hexagonal grid (rows of pitch p, every other row shifted by p/2, rows p√3/2 apart).

@@ -6,7 +6,7 @@
 // encoding of a light field (lfi/core/light_field.h) into a panel image and the
 // decoding of a panel image back into a light field. The classes' models, their
 // parameter tables and what they leave out are in optics/: lenticular_optics.h
-// (lenticular, line barrier), lenslet_array_optics.h, pinhole_array_optics.h.
+// (lenticular, line barrier) and lens_array_optics.h (lenslet and pinhole arrays).
 //
 // Frame (display.h): origin at the centre of the panel's active area, x along panel
 // columns, y up the panel (row 0 at the top), z = 0 the lens/barrier plane, +z
@@ -20,10 +20,9 @@
 #include "lfi/core/geometry.h"
 #include "lfi/core/light_field.h"
 #include "lfi/drivers/display.h"
-#include "lfi/drivers/optics/lenslet_array_optics.h"
+#include "lfi/drivers/optics/lens_array_optics.h"
 #include "lfi/drivers/optics/lenticular_optics.h"
 #include "lfi/drivers/optics/panel_grid.h"
-#include "lfi/drivers/optics/pinhole_array_optics.h"
 
 #include <opencv2/core.hpp>
 
@@ -81,7 +80,7 @@ public:
 private:
   DisplayInfo info_;
   PanelGrid grid_;
-  std::variant<LenticularOptics, LensletArrayOptics, PinholeArrayOptics> model_;
+  std::variant<LenticularOptics, LensArrayOptics> model_;
 };
 
 // Defaults (their parameter tables and sources are in display_optics.cpp): a
