@@ -32,13 +32,11 @@ std::vector<std::string> keysOf(OpticsType type) {
 
 }  // namespace
 
-const char* opticsFileName(OpticsType type) { return toString(type); }
-
 DisplayOpticsParams readDisplayOpticsTable(ConfigTable& t, const DisplayOpticsParams& base) {
   DisplayOpticsParams p = base;
   if (t.has("optics")) {
     std::vector<std::string> names;
-    for (OpticsType c : kClasses) names.emplace_back(opticsFileName(c));
+    for (OpticsType c : kClasses) names.emplace_back(toString(c));
     const std::string name = t.string("optics", std::nullopt, names);
     p.type = kClasses[static_cast<size_t>(std::find(names.begin(), names.end(), name) - names.begin())];
   }
@@ -47,7 +45,7 @@ DisplayOpticsParams readDisplayOpticsTable(ConfigTable& t, const DisplayOpticsPa
     for (const std::string& key : keysOf(c))
       if (t.has(key) && std::find(own.begin(), own.end(), key) == own.end())
         fail(Errc::Config, "{} is not a parameter of {} optics (those take: gap_mm, {})", t.where(key),
-             opticsFileName(p.type), fmt::join(own, ", "));
+             toString(p.type), fmt::join(own, ", "));
   auto number = [&](const char* key, double& field, double min, double max) {
     if (t.has(key)) field = t.number(key, std::nullopt, min, max);
   };
@@ -84,7 +82,7 @@ DisplayOpticsParams readDisplayOpticsTable(ConfigTable& t, const DisplayOpticsPa
   auto require = [&](const char* key, double value) {
     if (has(key) && !(value > 0))
       fail(Errc::Config, "{}: {} optics need {} > 0 (none given, and the device or defaults give {})",
-           t.where(key), opticsFileName(p.type), key, value);
+           t.where(key), toString(p.type), key, value);
   };
   require("lens_pitch_px", p.lensPitch_px);
   require("array_pitch_mm", p.arrayPitch_mm);

@@ -50,7 +50,7 @@ enum class OpticsType { Lenticular, LineBarrier, LensletArray, PinholeArray };
 enum class LensPacking { Square, Hexagonal };
 
 const char* toString(SubpixelLayout layout);
-const char* toString(OpticsType type);
+const char* toString(OpticsType type);  // the class as files name it: "lenslet_array"
 const char* toString(LensPacking packing);
 // Whether the optics send light in every direction of a 2-D grid from each lens.
 inline bool fullParallax(OpticsType type) {

@@ -45,7 +45,4 @@ DisplayOpticsParams readDisplayOpticsFile(const std::filesystem::path& path, con
 // naming the key. Does not call t.finish().
 DisplayOpticsParams readDisplayOpticsTable(ConfigTable& t, const DisplayOpticsParams& base);
 
-// The name of a class in files ("lenslet_array"), and back (Errc::InvalidArgument).
-const char* opticsFileName(OpticsType type);
-
 }  // namespace lfi
