@@ -1,0 +1,56 @@
+#include "lfi/inspection/golden_model.h"
+
+#include "lfi/core/error.h"
+
+#include <cmath>
+
+namespace lfi {
+
+void GoldenModelTrainer::add(const cv::Mat& image) {
+  if (image.empty() || image.channels() != 1)
+    fail(Errc::InvalidArgument, "golden model: an image must be single-channel and not empty (got {} x {}, {} "
+         "channels)", image.cols, image.rows, image.channels());
+  if (image.depth() != CV_8U && image.depth() != CV_16U && image.depth() != CV_32F)
+    fail(Errc::InvalidArgument, "golden model: image depth {} is not 8-bit, 16-bit or float", image.depth());
+  if (count_ > 0 && (image.size() != sum_.size() || image.type() != type_))
+    fail(Errc::InvalidArgument, "golden model: image {} x {} of type {} differs from the trained {} x {} of type {}",
+         image.cols, image.rows, image.type(), sum_.cols, sum_.rows, type_);
+  cv::Mat values;
+  image.convertTo(values, CV_64F);
+  if (count_ == 0) {
+    sum_ = cv::Mat::zeros(image.size(), CV_64FC1);
+    sumOfSquares_ = cv::Mat::zeros(image.size(), CV_64FC1);
+    type_ = image.type();
+  }
+  sum_ += values;
+  sumOfSquares_ += values.mul(values);
+  ++count_;
+}
+
+GoldenModel GoldenModelTrainer::model(const CameraNoise& noise) const {
+  if (count_ == 0) fail(Errc::InvalidArgument, "golden model: no image trained");
+  if (!(noise.read_dn >= 0) || !(noise.gain_dnPerElectron >= 0) ||
+      !std::isfinite(noise.read_dn + noise.gain_dnPerElectron))
+    fail(Errc::InvalidArgument, "golden model: camera noise read {} DN, gain {} DN/e- must be finite and >= 0",
+         noise.read_dn, noise.gain_dnPerElectron);
+  GoldenModel m;
+  m.images = count_;
+  const cv::Mat mean = sum_ / count_;
+  mean.convertTo(m.ideal, CV_32F);
+  m.variation.create(sum_.size(), CV_32FC1);
+  for (int row = 0; row < sum_.rows; ++row) {
+    const double* s = sum_.ptr<double>(row);
+    const double* s2 = sumOfSquares_.ptr<double>(row);
+    float* out = m.variation.ptr<float>(row);
+    for (int col = 0; col < sum_.cols; ++col) {
+      const double mu = s[col] / count_;
+      // The sample variance (n - 1), none from one image; never below the camera's noise.
+      const double sample = count_ > 1 ? std::max(0.0, (s2[col] - count_ * mu * mu) / (count_ - 1)) : 0.0;
+      const double floor = noise.read_dn * noise.read_dn + noise.gain_dnPerElectron * std::max(mu, 0.0);
+      out[col] = static_cast<float>(std::sqrt(std::max(sample, floor)));
+    }
+  }
+  return m;
+}
+
+}  // namespace lfi
