@@ -14,9 +14,19 @@ namespace lfi::usbdisplay {
 namespace {
 
 constexpr std::uint16_t kInfoVersion = 1;
-// Version 1: header (16 bytes), 7 f64, CRC-32; version 2 adds 6 f64.
-constexpr std::size_t kCalibrationSize = 76;
-constexpr std::size_t kCalibrationSize2 = 124;
+// The calibration block's f64 fields in wire order from byte 16, after a
+// 16-byte header and before the CRC-32: version 1 holds the first 7 (76
+// bytes), version 2 all 13 (124 bytes).
+constexpr double CalibrationBlock::*kCalibrationFields[] = {
+    &CalibrationBlock::pixelPitch_mm,   &CalibrationBlock::lensPitch_px,    &CalibrationBlock::slant_rad,
+    &CalibrationBlock::offset_px,       &CalibrationBlock::gap_mm,          &CalibrationBlock::focalLength_mm,
+    &CalibrationBlock::slitWidth_mm,    &CalibrationBlock::arrayPitch_mm,   &CalibrationBlock::rotation_rad,
+    &CalibrationBlock::arrayOffsetX_mm, &CalibrationBlock::arrayOffsetY_mm, &CalibrationBlock::fillFactor,
+    &CalibrationBlock::pinholeDiameter_mm};
+constexpr std::size_t fieldsOf(std::uint16_t version) { return version == kCalibrationVersion1 ? 7 : 13; }
+constexpr std::size_t calibrationSize(std::uint16_t version) { return 16 + 8 * fieldsOf(version) + 4; }
+constexpr std::size_t kCalibrationSize = calibrationSize(kCalibrationVersion1);
+static_assert(kCalibrationSize == 76 && calibrationSize(kCalibrationVersion2) == 124);
 constexpr std::size_t kNameField = 32;
 
 void putName(std::vector<std::uint8_t>& out, const std::string& text) {
@@ -192,7 +202,7 @@ std::vector<std::uint8_t> encodeCalibration(const CalibrationBlock& c) {
   if (v1 && c.optics != OpticsCode::Lenticular && c.optics != OpticsCode::LineBarrier)
     fail(Errc::InvalidArgument, "a version 1 calibration block cannot hold optics class {}",
          static_cast<int>(c.optics));
-  const std::size_t size = v1 ? kCalibrationSize : kCalibrationSize2;
+  const std::size_t size = calibrationSize(c.version);
   std::vector<std::uint8_t> out;
   out.reserve(size);
   putU32(out, kCalibrationMagic);
@@ -201,13 +211,7 @@ std::vector<std::uint8_t> encodeCalibration(const CalibrationBlock& c) {
   out.push_back(static_cast<std::uint8_t>(c.optics));
   if (!v1) out.push_back(static_cast<std::uint8_t>(c.packing));
   out.resize(16, 0);
-  for (double v : {c.pixelPitch_mm, c.lensPitch_px, c.slant_rad, c.offset_px, c.gap_mm, c.focalLength_mm,
-                   c.slitWidth_mm})
-    putF64(out, v);
-  if (!v1)
-    for (double v : {c.arrayPitch_mm, c.rotation_rad, c.arrayOffsetX_mm, c.arrayOffsetY_mm, c.fillFactor,
-                     c.pinholeDiameter_mm})
-      putF64(out, v);
+  for (std::size_t i = 0; i < fieldsOf(c.version); ++i) putF64(out, c.*kCalibrationFields[i]);
   putU32(out, crc32Of(out));
   return out;
 }
@@ -226,7 +230,7 @@ CalibrationBlock decodeCalibration(std::span<const std::uint8_t> bytes, const st
     fail(Errc::Device, "{}: calibration blob version {} is not supported (this host reads 1 and 2)", device,
          c.version);
   const bool v1 = c.version == kCalibrationVersion1;
-  const std::size_t expected = v1 ? kCalibrationSize : kCalibrationSize2;
+  const std::size_t expected = calibrationSize(c.version);
   const std::size_t size = getU16(p + 6);
   if (size != expected || size > bytes.size())
     fail(Errc::Device, "{}: calibration blob declares {} bytes, expected {} for version {}", device, size, expected,
@@ -242,23 +246,11 @@ CalibrationBlock decodeCalibration(std::span<const std::uint8_t> bytes, const st
          "1 line barrier{})",
          device, p[8], c.version, v1 ? "" : ", 2 lenslet array, 3 pinhole array");
   c.optics = static_cast<OpticsCode>(p[8]);
-  c.pixelPitch_mm = getF64(p + 16);
-  c.lensPitch_px = getF64(p + 24);
-  c.slant_rad = getF64(p + 32);
-  c.offset_px = getF64(p + 40);
-  c.gap_mm = getF64(p + 48);
-  c.focalLength_mm = getF64(p + 56);
-  c.slitWidth_mm = getF64(p + 64);
   if (!v1) {
     if (p[9] > 1) fail(Errc::Device, "{}: calibration packing code {} is unknown (0 square, 1 hexagonal)", device, p[9]);
     c.packing = static_cast<PackingCode>(p[9]);
-    c.arrayPitch_mm = getF64(p + 72);
-    c.rotation_rad = getF64(p + 80);
-    c.arrayOffsetX_mm = getF64(p + 88);
-    c.arrayOffsetY_mm = getF64(p + 96);
-    c.fillFactor = getF64(p + 104);
-    c.pinholeDiameter_mm = getF64(p + 112);
   }
+  for (std::size_t i = 0; i < fieldsOf(c.version); ++i) c.*kCalibrationFields[i] = getF64(p + 16 + 8 * i);
   requireRange(c.pixelPitch_mm, 1e-4, 10, "pixelPitch", "mm", device);
   requireRange(c.gap_mm, 1e-3, 100, "gap", "mm", device);
   switch (c.optics) {
