@@ -65,7 +65,7 @@ std::optional<Vec2> LenticularOptics::sourceOfRay(const Vec2& q, const Vec3& d) 
   if (!(d.z > 0)) return std::nullopt;
   const double w = q.x * normal_.x + q.y * normal_.y;
   const double u = q.x * axis_.x + q.y * axis_.y;
-  const double wm = w0_ + std::round((w - w0_) / perpPitch_) * perpPitch_;
+  const double wm = w0_ + lensIndex(q) * perpPitch_;  // (the lens the chief-ray model assigns q to)
   const double h = w - wm;
   if (!(std::abs(h) <= halfSlit_)) return std::nullopt;
   const double invZ = 1 / d.z;
