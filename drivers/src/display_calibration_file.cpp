@@ -32,14 +32,16 @@ std::vector<std::string> keysOf(OpticsType type) {
 
 }  // namespace
 
+OpticsType readOpticsClass(ConfigTable& t, OpticsType fallback) {
+  std::vector<std::string> names;
+  for (OpticsType c : kClasses) names.emplace_back(toString(c));
+  const std::string name = t.string("optics", toString(fallback), names);
+  return kClasses[static_cast<size_t>(std::find(names.begin(), names.end(), name) - names.begin())];
+}
+
 DisplayOpticsParams readDisplayOpticsTable(ConfigTable& t, const DisplayOpticsParams& base) {
   DisplayOpticsParams p = base;
-  if (t.has("optics")) {
-    std::vector<std::string> names;
-    for (OpticsType c : kClasses) names.emplace_back(toString(c));
-    const std::string name = t.string("optics", std::nullopt, names);
-    p.type = kClasses[static_cast<size_t>(std::find(names.begin(), names.end(), name) - names.begin())];
-  }
+  p.type = readOpticsClass(t, base.type);
   const std::vector<std::string> own = keysOf(p.type);
   for (OpticsType c : kClasses)
     for (const std::string& key : keysOf(c))

@@ -156,6 +156,16 @@ DisplayInfo defaultPinholeArrayDisplay() {
   return info;
 }
 
+DisplayInfo defaultDisplay(OpticsType type) {
+  switch (type) {
+    case OpticsType::LensletArray: return defaultLensletArrayDisplay();
+    case OpticsType::PinholeArray: return defaultPinholeArrayDisplay();
+    case OpticsType::Lenticular:
+    case OpticsType::LineBarrier: break;
+  }
+  return defaultLenticularDisplay();
+}
+
 cv::Mat encodeLightField(const LightField& lightField, const DisplayOptics& optics, double white,
                          LightFieldLookup lookup) {
   if (!(white > 0) || !std::isfinite(white))

@@ -48,11 +48,7 @@ namespace {
 
 DisplayParameters readDisplay(ConfigTable& t) {
   // The class's default display (display_optics.h) gives what the table leaves out.
-  const std::string kind = t.string("optics", "lenslet_array",
-                                    {"lenticular", "line_barrier", "lenslet_array", "pinhole_array"});
-  const DisplayInfo defaults = kind == "lenslet_array"   ? defaultLensletArrayDisplay()
-                               : kind == "pinhole_array" ? defaultPinholeArrayDisplay()
-                                                         : defaultLenticularDisplay();
+  const DisplayInfo defaults = defaultDisplay(readOpticsClass(t, OpticsType::LensletArray));
   DisplayParameters d;
   DisplayInfo& info = d.info;
   info.vendor = "lfi";

@@ -38,6 +38,10 @@ namespace lfi {
 // or Errc::Config (file, line, key).
 DisplayOpticsParams readDisplayOpticsFile(const std::filesystem::path& path, const DisplayOpticsParams& base);
 
+// The class the table's "optics" key names, or `fallback` without the key;
+// Errc::Config listing the classes for another name.
+OpticsType readOpticsClass(ConfigTable& t, OpticsType fallback);
+
 // The [optics] keys above from any table (the calibration file's [optics], a
 // scene file's [display]): the class, then the keys of that class replace those
 // of `base`. A key of another class is an error naming it and the class; a class

@@ -91,6 +91,8 @@ private:
 DisplayInfo defaultLenticularDisplay();
 DisplayInfo defaultLensletArrayDisplay();
 DisplayInfo defaultPinholeArrayDisplay();
+// The default display of a class (a line barrier: the lenticular display's, no slit width).
+DisplayInfo defaultDisplay(OpticsType type);
 
 // Samples `lightField` along every subpixel's chief ray and returns the panel
 // image: CV_8UC1 or CV_8UC3 (channels in subpixel order), drive level =
