@@ -5,6 +5,7 @@
 // sim: display's physical emitter) and inspect (the sim: camera), through the
 // device interfaces as the controller runs them.
 
+#include "lfi/core/image.h"
 #include "lfi/drivers/camera_registry.h"
 #include "lfi/drivers/capture_registry.h"
 #include "lfi/drivers/display_registry.h"
@@ -77,12 +78,10 @@ struct Lighting {
   double particle;     // the mean within 1 mm of the centre over the mean within 0.9 R
 };
 
-// The 99.9th percentile of an image's values: the controller's white.
-double percentile999(const cv::Mat& values) {
-  std::vector<float> v(values.begin<float>(), values.end<float>());
-  const auto at = v.begin() + static_cast<long>(0.999 * static_cast<double>(v.size()));
-  std::nth_element(v.begin(), at, v.end());
-  return *at > 0 ? *at : 1.0;
+// The drive scale: the 99.9th percentile of the radiance, as Controller::defaultWhite takes it.
+double white(const cv::Mat& radiance) {
+  const double w = percentile(radiance, 0.999);
+  return w > 0 ? w : 1.0;
 }
 
 // Shows `panel` (the display's drive levels) or `reference` (encoded) on the
@@ -92,7 +91,7 @@ Lighting inspect(const std::filesystem::path& scene, const LightField* reference
   auto display = openDisplay(uri);
   auto camera = openCamera(uri);
   const PresentResult shown =
-      reference ? display->show(*reference, percentile999(reference->lensletImage())) : display->show(*panel);
+      reference ? display->show(*reference, white(reference->lensletImage())) : display->show(*panel);
   EXPECT_EQ(shown.status, PresentStatus::Presented);
   camera->configure({.exposure_us = 2000, .pixelFormat = PixelFormat::Mono12, .trigger = TriggerMode::Software});
   camera->start(1);
@@ -192,7 +191,7 @@ TEST(DisplayParallax, BothReferenceCapturesLightTheLensAndShowAParticle) {
   const cv::Mat radiance = capturePanelReference(intact, settings);
   const auto t2 = std::chrono::steady_clock::now();
   cv::Mat panel;  // drive levels: 255 at the 99.9th percentile, as the encode's white
-  radiance.convertTo(panel, CV_8U, 255.0 / percentile999(radiance), 0.5);
+  radiance.convertTo(panel, CV_8U, 255.0 / white(radiance), 0.5);
   panel = panel.reshape(3, radiance.rows);  // (RGB stripe: three subpixels a pixel)
 
   const Lighting sensorIntact = inspect(intact, &reference, nullptr);
