@@ -207,6 +207,72 @@ void writeFileAtomically(const fs::path& requested, Overwrite overwrite,
   }
 }
 
+namespace {
+
+// writeFolderAtomically's publication by plain renames: the old folder (when
+// `replace`) moves to a hidden name, then the new one takes its place, and
+// the old one moves to `temporary`'s name for removal.
+void publishFolderInTwoSteps(const fs::path& temporary, const fs::path& target, bool replace) {
+  if (!replace) {
+    if (::rename(temporary.c_str(), target.c_str()) != 0)
+      fail(Errc::Io, "cannot rename '{}' to '{}': {}", temporary.string(), target.string(), std::strerror(errno));
+    return;
+  }
+  std::string aside = temporary.string() + "-old";
+  if (::rename(target.c_str(), aside.c_str()) != 0)
+    fail(Errc::Io, "cannot move '{}' aside: {}", target.string(), std::strerror(errno));
+  if (::rename(temporary.c_str(), target.c_str()) != 0) {
+    const int err = errno;
+    ::rename(aside.c_str(), target.c_str());  // (the old folder back)
+    fail(Errc::Io, "cannot rename '{}' to '{}': {}", temporary.string(), target.string(), std::strerror(err));
+  }
+  ::rename(aside.c_str(), temporary.c_str());
+}
+
+}  // namespace
+
+void writeFolderAtomically(const fs::path& requested, Overwrite overwrite,
+                           const std::function<void(const fs::path&)>& writeTo) {
+  if (requested.filename().empty() || requested.filename() == "." || requested.filename() == "..")
+    fail(Errc::InvalidArgument, "cannot write '{}': not a folder name", requested.string());
+  const fs::path target = resolvedTarget(requested);
+  std::error_code ec;
+  const fs::file_type existing = fs::symlink_status(target, ec).type();
+  if (overwrite == Overwrite::Refuse && existing != fs::file_type::not_found)
+    fail(Errc::Exists, "'{}' exists; refusing to overwrite it (use --force to replace it)", requested.string());
+  if (existing != fs::file_type::not_found && existing != fs::file_type::directory)
+    fail(Errc::Io, "cannot write the folder '{}': a file of that name is in the way", requested.string());
+  const fs::path dir = target.has_parent_path() ? target.parent_path() : fs::path(".");
+  std::string pattern = (dir / ("." + target.filename().string() + ".tmp-XXXXXX")).string();
+  if (::mkdtemp(pattern.data()) == nullptr)
+    fail(Errc::Io, "cannot create a temporary folder next to '{}': {}", target.string(), std::strerror(errno));
+  const fs::path temporary = pattern;
+  ::chmod(temporary.c_str(), 0777 & ~currentUmask());  // (mkdtemp's 0700: the folder gets a plain mkdir's mode)
+  try {
+    writeTo(temporary);
+    for (const fs::directory_entry& entry : fs::directory_iterator(temporary))
+      if (entry.is_regular_file()) syncFile(entry.path(), target / entry.path().filename());
+    syncDirectory(temporary);
+    const bool exchange = existing == fs::file_type::directory;  // (Allow: Refuse failed above)
+    if (::renameat2(AT_FDCWD, temporary.c_str(), AT_FDCWD, target.c_str(),
+                    exchange ? RENAME_EXCHANGE : RENAME_NOREPLACE) != 0) {
+      const int err = errno;
+      if (err == EEXIST || err == ENOTEMPTY)
+        fail(Errc::Exists, "'{}' appeared while it was being written; refusing to overwrite it", target.string());
+      if (err != EINVAL && err != ENOSYS)
+        fail(Errc::Io, "cannot rename '{}' to '{}': {}", temporary.string(), target.string(), std::strerror(err));
+      // A file system without renameat2's flags: the old folder steps aside
+      // first (for a moment `target` is absent, never mixed).
+      publishFolderInTwoSteps(temporary, target, exchange);
+    }
+    syncDirectory(dir);
+    if (exchange) fs::remove_all(temporary, ec);  // (now the old folder; a failure leaves it, hidden)
+  } catch (...) {
+    fs::remove_all(temporary, ec);
+    throw;
+  }
+}
+
 void writeFileAtomically(const fs::path& target, Overwrite overwrite, std::string_view content) {
   writeFileAtomically(target, overwrite, [&](const fs::path& temporary) {
     std::ofstream out(temporary, std::ios::binary | std::ios::trunc);

@@ -302,4 +302,56 @@ TEST_F(AtomicFile, ASymbolicLinkKeepsPointingAtTheWrittenFile) {
                           {"loop-a", "symbolic links"}));
 }
 
+// A folder of files published as one (a reference package).
+void writePackage(const fs::path& folder, const std::string& content) {
+  writePlain(folder / "a.txt", content);
+  writePlain(folder / "b.txt", content + content);
+}
+
+TEST_F(AtomicFile, AFolderIsPublishedWholeAndNeverReplacedUnasked) {
+  const fs::path target = dir_ / "package";
+  lfi::writeFolderAtomically(target, Overwrite::Refuse, [](const fs::path& tmp) { writePackage(tmp, "one"); });
+  EXPECT_EQ(readAll(target / "a.txt"), "one");
+  EXPECT_EQ(readAll(target / "b.txt"), "oneone");
+  EXPECT_EQ(entries(), (Names{"package"}));
+  bool called = false;
+  EXPECT_TRUE(throwsError([&] {
+    lfi::writeFolderAtomically(target, Overwrite::Refuse, [&](const fs::path&) { called = true; });
+  }, Errc::Exists, {"package", "--force"}));
+  EXPECT_FALSE(called) << "an existing folder is refused before any work";
+  EXPECT_EQ(readAll(target / "a.txt"), "one");
+}
+
+TEST_F(AtomicFile, AFolderReplacedWithAllowHoldsOnlyTheNewFiles) {
+  const fs::path target = dir_ / "package";
+  lfi::writeFolderAtomically(target, Overwrite::Refuse, [](const fs::path& tmp) {
+    writePackage(tmp, "old");
+    writePlain(tmp / "stale.txt", "only in the old one");
+  });
+  lfi::writeFolderAtomically(target, Overwrite::Allow, [](const fs::path& tmp) { writePackage(tmp, "new"); });
+  EXPECT_EQ(readAll(target / "a.txt"), "new");
+  EXPECT_FALSE(fs::exists(target / "stale.txt"));
+  EXPECT_EQ(entries(), (Names{"package"})) << "the old folder is removed, no temporary is left";
+}
+
+TEST_F(AtomicFile, AFolderWriteThatFailsLeavesTheOldFolderAndNoTemporary) {
+  const fs::path target = dir_ / "package";
+  lfi::writeFolderAtomically(target, Overwrite::Refuse, [](const fs::path& tmp) { writePackage(tmp, "old"); });
+  EXPECT_THROW(lfi::writeFolderAtomically(target, Overwrite::Allow, [](const fs::path& tmp) {
+    writePackage(tmp, "half");
+    throw std::runtime_error("the writer failed");
+  }), std::runtime_error);
+  EXPECT_EQ(readAll(target / "a.txt"), "old");
+  EXPECT_EQ(entries(), (Names{"package"}));
+}
+
+TEST_F(AtomicFile, AFileInTheWayOfAFolderIsAnError) {
+  writePlain(dir_ / "package", "a file");
+  EXPECT_TRUE(throwsError([&] {
+    lfi::writeFolderAtomically(dir_ / "package", Overwrite::Allow, [](const fs::path& tmp) { writePackage(tmp, "x"); });
+  }, Errc::Io, {"package", "in the way"}));
+  EXPECT_EQ(readAll(dir_ / "package"), "a file");
+  EXPECT_EQ(entries(), (Names{"package"}));
+}
+
 }  // namespace

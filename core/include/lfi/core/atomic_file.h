@@ -27,6 +27,18 @@ void writeFileAtomically(const std::filesystem::path& target, Overwrite overwrit
 // its symbolic links end at (which need not exist yet). Errc::Io for a loop.
 std::filesystem::path resolvedTarget(const std::filesystem::path& path);
 
+// The same for a folder of files published together (a reference package):
+// writeTo(temporaryFolder) fills a new folder next to `target`, every file in
+// it is flushed to the disk, and the folder is renamed to `target` in one
+// step, or, with Overwrite::Allow, exchanged with an existing `target` in one
+// step (the old folder is then removed). Readers see the old folder or the new
+// one, never a mix. Throws Errc::Exists (Refuse and target exists) or
+// Errc::Io; on any failure the temporary folder is removed and `target` is
+// untouched. (A signal that ends the process mid-write leaves the hidden
+// temporary folder ".<name>.tmp-XXXXXX" behind.)
+void writeFolderAtomically(const std::filesystem::path& target, Overwrite overwrite,
+                           const std::function<void(const std::filesystem::path& temporaryFolder)>& writeTo);
+
 // Convenience for text and small binary files.
 void writeFileAtomically(const std::filesystem::path& target, Overwrite overwrite, std::string_view content);
 
