@@ -53,4 +53,38 @@ GoldenModel GoldenModelTrainer::model(const CameraNoise& noise) const {
   return m;
 }
 
+cv::Mat GoldenModelTrainer::mean() const {
+  if (count_ == 0) fail(Errc::InvalidArgument, "golden model: no image trained");
+  cv::Mat m;
+  sum_.convertTo(m, CV_32F, 1.0 / count_);
+  return m;
+}
+
+cv::Mat GoldenModelTrainer::spread() const {
+  return model(CameraNoise{}).variation;  // (no floor: the sample deviation itself)
+}
+
+GoldenModelTrainer GoldenModelTrainer::resume(const cv::Mat& mean, const cv::Mat& spread, int count, int imageType) {
+  if (count < 1) fail(Errc::InvalidArgument, "golden model: {} images trained is not a count to resume from", count);
+  if (mean.empty() || mean.type() != CV_32FC1 || spread.type() != CV_32FC1 || spread.size() != mean.size())
+    fail(Errc::InvalidArgument, "golden model: the stored mean ({} x {}) and spread ({} x {}) must be float images "
+         "of one size", mean.cols, mean.rows, spread.cols, spread.rows);
+  if (imageType != CV_8UC1 && imageType != CV_16UC1 && imageType != CV_32FC1)
+    fail(Errc::InvalidArgument, "golden model: image type {} is not 8-bit, 16-bit or float single-channel", imageType);
+  double lowest = 0;
+  cv::minMaxLoc(spread, &lowest);
+  if (!(lowest >= 0) || !cv::checkRange(spread) || !cv::checkRange(mean))
+    fail(Errc::InvalidArgument, "golden model: the stored spread has a negative or non-finite value");
+  GoldenModelTrainer t;
+  t.count_ = count;
+  t.type_ = imageType;
+  mean.convertTo(t.sum_, CV_64F, count);
+  // sum of squares = (n - 1) s² + n μ²
+  cv::Mat m64, s64;
+  mean.convertTo(m64, CV_64F);
+  spread.convertTo(s64, CV_64F);
+  t.sumOfSquares_ = s64.mul(s64) * (count - 1) + m64.mul(m64) * count;
+  return t;
+}
+
 }  // namespace lfi

@@ -43,6 +43,18 @@ public:
   // The model of the images added so far (at least one, else Errc::InvalidArgument).
   GoldenModel model(const CameraNoise& noise) const;
 
+  // What a stored model keeps so that training can go on later: the images'
+  // mean and their sample standard deviation (0 from one image; no noise
+  // floor), CV_32FC1, and the type of the images trained (CV_8UC1, ...).
+  cv::Mat mean() const;
+  cv::Mat spread() const;
+  int imageType() const { return type_; }
+  // A trainer that goes on from stored statistics as if it had seen `count`
+  // images of type `imageType` with this mean and spread (exact up to the
+  // float rounding of the stored images). Throws Errc::InvalidArgument for
+  // images that do not match, negative spreads or a count below 1.
+  static GoldenModelTrainer resume(const cv::Mat& mean, const cv::Mat& spread, int count, int imageType);
+
 private:
   cv::Mat sum_, sumOfSquares_;  // CV_64FC1: exact enough for millions of 16-bit images
   int type_ = -1;
