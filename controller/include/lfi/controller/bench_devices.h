@@ -1,0 +1,41 @@
+#pragma once
+// A bench file's devices, opened through the backend registries (which the
+// program fills first: registerDriverBackends(), lfi::sim::registerSimBackends()).
+
+#include "lfi/controller/bench_file.h"
+#include "lfi/controller/controller.h"
+#include "lfi/drivers/camera.h"
+#include "lfi/drivers/display.h"
+#include "lfi/drivers/light_field_capture.h"
+
+#include <memory>
+#include <string>
+
+namespace lfi {
+
+// A light field held in memory (read from a file or a reference package) in
+// the place of a capture device: capture() returns it.
+class StoredLightField final : public LightFieldCapture {
+public:
+  StoredLightField(LightField lightField, std::string description)
+      : lightField_(std::move(lightField)), description_(std::move(description)) {}
+  LightFieldGeometry geometry() const override { return lightField_.geometry(); }
+  LightField capture(const std::function<void(double)>&) override { return lightField_; }
+  std::string description() const override { return description_; }
+
+private:
+  LightField lightField_;
+  std::string description_;
+};
+
+// The camera, opened and configured with the bench's settings.
+std::unique_ptr<Camera> openBenchCamera(const BenchFile& bench);
+std::unique_ptr<Display> openBenchDisplay(const BenchFile& bench);
+// The capture device, or the bench's light field file as a StoredLightField.
+std::unique_ptr<LightFieldCapture> openBenchCapture(const BenchFile& bench);
+// The controller's options from the bench's [camera], [display] and `frames`.
+ControllerOptions controllerOptions(const BenchFile& bench, int frames);
+// "<vendor> <model> <serial> (<uri>)" for records.
+std::string describeCamera(Camera& camera, const std::string& uri);
+
+}  // namespace lfi

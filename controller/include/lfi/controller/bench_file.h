@@ -1,0 +1,120 @@
+#pragma once
+// The inspection bench file: one TOML file that describes a bench (its
+// devices, how the camera runs, the geometry, where the reference lives, how
+// parts are judged and where records go). Every key is checked; errors name
+// the file, line and key (docs/inspection.md lists every key with its units).
+// Relative paths and the paths of sim: URIs are relative to the bench file.
+//
+//   table          key                    units  default     meaning
+//   (top)          format, version        -      required    "lfi-inspection-bench", 1
+//   [camera]       uri                    -      required    aravis:<id>, sim:<scene-file>
+//                  exposure_us            µs     required
+//                  gain                   dev.   0           device unit (SFNC: dB)
+//                  pixel_format           -      "Mono12"    Mono8 | Mono12 | Mono16
+//                  trigger                -      "software"  software | free_run | line
+//                  trigger_line           -      "Line0"     with trigger = "line"
+//                  frame_rate_hz          Hz     0           with trigger = "free_run"; 0 = the device's
+//                  binning                -      1
+//                  object_pixel_mm        mm     required    one camera pixel on the part (pitch / magnification)
+//                  read_noise_dn          DN     required    camera read noise, in the pixel format's DN
+//                  dn_per_electron        DN/e-  required    conversion gain (shot noise variance = this · level)
+//                  grab_timeout_ms        ms     5000        per frame, beyond twice the exposure
+//                  retries                -      3           bad or late frames tolerated per image
+//   [display]      uri                    -      required    usb:<vid>:<pid>[/<serial>], sim:<scene-file>
+//                  settle_ms              ms     0           the panel's response time after a show
+//                  white                  -      0           radiance at full drive; 0 = the reference's 99.9th percentile
+//   [capture]      uri  | light_field     -      one of      the reference's capture device, or a light field file
+//   [geometry]     distance_mm            mm     required    Δ: display plane to the part's reference plane
+//                  part_centre_px         px     centre      [column, row] of the part's origin on the image
+//   [reference]    folder                 path   required    the reference package (reference_package.h)
+//                  frames                 -      16          frames of the intact part the golden model starts from
+//                  mask_radius_mm         mm     none        the part: a disc around part_centre_px (none: whole image)
+//                  mask_lit_fraction      -      0.25        ... and lit at least this fraction of the ideal's 99th percentile
+//   [inspection]   frames                 -      1           frames averaged per part
+//                  absolute_dn            DN     0           a: the least difference that counts
+//                  relative               -      6           b: the threshold in units of the variation
+//                  smallest_defect_mm     mm     0           diameter the smoothing is matched to (σ = d / 4)
+//                  closing_mm             mm     0           radius of the closing that joins fragments
+//                  min_defect_area_mm2    mm²    0           smaller regions are not defects
+//                  max_defects            -      0           pass/fail rules (verdict.h)
+//                  max_defect_area_mm2    mm²    none
+//                  max_total_area_mm2     mm²    none
+//   [output]       folder                 path   required    where inspect and run write records and images
+//                  save_images            -      "failed"    all | failed | none: the part images kept
+//   [run]          on_device_loss         -      "stop"      stop | wait: wait for the device to come back
+//                  wait_limit_s           s      60          how long to wait, with a bounded back-off
+//
+// Units: mm, rad, µs; frames: image pixels (OpenCV's: top-left centre (0, 0)),
+// the part's frame as verdict.h defines it.
+
+#include "lfi/drivers/camera.h"
+#include "lfi/inspection/defects.h"
+#include "lfi/inspection/golden_model.h"
+#include "lfi/inspection/verdict.h"
+
+#include <filesystem>
+#include <optional>
+#include <string>
+
+namespace lfi {
+
+enum class SaveImages { All, Failed, None };
+enum class OnDeviceLoss { Stop, Wait };
+
+struct BenchFile {
+  std::filesystem::path file;  // as given
+  // [camera]
+  std::string cameraUri;
+  CameraSettings camera;
+  double objectPixel_mm = 0;
+  CameraNoise noise;
+  int grabTimeout_ms = 5000;
+  int retries = 3;
+  // [display]
+  std::string displayUri;
+  int settle_ms = 0;
+  double white = 0;
+  // [capture]: exactly one of the two
+  std::string captureUri;
+  std::filesystem::path lightFieldFile;
+  // [geometry]
+  double distance_mm = 0;
+  std::optional<Vec2> partCentre_px;  // none: the image's centre
+  // [reference]
+  std::filesystem::path referenceFolder;
+  int referenceFrames = 16;
+  std::optional<double> maskRadius_mm;
+  double maskLitFraction = 0.25;
+  // [inspection]
+  int inspectionFrames = 1;
+  double absolute_dn = 0;
+  double relative = 6;
+  double smallestDefect_mm = 0;
+  double closing_mm = 0;
+  double minDefectArea_mm2 = 0;
+  PassRules rules;
+  // [output]
+  std::filesystem::path outputFolder;
+  SaveImages saveImages = SaveImages::Failed;
+  // [run]
+  OnDeviceLoss onDeviceLoss = OnDeviceLoss::Stop;
+  double waitLimit_s = 60;
+
+  // What the reference depends on, one "key = value" line each, in a fixed
+  // order: the devices' URIs, the camera's settings, the capture, the geometry
+  // and the mask. Not the inspection's thresholds or rules, nor the output: a
+  // reference stays valid when those change.
+  std::string referenceIdentity() const;
+  // A 64-bit FNV-1a hash of referenceIdentity(), 16 hex digits.
+  std::string referenceHash() const;
+  // The part's frame on an image of the given size.
+  PartFrame partFrame(int width_px, int height_px) const;
+  // The detection settings in camera pixels.
+  DetectionSettings detection() const;
+};
+
+// Reads and checks a bench file. Throws Errc::NotFound for a missing file and
+// Errc::Config naming file, line and key for anything else.
+BenchFile readBenchFile(const std::filesystem::path& file);
+
+}  // namespace lfi

@@ -1,0 +1,56 @@
+#pragma once
+// Part after part against a reference package (reference_package.h): the
+// package's light field shown once with the drive scale it was trained with,
+// then for each part its image (the mean of the bench's `frames`), the
+// golden-model comparison (defects.h) and the verdict by the bench's rules
+// (verdict.h). No ground truth is used. The camera noise floor of the model is
+// the bench's, for a mean of `frames` frames (variance / frames).
+
+#include "lfi/controller/bench_file.h"
+#include "lfi/controller/controller.h"
+#include "lfi/controller/reference_package.h"
+#include "lfi/inspection/golden_model.h"
+#include "lfi/inspection/verdict.h"
+
+#include <memory>
+
+namespace lfi {
+
+struct PartInspection {
+  cv::Mat image;             // CV_32FC1, DN: the mean of the frames
+  PartVerdict verdict;
+  double analysis_ms = 0;    // from the image in hand to the verdict
+};
+
+class Inspector {
+public:
+  // The devices stay the caller's; the camera must be Configured or Streaming.
+  Inspector(const BenchFile& bench, const ReferencePackage& package, Display& display, Camera& camera);
+  ~Inspector();
+
+  // Shows the reference light field (Errc::Device when the display refuses it).
+  void showReference();
+  // Takes the part's image and judges it; throws what Controller::inspect throws.
+  PartInspection inspectPart();
+  // Judges an image (CV_8U, CV_16U or CV_32F, the package's size).
+  PartVerdict judge(const cv::Mat& image) const;
+
+  const GoldenModel& model() const { return model_; }
+  const cv::Mat& mask() const { return mask_; }
+
+private:
+  const BenchFile& bench_;
+  LightField lightField_;
+  double white_;
+  GoldenModel model_;
+  cv::Mat mask_;
+  PartFrame frame_;
+  DetectionSettings detection_;
+  std::unique_ptr<LightFieldCapture> capture_;
+  Controller controller_;
+};
+
+// The camera noise floor of a mean of `frames` frames.
+CameraNoise noiseOfMean(const CameraNoise& perFrame, int frames);
+
+}  // namespace lfi

@@ -1,0 +1,213 @@
+#include "lfi/controller/bench_file.h"
+
+#include "lfi/core/config.h"
+#include "lfi/core/error.h"
+#include "lfi/drivers/backend_registry.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+
+namespace lfi {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+// A path in the file, relative to the file's folder.
+fs::path pathIn(ConfigTable& t, const std::string& key) {
+  const std::string text = t.string(key);
+  if (text.empty()) fail(Errc::Config, "{} is empty", t.where(key));
+  const fs::path p = text;
+  return (p.is_absolute() ? p : t.directory() / p).lexically_normal();
+}
+
+// A device URI; the path of a sim: URI (a scene file) relative to the file's folder.
+std::string uriIn(ConfigTable& t, const std::string& key, const char* kind) {
+  const std::string text = t.string(key);
+  DeviceUri uri;
+  try {
+    uri = parseDeviceUri(text, kind, "sim:scene.toml");
+  } catch (const Error& e) {
+    fail(Errc::Config, "{}: {}", t.where(key), e.what());
+  }
+  if (uri.scheme != "sim" || fs::path(uri.path).is_absolute() || uri.path.empty()) return text;
+  const auto query = text.find('?');
+  return "sim:" + percentEncodeUriPart((t.directory() / uri.path).lexically_normal().string()) +
+         (query == std::string::npos ? "" : text.substr(query));
+}
+
+std::optional<double> optionalNumber(ConfigTable& t, const std::string& key, double min, double max) {
+  if (!t.has(key)) return std::nullopt;
+  return t.number(key, std::nullopt, min, max);
+}
+
+void readCamera(ConfigTable t, BenchFile& b) {
+  b.cameraUri = uriIn(t, "uri", "camera");
+  CameraSettings& c = b.camera;
+  c.exposure_us = t.number("exposure_us", std::nullopt, 1e-3, 1e9);
+  c.gain = t.number("gain", 0.0, -1e3, 1e3);
+  const std::string format = t.string("pixel_format", "Mono12", {"Mono8", "Mono12", "Mono16"});
+  c.pixelFormat = format == "Mono8" ? PixelFormat::Mono8 : format == "Mono16" ? PixelFormat::Mono16 : PixelFormat::Mono12;
+  const std::string trigger = t.string("trigger", "software", {"software", "free_run", "line"});
+  c.trigger = trigger == "free_run" ? TriggerMode::FreeRun : trigger == "line" ? TriggerMode::Line : TriggerMode::Software;
+  if (t.has("trigger_line") && c.trigger != TriggerMode::Line)
+    fail(Errc::Config, "{} is only for trigger = \"line\"", t.where("trigger_line"));
+  c.triggerLine = t.string("trigger_line", "Line0");
+  if (t.has("frame_rate_hz") && c.trigger != TriggerMode::FreeRun)
+    fail(Errc::Config, "{} is only for trigger = \"free_run\"", t.where("frame_rate_hz"));
+  c.frameRate_hz = t.number("frame_rate_hz", 0.0, 0, 1e6);
+  c.binning = t.integer("binning", 1, 1, 16);
+  b.objectPixel_mm = t.number("object_pixel_mm", std::nullopt, 1e-6, 1e3);
+  if (!(b.objectPixel_mm > 0)) fail(Errc::Config, "{} must be positive", t.where("object_pixel_mm"));
+  b.noise.read_dn = t.number("read_noise_dn", std::nullopt, 0, 1e6);
+  b.noise.gain_dnPerElectron = t.number("dn_per_electron", std::nullopt, 0, 1e6);
+  b.grabTimeout_ms = t.integer("grab_timeout_ms", 5000, 1, 86'400'000);
+  b.retries = t.integer("retries", 3, 0, 1000);
+  t.finish();
+}
+
+void readDisplay(ConfigTable t, BenchFile& b) {
+  b.displayUri = uriIn(t, "uri", "display");
+  b.settle_ms = t.integer("settle_ms", 0, 0, 86'400'000);
+  b.white = t.number("white", 0.0, 0, 1e30);
+  t.finish();
+}
+
+void readCapture(ConfigTable t, BenchFile& b) {
+  if (t.has("uri") == t.has("light_field"))
+    fail(Errc::Config, "{}: [capture] needs exactly one of 'uri' (a capture device) and 'light_field' (a file)",
+         t.where(t.has("uri") ? "uri" : "light_field"));
+  if (t.has("uri")) b.captureUri = uriIn(t, "uri", "light field capture");
+  else b.lightFieldFile = pathIn(t, "light_field");
+  t.finish();
+}
+
+void readGeometry(ConfigTable t, BenchFile& b) {
+  b.distance_mm = t.number("distance_mm", std::nullopt, 0, 1e6);
+  if (t.has("part_centre_px")) {
+    const auto c = t.numbers("part_centre_px", 2, std::nullopt, -1e6, 1e6);
+    b.partCentre_px = Vec2(c[0], c[1]);
+  }
+  t.finish();
+}
+
+void readReference(ConfigTable t, BenchFile& b) {
+  b.referenceFolder = pathIn(t, "folder");
+  b.referenceFrames = t.integer("frames", 16, 1, 100000);
+  b.maskRadius_mm = optionalNumber(t, "mask_radius_mm", 0, 1e6);
+  b.maskLitFraction = t.number("mask_lit_fraction", 0.25, 0, 1);
+  t.finish();
+}
+
+void readInspection(ConfigTable t, BenchFile& b) {
+  b.inspectionFrames = t.integer("frames", 1, 1, 100000);
+  b.absolute_dn = t.number("absolute_dn", 0.0, 0, 1e9);
+  b.relative = t.number("relative", 6.0, 0, 1e6);
+  b.smallestDefect_mm = t.number("smallest_defect_mm", 0.0, 0, 1e6);
+  b.closing_mm = t.number("closing_mm", 0.0, 0, 1e6);
+  b.minDefectArea_mm2 = t.number("min_defect_area_mm2", 0.0, 0, 1e12);
+  b.rules.maxDefects = t.integer("max_defects", 0, 0, 1 << 30);
+  b.rules.maxDefectArea_mm2 = optionalNumber(t, "max_defect_area_mm2", 0, 1e12);
+  b.rules.maxTotalArea_mm2 = optionalNumber(t, "max_total_area_mm2", 0, 1e12);
+  t.finish();
+  // The same limits in camera pixels (findDefects'): named here, not at the first part.
+  const DetectionSettings d = b.detection();
+  if (d.smoothing_px > 100 || d.closing_px > 100)
+    fail(Errc::Config, "{}: smallest_defect_mm = {} and closing_mm = {} are {:.3g} and {} camera pixels of {} mm; "
+         "at most 400 and 100", t.file(), b.smallestDefect_mm, b.closing_mm, 4 * d.smoothing_px, d.closing_px,
+         b.objectPixel_mm);
+}
+
+void readOutput(ConfigTable t, BenchFile& b) {
+  b.outputFolder = pathIn(t, "folder");
+  const std::string save = t.string("save_images", "failed", {"all", "failed", "none"});
+  b.saveImages = save == "all" ? SaveImages::All : save == "none" ? SaveImages::None : SaveImages::Failed;
+  t.finish();
+}
+
+void readRun(ConfigTable t, BenchFile& b) {
+  b.onDeviceLoss = t.string("on_device_loss", "stop", {"stop", "wait"}) == "wait" ? OnDeviceLoss::Wait
+                                                                                  : OnDeviceLoss::Stop;
+  b.waitLimit_s = t.number("wait_limit_s", 60.0, 0, 86400.0 * 365);
+  t.finish();
+}
+
+}  // namespace
+
+BenchFile readBenchFile(const fs::path& file) {
+  ConfigTable root = ConfigTable::parseFile(file);
+  root.requireKnownKeys({"format", "version", "camera", "display", "capture", "geometry", "reference", "inspection",
+                         "output", "run"});
+  root.string("format", std::nullopt, {"lfi-inspection-bench"});
+  root.integer("version", std::nullopt, 1, 1);
+  BenchFile b;
+  b.file = file;
+  const auto table = [&](const char* name, const std::vector<std::string>& keys, bool required) {
+    if (!required && !root.has(name)) return std::optional<ConfigTable>();
+    if (!root.has(name)) fail(Errc::Config, "{}: the table [{}] is missing", file.string(), name);
+    ConfigTable t = root.table(name);
+    t.requireKnownKeys(keys);
+    return std::optional<ConfigTable>(std::move(t));
+  };
+  readCamera(*table("camera",
+                    {"uri", "exposure_us", "gain", "pixel_format", "trigger", "trigger_line", "frame_rate_hz",
+                     "binning", "object_pixel_mm", "read_noise_dn", "dn_per_electron", "grab_timeout_ms", "retries"},
+                    true),
+             b);
+  readDisplay(*table("display", {"uri", "settle_ms", "white"}, true), b);
+  readCapture(*table("capture", {"uri", "light_field"}, true), b);
+  readGeometry(*table("geometry", {"distance_mm", "part_centre_px"}, true), b);
+  readReference(*table("reference", {"folder", "frames", "mask_radius_mm", "mask_lit_fraction"}, true), b);
+  if (auto t = table("inspection",
+                     {"frames", "absolute_dn", "relative", "smallest_defect_mm", "closing_mm", "min_defect_area_mm2",
+                      "max_defects", "max_defect_area_mm2", "max_total_area_mm2"},
+                     false))
+    readInspection(*t, b);
+  readOutput(*table("output", {"folder", "save_images"}, true), b);
+  if (auto t = table("run", {"on_device_loss", "wait_limit_s"}, false)) readRun(*t, b);
+  root.finish();
+  return b;
+}
+
+std::string BenchFile::referenceIdentity() const {
+  // (%.17g: a number reads back as the same double, so equal settings give equal text.)
+  return fmt::format(
+      "camera.uri = {}\ncamera.exposure_us = {:.17g}\ncamera.gain = {:.17g}\ncamera.pixel_format = {}\n"
+      "camera.binning = {}\ncamera.object_pixel_mm = {:.17g}\ndisplay.uri = {}\ndisplay.white = {:.17g}\n"
+      "capture.uri = {}\ncapture.light_field = {}\ngeometry.distance_mm = {:.17g}\ngeometry.part_centre_px = {}\n"
+      "reference.mask_radius_mm = {}\nreference.mask_lit_fraction = {:.17g}\n",
+      cameraUri, camera.exposure_us, camera.gain, toString(camera.pixelFormat), camera.binning, objectPixel_mm,
+      displayUri, white, captureUri, lightFieldFile.string(), distance_mm,
+      partCentre_px ? fmt::format("[{:.17g}, {:.17g}]", partCentre_px->x, partCentre_px->y) : "centre",
+      maskRadius_mm ? fmt::format("{:.17g}", *maskRadius_mm) : "none", maskLitFraction);
+}
+
+std::string BenchFile::referenceHash() const {
+  std::uint64_t h = 14695981039346656037ull;  // FNV-1a, 64 bits
+  for (const unsigned char c : referenceIdentity()) {
+    h ^= c;
+    h *= 1099511628211ull;
+  }
+  return fmt::format("{:016x}", h);
+}
+
+PartFrame BenchFile::partFrame(int width_px, int height_px) const {
+  return {objectPixel_mm, partCentre_px.value_or(Vec2((width_px - 1) / 2.0, (height_px - 1) / 2.0))};
+}
+
+DetectionSettings BenchFile::detection() const {
+  DetectionSettings d;
+  d.absolute_dn = absolute_dn;
+  d.relative = relative;
+  // A disc of diameter d has a standard deviation of d / 4 along each axis: the matched Gaussian's.
+  d.smoothing_px = smallestDefect_mm / 4 / objectPixel_mm;
+  d.closing_px = static_cast<int>(std::lround(closing_mm / objectPixel_mm));
+  const double minArea_px = std::ceil(minDefectArea_mm2 / (objectPixel_mm * objectPixel_mm) - 1e-9);
+  d.minArea_px = static_cast<int>(std::clamp(minArea_px, 1.0, 1e9));
+  return d;
+}
+
+}  // namespace lfi

@@ -1,0 +1,48 @@
+#include "lfi/controller/inspector.h"
+
+#include "lfi/controller/bench_devices.h"
+#include "lfi/core/error.h"
+#include "lfi/inspection/defects.h"
+
+#include <chrono>
+#include <cmath>
+
+namespace lfi {
+
+CameraNoise noiseOfMean(const CameraNoise& perFrame, int frames) {
+  return {perFrame.read_dn / std::sqrt(frames), perFrame.gain_dnPerElectron / frames};
+}
+
+Inspector::Inspector(const BenchFile& bench, const ReferencePackage& package, Display& display, Camera& camera)
+    : bench_(bench),
+      lightField_(package.lightField),
+      white_(package.info.white),
+      model_(package.trainer.model(noiseOfMean(bench.noise, bench.inspectionFrames))),
+      mask_(package.mask),
+      frame_(bench.partFrame(package.mask.cols, package.mask.rows)),
+      detection_(bench.detection()),
+      capture_(std::make_unique<StoredLightField>(package.lightField, "the reference package's light field")),
+      controller_(*capture_, display, camera, controllerOptions(bench, bench.inspectionFrames)) {}
+
+Inspector::~Inspector() = default;
+
+void Inspector::showReference() { controller_.emit(lightField_, white_); }
+
+PartInspection Inspector::inspectPart() {
+  PartInspection result;
+  result.image = controller_.inspect();
+  const auto start = std::chrono::steady_clock::now();
+  result.verdict = judge(result.image);
+  result.analysis_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  return result;
+}
+
+PartVerdict Inspector::judge(const cv::Mat& image) const {
+  if (image.size() != model_.ideal.size())
+    fail(Errc::Device, "inspect: the camera's image is {} x {}, the reference's {} x {} (a changed camera region or "
+         "binning? take a new reference with `lfi capture`)", image.cols, image.rows, model_.ideal.cols,
+         model_.ideal.rows);
+  return judgePart(findDefects(image, model_, mask_, detection_), frame_, bench_.rules);
+}
+
+}  // namespace lfi
