@@ -1,5 +1,5 @@
-// The camera, display and reference light field that `lfi inspect` and
-// `lfi calibrate-distance` drive: their options and their opening.
+// The camera, display and reference light field that `lfi calibrate-distance`
+// drives, given on its command line: their options and their opening.
 
 #include "bench_devices.h"
 
@@ -7,6 +7,7 @@
 
 #include "lfi/core/error.h"
 #include "lfi/core/exr_io.h"
+#include "lfi/controller/bench_devices.h"
 #include "lfi/drivers/camera_registry.h"
 #include "lfi/drivers/capture_registry.h"
 #include "lfi/drivers/display_registry.h"
@@ -21,19 +22,6 @@ namespace lfi::cli {
 namespace {
 
 constexpr long long kMostFrames = 100000;
-
-// A reference from a file needs no capture device: step 1 is skipped.
-class FileCapture final : public lfi::LightFieldCapture {
-public:
-  explicit FileCapture(fs::path file) : file_(std::move(file)), lf_(lfi::readLightFieldExr(file_)) {}
-  lfi::LightFieldGeometry geometry() const override { return lf_.geometry(); }
-  lfi::LightField capture(const std::function<void(double)>&) override { return lf_; }
-  std::string description() const override { return "file " + file_.string(); }
-
-private:
-  fs::path file_;
-  lfi::LightField lf_;
-};
 
 }  // namespace
 
@@ -71,7 +59,9 @@ OpenBench openBench(const BenchOptions& o, const char* command) {
   bench.camera->configure(settings);
   bench.display = lfi::openDisplay(o.display);
   bench.captured = !o.capture.empty();
-  bench.capture = bench.captured ? lfi::openLightFieldCapture(o.capture) : std::make_unique<FileCapture>(o.lightField);
+  bench.capture = bench.captured ? lfi::openLightFieldCapture(o.capture)
+                                 : std::make_unique<lfi::StoredLightField>(lfi::readLightFieldExr(o.lightField),
+                                                                           "file " + o.lightField.string());
   return bench;
 }
 

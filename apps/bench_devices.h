@@ -1,6 +1,7 @@
 #pragma once
-// The camera, display and reference light field that `lfi inspect` and
-// `lfi calibrate-distance` drive: their options and their opening.
+// The camera, display and reference light field that `lfi calibrate-distance`
+// drives, given on its command line: their options and their opening. (The
+// inspection's subcommands take a bench file instead: bench_cli.h.)
 
 #include "lfi/drivers/camera.h"
 #include "lfi/drivers/display.h"
@@ -14,7 +15,7 @@
 
 namespace lfi::cli {
 
-// The devices `lfi inspect` and `lfi calibrate-distance` drive, and how.
+// The devices `lfi calibrate-distance` drives, and how.
 struct BenchOptions {
   std::string camera, display, capture;
   std::filesystem::path lightField;

@@ -55,14 +55,14 @@ void ProgressBar::finish() {
 CLI::Validator threadCount() { return wholeNumberIn(0LL, kMostThreads); }
 CLI::Validator seedValue() { return wholeNumberIn<std::uint64_t>(0, lfi::sim::kLargestSeed); }
 
-void requireOutputFolder(const fs::path& folder, const char* command) {
+void requireOutputFolder(const fs::path& folder, const char* command, const char* source) {
   std::error_code made;
   fs::create_directories(folder, made);
   if (made || !fs::is_directory(folder, made))
-    lfi::fail(lfi::Errc::Io, "{}: cannot make the folder '{}' for --out: {}", command, folder.string(),
+    lfi::fail(lfi::Errc::Io, "{}: cannot make the folder '{}' for {}: {}", command, folder.string(), source,
               made ? made.message() : std::string("a file of that name is in the way"));
   if (::access(folder.c_str(), W_OK | X_OK) != 0)  // (files are made in it: it must be searchable too)
-    lfi::fail(lfi::Errc::Io, "{}: cannot write into '{}' for --out: {}", command, folder.string(),
+    lfi::fail(lfi::Errc::Io, "{}: cannot write into '{}' for {}: {}", command, folder.string(), source,
               std::strerror(errno));
 }
 

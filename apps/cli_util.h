@@ -56,9 +56,10 @@ CLI::Validator wholeNumberIn(T lowest, T highest) {
 CLI::Validator threadCount();
 CLI::Validator seedValue();
 
-// Makes the folder that --out names (or holds) and checks that files can be
-// written into it, before any work: Errc::Io naming the option and the reason.
-void requireOutputFolder(const std::filesystem::path& folder, const char* command);
+// Makes the folder that --out (or `source`) names or holds and checks that
+// files can be written into it, before any work: Errc::Io naming the source
+// and the reason.
+void requireOutputFolder(const std::filesystem::path& folder, const char* command, const char* source = "--out");
 
 // Refuses to start when one of `files` exists, unless `force`; Errc::Io when
 // that cannot be told (a folder on the way that cannot be searched).

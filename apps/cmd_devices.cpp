@@ -1,6 +1,12 @@
-// lfi devices: the USB displays and GenICam cameras attached, with their URIs.
+// lfi devices [BENCH]: what a bench file names, whether each device is there
+// and in what state; then the USB displays and GenICam cameras attached, with
+// their URIs.
 
 #include "commands.h"
+
+#include "lfi/controller/bench_devices.h"
+#include "lfi/controller/bench_file.h"
+#include "lfi/controller/reference_package.h"
 
 #include "lfi/core/error.h"
 #include "lfi/drivers/aravis/aravis_camera.h"
@@ -9,12 +15,51 @@
 
 #include <fmt/format.h>
 
+#include <filesystem>
+#include <functional>
+#include <memory>
 #include <string>
 #include <vector>
+
+namespace fs = std::filesystem;
 
 namespace lfi::cli {
 
 namespace {
+
+// One line per device the bench names: present (and what it says it is) or why not. False if one is missing.
+bool checkBench(const fs::path& file) {
+  const lfi::BenchFile bench = lfi::readBenchFile(file);
+  fmt::print("Bench {} (reference hash {}):\n", file.string(), bench.referenceHash());
+  bool all = true;
+  const auto check = [&](const char* role, const std::string& uri, const std::function<std::string()>& open) {
+    try {
+      fmt::print("  {:<9} {}  present: {}\n", role, uri, open());
+    } catch (const lfi::Error& e) {
+      fmt::print("  {:<9} {}  NOT AVAILABLE: {}\n", role, uri, e.what());
+      all = false;
+    }
+  };
+  check("camera", bench.cameraUri, [&] {
+    auto camera = lfi::openBenchCamera(bench);  // (configured: the bench's settings are accepted)
+    return fmt::format("{}, {}", lfi::describeCamera(*camera, bench.cameraUri), lfi::toString(camera->state()));
+  });
+  check("display", bench.displayUri, [&] {
+    auto display = lfi::openBenchDisplay(bench);
+    const lfi::DisplayInfo info = display->info();
+    return fmt::format("{}, {} x {} panel, {}", info.deviceId, info.panelWidth_px, info.panelHeight_px,
+                       lfi::toString(display->state()));
+  });
+  if (!bench.captureUri.empty())
+    check("capture", bench.captureUri, [&] { return lfi::openBenchCapture(bench)->description(); });
+  else
+    check("capture", bench.lightFieldFile.string(), [&] { return lfi::openBenchCapture(bench)->description(); });
+  check("reference", bench.referenceFolder.string(), [&] {
+    const lfi::ReferencePackage p = lfi::readReferencePackage(bench.referenceFolder, &bench);
+    return fmt::format("taken {}, {} images trained", p.info.created_utc, p.trainer.count());
+  });
+  return all;
+}
 
 int listDevices() {
   // Displays first: their listing is instant, the cameras' discovery waits about 1 s for answers.
@@ -40,8 +85,15 @@ int listDevices() {
 }  // namespace
 
 Command addDevicesCommand(CLI::App& app) {
-  auto* devices = app.add_subcommand("devices", "List the GenICam cameras and USB displays attached, with their URIs");
-  return {devices, [](const GlobalOptions&) { return listDevices(); }};
+  auto* devices = app.add_subcommand(
+      "devices", "Check a bench file's devices; list the GenICam cameras and USB displays attached, with their URIs");
+  auto bench = std::make_shared<fs::path>();
+  devices->add_option("bench", *bench, "Bench file whose devices to check")->check(CLI::ExistingFile);
+  return {devices, [bench](const GlobalOptions&) {
+            const bool present = bench->empty() || checkBench(*bench);
+            const int listed = listDevices();
+            return present ? listed : 1;
+          }};
 }
 
 }  // namespace lfi::cli

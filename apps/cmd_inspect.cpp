@@ -1,22 +1,22 @@
-// lfi inspect: the reference light field captured (or read), emitted with the
-// display, and the part inspected through the camera.
+// lfi inspect BENCH: one part inspected against the bench's reference package,
+// blind (no ground truth): its record, image and overlay in a folder of their
+// own under the bench's output folder, and the verdict as the exit status.
 
-#include "bench_devices.h"
+#include "bench_cli.h"
 #include "cli_util.h"
 #include "commands.h"
+#include "part_output.h"
 
-#include "lfi/controller/controller.h"
+#include "lfi/controller/bench_devices.h"
+#include "lfi/controller/inspector.h"
+#include "lfi/controller/reference_package.h"
 #include "lfi/core/atomic_file.h"
 #include "lfi/core/error.h"
-#include "lfi/core/exr_io.h"
-#include "lfi/core/image.h"
 
 #include <fmt/format.h>
 
-#include <chrono>
-#include <filesystem>
+#include <algorithm>
 #include <memory>
-#include <vector>
 
 namespace fs = std::filesystem;
 
@@ -25,65 +25,55 @@ namespace lfi::cli {
 namespace {
 
 struct InspectArgs {
-  BenchOptions bench;
-  fs::path out;
-  bool force = false;
+  fs::path bench, part, out;
+  bool json = false;
 };
 
-int runInspectCommand(const InspectArgs& a, const GlobalOptions& global) {
-  const auto overwrite = a.force ? lfi::Overwrite::Allow : lfi::Overwrite::Refuse;
-  std::vector<fs::path> outputs{a.out / "inspection.exr", a.out / "inspection.png"};
-  if (!a.bench.capture.empty())  // (a given light field is not written)
-    outputs.push_back(a.out / "lightfield.exr");
-  refuseExisting(outputs, a.force, "inspect");
-  OpenBench bench = openBench(a.bench, "inspect");
-  lfi::ControllerOptions options;
-  options.frames = a.bench.frames;
-  options.settle = std::chrono::milliseconds(a.bench.settle_ms);
-  ProgressBar bar;
-  lfi::Controller controller(*bench.capture, *bench.display, *bench.camera, options);
-  requireOutputFolder(a.out, "inspect");  // (once the devices are open: a bad one leaves no folder)
-  const lfi::LightField reference = controller.captureReference([&](const char* step, double f) {
-    if (!global.quiet) bar(step, f);
-  });
-  bar.finish();
-  if (bench.captured) lfi::writeLightFieldExr(a.out / "lightfield.exr", reference, overwrite);
-  try {  // (whatever fails from here on, a captured light field is kept and named)
-    controller.emit(reference);
-    const cv::Mat image = controller.inspect();
-    const auto info = bench.camera->info();
-    lfi::writeRadianceExr(a.out / "inspection.exr", image,
-                          {0,
-                           fmt::format("inspection image (DN, mean of {} frames) from {} {} via {}",
-                                       a.bench.frames, info.vendor, info.model, a.bench.camera),
-                           lfi::kCameraDigitalNumbers},
-                          overwrite);
-    double maxValue = 0;
-    cv::minMaxLoc(image, nullptr, &maxValue);
-    cv::Mat png8;
-    image.convertTo(png8, CV_8U, maxValue > 0 ? 255.0 / maxValue : 1.0);
-    lfi::writePngAtomically(a.out / "inspection.png", png8, overwrite);
-  } catch (const lfi::Error& e) {
-    if (!bench.captured) throw;
-    throw lfi::Error(e.code(),
-                     fmt::format("{} (the captured light field is kept: rerun with --light-field {} to skip the "
-                                 "capture)", e.what(), (a.out / "lightfield.exr").string()));
+int runInspect(const InspectArgs& a, const GlobalOptions&) {
+  const lfi::BenchFile bench = lfi::readBenchFile(a.bench);
+  // The devices: the bench's, or those of --part's scene on a simulated bench (a bench that cannot take
+  // --part is the first thing to say).
+  const lfi::BenchFile devices = a.part.empty() ? bench : withSimulatedPart(bench, a.part);
+  const lfi::ReferencePackage package = lfi::readReferencePackage(bench.referenceFolder, &bench);
+  auto display = lfi::openBenchDisplay(devices);
+  auto camera = lfi::openBenchCamera(devices);
+  lfi::Inspector inspector(devices, package, *display, *camera);
+  inspector.showReference();
+  const lfi::PartInspection part = inspector.inspectPart();
+  const std::string time = lfi::utcNow();
+  // One folder per inspection, named by its time (":" left out for other file systems' sake).
+  std::string name = "inspect-" + time;
+  name.erase(std::remove(name.begin(), name.end(), ':'), name.end());
+  const fs::path folder = a.out.empty() ? bench.outputFolder / name : a.out;
+  requireOutputFolder(folder, "inspect", a.out.empty() ? "[output] folder" : "--out");
+  const lfi::InspectionRecord record = partRecord(bench, inspector, part, 1, time, folder, "part");
+  const std::string json = lfi::recordJson(record).dump(2) + "\n";
+  lfi::writeFileAtomically(folder / "record.json", lfi::Overwrite::Refuse, json);
+  if (a.json) {
+    fmt::print("{}", json);
+  } else {
+    fmt::print("{}: {}\n", part.verdict.pass ? "PASS" : "FAIL", (folder / "record.json").string());
+    for (const std::string& reason : part.verdict.reasons) fmt::print("  {}\n", reason);
+    int n = 0;
+    for (const lfi::PartDefect& d : part.verdict.defects)
+      fmt::print("  defect {}: ({:.2f}, {:.2f}) mm, {:.3g} mm², contrast {:+.2f}\n", ++n, d.centroid_mm.x,
+                 d.centroid_mm.y, d.area_mm2, d.image.peakContrast);
   }
-  if (bench.captured) fmt::print("{}\n", (a.out / "lightfield.exr").string());
-  fmt::print("{}\n{}\n", (a.out / "inspection.exr").string(), (a.out / "inspection.png").string());
-  return 0;
+  return part.verdict.pass ? 0 : kExitPartFailed;
 }
 
 }  // namespace
 
 Command addInspectCommand(CLI::App& app) {
-  auto* inspect = app.add_subcommand(
-      "inspect", "Capture the reference light field, emit it with the display, inspect through the camera");
+  auto* command = app.add_subcommand(
+      "inspect", "Inspect one part against the bench's reference package: defects and a verdict (exit 0 pass, 3 fail)");
   auto a = std::make_shared<InspectArgs>();
-  addBenchOptions(*inspect, a->bench);
-  inspect->add_option("--out", a->out, "Output folder (inspection.exr/.png, lightfield.exr)")->required();
-  inspect->add_flag("--force", a->force, "Replace existing output files");
-  return {inspect, [a](const GlobalOptions& global) { return runInspectCommand(*a, global); }};
+  addBenchArgument(*command, a->bench);
+  command->add_option("--part", a->part, "Simulated bench: inspect the part of this scene file")
+      ->check(CLI::ExistingFile);
+  command->add_option("--out", a->out, "Folder for the record and images (default: a new one in [output] folder)");
+  command->add_flag("--json", a->json, "Print the record (JSON) to stdout");
+  return {command, [a](const GlobalOptions& global) { return runInspect(*a, global); }};
 }
 
 }  // namespace lfi::cli

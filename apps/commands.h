@@ -26,7 +26,11 @@ struct Command {
 Command addStudyCommand(CLI::App& app);
 Command addRenderCommand(CLI::App& app);
 Command addServeCameraCommand(CLI::App& app);
+Command addCaptureCommand(CLI::App& app);
+Command addTrainCommand(CLI::App& app);
 Command addInspectCommand(CLI::App& app);
+Command addRunCommand(CLI::App& app);
+Command addEmitCommand(CLI::App& app);
 Command addCalibrateDistanceCommand(CLI::App& app);
 Command addLfInfoCommand(CLI::App& app);
 Command addDevicesCommand(CLI::App& app);

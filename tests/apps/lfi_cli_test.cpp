@@ -3,12 +3,12 @@
 // and answers bad arguments and bad scene files with messages that name them.
 
 #include "lfi/core/exr_io.h"
+#include "lfi_process.h"
 
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 #include <opencv2/core.hpp>
-#include <sys/wait.h>
 #include <unistd.h>
 
 #include <cmath>
@@ -22,28 +22,10 @@ namespace {
 
 namespace fs = std::filesystem;
 
-struct Result {
-  int status = -1;     // the exit status
-  std::string output;  // stdout and stderr
-};
+using Result = lfi::testing_support::LfiResult;
+const auto quoted = [](const auto& s) { return lfi::testing_support::shellQuoted(std::string(s)); };
 
-std::string quoted(const std::string& s) {
-  std::string q = "'";
-  for (const char c : s) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
-  return q + "'";
-}
-
-Result lfi(const std::string& arguments) {
-  const std::string command = quoted(LFI_EXECUTABLE) + " " + arguments + " 2>&1";
-  Result run;
-  FILE* pipe = popen(command.c_str(), "r");
-  if (!pipe) return run;
-  char buffer[4096];
-  for (size_t n; (n = fread(buffer, 1, sizeof buffer, pipe)) > 0;) run.output.append(buffer, n);
-  const int status = pclose(pipe);
-  run.status = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return run;
-}
+Result lfi(const std::string& arguments) { return lfi::testing_support::runLfi(arguments); }
 
 std::string readBytes(const fs::path& p) {
   std::ifstream in(p, std::ios::binary);

@@ -1,0 +1,64 @@
+#include "bench_cli.h"
+
+#include "lfi/core/error.h"
+#include "lfi/drivers/backend_registry.h"
+
+#include <signal.h>
+
+namespace fs = std::filesystem;
+
+namespace lfi::cli {
+
+namespace {
+
+std::atomic<int> signalsSeen{0};
+struct sigaction previousInt {}, previousTerm {};
+
+void onSignal(int signal) {
+  if (signalsSeen.fetch_add(1) > 0) {  // the second: end now, as the default action would
+    ::signal(signal, SIG_DFL);
+    ::raise(signal);
+  }
+}
+
+std::string replaceScene(const std::string& uriText, const char* kind, const fs::path& scene) {
+  const DeviceUri uri = parseDeviceUri(uriText, kind, "sim:scene.toml");
+  if (uri.scheme != "sim")
+    fail(Errc::Config, "--part replaces the part of a simulated bench; the {} '{}' is not sim: (a physical bench "
+         "inspects the part that is under its camera)", kind, uriText);
+  const auto query = uriText.find('?');
+  return "sim:" + percentEncodeUriPart(fs::absolute(scene).lexically_normal().string()) +
+         (query == std::string::npos ? "" : uriText.substr(query));
+}
+
+}  // namespace
+
+void addBenchArgument(CLI::App& command, fs::path& file) {
+  command.add_option("bench", file, "Bench file (docs/inspection.md; data/benches/*.toml)")
+      ->required()
+      ->check(CLI::ExistingFile);
+}
+
+BenchFile withSimulatedPart(BenchFile bench, const fs::path& scene) {
+  bench.cameraUri = replaceScene(bench.cameraUri, "camera", scene);
+  bench.displayUri = replaceScene(bench.displayUri, "display", scene);
+  return bench;
+}
+
+StopOnSignal::StopOnSignal() {
+  signalsSeen = 0;
+  struct sigaction ours {};
+  ours.sa_handler = onSignal;
+  sigemptyset(&ours.sa_mask);
+  ::sigaction(SIGINT, &ours, &previousInt);
+  ::sigaction(SIGTERM, &ours, &previousTerm);
+}
+
+StopOnSignal::~StopOnSignal() {
+  ::sigaction(SIGINT, &previousInt, nullptr);
+  ::sigaction(SIGTERM, &previousTerm, nullptr);
+}
+
+bool StopOnSignal::stopRequested() { return signalsSeen.load() > 0; }
+
+}  // namespace lfi::cli

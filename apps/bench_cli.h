@@ -1,0 +1,39 @@
+#pragma once
+// What the subcommands that take a bench file share (capture, train, inspect,
+// run, emit, devices): the BENCH argument, the simulated part to inspect, the
+// exit status of a verdict, and a stop request from the terminal.
+
+#include "lfi/controller/bench_file.h"
+
+#include <CLI/CLI.hpp>
+
+#include <atomic>
+#include <filesystem>
+
+namespace lfi::cli {
+
+// Exit status of `lfi inspect` for a part that failed its verdict (0: it
+// passed; 1: an error; docs/inspection.md).
+inline constexpr int kExitPartFailed = 3;
+
+void addBenchArgument(CLI::App& command, std::filesystem::path& file);
+
+// --part SCENE: the part under a simulated bench's camera is the one of this
+// scene file (its camera and display URIs' scene replaced; the reference is
+// still the bench's). Throws Errc::Config for a bench whose camera or display
+// is not sim: (a physical bench inspects the part that is under its camera).
+BenchFile withSimulatedPart(BenchFile bench, const std::filesystem::path& scene);
+
+// Turns SIGINT and SIGTERM into a request that stopRequested() reports, so
+// that a loop ends after the part in hand; a second signal ends the process.
+// The handlers stay until the guard is destroyed.
+class StopOnSignal {
+public:
+  StopOnSignal();
+  ~StopOnSignal();
+  StopOnSignal(const StopOnSignal&) = delete;
+  StopOnSignal& operator=(const StopOnSignal&) = delete;
+  static bool stopRequested();
+};
+
+}  // namespace lfi::cli

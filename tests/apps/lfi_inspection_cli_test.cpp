@@ -1,0 +1,251 @@
+// The inspection loop as a bench user runs it, on the simulated bench
+// (data/benches/inspection_sim.toml): `lfi capture` takes the reference
+// package, `lfi inspect` finds every defect of the study blind and places it
+// on the part, the intact lens passes part after part with fresh camera noise,
+// and bad bench files, references and arguments get errors that name them.
+
+#include "lfi_process.h"
+#include "test_folder.h"
+
+#include <fmt/format.h>
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace {
+
+namespace fs = std::filesystem;
+using lfi::testing_support::runLfi;
+using lfi::testing_support::shellQuoted;
+
+std::string readText(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+void replaceAll(std::string& text, const std::string& from, const std::string& to) {
+  ASSERT_NE(text.find(from), std::string::npos) << from;
+  for (size_t at = 0; (at = text.find(from, at)) != std::string::npos; at += to.size()) text.replace(at, from.size(), to);
+}
+
+// The study's lens (data/scenes/inspection_bench.toml) seen by the bench: 0.5 mm object pixels.
+constexpr double kPixel_mm = 0.5;
+// Its camera-side face: z = t/2 - (R - sqrt(R² - r²)) at radial distance r (R = 51.5, t = 5).
+double cameraFaceZ(double r) { return 2.5 - (51.5 - std::sqrt(51.5 * 51.5 - r * r)); }
+
+class LfiInspectionCli : public testing::Test {
+protected:
+  // The shipped bench file with its folders in the test's own.
+  void SetUp() override {
+    std::string text = readText(source_ / "data" / "benches" / "inspection_sim.toml");
+    replaceAll(text, "sim:../scenes/", "sim:" + (source_ / "data" / "scenes").string() + "/");
+    replaceAll(text, "../../out/bench/", folder_.path().string() + "/");
+    benchText_ = text;
+    bench_ = folder_.write("bench.toml", text);
+  }
+
+  std::string bench() const { return shellQuoted(bench_.string()); }
+  fs::path reference() const { return folder_ / "reference"; }
+
+  void capture() {
+    const auto r = runLfi("-q capture " + bench());
+    ASSERT_EQ(r.status, 0) << r.output;
+  }
+
+  // The bench's scene with `edits` applied and `extra` appended (after the lens, the file's last object).
+  fs::path partScene(const std::string& name, const std::vector<std::pair<std::string, std::string>>& edits,
+                     const std::string& extra) {
+    std::string text = readText(source_ / "data" / "scenes" / "inspection_bench.toml");
+    for (const auto& [from, to] : edits) replaceAll(text, from, to);
+    return folder_.write(name + ".toml", text + "\n" + extra + "\n");
+  }
+
+  // `lfi inspect --json` of a part: the exit status and the record.
+  std::pair<int, nlohmann::json> inspect(const fs::path& part) {
+    const auto r = runLfi("-q inspect " + bench() + " --json --part " + shellQuoted(part.string()), false);
+    nlohmann::json record = nlohmann::json::parse(r.output, nullptr, false);
+    EXPECT_FALSE(record.is_discarded()) << r.output;
+    return {r.status, record};
+  }
+
+  const fs::path source_ = LFI_SOURCE_DIR;
+  lfi::testing_support::TestFolder folder_{"lfi-inspection-cli"};
+  std::string benchText_;
+  fs::path bench_;
+};
+
+double distance(const nlohmann::json& defect, double x, double y) {
+  return std::hypot(defect["centroid_mm"][0].get<double>() - x, defect["centroid_mm"][1].get<double>() - y);
+}
+
+// The defect of `record` nearest (x, y) mm; its distance.
+double nearest(const nlohmann::json& record, double x, double y) {
+  double best = 1e9;
+  for (const auto& d : record["defects"]) best = std::min(best, distance(d, x, y));
+  return best;
+}
+
+TEST_F(LfiInspectionCli, TheIntactLensPassesAHundredTimesInARowWithFreshNoise) {
+  capture();
+  const fs::path run = folder_ / "run";
+  const auto r = runLfi("-q run " + bench() + " --parts 100 --out " + shellQuoted(run.string()));
+  ASSERT_EQ(r.status, 0) << r.output;
+  std::ifstream records(run / "records.jsonl");
+  int parts = 0;
+  std::vector<std::uint64_t> numbers;
+  for (std::string line; std::getline(records, line); ++parts) {
+    const auto j = nlohmann::json::parse(line);
+    EXPECT_EQ(j["status"], "inspected");
+    EXPECT_EQ(j["verdict"], "pass") << line;
+    EXPECT_TRUE(j["defects"].empty()) << line;
+    numbers.push_back(j["part"]);
+  }
+  EXPECT_EQ(parts, 100);
+  for (size_t i = 0; i < numbers.size(); ++i) EXPECT_EQ(numbers[i], i + 1);
+  const std::string summary = readText(run / "summary.html");
+  EXPECT_NE(summary.find("<td>100</td><td>100</td><td>0</td><td>0</td><td>100.0 %</td>"), std::string::npos);
+  EXPECT_EQ(summary.find("http-equiv=\"refresh\""), std::string::npos) << "a finished run's page stops reloading";
+  EXPECT_FALSE(fs::exists(run / "images" / "part-000001.exr")) << "save_images = \"failed\" keeps no passed part";
+}
+
+TEST_F(LfiInspectionCli, EveryDefectOfTheStudyIsFoundBlindWhereItIs) {
+  capture();
+  // Inclusions (r = 0.5 mm, two pixels across) at the centre and near the rim: each within a pixel of its centre.
+  for (const char* material : {"material = \"absorber\"", "material = \"dielectric\"\nior = 1.0"}) {
+    const std::string inclusions = fmt::format(
+        "[[object]]\nname = \"centre\"\nshape = \"sphere\"\nradius_mm = 0.5\n{0}\n"
+        "[[object]]\nname = \"rim\"\nshape = \"sphere\"\nradius_mm = 0.5\nposition_mm = [10, 0, 0]\n{0}\n",
+        material);
+    const auto [status, record] = inspect(partScene("inclusions", {}, inclusions));
+    EXPECT_EQ(status, 3) << material;
+    EXPECT_EQ(record["verdict"], "fail");
+    EXPECT_LE(nearest(record, 0, 0), kPixel_mm) << material << "\n" << record.dump(1);
+    EXPECT_LE(nearest(record, 10, 0), kPixel_mm) << material << "\n" << record.dump(1);
+  }
+  {  // A 2 mm sphere cut out of the camera-side face 6 mm off axis: wider than three pixels, so inside its outline.
+    const std::string cut =
+        fmt::format("[[object.cut]]\nposition_mm = [6, 0, {:.6f}]\nradius_mm = 2\n", cameraFaceZ(6));
+    const auto [status, record] = inspect(partScene("cut", {}, cut));
+    EXPECT_EQ(status, 3);
+    ASSERT_FALSE(record["defects"].empty());
+    EXPECT_LT(distance(record["defects"][0], 6, 0), 2.0) << record.dump(1);
+  }
+  // The index 10 % high, and the lens 3 mm away from its place along the axis: the whole part is off.
+  for (const auto& [name, edit] : {std::pair<std::string, std::pair<std::string, std::string>>{
+                                       "index", {"ior = 1.5168", "ior = 1.66848"}},
+                                   {"misaligned", {"material = \"dielectric\"", "material = \"dielectric\"\nposition_mm = [0, 0, -3]"}}}) {
+    const auto [status, record] = inspect(partScene(name, {edit}, ""));
+    EXPECT_EQ(status, 3) << name;
+    EXPECT_FALSE(record["defects"].empty()) << name;
+  }
+}
+
+TEST_F(LfiInspectionCli, AFailedPartKeepsItsRecordImageAndOverlay) {
+  capture();
+  const fs::path out = folder_ / "part";
+  const fs::path scene = partScene("particle", {}, "[[object]]\nname = \"p\"\nshape = \"sphere\"\nradius_mm = 0.5\n"
+                                                   "position_mm = [-4, 3, 0]\nmaterial = \"absorber\"");
+  const auto r = runLfi("-q inspect " + bench() + " --part " + shellQuoted(scene.string()) + " --out " +
+                        shellQuoted(out.string()));
+  EXPECT_EQ(r.status, 3) << r.output;
+  EXPECT_NE(r.output.find("FAIL"), std::string::npos) << r.output;
+  const auto record = nlohmann::json::parse(readText(out / "record.json"));
+  EXPECT_EQ(record["format"], "lfi-inspection-record");
+  EXPECT_EQ(record["status"], "inspected");
+  ASSERT_EQ(record["defects"].size(), 1u) << record.dump(1);
+  const auto& d = record["defects"][0];
+  EXPECT_LE(distance(d, -4, 3), kPixel_mm);
+  EXPECT_TRUE(d["dark"].get<bool>());
+  EXPECT_LT(d["peak_contrast"].get<double>(), -0.3) << "an opaque particle takes a pixel's light, or most of it";
+  // The area in mm² is the pixel count times the pixel's area.
+  EXPECT_DOUBLE_EQ(d["area_mm2"].get<double>(), d["area_px"].get<double>() * kPixel_mm * kPixel_mm);
+  EXPECT_TRUE(fs::exists(out / record["images"]["image"].get<std::string>()));
+  EXPECT_TRUE(fs::exists(out / record["images"]["overlay"].get<std::string>()));
+  // Never written over: the same --out again is refused and the record stays.
+  const auto again = runLfi("-q inspect " + bench() + " --out " + shellQuoted(out.string()));
+  EXPECT_EQ(again.status, 1);
+  EXPECT_NE(again.output.find("exists"), std::string::npos) << again.output;
+  EXPECT_EQ(nlohmann::json::parse(readText(out / "record.json")), record);
+}
+
+TEST_F(LfiInspectionCli, TrainingAddsImagesToTheReference) {
+  capture();
+  const auto r = runLfi("-q train " + bench() + " --images 3");
+  ASSERT_EQ(r.status, 0) << r.output;
+  const auto meta = nlohmann::json::parse(readText(reference() / "reference.json"));
+  EXPECT_EQ(meta["image"]["images_trained"], 16 + 3);
+  EXPECT_EQ(runLfi("-q inspect " + bench()).status, 0);
+}
+
+TEST_F(LfiInspectionCli, BadBenchFilesAndReferencesAreNamedAndNothingIsWrittenOver) {
+  {  // A misspelt key: the file, line and key.
+    std::string text = benchText_;
+    replaceAll(text, "exposure_us = 10000", "exposure_uss = 10000");
+    const fs::path bad = folder_.write("misspelt.toml", text);
+    const auto r = runLfi("-q capture " + shellQuoted(bad.string()));
+    EXPECT_EQ(r.status, 1);
+    EXPECT_NE(r.output.find("misspelt.toml:"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("exposure_uss"), std::string::npos) << r.output;
+  }
+  const auto none = runLfi("-q inspect " + bench());
+  EXPECT_EQ(none.status, 1);
+  EXPECT_NE(none.output.find("no reference package"), std::string::npos) << none.output;
+  capture();
+  const std::string before = readText(reference() / "reference.json");
+  {  // Capture again without --force: refused, the package as it was.
+    const auto r = runLfi("-q capture " + bench());
+    EXPECT_EQ(r.status, 1);
+    EXPECT_NE(r.output.find("exists"), std::string::npos) << r.output;
+    EXPECT_EQ(readText(reference() / "reference.json"), before);
+  }
+  {  // The same reference folder from a bench with another exposure: another bench's reference.
+    std::string text = benchText_;
+    replaceAll(text, "exposure_us = 10000", "exposure_us = 12000");
+    const fs::path other = folder_.write("other.toml", text);
+    const auto r = runLfi("-q inspect " + shellQuoted(other.string()));
+    EXPECT_EQ(r.status, 1);
+    EXPECT_NE(r.output.find("another bench"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("lfi capture"), std::string::npos) << r.output;
+  }
+  {  // A damaged image in the package: the folder and file named.
+    std::string ideal = readText(reference() / "ideal.exr");
+    ideal.resize(ideal.size() / 2);
+    std::ofstream(reference() / "ideal.exr", std::ios::binary | std::ios::trunc) << ideal;
+    const auto r = runLfi("-q inspect " + bench());
+    EXPECT_EQ(r.status, 1);
+    EXPECT_NE(r.output.find("ideal.exr"), std::string::npos) << r.output;
+  }
+  {  // --part on a bench whose camera is not simulated.
+    std::string text = benchText_;
+    replaceAll(text, "uri = \"sim:" + (source_ / "data" / "scenes").string() + "/inspection_bench.toml\"\nexposure",
+               "uri = \"aravis:Nothing-Here\"\nexposure");
+    const fs::path physical = folder_.write("physical.toml", text);
+    const auto r = runLfi("-q inspect " + shellQuoted(physical.string()) + " --part " + shellQuoted(bench_.string()));
+    EXPECT_EQ(r.status, 1);
+    EXPECT_NE(r.output.find("--part"), std::string::npos) << r.output;
+  }
+}
+
+TEST_F(LfiInspectionCli, DevicesChecksWhatABenchNames) {
+  capture();
+  const auto sim = runLfi("devices " + bench());
+  EXPECT_NE(sim.output.find("camera"), std::string::npos);
+  EXPECT_NE(sim.output.find("taken"), std::string::npos) << "the reference package is there\n" << sim.output;
+  EXPECT_EQ(sim.output.find("NOT AVAILABLE"), std::string::npos) << sim.output;
+  // The physical template names devices this machine does not have: each one said, and the status says so.
+  const auto physical = runLfi("devices " + shellQuoted((source_ / "data" / "benches" / "inspection_physical.toml").string()));
+  EXPECT_EQ(physical.status, 1) << physical.output;
+  EXPECT_NE(physical.output.find("camera    aravis:Basler"), std::string::npos) << physical.output;
+  EXPECT_NE(physical.output.find("display   usb:1209:4c46  NOT AVAILABLE"), std::string::npos) << physical.output;
+}
+
+}  // namespace
