@@ -114,6 +114,7 @@ Station reopenStation(const BenchFile& bench, const ReferencePackage& package, c
 }
 
 int runRun(const RunArgs& a, const GlobalOptions& global) {
+  const StopOnSignal stop;  // (from the start: a Ctrl-C while the devices open ends the run before its first part)
   const BenchFile bench = readBenchFile(a.bench);
   // The devices: the bench's, or those of --part's scene on a simulated bench (a bench that cannot take
   // --part is the first thing to say).
@@ -127,7 +128,6 @@ int runRun(const RunArgs& a, const GlobalOptions& global) {
   requireOutputFolder(folder / "images", "run", a.out.empty() ? "[output] folder" : "--out");
   RecordLog log(folder / "records.jsonl");
   const fs::path page = folder / "summary.html";
-  StopOnSignal stop;
   fmt::print(stderr, "run: records in {} (Ctrl-C stops after the part in hand)\n", log.file().string());
   const auto start = Clock::now();
   auto lastPage = start;

@@ -248,4 +248,22 @@ TEST_F(LfiInspectionCli, DevicesChecksWhatABenchNames) {
   EXPECT_NE(physical.output.find("display   usb:1209:4c46  NOT AVAILABLE"), std::string::npos) << physical.output;
 }
 
+TEST_F(LfiInspectionCli, ARunInterruptedFromTheTerminalEndsWithEveryRecordAndItsSummary) {
+  capture();
+  const fs::path run = folder_ / "run";
+  // SIGINT after 4 s, as Ctrl-C: the part in hand is finished, the run ends normally.
+  const auto r = runLfi("-q run " + bench() + " --out " + shellQuoted(run.string()), true,
+                        "timeout --preserve-status --signal=INT 4 ");
+  EXPECT_EQ(r.status, 0) << r.output;
+  std::ifstream records(run / "records.jsonl");
+  long parts = 0;
+  for (std::string line; std::getline(records, line);) {
+    EXPECT_FALSE(nlohmann::json::parse(line, nullptr, false).is_discarded()) << "a torn record: " << line;
+    ++parts;
+  }
+  EXPECT_GT(parts, 0);
+  EXPECT_NE(r.output.find(fmt::format("{} parts in", parts)), std::string::npos) << r.output;
+  EXPECT_NE(readText(run / "summary.html").find(fmt::format("<td>{}</td>", parts)), std::string::npos);
+}
+
 }  // namespace

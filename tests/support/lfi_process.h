@@ -21,10 +21,11 @@ inline std::string shellQuoted(const std::string& s) {
   return q + "'";
 }
 
-// Runs `lfi <arguments>` (arguments as the shell reads them).
-inline LfiResult runLfi(const std::string& arguments, bool stderrToo = true) {
+// Runs `lfi <arguments>` (arguments as the shell reads them), after `prefix`
+// (e.g. "timeout --signal=INT 2 ").
+inline LfiResult runLfi(const std::string& arguments, bool stderrToo = true, const std::string& prefix = {}) {
   const std::string command =
-      shellQuoted(LFI_EXECUTABLE) + " " + arguments + (stderrToo ? " 2>&1" : " 2>/dev/null");
+      prefix + shellQuoted(LFI_EXECUTABLE) + " " + arguments + (stderrToo ? " 2>&1" : " 2>/dev/null");
   LfiResult run;
   FILE* pipe = popen(command.c_str(), "r");
   if (!pipe) return run;
