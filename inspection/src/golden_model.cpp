@@ -6,6 +6,14 @@
 
 namespace lfi {
 
+GoldenModelTrainer::GoldenModelTrainer(const GoldenModelTrainer& other)
+    : sum_(other.sum_.clone()), sumOfSquares_(other.sumOfSquares_.clone()), type_(other.type_), count_(other.count_) {}
+
+GoldenModelTrainer& GoldenModelTrainer::operator=(const GoldenModelTrainer& other) {
+  if (this != &other) *this = GoldenModelTrainer(other);
+  return *this;
+}
+
 void GoldenModelTrainer::add(const cv::Mat& image) {
   if (image.empty() || image.channels() != 1)
     fail(Errc::InvalidArgument, "golden model: an image must be single-channel and not empty (got {} x {}, {} "

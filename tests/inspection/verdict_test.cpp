@@ -95,4 +95,14 @@ TEST(GoldenModel, TrainingGoesOnFromStoredStatisticsAsIfItHadSeenEveryImage) {
                           Errc::InvalidArgument, {"negative"}));
 }
 
+TEST(GoldenModel, ACopiedTrainerTrainsOnItsOwn) {
+  lfi::GoldenModelTrainer a;
+  a.add(cv::Mat(4, 4, CV_16UC1, cv::Scalar(100)));
+  lfi::GoldenModelTrainer b = a;
+  b.add(cv::Mat(4, 4, CV_16UC1, cv::Scalar(700)));
+  EXPECT_EQ(a.count(), 1);
+  EXPECT_EQ(a.mean().at<float>(0, 0), 100.0f) << "the copy's images are not the original's";
+  EXPECT_EQ(b.mean().at<float>(0, 0), 400.0f);
+}
+
 }  // namespace

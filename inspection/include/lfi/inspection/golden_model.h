@@ -36,6 +36,13 @@ struct GoldenModel {
 
 class GoldenModelTrainer {
 public:
+  GoldenModelTrainer() = default;
+  // Copies train on independently (the sums are cloned, not shared as cv::Mat copies are).
+  GoldenModelTrainer(const GoldenModelTrainer& other);
+  GoldenModelTrainer& operator=(const GoldenModelTrainer& other);
+  GoldenModelTrainer(GoldenModelTrainer&&) = default;
+  GoldenModelTrainer& operator=(GoldenModelTrainer&&) = default;
+
   // Adds one image of a good part. Throws Errc::InvalidArgument for an empty or
   // multi-channel image, or one whose size or type differs from the first.
   void add(const cv::Mat& image);
