@@ -135,6 +135,22 @@ void readRun(ConfigTable t, BenchFile& b) {
   t.finish();
 }
 
+// A path of the file's (made from its folder by pathIn or uriIn) as seen from
+// that folder, so that a bench moved with its files keeps its reference hash;
+// an absolute path given in the file stays absolute.
+std::string fromBenchFolder(const fs::path& benchFile, const fs::path& path) {
+  const fs::path relative = path.lexically_relative(benchFile.parent_path());
+  return relative.empty() ? path.string() : relative.string();
+}
+
+std::string portableUri(const fs::path& benchFile, const std::string& text) {
+  if (text.rfind("sim:", 0) != 0) return text;
+  const DeviceUri uri = parseDeviceUri(text, "device", "sim:scene.toml");
+  const auto query = text.find('?');
+  return "sim:" + percentEncodeUriPart(fromBenchFolder(benchFile, uri.path)) +
+         (query == std::string::npos ? "" : text.substr(query));
+}
+
 }  // namespace
 
 BenchFile readBenchFile(const fs::path& file) {
@@ -179,8 +195,9 @@ std::string BenchFile::referenceIdentity() const {
       "camera.binning = {}\ncamera.object_pixel_mm = {:.17g}\ndisplay.uri = {}\ndisplay.white = {:.17g}\n"
       "capture.uri = {}\ncapture.light_field = {}\ngeometry.distance_mm = {:.17g}\ngeometry.part_centre_px = {}\n"
       "reference.mask_radius_mm = {}\nreference.mask_lit_fraction = {:.17g}\n",
-      cameraUri, camera.exposure_us, camera.gain, toString(camera.pixelFormat), camera.binning, objectPixel_mm,
-      displayUri, white, captureUri, lightFieldFile.string(), distance_mm,
+      portableUri(file, cameraUri), camera.exposure_us, camera.gain, toString(camera.pixelFormat), camera.binning,
+      objectPixel_mm, portableUri(file, displayUri), white, portableUri(file, captureUri),
+      lightFieldFile.empty() ? "" : fromBenchFolder(file, lightFieldFile), distance_mm,
       partCentre_px ? fmt::format("[{:.17g}, {:.17g}]", partCentre_px->x, partCentre_px->y) : "centre",
       maskRadius_mm ? fmt::format("{:.17g}", *maskRadius_mm) : "none", maskLitFraction);
 }

@@ -33,16 +33,29 @@ void writeImage(const fs::path& file, const cv::Mat& image, const std::string& d
   writeRadianceExr(file, image, {0, description, unit}, Overwrite::Refuse);
 }
 
-cv::Mat readImage(const fs::path& folder, const char* name, const ordered_json& files, const cv::Size& size) {
+// A file of the package that must be there: Errc::InvalidFile (the package is
+// damaged), not NotFound (no package), when it is not.
+fs::path packageFile(const fs::path& folder, const char* name) {
   const fs::path file = folder / name;
-  cv::Mat image = readRadianceExr(file);
+  std::error_code ec;
+  if (!fs::exists(file, ec))
+    fail(Errc::InvalidFile, "reference package '{}': {} is missing", folder.string(), name);
+  return file;
+}
+
+void checkPixels(const fs::path& folder, const char* name, const ordered_json& files, const cv::Mat& pixels) {
+  const auto recorded = files.at(name).at("pixel_crc32").get<unsigned long>();
+  if (pixelChecksum(pixels) != recorded)
+    fail(Errc::Checksum, "reference package '{}': {} is not the image the package recorded (pixel CRC-32 {:08x}, "
+         "recorded {:08x}): a file from another package?", folder.string(), name, pixelChecksum(pixels), recorded);
+}
+
+cv::Mat readImage(const fs::path& folder, const char* name, const ordered_json& files, const cv::Size& size) {
+  cv::Mat image = readRadianceExr(packageFile(folder, name));
   if (image.size() != size)
     fail(Errc::InvalidFile, "reference package '{}': {} is {} x {}, not the package's {} x {}", folder.string(), name,
          image.cols, image.rows, size.width, size.height);
-  const auto recorded = files.at(name).at("pixel_crc32").get<unsigned long>();
-  if (pixelChecksum(image) != recorded)
-    fail(Errc::Checksum, "reference package '{}': {} is not the image the package recorded (pixel CRC-32 {:08x}, "
-         "recorded {:08x}): a file from another package?", folder.string(), name, pixelChecksum(image), recorded);
+  checkPixels(folder, name, files, image);
   return image;
 }
 
@@ -87,7 +100,8 @@ void writeReferencePackage(const fs::path& folder, const ReferencePackage& p, Ov
   j["white"] = i.white;
   j["image"] = {{"width_px", mean.cols}, {"height_px", mean.rows}, {"type", typeName(p.trainer.imageType())},
                 {"images_trained", p.trainer.count()}};
-  j["files"] = {{"lightfield.exr", {{"content", "the reference light field the display shows"}}},
+  j["files"] = {{"lightfield.exr", {{"content", "the reference light field the display shows"},
+                                    {"pixel_crc32", pixelChecksum(p.lightField.lensletImage())}}},
                 {"ideal.exr", {{"content", "golden model: mean of the trained images (DN)"},
                                {"pixel_crc32", pixelChecksum(mean)}}},
                 {"spread.exr", {{"content", "sample standard deviation of the trained images (DN), no noise floor"},
@@ -143,7 +157,8 @@ ReferencePackage readReferencePackage(const fs::path& folder, const BenchFile* b
     height = j.at("image").at("height_px");
     type = typeFromName(j.at("image").at("type"));
     images = j.at("image").at("images_trained");
-    for (const char* name : {"ideal.exr", "spread.exr", "mask.exr"}) j.at("files").at(name).at("pixel_crc32");
+    for (const char* name : {"lightfield.exr", "ideal.exr", "spread.exr", "mask.exr"})
+      j.at("files").at(name).at("pixel_crc32").get<unsigned long>();  // (its type too: checked when read)
   } catch (const nlohmann::json::exception& e) {
     fail(Errc::InvalidFile, "reference package '{}': reference.json lacks a field or has one of the wrong type: {}",
          folder.string(), e.what());
@@ -160,7 +175,8 @@ ReferencePackage readReferencePackage(const fs::path& folder, const BenchFile* b
   const cv::Mat mean = readImage(folder, "ideal.exr", j["files"], size);
   const cv::Mat spread = readImage(folder, "spread.exr", j["files"], size);
   const cv::Mat mask01 = readImage(folder, "mask.exr", j["files"], size);
-  p.lightField = readLightFieldExr(folder / "lightfield.exr");
+  p.lightField = readLightFieldExr(packageFile(folder, "lightfield.exr"));
+  checkPixels(folder, "lightfield.exr", j["files"], p.lightField.lensletImage());
   try {
     p.trainer = GoldenModelTrainer::resume(mean, spread, images, type);
   } catch (const Error& e) {

@@ -103,7 +103,9 @@ struct BenchFile {
   // What the reference depends on, one "key = value" line each, in a fixed
   // order: the devices' URIs, the camera's settings, the capture, the geometry
   // and the mask. Not the inspection's thresholds or rules, nor the output: a
-  // reference stays valid when those change.
+  // reference stays valid when those change. Paths the file gives relative to
+  // its folder (sim: scenes, the light field file) are written so, so that a
+  // bench moved or copied with its files keeps its hash.
   std::string referenceIdentity() const;
   // A 64-bit FNV-1a hash of referenceIdentity(), 16 hex digits.
   std::string referenceHash() const;

@@ -7,7 +7,7 @@
 //   reference.json   format "lfi-reference", version 1; the bench file and its
 //                    reference hash (bench_file.h), the devices, the camera's
 //                    settings, the date, the image size and type, the images
-//                    trained, and the CRC-32 of each image's pixels
+//                    trained, and the CRC-32 of each file's pixels
 //   lightfield.exr   the reference light field the display shows (exr_io.h)
 //   ideal.exr        the golden model's ideal image: the trained images' mean (DN)
 //   spread.exr       their sample standard deviation (DN; 0 from one image),
@@ -63,7 +63,8 @@ void writeReferencePackage(const std::filesystem::path& folder, const ReferenceP
 // Reads and checks a package: every file present and valid, the images of one
 // size and matching their recorded checksums, and, with a bench, the package
 // taken on it (the reference hash). Errors name the folder and file:
-// Errc::NotFound (no package), Errc::InvalidFile, Errc::Checksum, and
+// Errc::NotFound (no package), Errc::InvalidFile (a file missing or damaged),
+// Errc::Checksum (a file from another package), and
 // Errc::Config for a package from another bench (both hashes and what to do).
 ReferencePackage readReferencePackage(const std::filesystem::path& folder, const BenchFile* bench);
 
