@@ -5,7 +5,22 @@
 #include <opencv2/imgproc.hpp>
 
 #include <algorithm>
+#include <climits>
 #include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <tuple>
+#include <vector>
+
+// The row loops of the off pixels' pass are built for several instruction
+// sets, chosen at load time, as the tracer's (sim/src/tracer/simd.h, which
+// says why the guards): they do the same float operations in every lane, and
+// without fused multiply-adds (-ffp-contract=off) every build gives the same bits.
+#if defined(__x86_64__) && !defined(__SANITIZE_ADDRESS__) && !defined(__AVX2__)
+#define LFI_ROW_CLONES __attribute__((target_clones("arch=x86-64-v4", "avx2", "default")))
+#else
+#define LFI_ROW_CLONES
+#endif
 
 namespace lfi {
 
@@ -31,69 +46,512 @@ void check(const cv::Mat& image, const GoldenModel& model, const cv::Mat& mask, 
          s.closing_px, s.minArea_px);
 }
 
-}  // namespace
+// ---- the off pixels: one banded pass over the frame --------------------------
+//
+// |smoothed d| > max(a, b · s · variation) is evaluated band by band of rows:
+// each row's difference is smoothed along the row into a ring of 2R + 1 rows,
+// then down the columns and compared at once, so the frame and the model are
+// read once and no frame-sized image is written. A closing of radius r and
+// then the mask see no off pixel farther than 2r (Chebyshev) from the mask:
+// only those rows and columns are examined.
 
-std::vector<Defect> findDefects(const cv::Mat& image, const GoldenModel& model, const cv::Mat& mask,
-                                const DetectionSettings& settings) {
-  check(image, model, mask, settings);
-  cv::Mat values, difference;
-  image.convertTo(values, CV_32F);
-  cv::subtract(values, model.ideal, difference);
+// The Gaussian's taps from the centre out (it is symmetric): taps[0] at the centre, taps[i] at ±i.
+struct SmoothingKernel {
+  std::vector<float> taps{1.f};
+  double noiseFactor = 1;  // the root of the sum of the 2-D kernel's squared weights: Σ taps_1d²
+  int radius() const { return static_cast<int>(taps.size()) - 1; }
+};
 
-  // Smoothing lowers independent noise by the root of the sum of the kernel's
-  // squared weights: (sum of k_i²) for the separable 2-D Gaussian k_i k_j.
-  cv::Mat smoothed = difference;
-  double noiseFactor = 1;
-  if (settings.smoothing_px > 0) {
-    const int size = 2 * static_cast<int>(std::ceil(3 * settings.smoothing_px)) + 1;
-    const cv::Mat kernel = cv::getGaussianKernel(size, settings.smoothing_px, CV_64F);
-    noiseFactor = kernel.dot(kernel);
-    cv::sepFilter2D(difference, smoothed, CV_32F, kernel, kernel, cv::Point(-1, -1), 0, cv::BORDER_REFLECT);
+SmoothingKernel smoothingKernel(double sigma_px) {
+  SmoothingKernel kernel;
+  if (!(sigma_px > 0)) return kernel;
+  const int size = 2 * static_cast<int>(std::ceil(3 * sigma_px)) + 1, radius = size / 2;
+  const cv::Mat k = cv::getGaussianKernel(size, sigma_px, CV_64F);
+  kernel.noiseFactor = k.dot(k);
+  kernel.taps.resize(static_cast<size_t>(radius + 1));
+  for (int i = 0; i <= radius; ++i) kernel.taps[static_cast<size_t>(i)] = static_cast<float>(k.at<double>(radius + i));
+  return kernel;
+}
+
+struct OffPixelSettings {
+  SmoothingKernel kernel;
+  float threshold_dn = 0;  // a
+  float relative = 0;      // b · noiseFactor: the threshold in units of the unsmoothed variation
+  int reach_px = 0;        // how far from the mask an off pixel can still matter
+};
+
+// Off pixels: columns [begin, end) of one row.
+struct Run {
+  int row, begin, end;
+};
+
+// Columns [begin, end) of a row; none when begin >= end.
+struct Span {
+  int begin = 0, end = 0;
+  bool empty() const { return begin >= end; }
+};
+
+int firstNonzero(const std::uint8_t* p, int n) {
+  int i = 0;
+  for (std::uint64_t word = 0; i + 8 <= n; i += 8) {
+    std::memcpy(&word, p + i, 8);
+    if (word != 0) break;
   }
-  cv::Mat threshold;
-  model.variation.convertTo(threshold, CV_32F, settings.relative * noiseFactor);
-  cv::max(threshold, settings.absolute_dn, threshold);
-  cv::Mat off = cv::abs(smoothed) > threshold;  // CV_8U, 255 where off
+  for (; i < n; ++i)
+    if (p[i] != 0) return i;
+  return n;
+}
+
+int lastNonzero(const std::uint8_t* p, int n) {  // -1: none
+  int i = n;
+  for (std::uint64_t word = 0; i >= 8; i -= 8) {
+    std::memcpy(&word, p + i - 8, 8);
+    if (word != 0) break;
+  }
+  for (; i > 0; --i)
+    if (p[i - 1] != 0) return i - 1;
+  return -1;
+}
+
+// A few rows ahead, the lines a row's loop will read: each row starts a new
+// stream (several pages on), which the hardware's prefetchers pick up late.
+constexpr int kRowsAhead = 4;
+void prefetch(const void* begin, size_t bytes) {
+  const char* p = static_cast<const char*>(begin);
+  for (size_t offset = 0; offset < bytes; offset += 64) __builtin_prefetch(p + offset);
+}
+
+// out[j] = image[begin + j] - ideal[begin + j], as float (the difference's definition).
+template <typename Pixel>
+LFI_ROW_CLONES void differenceRow(const void* imageRow, const float* __restrict ideal, int begin, int end,
+                                  float* __restrict out) {
+  const Pixel* __restrict image = static_cast<const Pixel*>(imageRow);
+  for (int c = begin; c < end; ++c) out[c - begin] = static_cast<float>(image[c]) - ideal[c];
+}
+
+using DifferenceRow = void (*)(const void*, const float*, int, int, float*);
+
+// h[j] = Σ_i taps[|i|] d[j + i], i in [-R, R]; d is valid on [-R, n + R).
+template <int R>
+LFI_ROW_CLONES void horizontal(const float* __restrict d, const float* taps, int n, float* __restrict h) {
+  float k[R + 1];
+  for (int i = 0; i <= R; ++i) k[i] = taps[i];
+  for (int j = 0; j < n; ++j) {
+    float acc = k[0] * d[j];
+    for (int i = 1; i <= R; ++i) acc += k[i] * (d[j - i] + d[j + i]);
+    h[j] = acc;
+  }
+}
+
+LFI_ROW_CLONES void horizontalAnyRadius(const float* __restrict d, const float* taps, int radius, int n,
+                                        float* __restrict h) {
+  for (int j = 0; j < n; ++j) h[j] = taps[0] * d[j];
+  for (int i = 1; i <= radius; ++i)
+    for (int j = 0; j < n; ++j) h[j] += taps[i] * (d[j - i] + d[j + i]);
+}
+
+// s[j] = Σ_i taps[|i|] rows[R + i][j], and whether any |s[j]| > max(a, relative · variation[j]).
+template <int R>
+LFI_ROW_CLONES bool vertical(const float* const* rows, const float* taps, const float* __restrict variation,
+                             float relative, float a, int n, float* __restrict s) {
+  float k[R + 1];
+  const float* __restrict r[2 * R + 1];
+  for (int i = 0; i <= R; ++i) k[i] = taps[i];
+  for (int i = 0; i <= 2 * R; ++i) r[i] = rows[i];
+  int any = 0;
+  for (int j = 0; j < n; ++j) {
+    float acc = k[0] * r[R][j];
+    for (int i = 1; i <= R; ++i) acc += k[i] * (r[R - i][j] + r[R + i][j]);
+    s[j] = acc;
+    any |= std::abs(acc) > std::max(a, relative * variation[j]);
+  }
+  return any != 0;
+}
+
+LFI_ROW_CLONES bool verticalAnyRadius(const float* const* rows, const float* taps, int radius,
+                                      const float* __restrict variation, float relative, float a, int n,
+                                      float* __restrict s) {
+  for (int j = 0; j < n; ++j) s[j] = taps[0] * rows[radius][j];
+  for (int i = 1; i <= radius; ++i) {
+    const float* __restrict up = rows[radius - i];
+    const float* __restrict down = rows[radius + i];
+    for (int j = 0; j < n; ++j) s[j] += taps[i] * (up[j] + down[j]);
+  }
+  int any = 0;
+  for (int j = 0; j < n; ++j) any |= std::abs(s[j]) > std::max(a, relative * variation[j]);
+  return any != 0;
+}
+
+struct Filters {
+  void (*horizontal)(const float*, const float*, int, float*) = nullptr;  // null: horizontalAnyRadius
+  bool (*vertical)(const float* const*, const float*, const float*, float, float, int, float*) = nullptr;
+};
+
+template <int R>
+Filters filtersOf() {
+  return {&horizontal<R>, &vertical<R>};
+}
+
+Filters filtersFor(int radius) {
+  switch (radius) {
+    case 0:
+      return filtersOf<0>();
+    case 1:
+      return filtersOf<1>();
+    case 2:
+      return filtersOf<2>();
+    case 3:
+      return filtersOf<3>();
+    case 4:
+      return filtersOf<4>();
+    case 5:
+      return filtersOf<5>();
+    case 6:
+      return filtersOf<6>();
+    default:
+      return {};
+  }
+}
+
+// One band of rows [y0, y1): where in each row an off pixel can matter, then
+// the difference of each row the band's smoothing needs, smoothed along the
+// row into a ring of 2R + 1 rows, then down the columns and compared with the
+// threshold, row by row.
+class Band {
+ public:
+  Band(const cv::Mat& image, DifferenceRow difference, const GoldenModel& model, const cv::Mat& mask,
+       const OffPixelSettings& settings)
+      : image_(image),
+        difference_(difference),
+        model_(model),
+        mask_(mask),
+        s_(settings),
+        taps_(settings.kernel.taps.data()),
+        radius_(settings.kernel.radius()),
+        filters_(filtersFor(settings.kernel.radius())) {}
+
+  void run(int y0, int y1, std::vector<Run>& off) {
+    findSpans(y0, y1);
+    int c0 = INT_MAX, c1 = INT_MIN;
+    for (const Span& span : spans_) {
+      if (span.empty()) continue;
+      c0 = std::min(c0, span.begin);
+      c1 = std::max(c1, span.end);
+    }
+    if (c0 >= c1) return;
+    c0_ = c0, c1_ = c1;
+    const int n = c1 - c0, window = 2 * radius_ + 1;
+    d_.resize(static_cast<size_t>(n + 2 * radius_));
+    ring_.resize(static_cast<size_t>(window) * static_cast<size_t>(n));
+    sRow_.resize(static_cast<size_t>(n));
+    rows_.resize(static_cast<size_t>(window));
+    first_ = y0 - radius_;
+    for (int v = y0 - radius_; v < y0 + radius_; ++v) smoothRow(v);
+    for (int y = y0; y < y1; ++y) {
+      smoothRow(y + radius_);
+      const Span& span = spans_[static_cast<size_t>(y - y0)];
+      if (y + kRowsAhead < y1) {
+        const Span& ahead = spans_[static_cast<size_t>(y + kRowsAhead - y0)];
+        if (!ahead.empty())
+          prefetch(model_.variation.ptr<float>(y + kRowsAhead) + ahead.begin,
+                   sizeof(float) * static_cast<size_t>(ahead.end - ahead.begin));
+      }
+      if (span.empty()) continue;
+      const int offset = span.begin - c0, count = span.end - span.begin;
+      for (int i = 0; i < window; ++i) rows_[static_cast<size_t>(i)] = slot(y - radius_ + i) + offset;
+      const float* variation = model_.variation.ptr<float>(y) + span.begin;
+      const bool any = filters_.vertical ? filters_.vertical(rows_.data(), taps_, variation, s_.relative,
+                                                             s_.threshold_dn, count, sRow_.data())
+                                         : verticalAnyRadius(rows_.data(), taps_, radius_, variation, s_.relative,
+                                                             s_.threshold_dn, count, sRow_.data());
+      if (!any) continue;
+      const auto isOff = [&](int j) {
+        return std::abs(sRow_[static_cast<size_t>(j)]) > std::max(s_.threshold_dn, s_.relative * variation[j]);
+      };
+      for (int j = 0; j < count; ++j) {
+        if (!isOff(j)) continue;
+        const int begin = j;
+        while (j < count && isOff(j)) ++j;
+        off.push_back({y, span.begin + begin, span.begin + j});
+      }
+    }
+  }
+
+ private:
+  // spans_[y - y0]: the hull of the mask's nonzero columns over the rows within reach, widened by reach.
+  void findSpans(int y0, int y1) {
+    const int width = image_.cols, height = image_.rows, reach = s_.reach_px;
+    spans_.assign(static_cast<size_t>(y1 - y0), Span{0, width});
+    if (mask_.empty()) return;
+    const int r0 = std::max(0, y0 - reach), r1 = std::min(height, y1 + reach);
+    extents_.assign(static_cast<size_t>(r1 - r0), Span{});
+    const size_t ends = std::min<size_t>(static_cast<size_t>(width), 640);
+    for (int row = r0; row < r1; ++row) {
+      if (row + kRowsAhead < r1) {
+        const std::uint8_t* ahead = mask_.ptr<std::uint8_t>(row + kRowsAhead);
+        prefetch(ahead, ends);
+        prefetch(ahead + width - ends, ends);
+      }
+      const std::uint8_t* m = mask_.ptr<std::uint8_t>(row);
+      const int first = firstNonzero(m, width);
+      if (first < width) extents_[static_cast<size_t>(row - r0)] = {first, lastNonzero(m, width) + 1};
+    }
+    for (int y = y0; y < y1; ++y) {
+      int begin = INT_MAX, end = INT_MIN;
+      for (int r = std::max(r0, y - reach); r < std::min(r1, y + reach + 1); ++r) {
+        const Span& e = extents_[static_cast<size_t>(r - r0)];
+        if (e.empty()) continue;
+        begin = std::min(begin, e.begin);
+        end = std::max(end, e.end);
+      }
+      spans_[static_cast<size_t>(y - y0)] =
+          begin < end ? Span{std::max(0, begin - reach), std::min(width, end + reach)} : Span{};
+    }
+  }
+
+  float* slot(int v) {
+    return ring_.data() + static_cast<size_t>((v - first_) % (2 * radius_ + 1)) * static_cast<size_t>(c1_ - c0_);
+  }
+
+  // The row v (reflected into the image, as cv::BORDER_REFLECT), smoothed along itself, into its slot.
+  void smoothRow(int v) {
+    const int width = image_.cols, height = image_.rows, r = radius_;
+    const int begin = std::max(0, c0_ - r), end = std::min(width, c1_ + r);
+    if (v + kRowsAhead >= 0 && v + kRowsAhead < height) {
+      prefetch(model_.ideal.ptr<float>(v + kRowsAhead) + begin, sizeof(float) * static_cast<size_t>(end - begin));
+      prefetch(image_.ptr(v + kRowsAhead) + image_.elemSize() * static_cast<size_t>(begin),
+               image_.elemSize() * static_cast<size_t>(end - begin));
+    }
+    const int row = cv::borderInterpolate(v, height, cv::BORDER_REFLECT);
+    const void* image = image_.ptr(row);
+    const float* ideal = model_.ideal.ptr<float>(row);
+    // d_[j] is column c0 - R + j; the columns beyond the image are reflected ones.
+    float* d = d_.data();
+    difference_(image, ideal, begin, end, d + (begin - (c0_ - r)));
+    for (int c = c0_ - r; c < begin; ++c) {
+      const int x = cv::borderInterpolate(c, width, cv::BORDER_REFLECT);
+      difference_(image, ideal, x, x + 1, d + (c - (c0_ - r)));
+    }
+    for (int c = end; c < c1_ + r; ++c) {
+      const int x = cv::borderInterpolate(c, width, cv::BORDER_REFLECT);
+      difference_(image, ideal, x, x + 1, d + (c - (c0_ - r)));
+    }
+    if (filters_.horizontal)
+      filters_.horizontal(d + r, taps_, c1_ - c0_, slot(v));
+    else
+      horizontalAnyRadius(d + r, taps_, r, c1_ - c0_, slot(v));
+  }
+
+  const cv::Mat& image_;
+  DifferenceRow difference_;
+  const GoldenModel& model_;
+  const cv::Mat& mask_;
+  const OffPixelSettings& s_;
+  const float* taps_;
+  int radius_;
+  Filters filters_;
+  int c0_ = 0, c1_ = 0, first_ = 0;
+  std::vector<Span> spans_, extents_;
+  std::vector<float> d_, ring_, sRow_;
+  std::vector<const float*> rows_;
+};
+
+DifferenceRow differenceRowFor(int depth) {
+  switch (depth) {
+    case CV_8U:
+      return &differenceRow<std::uint8_t>;
+    case CV_16U:
+      return &differenceRow<std::uint16_t>;
+    default:
+      return &differenceRow<float>;
+  }
+}
+
+// The image as the pass reads it: 8-bit, 16-bit and float as they are, other depths converted to float (the
+// difference's definition).
+cv::Mat pixelsForPass(const cv::Mat& image) {
+  if (image.depth() == CV_8U || image.depth() == CV_16U || image.depth() == CV_32F) return image;
+  cv::Mat values;
+  image.convertTo(values, CV_32F);
+  return values;
+}
+
+// The off pixels as runs in raster order: bands of rows on OpenCV's threads.
+std::vector<Run> findOffRuns(const cv::Mat& values, const GoldenModel& model, const cv::Mat& mask,
+                             const OffPixelSettings& settings) {
+  // Bands tall enough that the 2R rows a band's smoothing reads beyond its own, and the 2r rows of mask its
+  // spans do, stay a small share.
+  const int bandRows = std::max({64, 4 * settings.kernel.radius(), 2 * settings.reach_px});
+  const int bands = (values.rows + bandRows - 1) / bandRows;
+  std::vector<std::vector<Run>> off(static_cast<size_t>(bands));
+  cv::parallel_for_(
+      cv::Range(0, bands),
+      [&](const cv::Range& range) {
+        Band band(values, differenceRowFor(values.depth()), model, mask, settings);
+        for (int b = range.start; b < range.end; ++b)
+          band.run(b * bandRows, std::min(values.rows, (b + 1) * bandRows), off[static_cast<size_t>(b)]);
+      },
+      bands);
+  std::vector<Run> all;
+  for (const auto& band : off) all.insert(all.end(), band.begin(), band.end());
+  return all;
+}
+
+// ---- regions ---------------------------------------------------------------
+
+// The runs in groups that the closing cannot join: a closing of radius r
+// (then the mask) turns each group into regions within r of it, so groups
+// more than 2r + 1 apart (Chebyshev) give regions that neither overlap nor
+// touch. Runs are grouped through the tiles of a grid they fall in, joined
+// with every tile near enough to hold a pixel within 2r + 1.
+std::vector<std::vector<Run>> separateGroups(const std::vector<Run>& runs, cv::Size size, int closing) {
+  constexpr int kTile = 16;
+  const int tilesX = (size.width + kTile - 1) / kTile, tilesY = (size.height + kTile - 1) / kTile;
+  std::vector<int> parent(static_cast<size_t>(tilesX) * static_cast<size_t>(tilesY), -1), marked;
+  for (const Run& run : runs)
+    for (int tx = run.begin / kTile; tx <= (run.end - 1) / kTile; ++tx) {
+      const int t = run.row / kTile * tilesX + tx;
+      if (parent[static_cast<size_t>(t)] < 0) parent[static_cast<size_t>(t)] = t, marked.push_back(t);
+    }
+  const auto root = [&](int t) {
+    while (parent[static_cast<size_t>(t)] != t)
+      t = parent[static_cast<size_t>(t)] = parent[static_cast<size_t>(parent[static_cast<size_t>(t)])];
+    return t;
+  };
+  // Tiles m apart hold pixels (m - 1) · kTile + 1 apart at the least. (A run's own tiles are neighbours.)
+  const int reach = (2 * closing + 1) / kTile + 1;
+  for (const int t : marked) {
+    const int tx = t % tilesX, ty = t / tilesX;
+    for (int dy = 0; dy <= reach && ty + dy < tilesY; ++dy)
+      for (int dx = -reach; dx <= reach; ++dx) {
+        if ((dy == 0 && dx <= 0) || tx + dx < 0 || tx + dx >= tilesX) continue;
+        const int u = (ty + dy) * tilesX + tx + dx;
+        if (parent[static_cast<size_t>(u)] < 0) continue;
+        const int a = root(t), b = root(u);
+        if (a != b) parent[static_cast<size_t>(std::max(a, b))] = std::min(a, b);
+      }
+  }
+  std::vector<int> groupOf(parent.size(), -1);
+  std::vector<std::vector<Run>> groups;
+  for (const Run& run : runs) {
+    int& g = groupOf[static_cast<size_t>(root(run.row / kTile * tilesX + run.begin / kTile))];
+    if (g < 0) g = static_cast<int>(groups.size()), groups.emplace_back();
+    groups[static_cast<size_t>(g)].push_back(run);
+  }
+  return groups;
+}
+
+// The window a group's regions are found in: wide enough (2r + 2 beyond its
+// runs) that the window's edges change nothing.
+cv::Rect windowOf(const std::vector<Run>& runs, cv::Size size, int closing) {
+  int x0 = INT_MAX, x1 = INT_MIN, y0 = INT_MAX, y1 = INT_MIN;
+  for (const Run& run : runs) {
+    x0 = std::min(x0, run.begin), x1 = std::max(x1, run.end);
+    y0 = std::min(y0, run.row), y1 = std::max(y1, run.row + 1);
+  }
+  const int margin = 2 * closing + 2;
+  return cv::Rect(x0 - margin, y0 - margin, x1 - x0 + 2 * margin, y1 - y0 + 2 * margin) & cv::Rect(cv::Point(), size);
+}
+
+// The regions of one group: its runs closed, masked and labelled in its
+// window, then each region's statistics over the unsmoothed difference.
+void addRegions(const std::vector<Run>& group, const cv::Mat& values, const GoldenModel& model, const cv::Mat& mask,
+                const DetectionSettings& settings, std::vector<Defect>& defects) {
+  const cv::Rect window = windowOf(group, values.size(), settings.closing_px);
+  cv::Mat off = cv::Mat::zeros(window.size(), CV_8UC1);
+  for (const Run& run : group)
+    std::memset(off.ptr<std::uint8_t>(run.row - window.y) + (run.begin - window.x), 255,
+                static_cast<size_t>(run.end - run.begin));
   if (settings.closing_px > 0) {
-    const cv::Mat disc = cv::getStructuringElement(
-        cv::MORPH_ELLIPSE, cv::Size(2 * settings.closing_px + 1, 2 * settings.closing_px + 1));
+    const cv::Mat disc = cv::getStructuringElement(cv::MORPH_ELLIPSE,
+                                                   cv::Size(2 * settings.closing_px + 1, 2 * settings.closing_px + 1));
     cv::morphologyEx(off, off, cv::MORPH_CLOSE, disc);
   }
-  if (!mask.empty()) off.setTo(0, mask == 0);
+  if (!mask.empty())
+    for (int row = 0; row < window.height; ++row) {
+      std::uint8_t* o = off.ptr<std::uint8_t>(row);
+      const std::uint8_t* m = mask.ptr<std::uint8_t>(window.y + row) + window.x;
+      for (int col = 0; col < window.width; ++col) o[col] = m[col] != 0 ? o[col] : 0;
+    }
 
   cv::Mat labels, stats, centroids;
   const int count = cv::connectedComponentsWithStats(off, labels, stats, centroids, 8, CV_32S);
-  std::vector<Defect> defects;
-  std::vector<double> sum(static_cast<size_t>(count), 0.0), contrastSum(static_cast<size_t>(count), 0.0),
-      peak(static_cast<size_t>(count), 0.0);
-  for (int row = 0; row < labels.rows; ++row) {
+  const auto n = static_cast<size_t>(count);
+  std::vector<double> sum(n, 0.0), contrastSum(n, 0.0), peak(n, 0.0), sumX(n, 0.0), sumY(n, 0.0);
+  std::vector<char> kept(n, 0);
+  for (int k = 1; k < count; ++k)
+    kept[static_cast<size_t>(k)] = stats.at<int>(k, cv::CC_STAT_AREA) >= settings.minArea_px;
+  // Each region's sums in raster order: the same whichever window holds it.
+  const DifferenceRow difference = differenceRowFor(values.depth());
+  std::vector<float> d(static_cast<size_t>(window.width));
+  for (int row = 0; row < window.height; ++row) {
+    const int y = window.y + row;
     const int* label = labels.ptr<int>(row);
-    const float* d = difference.ptr<float>(row);
-    const float* ideal = model.ideal.ptr<float>(row);
-    for (int col = 0; col < labels.cols; ++col) {
+    const float* ideal = model.ideal.ptr<float>(y) + window.x;
+    difference(values.ptr(y), model.ideal.ptr<float>(y), window.x, window.x + window.width, d.data());
+    for (int col = 0; col < window.width; ++col) {
       const auto k = static_cast<size_t>(label[col]);
-      if (k == 0) continue;
-      const double contrast = ideal[col] > 0 ? d[col] / ideal[col] : 0.0;
-      sum[k] += d[col];
+      if (!kept[k]) continue;
+      const float dk = d[static_cast<size_t>(col)];
+      const double contrast = ideal[col] > 0 ? dk / ideal[col] : 0.0;
+      sum[k] += dk;
       contrastSum[k] += contrast;
       if (std::abs(contrast) > std::abs(peak[k])) peak[k] = contrast;
+      sumX[k] += window.x + col;
+      sumY[k] += y;
     }
   }
   for (int k = 1; k < count; ++k) {
-    const int area = stats.at<int>(k, cv::CC_STAT_AREA);
-    if (area < settings.minArea_px) continue;
-    Defect defect;
-    defect.centroid_px = {centroids.at<double>(k, 0), centroids.at<double>(k, 1)};
-    defect.area_px = area;
-    defect.bounds_px = {stats.at<int>(k, cv::CC_STAT_LEFT), stats.at<int>(k, cv::CC_STAT_TOP),
-                        stats.at<int>(k, cv::CC_STAT_WIDTH), stats.at<int>(k, cv::CC_STAT_HEIGHT)};
     const auto i = static_cast<size_t>(k);
+    if (!kept[i]) continue;
+    const int area = stats.at<int>(k, cv::CC_STAT_AREA);
+    Defect defect;
+    defect.centroid_px = {sumX[i] / area, sumY[i] / area};
+    defect.area_px = area;
+    defect.bounds_px = cv::Rect(stats.at<int>(k, cv::CC_STAT_LEFT), stats.at<int>(k, cv::CC_STAT_TOP),
+                                stats.at<int>(k, cv::CC_STAT_WIDTH), stats.at<int>(k, cv::CC_STAT_HEIGHT)) +
+                       window.tl();
     defect.peakContrast = peak[i];
     defect.meanContrast = contrastSum[i] / area;
     defect.dark = sum[i] < 0;
     defects.push_back(defect);
   }
-  std::sort(defects.begin(), defects.end(), [](const Defect& a, const Defect& b) { return a.area_px > b.area_px; });
+}
+
+}  // namespace
+
+std::vector<Defect> findDefects(const cv::Mat& image, const GoldenModel& model, const cv::Mat& mask,
+                                const DetectionSettings& settings) {
+  check(image, model, mask, settings);
+  OffPixelSettings off{.kernel = smoothingKernel(settings.smoothing_px)};
+  off.threshold_dn = static_cast<float>(settings.absolute_dn);
+  off.relative = static_cast<float>(settings.relative * off.kernel.noiseFactor);
+  off.reach_px = 2 * settings.closing_px;
+  const cv::Mat values = pixelsForPass(image);
+  const std::vector<Run> runs = findOffRuns(values, model, mask, off);
+  std::vector<Defect> defects;
+  if (runs.empty()) return defects;  // a good part: nothing to close or label
+  std::vector<std::vector<Run>> groups = separateGroups(runs, image.size(), settings.closing_px);
+  // Groups whose windows together cover more than one window around all of them (noise everywhere, a wrong
+  // part) are labelled in that one window: a frame's worth at most.
+  double covered = 0;
+  for (const auto& group : groups) covered += windowOf(group, image.size(), settings.closing_px).area();
+  if (groups.size() > 1 && covered > windowOf(runs, image.size(), settings.closing_px).area()) groups.assign(1, runs);
+  if (groups.size() == 1) {
+    addRegions(groups[0], values, model, mask, settings, defects);
+  } else {  // several small windows: one at a time on each thread (OpenCV's own calls inside run serially)
+    std::vector<std::vector<Defect>> found(groups.size());
+    cv::parallel_for_(cv::Range(0, static_cast<int>(groups.size())), [&](const cv::Range& range) {
+      for (int g = range.start; g < range.end; ++g)
+        addRegions(groups[static_cast<size_t>(g)], values, model, mask, settings, found[static_cast<size_t>(g)]);
+    });
+    for (const auto& f : found) defects.insert(defects.end(), f.begin(), f.end());
+  }
+  std::sort(defects.begin(), defects.end(), [](const Defect& a, const Defect& b) {
+    if (a.area_px != b.area_px) return a.area_px > b.area_px;
+    return std::tuple(a.bounds_px.y, a.bounds_px.x, a.centroid_px.y, a.centroid_px.x) <
+           std::tuple(b.bounds_px.y, b.bounds_px.x, b.centroid_px.y, b.centroid_px.x);
+  });
   return defects;
 }
 

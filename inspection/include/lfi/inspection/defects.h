@@ -15,7 +15,12 @@
 //   minArea_px    px²    the smallest region reported
 //
 // Units: pixels of the camera image (row 0 at the top); contrasts relative to
-// the ideal image ((image - ideal) / ideal: -1 is black, 0 as the intact part).
+// the ideal image ((image - ideal) / ideal: -1 is black, 0 as the intact part),
+// of the image itself, not of the smoothed difference.
+//
+// Cost: one pass over the frame and the model on OpenCV's threads, only within
+// 2 · closing_px of the mask; the closing and the labelling only around off
+// pixels (none on a good part). Figures: docs/performance.md (lfi-inspect-bench).
 
 #include "lfi/core/geometry.h"
 #include "lfi/inspection/golden_model.h"
