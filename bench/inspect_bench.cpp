@@ -1,8 +1,10 @@
 // lfi-inspect-bench: the inspection's latency, frame arrival → verdict
-// (findDefects against a trained golden model), for 5-megapixel Mono8 and
-// Mono12 frames, next to a bound measured in the same turns.
+// (DefectFinder::find against a trained golden model), for 5-megapixel Mono8
+// and Mono12 frames, next to a bound measured in the same turns.
 //
-//   timed    findDefects on a fresh frame of a good part (clean) and of a part
+//   once     the DefectFinder's set-up (the smoothed difference's σ per pixel),
+//            as an inspection or a run does it before its first part
+//   timed    DefectFinder::find on a fresh frame of a good part (clean) and of a part
 //            with three dark defects drawn in (defective), the verdict taken
 //            from its answer; on OpenCV's thread pool
 //   bound    one pass over the frame's bytes: a memcpy of the frame into a
@@ -51,6 +53,7 @@
 #include <cmath>
 #include <cstring>
 #include <functional>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -177,6 +180,8 @@ void benchFormat(const Format& format, cv::Size size, int turns, const Detection
   GoldenModelTrainer trainer;
   for (int i = 0; i < kTraining; ++i) trainer.add(makeFrame(part, format, 0, rng).image);
   const GoldenModel model = trainer.model(part.noise);
+  std::optional<DefectFinder> finder;
+  const double setUp = secondsOf([&] { finder.emplace(model, part.mask, settings); });
   std::vector<Frame> clean, defective;
   for (int i = 0; i < kPool; ++i) {
     clean.push_back(makeFrame(part, format, 0, rng));
@@ -193,8 +198,8 @@ void benchFormat(const Format& format, cv::Size size, int turns, const Detection
     double tc = 0, td = 0, tcopy = 0, tabs = 0;
     std::vector<Defect> foundClean, foundDefective;
     const std::function<void()> steps[3] = {
-        [&] { tc = secondsOf([&] { foundClean = findDefects(c.image, model, part.mask, settings); }); },
-        [&] { td = secondsOf([&] { foundDefective = findDefects(d.image, model, part.mask, settings); }); },
+        [&] { tc = secondsOf([&] { foundClean = finder->find(c.image); }); },
+        [&] { td = secondsOf([&] { foundDefective = finder->find(d.image); }); },
         [&] {
           tcopy = secondsOf([&] {
             std::memcpy(copy.data, c.image.data, bytes);
@@ -215,6 +220,7 @@ void benchFormat(const Format& format, cv::Size size, int turns, const Detection
 
   fmt::print("{} {} x {} ({:.1f} MB a frame), golden model from {} frames, {} turns\n", format.name, size.width,
              size.height, bytes / 1e6, kTraining, turns);
+  fmt::print("  DefectFinder set-up, once: {:.1f} ms\n", 1e3 * setUp);
   fmt::print("  {:<32} {:>9} {:>9}   {:>22}\n", "", "median", "p99", "ratio to bound (p1-p99)");
   auto line = [&](const char* label, const std::vector<double>& t, const std::vector<double>* ratio) {
     fmt::print("  {:<32} {:6.2f} ms {:6.2f} ms", label, 1e3 * percentile(t, 0.5), 1e3 * percentile(t, 0.99));
@@ -223,8 +229,8 @@ void benchFormat(const Format& format, cv::Size size, int turns, const Detection
                  percentile(*ratio, 0.99));
     fmt::print("\n");
   };
-  line("findDefects, clean frame", cleanTime, &cleanRatio);
-  line(fmt::format("findDefects, {} defects", kDefects).c_str(), defectiveTime, &defectiveRatio);
+  line("find, clean frame", cleanTime, &cleanRatio);
+  line(fmt::format("find, {} defects", kDefects).c_str(), defectiveTime, &defectiveRatio);
   line("bound: memcpy + absdiff", boundTime, nullptr);
   line("  memcpy of the frame", copyTime, nullptr);
   line("  cv::absdiff of two frames", absdiffTime, nullptr);
@@ -233,7 +239,7 @@ void benchFormat(const Format& format, cv::Size size, int turns, const Detection
 int run(int argc, char** argv) {
   int repeats = 200, threads = 0;
   bool quick = false;
-  CLI::App app("lfi-inspect-bench: findDefects on 5 MP Mono8 and Mono12 frames against memcpy + absdiff");
+  CLI::App app("lfi-inspect-bench: DefectFinder::find on 5 MP Mono8 and Mono12 frames against memcpy + absdiff");
   app.add_option("--repeats", repeats, "Turns per format; the figures are their median and 99th percentile")
       ->check(CLI::Range(1, 100000));
   app.add_flag("--quick", quick, "612 x 512 frames and 10 turns (a smoke run of the self-checks)");

@@ -2,7 +2,6 @@
 
 #include "lfi/controller/bench_devices.h"
 #include "lfi/core/error.h"
-#include "lfi/inspection/defects.h"
 
 #include <chrono>
 #include <cmath>
@@ -17,10 +16,11 @@ Inspector::Inspector(const BenchFile& bench, const ReferencePackage& package, Di
     : bench_(bench),
       lightField_(package.lightField),
       white_(package.info.white),
-      model_(package.trainer.model(noiseOfMean(bench.noise, bench.inspectionFrames))),
       mask_(package.mask),
+      size_(package.mask.size()),
       frame_(bench.partFrame(package.mask.cols, package.mask.rows)),
-      detection_(bench.detection()),
+      finder_(package.trainer.model(noiseOfMean(bench.noise, bench.inspectionFrames)), package.mask,
+              bench.detection()),
       capture_(std::make_unique<StoredLightField>(package.lightField, "the reference package's light field")),
       controller_(*capture_, display, camera, controllerOptions(bench, bench.inspectionFrames)) {}
 
@@ -38,11 +38,10 @@ PartInspection Inspector::inspectPart() {
 }
 
 PartVerdict Inspector::judge(const cv::Mat& image) const {
-  if (image.size() != model_.ideal.size())
+  if (image.size() != size_)
     fail(Errc::Device, "inspect: the camera's image is {} x {}, the reference's {} x {} (a changed camera region or "
-         "binning? take a new reference with `lfi capture`)", image.cols, image.rows, model_.ideal.cols,
-         model_.ideal.rows);
-  return judgePart(findDefects(image, model_, mask_, detection_), frame_, bench_.rules);
+         "binning? take a new reference with `lfi capture`)", image.cols, image.rows, size_.width, size_.height);
+  return judgePart(finder_.find(image), frame_, bench_.rules);
 }
 
 }  // namespace lfi

@@ -26,16 +26,19 @@ namespace lfi {
 
 namespace {
 
-void check(const cv::Mat& image, const GoldenModel& model, const cv::Mat& mask, const DetectionSettings& s) {
-  if (model.ideal.empty() || model.ideal.type() != CV_32FC1 || model.variation.size() != model.ideal.size() ||
-      model.variation.type() != CV_32FC1)
-    fail(Errc::InvalidArgument, "defects: the golden model is empty or not a pair of float images of one size");
+void checkImage(const cv::Mat& image, const GoldenModel& model) {
   if (image.size() != model.ideal.size() || image.channels() != 1)
     fail(Errc::InvalidArgument, "defects: image {} x {} with {} channel(s) does not match the golden model's {} x {}",
          image.cols, image.rows, image.channels(), model.ideal.cols, model.ideal.rows);
-  if (!mask.empty() && (mask.size() != image.size() || mask.type() != CV_8UC1))
-    fail(Errc::InvalidArgument, "defects: mask {} x {} of type {} is not an 8-bit image of the image's {} x {}",
-         mask.cols, mask.rows, mask.type(), image.cols, image.rows);
+}
+
+void check(const GoldenModel& model, const cv::Mat& mask, const DetectionSettings& s) {
+  if (model.ideal.empty() || model.ideal.type() != CV_32FC1 || model.variation.size() != model.ideal.size() ||
+      model.variation.type() != CV_32FC1)
+    fail(Errc::InvalidArgument, "defects: the golden model is empty or not a pair of float images of one size");
+  if (!mask.empty() && (mask.size() != model.ideal.size() || mask.type() != CV_8UC1))
+    fail(Errc::InvalidArgument, "defects: mask {} x {} of type {} is not an 8-bit image of the model's {} x {}",
+         mask.cols, mask.rows, mask.type(), model.ideal.cols, model.ideal.rows);
   if (!(s.absolute_dn >= 0) || !(s.relative >= 0) || !std::isfinite(s.absolute_dn + s.relative))
     fail(Errc::InvalidArgument, "defects: thresholds a = {} DN, b = {} must be finite and >= 0", s.absolute_dn,
          s.relative);
@@ -48,7 +51,7 @@ void check(const cv::Mat& image, const GoldenModel& model, const cv::Mat& mask, 
 
 // ---- the off pixels: one banded pass over the frame --------------------------
 //
-// |smoothed d| > max(a, b · s · variation) is evaluated band by band of rows:
+// |smoothed d| > max(a, b · σ) is evaluated band by band of rows:
 // each row's difference is smoothed along the row into a ring of 2R + 1 rows,
 // then down the columns and compared at once, so the frame and the model are
 // read once and no frame-sized image is written. A closing of radius r and
@@ -58,7 +61,6 @@ void check(const cv::Mat& image, const GoldenModel& model, const cv::Mat& mask, 
 // The Gaussian's taps from the centre out (it is symmetric): taps[0] at the centre, taps[i] at ±i.
 struct SmoothingKernel {
   std::vector<float> taps{1.f};
-  double noiseFactor = 1;  // the root of the sum of the 2-D kernel's squared weights: Σ taps_1d²
   int radius() const { return static_cast<int>(taps.size()) - 1; }
 };
 
@@ -67,16 +69,53 @@ SmoothingKernel smoothingKernel(double sigma_px) {
   if (!(sigma_px > 0)) return kernel;
   const int size = 2 * static_cast<int>(std::ceil(3 * sigma_px)) + 1, radius = size / 2;
   const cv::Mat k = cv::getGaussianKernel(size, sigma_px, CV_64F);
-  kernel.noiseFactor = k.dot(k);
   kernel.taps.resize(static_cast<size_t>(radius + 1));
   for (int i = 0; i <= radius; ++i) kernel.taps[static_cast<size_t>(i)] = static_cast<float>(k.at<double>(radius + i));
   return kernel;
 }
 
+// Σ_p w_x(p)² values(row, p) along each row, w_x the smoothing's weights of
+// column x with the pass's reflected border (cv::BORDER_REFLECT): the variance
+// of a row's smoothed independent noise. CV_32FC1 in and out.
+cv::Mat smoothedVariance(const cv::Mat& values, const std::vector<float>& taps) {
+  const int radius = static_cast<int>(taps.size()) - 1, width = values.cols, n = 2 * radius + 1;
+  // Column x's kernel as n (pixel, squared weight) pairs; a pixel met twice has one pair with the taps'
+  // sum and one of weight 0.
+  std::vector<int> pixel(static_cast<size_t>(width) * static_cast<size_t>(n), 0);
+  std::vector<float> weight2(pixel.size(), 0.f);
+  for (int x = 0; x < width; ++x) {
+    int* px = pixel.data() + static_cast<std::ptrdiff_t>(x) * n;
+    std::vector<double> w(static_cast<size_t>(n), 0.0);
+    for (int i = -radius; i <= radius; ++i) {
+      const int p = cv::borderInterpolate(x + i, width, cv::BORDER_REFLECT);
+      const int slot = static_cast<int>(std::find(px, px + (i + radius), p) - px);  // an earlier tap's pixel?
+      px[slot] = p;
+      w[static_cast<size_t>(slot)] += taps[static_cast<size_t>(std::abs(i))];
+    }
+    for (int k = 0; k < n; ++k)
+      weight2[static_cast<size_t>(x) * static_cast<size_t>(n) + static_cast<size_t>(k)] =
+          static_cast<float>(w[static_cast<size_t>(k)] * w[static_cast<size_t>(k)]);
+  }
+  cv::Mat out(values.size(), CV_32FC1);
+  cv::parallel_for_(cv::Range(0, values.rows), [&](const cv::Range& rows) {
+    for (int row = rows.start; row < rows.end; ++row) {
+      const float* v = values.ptr<float>(row);
+      float* o = out.ptr<float>(row);
+      for (int x = 0; x < width; ++x) {
+        const size_t at = static_cast<size_t>(x) * static_cast<size_t>(n);
+        double sum = 0;
+        for (int k = 0; k < n; ++k) sum += weight2[at + static_cast<size_t>(k)] * v[pixel[at + static_cast<size_t>(k)]];
+        o[x] = static_cast<float>(sum);
+      }
+    }
+  });
+  return out;
+}
+
 struct OffPixelSettings {
   SmoothingKernel kernel;
   float threshold_dn = 0;  // a
-  float relative = 0;      // b · noiseFactor: the threshold in units of the unsmoothed variation
+  float relative = 0;      // b: the threshold in units of σ
   int reach_px = 0;        // how far from the mask an off pixel can still matter
 };
 
@@ -150,9 +189,9 @@ LFI_ROW_CLONES void horizontalAnyRadius(const float* __restrict d, const float* 
     for (int j = 0; j < n; ++j) h[j] += taps[i] * (d[j - i] + d[j + i]);
 }
 
-// s[j] = Σ_i taps[|i|] rows[R + i][j], and whether any |s[j]| > max(a, relative · variation[j]).
+// s[j] = Σ_i taps[|i|] rows[R + i][j], and whether any |s[j]| > max(a, relative · σ[j]).
 template <int R>
-LFI_ROW_CLONES bool vertical(const float* const* rows, const float* taps, const float* __restrict variation,
+LFI_ROW_CLONES bool vertical(const float* const* rows, const float* taps, const float* __restrict sigma,
                              float relative, float a, int n, float* __restrict s) {
   float k[R + 1];
   const float* __restrict r[2 * R + 1];
@@ -163,13 +202,13 @@ LFI_ROW_CLONES bool vertical(const float* const* rows, const float* taps, const 
     float acc = k[0] * r[R][j];
     for (int i = 1; i <= R; ++i) acc += k[i] * (r[R - i][j] + r[R + i][j]);
     s[j] = acc;
-    any |= std::abs(acc) > std::max(a, relative * variation[j]);
+    any |= std::abs(acc) > std::max(a, relative * sigma[j]);
   }
   return any != 0;
 }
 
 LFI_ROW_CLONES bool verticalAnyRadius(const float* const* rows, const float* taps, int radius,
-                                      const float* __restrict variation, float relative, float a, int n,
+                                      const float* __restrict sigma, float relative, float a, int n,
                                       float* __restrict s) {
   for (int j = 0; j < n; ++j) s[j] = taps[0] * rows[radius][j];
   for (int i = 1; i <= radius; ++i) {
@@ -178,7 +217,7 @@ LFI_ROW_CLONES bool verticalAnyRadius(const float* const* rows, const float* tap
     for (int j = 0; j < n; ++j) s[j] += taps[i] * (up[j] + down[j]);
   }
   int any = 0;
-  for (int j = 0; j < n; ++j) any |= std::abs(s[j]) > std::max(a, relative * variation[j]);
+  for (int j = 0; j < n; ++j) any |= std::abs(s[j]) > std::max(a, relative * sigma[j]);
   return any != 0;
 }
 
@@ -259,14 +298,14 @@ class Band {
       if (span.empty()) continue;
       const int offset = span.begin - c0, count = span.end - span.begin;
       for (int i = 0; i < window; ++i) rows_[static_cast<size_t>(i)] = slot(y - radius_ + i) + offset;
-      const float* variation = model_.variation.ptr<float>(y) + span.begin;
-      const bool any = filters_.vertical ? filters_.vertical(rows_.data(), taps_, variation, s_.relative,
+      const float* sigma = model_.variation.ptr<float>(y) + span.begin;
+      const bool any = filters_.vertical ? filters_.vertical(rows_.data(), taps_, sigma, s_.relative,
                                                              s_.threshold_dn, count, sRow_.data())
-                                         : verticalAnyRadius(rows_.data(), taps_, radius_, variation, s_.relative,
+                                         : verticalAnyRadius(rows_.data(), taps_, radius_, sigma, s_.relative,
                                                              s_.threshold_dn, count, sRow_.data());
       if (!any) continue;
       const auto isOff = [&](int j) {
-        return std::abs(sRow_[static_cast<size_t>(j)]) > std::max(s_.threshold_dn, s_.relative * variation[j]);
+        return std::abs(sRow_[static_cast<size_t>(j)]) > std::max(s_.threshold_dn, s_.relative * sigma[j]);
       };
       for (int j = 0; j < count; ++j) {
         if (!isOff(j)) continue;
@@ -520,12 +559,38 @@ void addRegions(const std::vector<Run>& group, const cv::Mat& values, const Gold
 
 }  // namespace
 
+DefectFinder::DefectFinder(const GoldenModel& model, const cv::Mat& mask, const DetectionSettings& settings)
+    : mask_(mask), settings_(settings) {
+  check(model, mask, settings);
+  threshold_.ideal = model.ideal;
+  threshold_.images = model.images;
+  if (!(settings.smoothing_px > 0)) {
+    threshold_.variation = model.variation;
+    return;
+  }
+  // The smoothed difference of independent pixels has the variance Σ_p W(x, p)² variation(p)², W the
+  // pass's separable smoothing: along each axis the kernel's taps, a pixel that the reflected border brings
+  // into the kernel twice weighted by the two taps' sum (so near a border this is not a filter).
+  const SmoothingKernel kernel = smoothingKernel(settings.smoothing_px);
+  cv::Mat variance = model.variation.mul(model.variation);
+  variance = smoothedVariance(variance, kernel.taps);                // along the rows
+  variance = smoothedVariance(variance.t(), kernel.taps).t();        // down the columns
+  cv::sqrt(variance, threshold_.variation);
+}
+
 std::vector<Defect> findDefects(const cv::Mat& image, const GoldenModel& model, const cv::Mat& mask,
                                 const DetectionSettings& settings) {
-  check(image, model, mask, settings);
+  return DefectFinder(model, mask, settings).find(image);
+}
+
+std::vector<Defect> DefectFinder::find(const cv::Mat& image) const {
+  checkImage(image, threshold_);
+  const GoldenModel& model = threshold_;
+  const cv::Mat& mask = mask_;
+  const DetectionSettings& settings = settings_;
   OffPixelSettings off{.kernel = smoothingKernel(settings.smoothing_px)};
   off.threshold_dn = static_cast<float>(settings.absolute_dn);
-  off.relative = static_cast<float>(settings.relative * off.kernel.noiseFactor);
+  off.relative = static_cast<float>(settings.relative);  // (σ holds the smoothing's effect on the noise)
   off.reach_px = 2 * settings.closing_px;
   const cv::Mat values = pixelsForPass(image);
   const std::vector<Run> runs = findOffRuns(values, model, mask, off);

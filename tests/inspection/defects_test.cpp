@@ -136,6 +136,52 @@ TEST(Defects, SmoothingMatchedToTheDefectFindsAFaintWideOne) {
   EXPECT_NEAR(defects[0].centroid_px.y, 60, 1.0);
 }
 
+// A part lit on its left half (1000 DN, shot noise 33 DN) and dark on its
+// right (10 DN, read noise 1 DN), as at a lens's rim, with the model's
+// variation the true noise.
+GoldenModel edgeModel() {
+  GoldenModel m;
+  m.ideal.create(kHeight, kWidth, CV_32FC1);
+  m.variation.create(kHeight, kWidth, CV_32FC1);
+  m.ideal.colRange(0, kWidth / 2).setTo(1000);
+  m.ideal.colRange(kWidth / 2, kWidth).setTo(10);
+  m.variation.colRange(0, kWidth / 2).setTo(33);
+  m.variation.colRange(kWidth / 2, kWidth).setTo(1);
+  m.images = 1000;
+  return m;
+}
+
+cv::Mat edgeFrame(cv::RNG& rng, const GoldenModel& m) {
+  cv::Mat noise(kHeight, kWidth, CV_32FC1), out;
+  rng.fill(noise, cv::RNG::NORMAL, 0, 1);
+  cv::Mat values = m.ideal + noise.mul(m.variation);
+  values.convertTo(out, CV_16U);
+  return out;
+}
+
+TEST(Defects, TheSmoothedNoiseAtALitEdgeIsTheNeighboursNotTheCentresAlone) {
+  // Smoothed with σ = 2 px, a dark pixel next to the edge takes in lit pixels
+  // whose noise is 33 times its own: against its own variation (1 DN times the
+  // smoothing's factor 1 / (4 π σ²) = 0.02) it would be off in every frame; the
+  // smoothed difference's own deviation there, sqrt(Σ k² variation²), keeps 50
+  // good frames at b = 6 clean (4e-9 a pixel).
+  const GoldenModel model = edgeModel();
+  const DefectFinder finder(model, {}, {.smoothing_px = 2});
+  // Far from the edge σ is the variation times the factor; at the edge, half the kernel's weight is lit.
+  const double factor = 1 / (4 * std::numbers::pi * 2 * 2);
+  EXPECT_NEAR(finder.sigma().at<float>(60, kWidth - 10), 1 * std::sqrt(factor), 1e-3);
+  EXPECT_NEAR(finder.sigma().at<float>(60, 10), 33 * std::sqrt(factor), 1e-2);
+  EXPECT_GT(finder.sigma().at<float>(60, kWidth / 2), 33 * std::sqrt(factor) / 2);
+  cv::RNG rng(8);
+  for (int i = 0; i < 50; ++i) ASSERT_TRUE(finder.find(edgeFrame(rng, model)).empty()) << "frame " << i;
+  // A real defect on the dark side is still found: 5 DN darker over a disc of radius 4 px, 20 σ deep.
+  cv::Mat image = edgeFrame(rng, model);
+  cv::circle(image, {kWidth - 30, 60}, 4, cv::Scalar(5), -1);
+  const std::vector<Defect> found = finder.find(image);
+  ASSERT_EQ(found.size(), 1u);
+  EXPECT_NEAR(found[0].centroid_px.x, kWidth - 30, 1.0);
+}
+
 TEST(Defects, TheMaskTheMinimumAreaAndTheAbsoluteThresholdApply) {
   cv::RNG rng(5);
   const GoldenModel model = trained(rng);

@@ -9,6 +9,7 @@
 #include "lfi/controller/bench_file.h"
 #include "lfi/controller/controller.h"
 #include "lfi/controller/reference_package.h"
+#include "lfi/inspection/defects.h"
 #include "lfi/inspection/golden_model.h"
 #include "lfi/inspection/verdict.h"
 
@@ -35,17 +36,16 @@ public:
   // Judges an image (CV_8U, CV_16U or CV_32F, the package's size).
   PartVerdict judge(const cv::Mat& image) const;
 
-  const GoldenModel& model() const { return model_; }
   const cv::Mat& mask() const { return mask_; }
 
 private:
   const BenchFile& bench_;
   LightField lightField_;
   double white_;
-  GoldenModel model_;
   cv::Mat mask_;
+  cv::Size size_;
   PartFrame frame_;
-  DetectionSettings detection_;
+  DefectFinder finder_;
   std::unique_ptr<LightFieldCapture> capture_;
   Controller controller_;
 };

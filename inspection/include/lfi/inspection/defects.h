@@ -2,14 +2,17 @@
 // Defects an image shows against the golden model (golden_model.h), without
 // ground truth. The difference d = image - ideal is smoothed with a Gaussian
 // matched to the smallest defect of interest; a pixel is off where
-// |smoothed d| > max(a, b · variation · s), s the factor by which the smoothing
-// lowers independent pixel noise (s = 1 unsmoothed); off pixels are joined by a
-// morphological closing, kept inside the part's mask, and grouped into
-// 8-connected regions; regions smaller than the minimum area are dropped.
+// |smoothed d| > max(a, b · σ), σ the standard deviation the smoothed
+// difference of a good part has there: sqrt(Σ k² · variation²) over the
+// kernel's weights k, so the variation of every pixel the smoothing takes in
+// counts (on the dark side of a lit edge, the bright side's noise is most of
+// it; σ = variation unsmoothed); off pixels are joined by a morphological
+// closing, kept inside the part's mask, and grouped into 8-connected regions;
+// regions smaller than the minimum area are dropped.
 //
 //   setting       units  meaning
 //   absolute_dn   DN     a: the least difference that counts, whatever the variation
-//   relative      -      b: the threshold in units of the (smoothed) variation
+//   relative      -      b: the threshold in units of σ
 //   smoothing_px  px     the Gaussian's standard deviation; 0 = none
 //   closing_px    px     radius of the closing that joins a defect's fragments; 0 = none
 //   minArea_px    px²    the smallest region reported
@@ -48,10 +51,27 @@ struct Defect {
   bool dark = false;        // the region's mean difference is negative
 };
 
-// The defects of `image` against `model`, largest first. `mask` (CV_8UC1, the
-// image's size; nonzero = the part) may be empty for the whole image. Throws
-// Errc::InvalidArgument naming the sizes or types for an image or mask that
-// does not match the model, or a setting out of range.
+// The defects of image after image against one model: σ, which depends on
+// the model and the settings only, is computed once. `mask` (CV_8UC1, the
+// model's size; nonzero = the part) may be empty for the whole image. Throws
+// Errc::InvalidArgument for a model or mask that do not match or a setting
+// out of range.
+class DefectFinder {
+public:
+  DefectFinder(const GoldenModel& model, const cv::Mat& mask, const DetectionSettings& settings);
+  // The defects of `image`, largest first. Throws Errc::InvalidArgument naming
+  // the sizes or types for an image that does not match the model.
+  std::vector<Defect> find(const cv::Mat& image) const;
+  // σ per pixel (DN, CV_32FC1).
+  const cv::Mat& sigma() const { return threshold_.variation; }
+
+private:
+  GoldenModel threshold_;  // the ideal, and σ in place of the variation
+  cv::Mat mask_;
+  DetectionSettings settings_;
+};
+
+// DefectFinder(model, mask, settings).find(image), for one image.
 std::vector<Defect> findDefects(const cv::Mat& image, const GoldenModel& model, const cv::Mat& mask,
                                 const DetectionSettings& settings);
 
