@@ -9,6 +9,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include <cmath>
+#include <optional>
 
 namespace lfi::study::detail {
 
@@ -41,6 +42,34 @@ cv::Mat defectMask(const sim::Scene& scene, const sim::TelecentricCamera& camera
   return mask;
 }
 
+// Where a world point appears in the frame: the sensor position whose chief
+// ray, refracted by `part`, passes through it, found by moving the sensor
+// position by the lateral miss (the camera maps object-space x, y linearly
+// onto the sensor, so a few steps converge). Continuous pixel coordinates
+// (pixel i spans [i, i + 1)).
+Vec2 apparentPosition(const sim::Scene& part, const sim::TelecentricCamera& camera, const Vec3& point) {
+  const Vec2 target = camera.project(point);
+  Vec2 p = target;
+  for (int step = 0; step < 32; ++step) {
+    const double i = std::floor(p.x), j = std::floor(p.y);
+    const auto path = sim::refractionPath(
+        part, camera.ray(static_cast<int>(i), static_cast<int>(j), {p.x - i, p.y - j}, {0, 0}));
+    // The path's point nearest `point`.
+    Vec3 nearest = path.front();
+    for (size_t k = 0; k + 1 < path.size(); ++k) {
+      const Vec3 seg = path[k + 1] - path[k];
+      const double len2 = seg.length2();
+      const double t = len2 > 0 ? std::clamp((point - path[k]).dot(seg) / len2, 0.0, 1.0) : 0.0;
+      const Vec3 q = path[k] + seg * t;
+      if ((q - point).length2() < (nearest - point).length2()) nearest = q;
+    }
+    const Vec2 miss = target - camera.project(nearest);
+    p += miss;
+    if (miss.length() < 1e-6) break;
+  }
+  return p;
+}
+
 }  // namespace
 
 GroundTruth traceGroundTruth(const Bench& bench, const std::vector<SceneSpec>& specs,
@@ -53,11 +82,20 @@ GroundTruth traceGroundTruth(const Bench& bench, const std::vector<SceneSpec>& s
     const sim::Scene scene(part);
     cv::Mat all = cv::Mat::zeros(camera.height, camera.width, CV_8UC1);
     std::vector<cv::Mat> masks;
+    // The scene's lens as it is (moved, its index changed) without its
+    // defects: what the defects' centres are seen through.
+    SceneSpec lensOnly = spec;
+    lensOnly.cuts.clear();
+    lensOnly.inclusions.clear();
+    const sim::Scene lens(partObjects(bench, lensOnly));
+    std::vector<Vec2> centres;
     for (const Defect& defect : spec.defects) {
+      const sim::Bounds b = defect.marker->bounds();
+      const Vec3 centre = (b.lo + b.hi) * 0.5;
+      centres.push_back(apparentPosition(lens, camera, centre) - Vec2(0.5, 0.5));
       cv::Mat m = defectMask(scene, camera, *defect.marker);
       if (cv::countNonZero(m) == 0) {
-        const sim::Bounds b = defect.marker->bounds();
-        const Vec2 p = camera.project((b.lo + b.hi) * 0.5);
+        const Vec2 p = camera.project(centre);
         const cv::Point px(static_cast<int>(p.x), static_cast<int>(p.y));
         if (px.inside(cv::Rect(0, 0, m.cols, m.rows))) m.at<uchar>(px) = 255;
       }
@@ -66,6 +104,7 @@ GroundTruth traceGroundTruth(const Bench& bench, const std::vector<SceneSpec>& s
       all |= m;
     }
     truth.masks.push_back(std::move(masks));
+    truth.centres.push_back(std::move(centres));
     truth.allDefects.push_back(all);
   }
   return truth;
@@ -140,7 +179,7 @@ cv::Mat toFloat(const cv::Mat& frame) {
 Evaluation evaluate(const Bench& bench, const Illumination& light, const std::vector<SceneSpec>& specs,
                     const GroundTruth& truth, const sim::TelecentricCamera& camera, sim::CameraSensorModel sensor,
                     sim::RenderOptions ro, std::uint64_t seed, Progress& progress, double renderUnits,
-                    const fs::path* imagesDir, Overwrite overwrite) {
+                    const fs::path* imagesDir, Overwrite overwrite, const DetectionSettings* blind) {
   auto renderScene = [&](const SceneSpec& spec, std::uint64_t mcSeed, const std::string& label) {
     std::vector<Object> objects = partObjects(bench, spec);
     objects.push_back(backlight(bench, light));
@@ -163,6 +202,10 @@ Evaluation evaluate(const Bench& bench, const Illumination& light, const std::ve
   sensor.exposeFor(brightest, bench.camera.exposureFill);
   const cv::Mat intactFrame = toFloat(sensor.capture(intact, seed * 7919 + 1, ro.threads));
   const cv::Mat controlFrame = toFloat(sensor.capture(intact, seed * 7919 + 2, ro.threads));
+  // The blind detector's golden model: frames of the intact lens with noise
+  // draws of their own (none of them is a frame it inspects).
+  std::optional<DefectFinder> finder;
+  if (blind) finder.emplace(trainGoldenModel(intact, sensor, seed * 7919 + 1000, ro.threads), truth.lens, *blind);
 
   // Per-pixel noise expected from the sensor model for a difference of two
   // frames; differences are judged in units of it (z).
@@ -224,6 +267,9 @@ Evaluation evaluate(const Bench& bench, const Illumination& light, const std::ve
     const FlaggedRegions regions = flaggedRegions(diff, sigma, allDefects, changed);
     sceneOut["false_positives"] = regions.falsePositives;
     sceneOut["secondary_regions"] = regions.secondary;
+    if (blind)
+      sceneOut["blind"] = blindFindings(frame, *finder, *blind, spec, masks, truth.centres[index], changed,
+                                        camera.objectPixel_mm());
 
     if (imagesDir) writeSceneImages(*imagesDir, spec, light, camera, sensor, frame, diff, overwrite);
   }

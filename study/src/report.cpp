@@ -94,6 +94,42 @@ std::string sweepHtml(const nlohmann::ordered_json& sweep) {
   return h + "</table>";
 }
 
+// The blind detector's scores: per scene and setup, hits of the scene's
+// defects, false alarms, and each found defect's position error.
+std::string blindHtml(const nlohmann::ordered_json& study) {
+  const auto& b = study["blind_detector"];
+  const auto& s = b["settings"];
+  std::string h = fmt::format(
+      "<h2>Blind detector</h2><p>lfi::DefectFinder (golden-template comparison, no ground truth) against a golden "
+      "model of the intact lens per illumination ({} frames), inside the lens's footprint; settings a = {} DN, "
+      "b = {}, smoothing {:.2f} px, closing {} px, minimum area {} px (object pixel {:.4f} mm). Scored against the "
+      "ground truth: a hit is a found region whose centroid lies in the defect's mask or within one pixel of its "
+      "centre; a false alarm is a region on no defect (secondary: where the defect changed the light). Position "
+      "error in object space.</p><table><tr><th>scene</th>",
+      b["training_frames"].get<int>(), s["absolute_dn"].get<double>(), s["relative"].get<double>(),
+      s["smoothing_px"].get<double>(), s["closing_px"].get<int>(), s["min_area_px"].get<int>(),
+      b["object_pixel_mm"].get<double>());
+  for (const auto& setup : study["setups"]) h += "<th>" + setup.get<std::string>() + "</th>";
+  h += "</tr>";
+  for (const auto& [scene, data] : study["scenes"].items()) {
+    if (!data.contains("blind")) continue;
+    h += "<tr><th>" + scene + "</th>";
+    for (const auto& setup : study["setups"]) {
+      const auto& r = data["blind"][setup.get<std::string>()];
+      h += fmt::format("<td>hits {}/{}<br>", r["hits"].get<int>(), r["hits"].get<int>() + r["misses"].get<int>());
+      for (const auto& [defect, d] : r["defects"].items())
+        h += d["found"].get<bool>()
+                 ? fmt::format("<span class=\"detected\">{}: {:.3f} mm</span><br>", defect,
+                               d["position_error_mm"].get<double>())
+                 : fmt::format("<span class=\"missed\">{}: missed</span><br>", defect);
+      h += fmt::format("false alarms: {} ({} secondary), extra regions: {}</td>", r["false_alarms"].get<int>(),
+                       r["secondary_false_alarms"].get<int>(), r["extra_regions"].get<int>());
+    }
+    h += "</tr>";
+  }
+  return h + "</table>";
+}
+
 std::string htmlReport(const nlohmann::ordered_json& study) {
   std::string h = R"(<!doctype html><html><head><meta charset="utf-8"><title>lfi reference study</title>
 <style>body{font-family:sans-serif;margin:1em}table{border-collapse:collapse}td,th{border:1px solid #ccc;padding:4px;text-align:center}
@@ -123,6 +159,7 @@ difference with the intact lens (grey = 0, &plusmn;8&sigma; full scale).</p><tab
     h += "</tr>";
   }
   h += "</table>";
+  if (study.contains("blind_detector")) h += blindHtml(study);
   if (study.contains("sweep")) h += sweepHtml(study["sweep"]);
   h += "<h2>Noise</h2><pre>" + study["noise"].dump(2) + "</pre></body></html>\n";
   return h;
@@ -158,6 +195,42 @@ void writeReport(const fs::path& outDir, Overwrite mode, const nlohmann::ordered
 
 }  // namespace detail
 
+namespace {
+
+// The blind detector's scores for the terminal: per defect the position error
+// of its hit (or "missed"), per scene the false alarms.
+std::string blindText(const nlohmann::ordered_json& study) {
+  if (!study.contains("blind_detector")) return "";
+  std::string out = "\nblind detector (golden model, no ground truth): position error of each hit\n";
+  out += fmt::format("{:<14} {:<8}", "scene", "defect");
+  for (const auto& s : study["setups"]) out += fmt::format(" {:>22}", s.get<std::string>());
+  out += "\n";
+  for (const auto& [scene, data] : study["scenes"].items()) {
+    if (!data.contains("blind")) continue;
+    const auto& bySetup = data["blind"];
+    for (const auto& [defect, unused] : bySetup[study["setups"][0].get<std::string>()]["defects"].items()) {
+      out += fmt::format("{:<14} {:<8}", scene, defect);
+      for (const auto& s : study["setups"]) {
+        const auto& d = bySetup[s.get<std::string>()]["defects"][defect];
+        out += fmt::format(" {:>22}", d["found"].get<bool>()
+                                          ? fmt::format("{:.3f} mm", d["position_error_mm"].get<double>())
+                                          : std::string("missed"));
+      }
+      out += "\n";
+    }
+    out += fmt::format("{:<14} {:<8}", scene, "false+");
+    for (const auto& s : study["setups"]) {
+      const auto& r = bySetup[s.get<std::string>()];
+      out += fmt::format(" {:>22}", fmt::format("{} ({} secondary)", r["false_alarms"].get<int>(),
+                                                r["secondary_false_alarms"].get<int>()));
+    }
+    out += "\n";
+  }
+  return out;
+}
+
+}  // namespace
+
 std::string verdictTable(const nlohmann::ordered_json& study) {
   std::string sweepText;
   if (study.contains("sweep")) {
@@ -191,7 +264,7 @@ std::string verdictTable(const nlohmann::ordered_json& study) {
     }
     out += "\n";
   }
-  return out + sweepText;
+  return out + blindText(study) + sweepText;
 }
 
 }  // namespace lfi::study

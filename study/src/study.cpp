@@ -141,6 +141,8 @@ nlohmann::ordered_json runStudy(const Bench& bench, const fs::path& outDir, cons
                           {"distance_mm", lightField->geometry().distance_mm},
                           {"capture_samples_per_pixel", q.captureSamples}};
   study["criterion"] = criterionJson();
+  const DetectionSettings blind = blindSettings(bench, camera);
+  study["blind_detector"] = blindDetectorJson(blind, camera);
 
   sim::RenderOptions ro;
   ro.samplesPerPixel = q.samplesPerPixel;
@@ -151,7 +153,7 @@ nlohmann::ordered_json runStudy(const Bench& bench, const fs::path& outDir, cons
     const Illumination light{kSetups[si], lightField, bench.inverseSchlieren.lookup, 0};
     const Evaluation e = namingTheStep(fmt::format("setup '{}' of '{}'", kSetups[si], bench.source), [&] {
       return evaluate(bench, light, specs, truth, camera, bench.sensorModel(), ro, options.seed * 1000 + si * 100,
-                      progress, 1.0, &imagesDir, overwrite);
+                      progress, 1.0, &imagesDir, overwrite, &blind);
     });
     study["noise"][kSetups[si]] = e.noise;
     for (const auto& [scene, result] : e.scenes.items()) {
@@ -160,6 +162,7 @@ nlohmann::ordered_json runStudy(const Bench& bench, const fs::path& outDir, cons
       for (const auto& [defect, cell] : result["defects"].items()) out["defects"][defect][kSetups[si]] = cell;
       out["false_positives"][kSetups[si]] = result["false_positives"];
       out["secondary_regions"][kSetups[si]] = result["secondary_regions"];
+      out["blind"][kSetups[si]] = result["blind"];
     }
   }
 

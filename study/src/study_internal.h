@@ -1,10 +1,13 @@
 #pragma once
 // Internal to lfi_study: what its parts share — the declared detection
-// criterion, the scenes and illuminations, one evaluation of them, the
-// sweep's variants, the report's writers and the study's progress.
+// criterion, the scenes and illuminations, one evaluation of them, the blind
+// detector's settings, the sweep's variants, the report's writers and the
+// study's progress.
 
 #include "lfi/core/atomic_file.h"
 #include "lfi/core/light_field.h"
+#include "lfi/inspection/defects.h"
+#include "lfi/inspection/golden_model.h"
 #include "lfi/sim/render.h"
 #include "lfi/study/study.h"
 
@@ -90,6 +93,10 @@ LightField captureLightField(const Bench& bench, const LightFieldGeometry& geome
 // and the camera only, not on the illumination, so it is traced once per camera.
 struct GroundTruth {
   std::vector<std::vector<cv::Mat>> masks;  // [scene][defect]
+  // [scene][defect]: where the defect's centre appears (the pixel position whose
+  // chief ray, refracted by the scene's lens without its defects, passes through
+  // it), (column, row) with pixel centres at whole numbers.
+  std::vector<std::vector<Vec2>> centres;
   std::vector<cv::Mat> allDefects;          // [scene]
   cv::Mat lens;                             // the intact lens
 };
@@ -106,14 +113,46 @@ struct Evaluation {
 
 // Renders every scene under one illumination, passes each through the camera,
 // and judges it against the intact lens by the declared criterion. Writes the
-// frames and difference images to imagesDir when it is given.
+// frames and difference images to imagesDir when it is given. With `blind`,
+// also runs the blind detector on every frame (scenes -> scene -> "blind").
 Evaluation evaluate(const Bench& bench, const Illumination& light, const std::vector<SceneSpec>& specs,
                     const GroundTruth& truth, const sim::TelecentricCamera& camera, sim::CameraSensorModel sensor,
                     sim::RenderOptions ro, std::uint64_t seed, Progress& progress, double renderUnits,
-                    const std::filesystem::path* imagesDir, Overwrite overwrite);
+                    const std::filesystem::path* imagesDir, Overwrite overwrite,
+                    const DetectionSettings* blind = nullptr);
 
 // The declared criterion as study.json states it.
 nlohmann::ordered_json criterionJson();
+
+// ---- The blind detector (blind.cpp) -----------------------------------------
+
+// Its declared settings (docs/study.md, "Blind detector").
+inline constexpr int kGoldenFrames = 16;          // frames of the intact lens the golden model is trained from
+inline constexpr double kBlindAbsoluteDn = 0;     // a: the variation holds all the study's frames vary by
+inline constexpr double kBlindRelative = 5;       // b: 5 sigma of the smoothed difference
+inline constexpr double kMatchedSigmaPerRadius = 0.63;  // Gaussian that best finds a disc of radius R: 0.63 R
+inline constexpr double kClosingPerRadius = 1.0;  // closing radius, per inclusion radius
+inline constexpr int kBlindMinArea_px = 1;
+
+// The golden model of the intact lens under one illumination: kGoldenFrames
+// camera frames of its rendering, each with its own noise draw (seeds seed,
+// seed + 1, ...), and the camera's noise as the variation's floor.
+GoldenModel trainGoldenModel(const cv::Mat& intactRadiance, const sim::CameraSensorModel& sensor,
+                             std::uint64_t seed, int threads);
+// The declared settings for the camera: smoothing and closing scale with the
+// inclusion radius in its pixels.
+DetectionSettings blindSettings(const Bench& bench, const sim::TelecentricCamera& camera);
+// The detector, its settings and its scoring as study.json states them.
+nlohmann::ordered_json blindDetectorJson(const DetectionSettings& settings, const sim::TelecentricCamera& camera);
+// The detector (golden model, part mask, settings) on one scene's frame, scored against its ground truth:
+// {regions, hits, misses, false_alarms, secondary_false_alarms, extra_regions,
+//  found: [{centroid_px, area_px, dark, defect}], defects: {name: {found,
+//  position_error_mm}}}. `changed`: pixels whose rendered radiance differs
+// from the intact lens's (dilated).
+nlohmann::ordered_json blindFindings(const cv::Mat& frame, const DefectFinder& finder,
+                                     const DetectionSettings& settings, const SceneSpec& spec,
+                                     const std::vector<cv::Mat>& masks, const std::vector<Vec2>& centres,
+                                     const cv::Mat& changed, double objectPixel_mm);
 
 // ---- The display-quality sweep (sweep.cpp) --------------------------------
 

@@ -3,6 +3,7 @@
 
 #include "lfi/core/error.h"
 #include "lfi/core/exr_io.h"
+#include "lfi/study/blind_scoring.h"
 #include "lfi/study/study.h"
 
 #include "lfi_test_support.h"
@@ -78,6 +79,17 @@ void checkOutputs(const nlohmann::ordered_json& r, const fs::path& dir) {
         EXPECT_GT(cell["pixels"].get<int>(), 0) << scene << "/" << d;
       }
     for (const auto& setup : setups) {
+      // The blind detector's score adds up: every defect is a hit or a miss,
+      // every region a hit, an extra region on a hit defect, or a false alarm.
+      const auto& b = s["blind"][setup];
+      EXPECT_EQ(b["hits"].get<int>() + b["misses"].get<int>(), static_cast<int>(names.size())) << scene << setup;
+      EXPECT_EQ(b["hits"].get<int>() + b["extra_regions"].get<int>() + b["false_alarms"].get<int>(),
+                b["regions"].get<int>()) << scene << setup;
+      EXPECT_EQ(b["found"].size(), b["regions"].get<size_t>()) << scene << setup;
+      EXPECT_LE(b["secondary_false_alarms"].get<int>(), b["false_alarms"].get<int>()) << scene << setup;
+      for (const auto& d : names)
+        EXPECT_EQ(b["defects"][d]["found"].get<bool>(), !b["defects"][d]["position_error_mm"].is_null())
+            << scene << "/" << d << "/" << setup;
       for (const char* ext : {".exr", ".png", "_diff.png"})
         EXPECT_TRUE(fs::exists(dir / "images" / (scene + "_" + setup + ext))) << scene << setup << ext;
     }
@@ -129,6 +141,26 @@ TEST(QuickStudy, EndToEnd) {
   // h/f = 0.2 rad, far beyond the camera's 0.015 rad acceptance: that region
   // is dark with or without the particle, so nothing can differ.
   EXPECT_EQ(r["scenes"]["absorbing"]["defects"]["rim"]["parallel"]["verdict"], "missed");
+  // The blind detector (golden model, no ground truth) sees the same: with
+  // nothing but the camera's noise, a 5 sigma excursion of the smoothed
+  // difference has probability 6e-7 per pixel (1.2e-6 with the noise of a
+  // 16-frame golden image), about 0.01 expected regions over the lens's 1e4
+  // pixels: the intact lens raises no alarm under any illumination.
+  for (const char* setup : {"parallel", "area", "inverse_schlieren"})
+    EXPECT_EQ(r["scenes"]["intact"]["blind"][setup]["false_alarms"], 0) << setup;
+  // Under inverse schlieren both opaque particles block the whole signal over
+  // more than ten pixels, and none of their light lands elsewhere; the one on
+  // the axis is seen without refraction, so its dark region is centred on it:
+  // its centroid lies within a pixel (object space) of the particle's centre.
+  {
+    const auto& b = r["scenes"]["absorbing"]["blind"]["inverse_schlieren"];
+    EXPECT_EQ(b["hits"], 2);
+    EXPECT_EQ(b["false_alarms"], 0);
+    EXPECT_LT(b["defects"]["center"]["position_error_mm"].get<double>(),
+              r["blind_detector"]["object_pixel_mm"].get<double>());
+  }
+  // Where parallel light cannot reach the camera (the rim), no detector finds anything.
+  EXPECT_FALSE(r["scenes"]["absorbing"]["blind"]["parallel"]["defects"]["rim"]["found"].get<bool>());
   // The sweep: both points, both lookups, every defect; with the bench's own
   // light field the on-axis opaque particle is found as in the main table.
   ASSERT_TRUE(r.contains("sweep"));
@@ -203,6 +235,55 @@ TEST(Sweep, AnswersFollowTheDeclaredThreshold) {
   EXPECT_EQ(a["d"]["interpolated"]["coarsest_element_mm"], 3.2);
   EXPECT_EQ(a["d"]["interpolated"]["fewest_angular"], 2);
   EXPECT_EQ(a["d"]["interpolated"]["delta_tolerance_mm"], 4.0);
+}
+
+// The blind detector's scoring on synthetic regions and masks (0.1 mm object pixels).
+TEST(BlindScoring, HitsMissesFalseAlarmsAndFragments) {
+  using lfi::study::TrueDefect;
+  auto region = [](double x, double y) {
+    lfi::Defect d;
+    d.centroid_px = {x, y};
+    d.area_px = 1;
+    return d;
+  };
+  cv::Mat disc = cv::Mat::zeros(64, 64, CV_8UC1), empty = cv::Mat::zeros(64, 64, CV_8UC1);
+  for (int y = 17; y <= 23; ++y)
+    for (int x = 17; x <= 23; ++x)
+      if ((x - 20) * (x - 20) + (y - 20) * (y - 20) <= 9) disc.at<uchar>(y, x) = 255;  // radius 3 around (20, 20)
+  // A: a disc mask, its centre seen at (20, 21); B: no mask, only its centre; C: never found.
+  const std::vector<TrueDefect> truth = {{disc, {20, 21}}, {empty, {50, 10}}, {empty, {5, 60}}};
+  const std::vector<lfi::Defect> found = {
+      region(22, 20),      // in A's mask, 2.24 px from its centre
+      region(20.5, 21.0),  // in A's mask, 0.5 px: the nearer, A's hit
+      region(50.6, 10.0),  // 0.6 px from B's centre (no mask): B's hit
+      region(40, 40),      // on nothing: a false alarm
+      region(51.2, 10.0),  // 1.2 px from B, in no mask: a false alarm
+  };
+  const lfi::study::BlindScore s = lfi::study::scoreBlindDetection(found, truth, 0.1);
+  EXPECT_EQ(s.hits, 2);
+  EXPECT_EQ(s.misses, 1);
+  EXPECT_EQ(s.extraRegions, 1);  // the farther region on A: a fragment, no false alarm
+  EXPECT_EQ(s.falseAlarms, 2);
+  EXPECT_EQ(s.falseAlarmRegions, (std::vector<int>{3, 4}));
+  EXPECT_EQ(s.regionOf, (std::vector<int>{1, 2, -1}));
+  ASSERT_TRUE(s.positionError_mm[0] && s.positionError_mm[1]);
+  EXPECT_NEAR(*s.positionError_mm[0], 0.05, 1e-12);
+  EXPECT_NEAR(*s.positionError_mm[1], 0.06, 1e-12);
+  EXPECT_FALSE(s.positionError_mm[2]);
+  // A region is one defect's at most: the nearer one takes it, and the other is missed.
+  const lfi::study::BlindScore overlap =
+      lfi::study::scoreBlindDetection({region(20, 20)}, {{disc, {20, 22}}, {disc, {21, 20}}}, 0.1);
+  EXPECT_EQ(overlap.regionOf, (std::vector<int>{-1, 0}));
+  EXPECT_EQ(overlap.hits, 1);
+  EXPECT_EQ(overlap.falseAlarms, 0);
+  // With no defect (the intact lens) every region is a false alarm.
+  const lfi::study::BlindScore intact = lfi::study::scoreBlindDetection(found, {}, 0.1);
+  EXPECT_EQ(intact.falseAlarms, 5);
+  EXPECT_EQ(intact.hits + intact.misses + intact.extraRegions, 0);
+  EXPECT_TRUE(throwsError([&] { lfi::study::scoreBlindDetection(found, {{cv::Mat(64, 64, CV_32F), {0, 0}}}, 0.1); },
+                          Errc::InvalidArgument, {"mask"}));
+  EXPECT_TRUE(
+      throwsError([&] { lfi::study::scoreBlindDetection(found, truth, 0); }, Errc::InvalidArgument, {"pixel"}));
 }
 
 TEST(Bench, MutatedValuesLoadAsConsistentBenchesOrAreNamedErrors) {
