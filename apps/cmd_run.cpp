@@ -91,7 +91,9 @@ Station openStation(const BenchFile& bench, const ReferencePackage& package) {
 }
 
 // A device error: what on_device_loss = "wait" rides out.
-bool deviceTrouble(const Error& e) { return e.code() == Errc::Device || e.code() == Errc::Timeout || e.code() == Errc::NotFound; }
+bool deviceTrouble(const Error& e) {
+  return e.code() == Errc::Device || e.code() == Errc::Timeout || e.code() == Errc::NotFound;
+}
 
 // Reopens the devices with a doubling back-off (0.5 s to 8 s) until the bench's wait limit.
 Station reopenStation(const BenchFile& bench, const ReferencePackage& package, const std::string& why) {
@@ -131,6 +133,7 @@ int runRun(const RunArgs& a, const GlobalOptions& global) {
   fmt::print(stderr, "run: records in {} (Ctrl-C stops after the part in hand)\n", log.file().string());
   const auto start = Clock::now();
   auto lastPage = start;
+  Clock::duration pageTime{};
   RunCounts counts;
   std::uint64_t part = 0;
   const auto done = [&] {
@@ -147,6 +150,10 @@ int runRun(const RunArgs& a, const GlobalOptions& global) {
       (result.verdict.pass ? counts.passed : counts.failed) += 1;
     } catch (const Error& e) {
       if (!deviceTrouble(e)) throw;
+      if (e.code() == Errc::Timeout && bench.camera.trigger == TriggerMode::Line) {
+        --part;  // a hardware-triggered camera that saw no trigger: no part came, none is missing
+        continue;
+      }
       log.append(errorRecord(bench, part, utcNow(), e.what()));
       ++counts.errors;
       if (bench.onDeviceLoss == OnDeviceLoss::Stop) {
@@ -164,9 +171,12 @@ int runRun(const RunArgs& a, const GlobalOptions& global) {
     if (!global.quiet)
       fmt::print(stderr, "\rpart {}: {} passed, {} failed, {} not inspected, {:.2f} parts/s   ", part, counts.passed,
                  counts.failed, counts.errors, part / std::max(elapsed, 1e-9));
-    if (Clock::now() - lastPage > std::chrono::seconds(2)) {
+    // The page is rebuilt from all the records: every 2 s, or less often once that takes long (a long run's file).
+    if (Clock::now() - lastPage > std::max<Clock::duration>(std::chrono::seconds(2), 20 * pageTime)) {
+      const auto begin = Clock::now();
       writeRunSummary(log.file(), page, true);
       lastPage = Clock::now();
+      pageTime = lastPage - begin;
     }
   }
   if (!global.quiet) fmt::print(stderr, "\n");

@@ -177,13 +177,16 @@ TEST_F(LfiInspectionCli, AFailedPartKeepsItsRecordImageAndOverlay) {
   EXPECT_EQ(nlohmann::json::parse(readText(out / "record.json")), record);
 }
 
-TEST_F(LfiInspectionCli, TrainingAddsImagesToTheReference) {
+TEST_F(LfiInspectionCli, TrainingAddsImagesToTheReferenceWhichEmitShows) {
   capture();
   const auto r = runLfi("-q train " + bench() + " --images 3");
   ASSERT_EQ(r.status, 0) << r.output;
   const auto meta = nlohmann::json::parse(readText(reference() / "reference.json"));
   EXPECT_EQ(meta["image"]["images_trained"], 16 + 3);
   EXPECT_EQ(runLfi("-q inspect " + bench()).status, 0);
+  const auto emit = runLfi("emit " + bench() + " --seconds 0.2");
+  EXPECT_EQ(emit.status, 0) << emit.output;
+  EXPECT_NE(emit.output.find("emit: showing on sim:"), std::string::npos) << emit.output;
 }
 
 TEST_F(LfiInspectionCli, BadBenchFilesAndReferencesAreNamedAndNothingIsWrittenOver) {
