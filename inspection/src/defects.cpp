@@ -444,17 +444,18 @@ DefectFinder::DefectFinder(const GoldenModel& model, const cv::Mat& mask, const 
   check(model, mask, settings);
   threshold_.ideal = model.ideal;
   threshold_.images = model.images;
-  if (!(settings.smoothing_px > 0)) {
-    threshold_.variation = model.variation;
-    return;
+  // A good image differs from the ideal, the mean of n such images, by its own noise and the ideal's:
+  // variance variation² (1 + 1/n).
+  const double ofIdeal = model.images > 0 ? 1 + 1.0 / model.images : 1;
+  cv::Mat variance = model.variation.mul(model.variation) * ofIdeal;
+  if (settings.smoothing_px > 0) {
+    // The smoothed difference of independent pixels has the variance Σ_p W(x, p)² variance(p), W the
+    // pass's separable smoothing: along each axis the kernel's taps, a pixel that the reflected border
+    // brings into the kernel twice weighted by the two taps' sum (so near a border this is not a filter).
+    const SmoothingKernel kernel = smoothingKernel(settings.smoothing_px);
+    variance = smoothedVariance(variance, kernel.taps);          // along the rows
+    variance = smoothedVariance(variance.t(), kernel.taps).t();  // down the columns
   }
-  // The smoothed difference of independent pixels has the variance Σ_p W(x, p)² variation(p)², W the
-  // pass's separable smoothing: along each axis the kernel's taps, a pixel that the reflected border brings
-  // into the kernel twice weighted by the two taps' sum (so near a border this is not a filter).
-  const SmoothingKernel kernel = smoothingKernel(settings.smoothing_px);
-  cv::Mat variance = model.variation.mul(model.variation);
-  variance = smoothedVariance(variance, kernel.taps);                // along the rows
-  variance = smoothedVariance(variance.t(), kernel.taps).t();        // down the columns
   cv::sqrt(variance, threshold_.variation);
 }
 

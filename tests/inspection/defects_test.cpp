@@ -120,6 +120,21 @@ TEST(Defects, GoodPartsRaiseNoAlarm) {
   for (int i = 0; i < 100; ++i) ASSERT_TRUE(findDefects(frame(rng), model, {}, {}).empty()) << "frame " << i;
 }
 
+TEST(Defects, TheIdealsOwnNoiseCountsWhenFewImagesWereTrained) {
+  // A model from one image: its ideal is as noisy as the frames, so a good
+  // frame's difference has twice the variance. Against σ = 10 DN alone b = 6
+  // would be 4.2 deviations of that difference (2e-5 a pixel, about 40 false
+  // pixels in 100 frames); against σ √2 it is 6 (2e-9: none).
+  cv::RNG rng(6);
+  const GoldenModel model = trained(rng, 1);
+  ASSERT_EQ(model.images, 1);
+  const DefectFinder finder(model, {}, {});
+  EXPECT_NEAR(finder.sigma().at<float>(0, 0), kNoise * std::sqrt(2.0), 1e-3);
+  int alarms = 0;
+  for (int i = 0; i < 100; ++i) alarms += static_cast<int>(finder.find(frame(rng)).size());
+  EXPECT_EQ(alarms, 0);
+}
+
 TEST(Defects, SmoothingMatchedToTheDefectFindsAFaintWideOne) {
   // 2 % darker (20 DN, 2 noise deviations) over a disc of radius 10: a disc
   // pixel reaches 6 deviations with probability 3e-5, none of its 314 is
@@ -167,8 +182,9 @@ TEST(Defects, TheSmoothedNoiseAtALitEdgeIsTheNeighboursNotTheCentresAlone) {
   // good frames at b = 6 clean (4e-9 a pixel).
   const GoldenModel model = edgeModel();
   const DefectFinder finder(model, {}, {.smoothing_px = 2});
-  // Far from the edge σ is the variation times the factor; at the edge, half the kernel's weight is lit.
-  const double factor = 1 / (4 * std::numbers::pi * 2 * 2);
+  // Far from the edge σ is the variation times the factor (the ideal from 1000 images adds 0.05 %); at the
+  // edge, half the kernel's weight is lit.
+  const double factor = (1 + 1e-3) / (4 * std::numbers::pi * 2 * 2);
   EXPECT_NEAR(finder.sigma().at<float>(60, kWidth - 10), 1 * std::sqrt(factor), 1e-3);
   EXPECT_NEAR(finder.sigma().at<float>(60, 10), 33 * std::sqrt(factor), 1e-2);
   EXPECT_GT(finder.sigma().at<float>(60, kWidth / 2), 33 * std::sqrt(factor) / 2);

@@ -3,10 +3,11 @@
 // ground truth. The difference d = image - ideal is smoothed with a Gaussian
 // matched to the smallest defect of interest; a pixel is off where
 // |smoothed d| > max(a, b · σ), σ the standard deviation the smoothed
-// difference of a good part has there: sqrt(Σ k² · variation²) over the
-// kernel's weights k, so the variation of every pixel the smoothing takes in
-// counts (on the dark side of a lit edge, the bright side's noise is most of
-// it; σ = variation unsmoothed); off pixels are joined by a morphological
+// difference of a good part has there: sqrt(Σ k² · variation² · (1 + 1/n))
+// over the kernel's weights k, so the variation of every pixel the smoothing
+// takes in counts (on the dark side of a lit edge, the bright side's noise is
+// most of it), and so does the ideal's own noise, the mean of the model's n
+// images (σ = variation · sqrt(1 + 1/n) unsmoothed); off pixels are joined by a morphological
 // closing, kept inside the part's mask, and grouped into 8-connected regions;
 // regions smaller than the minimum area are dropped.
 //
