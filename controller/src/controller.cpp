@@ -124,6 +124,11 @@ cv::Mat Controller::inspect() {
       }
       continue;
     }
+    if (options_.frames == 1) {  // (the frame itself: no sum to keep exact)
+      cv::Mat image;
+      frame.image.convertTo(image, CV_32F);
+      return image;
+    }
     cv::Mat f;
     frame.image.convertTo(f, CV_64F);
     if (sum.empty())
