@@ -5,6 +5,8 @@
 
 #include <signal.h>
 
+#include <algorithm>
+
 namespace fs = std::filesystem;
 
 namespace lfi::cli {
@@ -37,6 +39,12 @@ void addBenchArgument(CLI::App& command, fs::path& file) {
   command.add_option("bench", file, "Bench file (docs/inspection.md; data/benches/*.toml)")
       ->required()
       ->check(CLI::ExistingFile);
+}
+
+std::string timedFolderName(const char* prefix, const std::string& timeUtc) {
+  std::string name = std::string(prefix) + "-" + timeUtc;
+  name.erase(std::remove(name.begin(), name.end(), ':'), name.end());
+  return name;
 }
 
 BenchFile withSimulatedPart(BenchFile bench, const fs::path& scene) {

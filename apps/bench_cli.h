@@ -9,6 +9,7 @@
 
 #include <atomic>
 #include <filesystem>
+#include <string>
 
 namespace lfi::cli {
 
@@ -17,6 +18,10 @@ namespace lfi::cli {
 inline constexpr int kExitPartFailed = 3;
 
 void addBenchArgument(CLI::App& command, std::filesystem::path& file);
+
+// "<prefix>-<time>": the folder of one inspection or run, named by its UTC
+// time (ISO 8601 without its colons, for other file systems' sake).
+std::string timedFolderName(const char* prefix, const std::string& timeUtc);
 
 // --part SCENE: the part under a simulated bench's camera is the one of this
 // scene file (its camera and display URIs' scene replaced; the reference is

@@ -15,7 +15,6 @@
 
 #include <fmt/format.h>
 
-#include <algorithm>
 #include <memory>
 
 namespace fs = std::filesystem;
@@ -41,10 +40,7 @@ int runInspect(const InspectArgs& a, const GlobalOptions&) {
   inspector.showReference();
   const lfi::PartInspection part = inspector.inspectPart();
   const std::string time = lfi::utcNow();
-  // One folder per inspection, named by its time (":" left out for other file systems' sake).
-  std::string name = "inspect-" + time;
-  name.erase(std::remove(name.begin(), name.end(), ':'), name.end());
-  const fs::path folder = a.out.empty() ? bench.outputFolder / name : a.out;
+  const fs::path folder = a.out.empty() ? bench.outputFolder / timedFolderName("inspect", time) : a.out;
   requireOutputFolder(folder, "inspect", a.out.empty() ? "[output] folder" : "--out");
   const lfi::InspectionRecord record = partRecord(bench, inspector, part, 1, time, folder, "part");
   const std::string json = lfi::recordJson(record).dump(2) + "\n";

@@ -112,6 +112,7 @@ Station reopenStation(const BenchFile& bench, const ReferencePackage& package, c
     }
     pause = std::min(pause * 2, std::chrono::milliseconds(8000));
   }
+  if (StopOnSignal::stopRequested()) fail(Errc::Cancelled, "run: stopped while waiting for the devices ({})", last);
   fail(Errc::Device, "run: the devices did not come back within {} s ([run] wait_limit_s): {}", bench.waitLimit_s, last);
 }
 
@@ -122,10 +123,7 @@ int runRun(const RunArgs& a, const GlobalOptions& global) {
   // --part is the first thing to say).
   const BenchFile devices = a.part.empty() ? bench : withSimulatedPart(bench, a.part);
   const ReferencePackage package = readReferencePackage(bench.referenceFolder, &bench);
-  const std::string started = utcNow();
-  std::string name = "run-" + started;
-  name.erase(std::remove(name.begin(), name.end(), ':'), name.end());
-  const fs::path folder = a.out.empty() ? bench.outputFolder / name : a.out;
+  const fs::path folder = a.out.empty() ? bench.outputFolder / timedFolderName("run", utcNow()) : a.out;
   Station station = openStation(devices, package);
   requireOutputFolder(folder / "images", "run", a.out.empty() ? "[output] folder" : "--out");
   RecordLog log(folder / "records.jsonl");
@@ -149,7 +147,17 @@ int runRun(const RunArgs& a, const GlobalOptions& global) {
                             fmt::format("part-{:06d}", part)));
       (result.verdict.pass ? counts.passed : counts.failed) += 1;
     } catch (const Error& e) {
-      if (!deviceTrouble(e)) throw;
+      if (!deviceTrouble(e)) {
+        // Not the devices (a full disk, a file that cannot be written): record what can be, and stop.
+        try {
+          log.append(errorRecord(bench, part, utcNow(), e.what()));
+          writeRunSummary(log.file(), page, false);
+        } catch (const Error&) {
+          // (the disk may take nothing more: the records before this part are on it)
+        }
+        fail(e.code(), "run: stopped at part {}: {} (the records before it are in {})", part, e.what(),
+             log.file().string());
+      }
       if (e.code() == Errc::Timeout && bench.camera.trigger == TriggerMode::Line) {
         --part;  // a hardware-triggered camera that saw no trigger: no part came, none is missing
         continue;
@@ -164,7 +172,12 @@ int runRun(const RunArgs& a, const GlobalOptions& global) {
       station.inspector.reset();  // (the devices closed, in the order they depend on each other, before reopening)
       station.camera.reset();
       station.display.reset();
-      station = reopenStation(devices, package, e.what());
+      try {
+        station = reopenStation(devices, package, e.what());
+      } catch (const Error&) {
+        writeRunSummary(log.file(), page, false);
+        throw;
+      }
     }
     ++counts.parts;
     const double elapsed = std::chrono::duration<double>(Clock::now() - start).count();

@@ -269,4 +269,26 @@ TEST_F(LfiInspectionCli, ARunInterruptedFromTheTerminalEndsWithEveryRecordAndIts
   EXPECT_NE(readText(run / "summary.html").find(fmt::format("<td>{}</td>", parts)), std::string::npos);
 }
 
+TEST_F(LfiInspectionCli, ARunThatCannotWriteAPartsFilesStopsNamingThePartWithEveryRecordBefore) {
+  capture();
+  std::string text = benchText_;
+  replaceAll(text, "save_images = \"failed\"", "save_images = \"all\"");
+  const fs::path all = folder_.write("all.toml", text);
+  // Part 3's image cannot be written: a folder is in its place (as a file system that refuses it).
+  const fs::path run = folder_ / "run";
+  fs::create_directories(run / "images" / "part-000003.exr");
+  const auto r = runLfi("-q run " + shellQuoted(all.string()) + " --parts 10 --out " + shellQuoted(run.string()));
+  EXPECT_EQ(r.status, 1) << r.output;
+  EXPECT_NE(r.output.find("stopped at part 3"), std::string::npos) << r.output;
+  std::ifstream records(run / "records.jsonl");
+  std::vector<nlohmann::json> lines;
+  for (std::string line; std::getline(records, line);) lines.push_back(nlohmann::json::parse(line));
+  ASSERT_EQ(lines.size(), 3u);
+  EXPECT_EQ(lines[0]["status"], "inspected");
+  EXPECT_EQ(lines[1]["status"], "inspected");
+  EXPECT_EQ(lines[2]["status"], "error");
+  EXPECT_TRUE(fs::exists(run / "images" / "part-000002.exr"));
+  EXPECT_NE(readText(run / "summary.html").find("<td>3</td><td>2</td><td>0</td><td>1</td>"), std::string::npos);
+}
+
 }  // namespace
