@@ -43,7 +43,7 @@ int runInspect(const InspectArgs& a, const GlobalOptions&) {
   const fs::path folder = a.out.empty() ? bench.outputFolder / timedFolderName("inspect", time) : a.out;
   requireOutputFolder(folder, "inspect", a.out.empty() ? "[output] folder" : "--out");
   const lfi::InspectionRecord record = partRecord(bench, inspector, part, 1, time, folder, "part");
-  const std::string json = lfi::recordJson(record).dump(2) + "\n";
+  const std::string json = lfi::recordText(record, 2) + "\n";
   lfi::writeFileAtomically(folder / "record.json", lfi::Overwrite::Refuse, json);
   if (a.json) {
     fmt::print("{}", json);

@@ -53,7 +53,7 @@ public:
   RecordLog(const RecordLog&) = delete;
   RecordLog& operator=(const RecordLog&) = delete;
   void append(const InspectionRecord& record) {
-    const std::string line = recordJson(record).dump() + "\n";
+    const std::string line = recordText(record, -1) + "\n";
     size_t done = 0;
     while (done < line.size()) {
       const ssize_t n = ::write(fd_, line.data() + done, line.size() - done);

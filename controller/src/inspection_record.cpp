@@ -45,6 +45,10 @@ nlohmann::ordered_json recordJson(const InspectionRecord& r) {
   return j;
 }
 
+std::string recordText(const InspectionRecord& record, int indent) {
+  return recordJson(record).dump(indent, ' ', false, ordered_json::error_handler_t::replace);
+}
+
 RecordSummary readRecordSummary(const nlohmann::json& j, const std::string& where) {
   RecordSummary s;
   try {

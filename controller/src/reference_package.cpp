@@ -116,7 +116,7 @@ void writeReferencePackage(const fs::path& folder, const ReferencePackage& p, Ov
                kCameraDigitalNumbers);
     writeImage(tmp / "mask.exr", mask01, "the part's mask: 1 where defects are looked for", "mask (0 or 1)");
     std::ofstream out(tmp / "reference.json");
-    out << j.dump(2) << "\n";
+    out << j.dump(2, ' ', false, ordered_json::error_handler_t::replace) << "\n";  // (non-UTF-8 names: U+FFFD)
     out.close();
     if (!out) fail(Errc::Io, "cannot write '{}'", (folder / "reference.json").string());
   });

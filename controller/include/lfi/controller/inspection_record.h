@@ -39,6 +39,9 @@ struct InspectionRecord {
 };
 
 nlohmann::ordered_json recordJson(const InspectionRecord& record);
+// The record as JSON text: on one line (indent < 0, for JSON Lines) or
+// indented; strings that are not UTF-8 (a path, a device's name) with U+FFFD.
+std::string recordText(const InspectionRecord& record, int indent);
 
 // What a run's summary needs of a record read back (records the run wrote, or
 // another version's: only these keys are read). Throws Errc::InvalidFile
