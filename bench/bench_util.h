@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cerrno>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <exception>
@@ -19,6 +20,20 @@
 #include <vector>
 
 namespace lfi::bench {
+
+// The seconds one call of `f` takes.
+inline double secondsOf(const std::function<void()>& f) {
+  const auto t0 = std::chrono::steady_clock::now();
+  f();
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+// The nearest-rank percentile of `v` (fraction 0.5: the median, 0.99: the 99th percentile); v not empty.
+inline double percentile(std::vector<double> v, double fraction) {
+  std::sort(v.begin(), v.end());
+  const auto rank = static_cast<size_t>(std::ceil(fraction * static_cast<double>(v.size())));
+  return v[std::clamp<size_t>(rank, 1, v.size()) - 1];
+}
 
 inline double bestSeconds(int repeats, const std::function<void()>& f) {
   double best = 1e300;

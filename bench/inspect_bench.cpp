@@ -62,14 +62,11 @@ using namespace lfi;
 
 namespace {
 
+using lfi::bench::percentile;
+using lfi::bench::secondsOf;
+
 void keep(const void* p) {
   asm volatile("" : : "r"(p) : "memory");
-}
-
-double secondsOf(const std::function<void()>& f) {
-  const auto t0 = std::chrono::steady_clock::now();
-  f();
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
 struct Format {
@@ -165,12 +162,6 @@ void check(const std::vector<Defect>& found, const Frame& frame, const char* wha
                       "was not found there",
                       what, d.radius, d.centre.x, d.centre.y));
   }
-}
-
-double percentile(std::vector<double> v, double fraction) {
-  std::sort(v.begin(), v.end());
-  const auto rank = static_cast<size_t>(std::ceil(fraction * static_cast<double>(v.size())));
-  return v[std::clamp<size_t>(rank, 1, v.size()) - 1];
 }
 
 void benchFormat(const Format& format, cv::Size size, int turns, const DetectionSettings& settings) {
