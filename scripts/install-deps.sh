@@ -15,6 +15,8 @@ PACKAGES=(
   libusb-1.0-0-dev
   # images, light fields, analysis
   libopencv-dev libopenexr-dev libimath-dev zlib1g-dev libpng-dev
+  # Gray code patterns for the coded reference (OpenCV's structured_light)
+  libopencv-contrib-dev
   # meshes (OBJ, PLY, STL, ...)
   libassimp-dev
   # small libraries instead of hand-written code

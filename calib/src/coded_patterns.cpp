@@ -1,0 +1,200 @@
+#include "lfi/calib/coded_patterns.h"
+
+#include "lfi/core/error.h"
+
+#include <opencv2/structured_light.hpp>
+
+#include <algorithm>
+#include <atomic>
+#include <bit>
+#include <cmath>
+#include <cstdint>
+#include <vector>
+
+namespace lfi::calib {
+
+namespace {
+
+// ⌈log2 n⌉ for n ≥ 1, exactly (OpenCV computes it in floating point; the two agree over 1 .. kMaxPanelSide).
+int bitsFor(int n) {
+  return std::bit_width(static_cast<unsigned>(n - 1));
+}
+
+void checkSide(const char* what, const char* name, int side) {
+  if (side < 1 || side > GrayCodeLayout::kMaxPanelSide)
+    fail(Errc::InvalidArgument, "{}: panel {} {} is outside 1 .. {}", what, name, side, GrayCodeLayout::kMaxPanelSide);
+}
+
+// Camera rows decoded together: each frame is read as one run of this many rows per bit, and the codes of
+// the rows' pixels stay in the core's cache between the bits.
+constexpr int kTileRows = 8;
+
+// The per-pixel accumulators of a tile: Gray codes so far (most significant bit first) and the smallest
+// |pattern − inverse| so far. Panel sides ≤ 65536 keep codes within 16 bits, and CV_16U contrasts too.
+struct TileState {
+  std::vector<std::uint16_t> column, row, minContrast;
+  explicit TileState(size_t pixels) : column(pixels), row(pixels), minContrast(pixels) {}
+};
+
+// One bit of one camera row: a plain loop over pixels that the compiler vectorises.
+template <typename T>
+void accumulateBit(const T* pattern, const T* inverse, std::uint16_t* code, std::uint16_t* minContrast, int n) {
+  for (int i = 0; i < n; ++i) {
+    const std::uint16_t a = pattern[i], b = inverse[i];
+    const std::uint16_t contrast = static_cast<std::uint16_t>(std::max(a, b) - std::min(a, b));
+    code[i] = static_cast<std::uint16_t>((code[i] << 1) | (a > b ? 1 : 0));
+    minContrast[i] = std::min(minContrast[i], contrast);
+  }
+}
+
+std::uint16_t grayToBinary(std::uint16_t g) {
+  g ^= static_cast<std::uint16_t>(g >> 1);
+  g ^= static_cast<std::uint16_t>(g >> 2);
+  g ^= static_cast<std::uint16_t>(g >> 4);
+  g ^= static_cast<std::uint16_t>(g >> 8);
+  return g;
+}
+
+struct Counts {
+  int lit = 0, decoded = 0;
+};
+
+// Decodes camera rows [row0, row1): every frame is read once, a tile of rows at a time.
+template <typename T>
+Counts decodeRows(const std::vector<cv::Mat>& frames, const cv::Mat& white, const cv::Mat& black,
+                  const GrayCodeLayout& layout, const DecodeSettings& s, PanelCorrespondence& out, int row0, int row1) {
+  const int width = white.cols;
+  const int bits = layout.columnBits + layout.rowBits;
+  TileState state(static_cast<size_t>(kTileRows) * static_cast<size_t>(width));
+  Counts counts;
+  for (int tile0 = row0; tile0 < row1; tile0 += kTileRows) {
+    const int tile1 = std::min(tile0 + kTileRows, row1);
+    std::fill(state.column.begin(), state.column.end(), 0);
+    std::fill(state.row.begin(), state.row.end(), 0);
+    std::fill(state.minContrast.begin(), state.minContrast.end(), std::uint16_t{0xffff});
+    for (int bit = 0; bit < bits; ++bit) {
+      const bool isColumn = bit < layout.columnBits;
+      const int index = isColumn ? layout.columnPattern(bit) : layout.rowPattern(bit - layout.columnBits);
+      std::uint16_t* codes = isColumn ? state.column.data() : state.row.data();
+      const cv::Mat& pattern = frames[static_cast<size_t>(index)];
+      const cv::Mat& inverse = frames[static_cast<size_t>(index) + 1];
+      for (int v = tile0; v < tile1; ++v) {
+        const size_t at = static_cast<size_t>(v - tile0) * static_cast<size_t>(width);
+        accumulateBit(pattern.ptr<T>(v), inverse.ptr<T>(v), codes + at, state.minContrast.data() + at, width);
+      }
+    }
+    for (int v = tile0; v < tile1; ++v) {
+      const size_t at = static_cast<size_t>(v - tile0) * static_cast<size_t>(width);
+      const T* w = white.ptr<T>(v);
+      const T* b = black.ptr<T>(v);
+      auto* panel = out.panel.ptr<cv::Vec2i>(v);
+      auto* confidence = out.confidence.ptr<float>(v);
+      for (int u = 0; u < width; ++u) {
+        const int range = static_cast<int>(w[u]) - static_cast<int>(b[u]);
+        panel[u] = cv::Vec2i(-1, -1);
+        confidence[u] = 0;
+        if (range < s.minLit_dn) continue;
+        ++counts.lit;
+        const int contrast = bits == 0 ? range : state.minContrast[at + static_cast<size_t>(u)];
+        if (contrast < s.minContrast_dn || contrast < s.minContrastFraction * range) continue;
+        const int x = grayToBinary(state.column[at + static_cast<size_t>(u)]);
+        const int y = grayToBinary(state.row[at + static_cast<size_t>(u)]);
+        if (x >= layout.panelWidth || y >= layout.panelHeight) continue;
+        panel[u] = cv::Vec2i(x, y);
+        confidence[u] = static_cast<float>(contrast) / static_cast<float>(range);
+        ++counts.decoded;
+      }
+    }
+  }
+  return counts;
+}
+
+void checkInputs(const std::vector<cv::Mat>& frames, const cv::Mat& white, const cv::Mat& black,
+                 const GrayCodeLayout& layout, const DecodeSettings& s) {
+  constexpr const char* what = "decodeGrayCode";
+  checkSide(what, "width", layout.panelWidth);
+  checkSide(what, "height", layout.panelHeight);
+  if (layout.columnBits != bitsFor(layout.panelWidth) || layout.rowBits != bitsFor(layout.panelHeight))
+    fail(Errc::InvalidArgument,
+         "{}: the layout's {} column and {} row bits do not fit its {} x {} panel (it takes {} and {})", what,
+         layout.columnBits, layout.rowBits, layout.panelWidth, layout.panelHeight, bitsFor(layout.panelWidth),
+         bitsFor(layout.panelHeight));
+  if (s.minLit_dn < 1 || s.minLit_dn > 65535)
+    fail(Errc::InvalidArgument, "{}: settings.minLit_dn = {} is outside 1 .. 65535", what, s.minLit_dn);
+  if (s.minContrast_dn < 1 || s.minContrast_dn > 65535)
+    fail(Errc::InvalidArgument, "{}: settings.minContrast_dn = {} is outside 1 .. 65535", what, s.minContrast_dn);
+  if (!(s.minContrastFraction >= 0 && s.minContrastFraction <= 1))
+    fail(Errc::InvalidArgument, "{}: settings.minContrastFraction = {} is outside 0 .. 1", what, s.minContrastFraction);
+  if (static_cast<int>(frames.size()) != layout.patternCount())
+    fail(Errc::InvalidArgument,
+         "{}: {} pattern frames for a {} x {} panel's set, which has {} patterns ({} column and {} row bits, each "
+         "with its inverse; white and black are passed apart)",
+         what, frames.size(), layout.panelWidth, layout.panelHeight, layout.patternCount(), layout.columnBits,
+         layout.rowBits);
+  if (white.empty()) fail(Errc::InvalidArgument, "{}: the white frame is empty", what);
+  if (white.type() != CV_8UC1 && white.type() != CV_16UC1)
+    fail(Errc::InvalidArgument, "{}: the white frame is of type {}, not CV_8UC1 or CV_16UC1", what,
+         cv::typeToString(white.type()));
+  auto same = [&](const cv::Mat& frame, const std::string& name) {
+    if (frame.type() != white.type())
+      fail(Errc::InvalidArgument, "{}: {} is of type {}, the white frame of type {}", what, name,
+           cv::typeToString(frame.type()), cv::typeToString(white.type()));
+    if (frame.size() != white.size())
+      fail(Errc::InvalidArgument, "{}: {} is {} x {} pixels, the white frame {} x {}", what, name, frame.cols,
+           frame.rows, white.cols, white.rows);
+  };
+  same(black, "the black frame");
+  for (size_t i = 0; i < frames.size(); ++i) same(frames[i], "pattern frame " + std::to_string(i));
+}
+
+}  // namespace
+
+GrayCodeLayout GrayCodeLayout::forPanel(int panelWidth, int panelHeight) {
+  checkSide("GrayCodeLayout", "width", panelWidth);
+  checkSide("GrayCodeLayout", "height", panelHeight);
+  return {.panelWidth = panelWidth,
+          .panelHeight = panelHeight,
+          .columnBits = bitsFor(panelWidth),
+          .rowBits = bitsFor(panelHeight)};
+}
+
+CodedPatternSet grayCodePatterns(int panelWidth, int panelHeight) {
+  checkSide("grayCodePatterns", "width", panelWidth);
+  checkSide("grayCodePatterns", "height", panelHeight);
+  CodedPatternSet set;
+  set.layout = GrayCodeLayout::forPanel(panelWidth, panelHeight);
+  const cv::Ptr<cv::structured_light::GrayCodePattern> gray =
+      cv::structured_light::GrayCodePattern::create(panelWidth, panelHeight);
+  gray->generate(set.patterns);
+  if (static_cast<int>(set.patterns.size()) != set.layout.patternCount())
+    fail(Errc::InvalidArgument, "grayCodePatterns: OpenCV made {} patterns for a {} x {} panel, which takes {}",
+         set.patterns.size(), panelWidth, panelHeight, set.layout.patternCount());
+  gray->getImagesForShadowMasks(set.black, set.white);
+  return set;
+}
+
+PanelCorrespondence decodeGrayCode(const std::vector<cv::Mat>& frames, const cv::Mat& white, const cv::Mat& black,
+                                   const GrayCodeLayout& layout, const DecodeSettings& settings) {
+  checkInputs(frames, white, black, layout, settings);
+  PanelCorrespondence out;
+  out.panel.create(white.size(), CV_32SC2);
+  out.confidence.create(white.size(), CV_32FC1);
+  std::atomic<int> lit{0}, decoded{0};
+  const int rows = white.rows;
+  cv::parallel_for_(
+      cv::Range(0, rows),
+      [&](const cv::Range& band) {
+        const Counts c =
+            white.depth() == CV_8U
+                ? decodeRows<std::uint8_t>(frames, white, black, layout, settings, out, band.start, band.end)
+                : decodeRows<std::uint16_t>(frames, white, black, layout, settings, out, band.start, band.end);
+        lit += c.lit;
+        decoded += c.decoded;
+      },
+      std::ceil(static_cast<double>(rows) / kTileRows));
+  out.lit = lit;
+  out.decoded = decoded;
+  return out;
+}
+
+}  // namespace lfi::calib
