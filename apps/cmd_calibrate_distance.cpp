@@ -1,7 +1,7 @@
 // lfi calibrate-distance: the display-to-part distance scan
 // (docs/calibration.md), its table on stdout and its result file (JSON).
 
-#include "bench_devices.h"
+#include "device_options.h"
 #include "cli_util.h"
 #include "commands.h"
 
@@ -41,7 +41,7 @@ std::vector<double> scanCandidates(double from, double to, double step) {
 }
 
 // lfi calibrate-distance: the display-to-part distance scan (docs/calibration.md).
-void calibrateDistance(const BenchOptions& o, const std::vector<double>& candidates, const std::vector<int>& roiBox,
+void calibrateDistance(const DeviceOptions& o, const std::vector<double>& candidates, const std::vector<int>& roiBox,
                        const fs::path& out, bool force, bool quiet) {
   const auto overwrite = force ? lfi::Overwrite::Allow : lfi::Overwrite::Refuse;
   if (std::error_code ec; out.filename().empty() || fs::is_directory(out, ec))
@@ -52,7 +52,7 @@ void calibrateDistance(const BenchOptions& o, const std::vector<double>& candida
   std::vector<fs::path> outputs{out};
   if (!o.capture.empty()) outputs.push_back(referenceFile);
   refuseExisting(outputs, force, "calibrate-distance");
-  OpenBench bench = openBench(o, "calibrate-distance");
+  OpenDevices bench = openDevices(o, "calibrate-distance");
   // Where the result goes must take it before the scan, not after (and a bad device leaves no folder behind).
   requireOutputFolder(out.parent_path().empty() ? fs::path(".") : out.parent_path(), "calibrate-distance");
   const lfi::CameraSettings settings = bench.camera->settings();
@@ -145,7 +145,7 @@ void calibrateDistance(const BenchOptions& o, const std::vector<double>& candida
 }
 
 struct CalibrateArgs {
-  BenchOptions bench;
+  DeviceOptions bench;
   double scanFrom = -6, scanTo = 6, scanStep = 1;
   std::vector<int> roiBox;
   fs::path out;
@@ -159,7 +159,7 @@ Command addCalibrateDistanceCommand(CLI::App& app) {
       "calibrate-distance", "Scan the display-to-part distance error by showing the reference light field "
       "propagated to candidate distances (docs/calibration.md)");
   auto a = std::make_shared<CalibrateArgs>();
-  addBenchOptions(*calibrate, a->bench);
+  addDeviceOptions(*calibrate, a->bench);
   calibrate->add_option("--from", a->scanFrom, "First candidate error (mm)")->capture_default_str();
   calibrate->add_option("--to", a->scanTo, "Last candidate error (mm)")->capture_default_str();
   calibrate->add_option("--step", a->scanStep, "Candidate spacing (mm)")->capture_default_str();

@@ -50,10 +50,8 @@ bool checkBench(const fs::path& file) {
     return fmt::format("{}, {} x {} panel, {}", info.deviceId, info.panelWidth_px, info.panelHeight_px,
                        lfi::toString(display->state()));
   });
-  if (!bench.captureUri.empty())
-    check("capture", bench.captureUri, [&] { return lfi::openBenchCapture(bench)->description(); });
-  else
-    check("capture", bench.lightFieldFile.string(), [&] { return lfi::openBenchCapture(bench)->description(); });
+  check("capture", bench.captureUri.empty() ? bench.lightFieldFile.string() : bench.captureUri,
+        [&] { return lfi::openBenchCapture(bench)->description(); });
   check("reference", bench.referenceFolder.string(), [&] {
     const lfi::ReferencePackage p = lfi::readReferencePackage(bench.referenceFolder, &bench);
     return fmt::format("taken {}, {} images trained", p.info.created_utc, p.trainer.count());

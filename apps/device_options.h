@@ -16,7 +16,7 @@
 namespace lfi::cli {
 
 // The devices `lfi calibrate-distance` drives, and how.
-struct BenchOptions {
+struct DeviceOptions {
   std::string camera, display, capture;
   std::filesystem::path lightField;
   int frames = 1;
@@ -25,18 +25,18 @@ struct BenchOptions {
   int settle_ms = 0;
 };
 
-void addBenchOptions(CLI::App& command, BenchOptions& o);
+void addDeviceOptions(CLI::App& command, DeviceOptions& o);
 
 // The devices opened and the camera configured.
-struct OpenBench {
+struct OpenDevices {
   std::unique_ptr<lfi::Camera> camera;
   std::unique_ptr<lfi::Display> display;
-  std::unique_ptr<lfi::LightFieldCapture> capture;  // a device, or FileCapture
+  std::unique_ptr<lfi::LightFieldCapture> capture;  // a device, or the --light-field file (StoredLightField)
   bool captured = false;                            // a device: the reference is a new capture
 };
 
 // Opens through the device registries, which main.cpp fills before any
 // subcommand runs.
-OpenBench openBench(const BenchOptions& o, const char* command);
+OpenDevices openDevices(const DeviceOptions& o, const char* command);
 
 }  // namespace lfi::cli

@@ -1,7 +1,7 @@
 // The camera, display and reference light field that `lfi calibrate-distance`
 // drives, given on its command line: their options and their opening.
 
-#include "bench_devices.h"
+#include "device_options.h"
 
 #include "cli_util.h"
 
@@ -25,7 +25,7 @@ constexpr long long kMostFrames = 100000;
 
 }  // namespace
 
-void addBenchOptions(CLI::App& command, BenchOptions& o) {
+void addDeviceOptions(CLI::App& command, DeviceOptions& o) {
   command.add_option("--camera", o.camera, "Camera URI (aravis:<id>, sim:<scene-file>)")->required();
   command.add_option("--display", o.display, "Display URI (usb:<vid>:<pid>[/<serial>], sim:<scene-file>)")
       ->required();
@@ -45,10 +45,10 @@ void addBenchOptions(CLI::App& command, BenchOptions& o) {
       ->capture_default_str();
 }
 
-OpenBench openBench(const BenchOptions& o, const char* command) {
+OpenDevices openDevices(const DeviceOptions& o, const char* command) {
   if (o.capture.empty() && o.lightField.empty())
     lfi::fail(lfi::Errc::Config, "{}: give --capture <uri> or --light-field <file>", command);
-  OpenBench bench;
+  OpenDevices bench;
   bench.camera = lfi::openCamera(o.camera);
   lfi::CameraSettings settings;
   settings.exposure_us = o.exposure_us;
