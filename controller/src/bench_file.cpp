@@ -61,7 +61,6 @@ void readCamera(ConfigTable t, BenchFile& b) {
   c.frameRate_hz = t.number("frame_rate_hz", 0.0, 0, 1e6);
   c.binning = t.integer("binning", 1, 1, 16);
   b.objectPixel_mm = t.number("object_pixel_mm", std::nullopt, 1e-6, 1e3);
-  if (!(b.objectPixel_mm > 0)) fail(Errc::Config, "{} must be positive", t.where("object_pixel_mm"));
   b.noise.read_dn = t.number("read_noise_dn", std::nullopt, 0, 1e6);
   b.noise.gain_dnPerElectron = t.number("dn_per_electron", std::nullopt, 0, 1e6);
   b.grabTimeout_ms = t.integer("grab_timeout_ms", 5000, 1, 86'400'000);

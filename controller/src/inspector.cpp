@@ -14,19 +14,17 @@ CameraNoise noiseOfMean(const CameraNoise& perFrame, int frames) {
 
 Inspector::Inspector(const BenchFile& bench, const ReferencePackage& package, Display& display, Camera& camera)
     : bench_(bench),
-      lightField_(package.lightField),
       white_(package.info.white),
       mask_(package.mask),
-      size_(package.mask.size()),
       frame_(bench.partFrame(package.mask.cols, package.mask.rows)),
       finder_(package.trainer.model(noiseOfMean(bench.noise, bench.inspectionFrames)), package.mask,
               bench.detection()),
-      capture_(std::make_unique<StoredLightField>(package.lightField, "the reference package's light field")),
-      controller_(*capture_, display, camera, controllerOptions(bench, bench.inspectionFrames)) {}
+      reference_(std::make_unique<StoredLightField>(package.lightField, "the reference package's light field")),
+      controller_(*reference_, display, camera, controllerOptions(bench, bench.inspectionFrames)) {}
 
 Inspector::~Inspector() = default;
 
-void Inspector::showReference() { controller_.emit(lightField_, white_); }
+void Inspector::showReference() { controller_.emit(reference_->lightField(), white_); }
 
 PartInspection Inspector::inspectPart() {
   PartInspection result;
@@ -38,9 +36,9 @@ PartInspection Inspector::inspectPart() {
 }
 
 PartVerdict Inspector::judge(const cv::Mat& image) const {
-  if (image.size() != size_)
+  if (image.size() != mask_.size())
     fail(Errc::Device, "inspect: the camera's image is {} x {}, the reference's {} x {} (a changed camera region or "
-         "binning? take a new reference with `lfi capture`)", image.cols, image.rows, size_.width, size_.height);
+         "binning? take a new reference with `lfi capture`)", image.cols, image.rows, mask_.cols, mask_.rows);
   return judgePart(finder_.find(image), frame_, bench_.rules);
 }
 

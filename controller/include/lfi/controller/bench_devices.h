@@ -21,6 +21,7 @@ public:
       : lightField_(std::move(lightField)), description_(std::move(description)) {}
   LightFieldGeometry geometry() const override { return lightField_.geometry(); }
   LightField capture(const std::function<void(double)>&) override { return lightField_; }
+  const LightField& lightField() const { return lightField_; }
   std::string description() const override { return description_; }
 
 private:

@@ -6,6 +6,7 @@
 // (verdict.h). No ground truth is used. The camera noise floor of the model is
 // the bench's, for a mean of `frames` frames (variance / frames).
 
+#include "lfi/controller/bench_devices.h"
 #include "lfi/controller/bench_file.h"
 #include "lfi/controller/controller.h"
 #include "lfi/controller/reference_package.h"
@@ -40,13 +41,11 @@ public:
 
 private:
   const BenchFile& bench_;
-  LightField lightField_;
   double white_;
   cv::Mat mask_;
-  cv::Size size_;
   PartFrame frame_;
   DefectFinder finder_;
-  std::unique_ptr<LightFieldCapture> capture_;
+  std::unique_ptr<StoredLightField> reference_;  // what showReference() shows (the controller's capture)
   Controller controller_;
 };
 
