@@ -133,7 +133,8 @@ TEST_F(RunFaults, ACameraGoneMidRunStopsItWithEveryRecordBeforeKept) {
   ASSERT_EQ(capture.status, 0) << capture.output;
   const fs::path run = folder_ / "run";
   lfi::testing_support::LfiResult result;
-  std::thread runner([&] { result = runLfi("-q run " + shellQuoted(file.string()) + " --out " + shellQuoted(run.string())); });
+  std::thread runner(
+      [&] { result = runLfi("-q run " + shellQuoted(file.string()) + " --out " + shellQuoted(run.string())); });
   const bool started = waitForRecords(run / "records.jsonl", 3);
   camera_->signal(SIGKILL);
   runner.join();
