@@ -31,9 +31,22 @@ constexpr int kTileRows = 8;
 
 // The per-pixel accumulators of a tile: Gray codes so far (most significant bit first) and the smallest
 // |pattern − inverse| so far. Panel sides ≤ 65536 keep codes within 16 bits, and CV_16U contrasts too.
+// With two sources per axis (DecodeSettings::secondShare > 0), per axis: the bits read as split (below
+// splitBelow) and the smallest and largest split contrast, and the smallest contrast of the other bits.
 struct TileState {
   std::vector<std::uint16_t> column, row, minContrast;
-  explicit TileState(size_t pixels) : column(pixels), row(pixels), minContrast(pixels) {}
+  std::vector<std::uint16_t> splitBelow;
+  std::vector<std::uint16_t> split[2], minSplit[2], maxSplit[2], minClear;
+  TileState(size_t pixels, bool twoSources) : column(pixels), row(pixels), minContrast(pixels) {
+    if (!twoSources) return;
+    splitBelow.resize(pixels);
+    minClear.resize(pixels);
+    for (int axis = 0; axis < 2; ++axis) {
+      split[axis].resize(pixels);
+      minSplit[axis].resize(pixels);
+      maxSplit[axis].resize(pixels);
+    }
+  }
 };
 
 // One bit of one camera row: a plain loop over pixels that the compiler vectorises.
@@ -44,6 +57,23 @@ void accumulateBit(const T* pattern, const T* inverse, std::uint16_t* code, std:
     const std::uint16_t contrast = static_cast<std::uint16_t>(std::max(a, b) - std::min(a, b));
     code[i] = static_cast<std::uint16_t>((code[i] << 1) | (a > b ? 1 : 0));
     minContrast[i] = std::min(minContrast[i], contrast);
+  }
+}
+
+// The same with the split bits kept apart.
+template <typename T>
+void accumulateSplitBit(const T* pattern, const T* inverse, const std::uint16_t* splitBelow, std::uint16_t* code,
+                        std::uint16_t* split, std::uint16_t* minSplit, std::uint16_t* maxSplit,
+                        std::uint16_t* minClear, int n) {
+  for (int i = 0; i < n; ++i) {
+    const std::uint16_t a = pattern[i], b = inverse[i];
+    const std::uint16_t contrast = static_cast<std::uint16_t>(std::max(a, b) - std::min(a, b));
+    const bool isSplit = contrast < splitBelow[i];
+    code[i] = static_cast<std::uint16_t>((code[i] << 1) | (a > b ? 1 : 0));
+    split[i] = static_cast<std::uint16_t>((split[i] << 1) | (isSplit ? 1 : 0));
+    minSplit[i] = isSplit ? std::min(minSplit[i], contrast) : minSplit[i];
+    maxSplit[i] = isSplit ? std::max(maxSplit[i], contrast) : maxSplit[i];
+    minClear[i] = isSplit ? minClear[i] : std::min(minClear[i], contrast);
   }
 }
 
@@ -59,28 +89,77 @@ struct Counts {
   int lit = 0, decoded = 0;
 };
 
+// One axis of a pixel with two sources allowed: the panel column (row) of the brighter source, the other's or
+// −1, and the brighter one's share of the light. Two sources differ in exactly the split bits, and each split
+// bit's contrast is the difference of their shares, so with two or more split bits their contrasts must agree
+// (else more than two sources) and be large enough for their signs to tell which code is the brighter one.
+struct AxisSources {
+  int first = -1, second = -1;
+  float share = 1;
+};
+
+bool decodeAxis(std::uint16_t code, std::uint16_t split, int minSplit, int maxSplit, int range, int size,
+                const DecodeSettings& s, AxisSources& out) {
+  const int splitBits = std::popcount(static_cast<unsigned>(split));
+  const double readable = std::max<double>(s.minContrast_dn, s.minContrastFraction * range);
+  out.first = grayToBinary(code);
+  if (out.first >= size) return false;
+  if (splitBits == 0) return true;
+  if (splitBits >= 2 && maxSplit - minSplit > readable) return minSplit >= readable;  // more: the brightest alone
+  if (splitBits >= 2 && minSplit < readable) return false;
+  out.second = grayToBinary(static_cast<std::uint16_t>(code ^ split));
+  if (out.second >= size) return false;
+  out.share = static_cast<float>(0.5 * (1 + 0.5 * (minSplit + maxSplit) / range));
+  return true;
+}
+
 // Decodes camera rows [row0, row1): every frame is read once, a tile of rows at a time.
 template <typename T>
 Counts decodeRows(const std::vector<cv::Mat>& frames, const cv::Mat& white, const cv::Mat& black,
                   const GrayCodeLayout& layout, const DecodeSettings& s, PanelCorrespondence& out, int row0, int row1) {
   const int width = white.cols;
   const int bits = layout.columnBits + layout.rowBits;
-  TileState state(static_cast<size_t>(kTileRows) * static_cast<size_t>(width));
+  const bool twoSources = s.secondShare > 0;
+  TileState state(static_cast<size_t>(kTileRows) * static_cast<size_t>(width), twoSources);
   Counts counts;
   for (int tile0 = row0; tile0 < row1; tile0 += kTileRows) {
     const int tile1 = std::min(tile0 + kTileRows, row1);
     std::fill(state.column.begin(), state.column.end(), 0);
     std::fill(state.row.begin(), state.row.end(), 0);
     std::fill(state.minContrast.begin(), state.minContrast.end(), std::uint16_t{0xffff});
+    if (twoSources) {
+      for (int axis = 0; axis < 2; ++axis) {
+        std::fill(state.split[axis].begin(), state.split[axis].end(), 0);
+        std::fill(state.minSplit[axis].begin(), state.minSplit[axis].end(), std::uint16_t{0xffff});
+        std::fill(state.maxSplit[axis].begin(), state.maxSplit[axis].end(), 0);
+      }
+      std::fill(state.minClear.begin(), state.minClear.end(), std::uint16_t{0xffff});
+      // A bit is split when its contrast is below (1 − 2·secondShare) of the pixel's white − black.
+      for (int v = tile0; v < tile1; ++v) {
+        const T* w = white.ptr<T>(v);
+        const T* b = black.ptr<T>(v);
+        for (int u = 0; u < width; ++u) {
+          const double range = std::max(0, static_cast<int>(w[u]) - static_cast<int>(b[u]));
+          state.splitBelow[static_cast<size_t>(v - tile0) * static_cast<size_t>(width) + static_cast<size_t>(u)] =
+              static_cast<std::uint16_t>(std::ceil((1 - 2 * s.secondShare) * range));
+        }
+      }
+    }
     for (int bit = 0; bit < bits; ++bit) {
       const bool isColumn = bit < layout.columnBits;
+      const int axis = isColumn ? 0 : 1;
       const int index = isColumn ? layout.columnPattern(bit) : layout.rowPattern(bit - layout.columnBits);
       std::uint16_t* codes = isColumn ? state.column.data() : state.row.data();
       const cv::Mat& pattern = frames[static_cast<size_t>(index)];
       const cv::Mat& inverse = frames[static_cast<size_t>(index) + 1];
       for (int v = tile0; v < tile1; ++v) {
         const size_t at = static_cast<size_t>(v - tile0) * static_cast<size_t>(width);
-        accumulateBit(pattern.ptr<T>(v), inverse.ptr<T>(v), codes + at, state.minContrast.data() + at, width);
+        if (twoSources)
+          accumulateSplitBit(pattern.ptr<T>(v), inverse.ptr<T>(v), state.splitBelow.data() + at, codes + at,
+                             state.split[axis].data() + at, state.minSplit[axis].data() + at,
+                             state.maxSplit[axis].data() + at, state.minClear.data() + at, width);
+        else
+          accumulateBit(pattern.ptr<T>(v), inverse.ptr<T>(v), codes + at, state.minContrast.data() + at, width);
       }
     }
     for (int v = tile0; v < tile1; ++v) {
@@ -88,13 +167,33 @@ Counts decodeRows(const std::vector<cv::Mat>& frames, const cv::Mat& white, cons
       const T* w = white.ptr<T>(v);
       const T* b = black.ptr<T>(v);
       auto* panel = out.panel.ptr<cv::Vec2i>(v);
+      auto* second = out.second.ptr<cv::Vec2i>(v);
+      auto* share = out.share.ptr<cv::Vec2f>(v);
       auto* confidence = out.confidence.ptr<float>(v);
       for (int u = 0; u < width; ++u) {
         const int range = static_cast<int>(w[u]) - static_cast<int>(b[u]);
-        panel[u] = cv::Vec2i(-1, -1);
+        panel[u] = second[u] = cv::Vec2i(-1, -1);
+        share[u] = cv::Vec2f(1, 1);
         confidence[u] = 0;
         if (range < s.minLit_dn) continue;
         ++counts.lit;
+        if (twoSources) {
+          const size_t k = at + static_cast<size_t>(u);
+          AxisSources x, y;
+          if (!decodeAxis(state.column[k], state.split[0][k], state.minSplit[0][k], state.maxSplit[0][k], range,
+                          layout.panelWidth, s, x) ||
+              !decodeAxis(state.row[k], state.split[1][k], state.minSplit[1][k], state.maxSplit[1][k], range,
+                          layout.panelHeight, s, y))
+            continue;
+          const int clear = std::min<int>(state.minClear[k], range);
+          if (clear < s.minContrast_dn) continue;
+          panel[u] = cv::Vec2i(x.first, y.first);
+          second[u] = cv::Vec2i(x.second, y.second);
+          share[u] = cv::Vec2f(x.share, y.share);
+          confidence[u] = static_cast<float>(clear) / static_cast<float>(range);
+          ++counts.decoded;
+          continue;
+        }
         const int contrast = bits == 0 ? range : state.minContrast[at + static_cast<size_t>(u)];
         if (contrast < s.minContrast_dn || contrast < s.minContrastFraction * range) continue;
         const int x = grayToBinary(state.column[at + static_cast<size_t>(u)]);
@@ -125,6 +224,8 @@ void checkInputs(const std::vector<cv::Mat>& frames, const cv::Mat& white, const
     fail(Errc::InvalidArgument, "{}: settings.minContrast_dn = {} is outside 1 .. 65535", what, s.minContrast_dn);
   if (!(s.minContrastFraction >= 0 && s.minContrastFraction <= 1))
     fail(Errc::InvalidArgument, "{}: settings.minContrastFraction = {} is outside 0 .. 1", what, s.minContrastFraction);
+  if (!(s.secondShare >= 0 && s.secondShare < 0.5))
+    fail(Errc::InvalidArgument, "{}: settings.secondShare = {} is outside [0, 0.5)", what, s.secondShare);
   if (static_cast<int>(frames.size()) != layout.patternCount())
     fail(Errc::InvalidArgument,
          "{}: {} pattern frames for a {} x {} panel's set, which has {} patterns ({} column and {} row bits, each "
@@ -178,6 +279,8 @@ PanelCorrespondence decodeGrayCode(const std::vector<cv::Mat>& frames, const cv:
   checkInputs(frames, white, black, layout, settings);
   PanelCorrespondence out;
   out.panel.create(white.size(), CV_32SC2);
+  out.second.create(white.size(), CV_32SC2);
+  out.share.create(white.size(), CV_32FC2);
   out.confidence.create(white.size(), CV_32FC1);
   std::atomic<int> lit{0}, decoded{0};
   const int rows = white.rows;

@@ -343,6 +343,43 @@ PanelCorrespondence decodeOnePixel(int span, std::vector<int> contrast, const De
                         cv::Mat(1, 1, CV_16UC1, cv::Scalar(base)), layout, s);
 }
 
+TEST(DecodeGrayCode, APixelThatSeesTwoColumnsDecodesToBothWithTheirShares) {
+  // An 8-column panel (Gray codes 000 001 011 010 110 111 101 100, most significant bit first); a camera pixel's
+  // bit k has pattern − inverse = (share of its light from columns with bit k set − the rest) · span.
+  const DecodeSettings s{.minLit_dn = 500, .minContrast_dn = 100, .minContrastFraction = 0.2, .secondShare = 0.1};
+  const auto decodes = [&](std::vector<int> contrast, int first, int second, float share) {
+    const PanelCorrespondence c = decodeOnePixel(1000, contrast, s, 8);
+    ASSERT_EQ(c.decoded, 1);
+    EXPECT_EQ(c.panel.at<cv::Vec2i>(0, 0), cv::Vec2i(first, 0));
+    EXPECT_EQ(c.second.at<cv::Vec2i>(0, 0), cv::Vec2i(second, -1));
+    EXPECT_FLOAT_EQ(c.share.at<cv::Vec2f>(0, 0)[0], share);
+    EXPECT_FLOAT_EQ(c.share.at<cv::Vec2f>(0, 0)[1], 1.f) << "one row";
+  };
+  // Columns 2 (011, 70 %) and 3 (010, 30 %): the last bit splits at 0.7 − 0.3.
+  decodes({-1000, 1000, 400}, 2, 3, 0.7f);
+  // Columns 0 (000, 70 %) and 2 (011, 30 %): two bits split alike; their signs name the brighter.
+  decodes({-1000, -400, -400}, 0, 2, 0.7f);
+  // A 50/50 split of one bit: either code is the first, the pair is the same.
+  const PanelCorrespondence even = decodeOnePixel(1000, {-1000, 1000, 0}, s, 8);
+  ASSERT_EQ(even.decoded, 1);
+  const cv::Vec2i a = even.panel.at<cv::Vec2i>(0, 0), b = even.second.at<cv::Vec2i>(0, 0);
+  EXPECT_EQ(std::minmax(a[0], b[0]), std::minmax(2, 3));
+  EXPECT_FLOAT_EQ(even.share.at<cv::Vec2f>(0, 0)[0], 0.5f);
+  // Columns 0 (60 %), 2 (25 %) and 1 (001, 15 %): the split bits disagree (−0.5, −0.2), more than two sources;
+  // each readable (0.2 · span), so the brightest alone, as with one source.
+  decodes({-1000, -500, -200}, 0, -1, 1.f);
+  // ... and one not readable: no sign to trust, undecoded.
+  EXPECT_EQ(decodeOnePixel(1000, {-1000, -500, -199}, s, 8).decoded, 0);
+  // Without secondShare the same pixel of two sources decodes to the brighter one alone, or not at all.
+  const DecodeSettings one{.minLit_dn = 500, .minContrast_dn = 100, .minContrastFraction = 0.2};
+  PanelCorrespondence c = decodeOnePixel(1000, {-1000, 1000, 400}, one, 8);
+  EXPECT_EQ(c.panel.at<cv::Vec2i>(0, 0), cv::Vec2i(2, 0));
+  EXPECT_EQ(c.second.at<cv::Vec2i>(0, 0), cv::Vec2i(-1, -1));
+  EXPECT_EQ(decodeOnePixel(1000, {-1000, 1000, 100}, one, 8).decoded, 0);
+  EXPECT_TRUE(throwsError([&] { decodeOnePixel(1000, {0, 0, 0}, {.secondShare = 0.5}, 8); }, Errc::InvalidArgument,
+                          {"secondShare"}));
+}
+
 TEST(DecodeGrayCode, ThresholdsHoldAtTheirBoundaries) {
   // Gray 11 is column 2; the weaker bit sets the confidence.
   const DecodeSettings absolute{.minLit_dn = 500, .minContrast_dn = 100, .minContrastFraction = 0};

@@ -35,6 +35,21 @@
 // than decoded to a panel pixel far away. A code beyond the panel's width or
 // height (W, H not powers of two) is undecoded too.
 //
+// Two sources (DecodeSettings::secondShare > 0): a camera pixel that sees two
+// panel columns (rows) at once — straddling two lenses of the display, or
+// between two views of one — sees each bit where their codes differ at the
+// difference of their shares. Such a bit (|pattern − inverse| below
+// (1 − 2·secondShare)·(white − black)) is split, and the pixel decodes to
+// both columns: the brighter source's code (each bit's sign) and that code
+// with every split bit flipped. With two or more split bits each must reach
+// max(minContrast_dn, minContrastFraction·(white − black)), so that its sign
+// tells which source is brighter; when their contrasts differ by more than
+// that figure the pixel sees more than two sources, and decodes to the
+// brightest one alone, as with one source. One split bit needs neither.
+// Columns and rows are decoded apart, so a pixel at the corner of four lenses
+// decodes to 2 × 2 panel pixels. The confidence is then taken over the bits
+// that are not split (1 when every bit is).
+//
 // Confidence of a decoded pixel: the smallest |pattern − inverse| over all its
 // bits divided by its white − black, about 1 for a pixel well inside one panel
 // pixel's image (noise can take it a little above 1), falling towards 0 as the
@@ -83,11 +98,15 @@ struct DecodeSettings {
   int minLit_dn = 16;                // white − black at least this: the pixel sees the panel (1 .. 65535)
   int minContrast_dn = 4;            // each bit's |pattern − inverse| at least this (1 .. 65535) ...
   double minContrastFraction = 0.2;  // ... and at least this fraction of white − black (0 .. 1)
+  double secondShare = 0;            // two sources per axis from this share of the light on ([0, 0.5); 0: one)
 };
 
 // Per camera pixel, the panel pixel whose light reaches it.
 struct PanelCorrespondence {
   cv::Mat panel;       // CV_32SC2, camera size: (x, y) of the panel pixel, (-1, -1) where undecoded
+                       // (with two sources: of the brighter column and the brighter row)
+  cv::Mat second;      // CV_32SC2: the second source's column and row, -1 for an axis with one source
+  cv::Mat share;       // CV_32FC2: the share of the light from `panel`'s column and row (1 with one source)
   cv::Mat confidence;  // CV_32FC1, camera size: as in the header comment, 0 where undecoded
   int lit = 0;         // camera pixels with white − black ≥ minLit_dn
   int decoded = 0;     // camera pixels decoded (all of them lit)
