@@ -137,4 +137,26 @@ void requirePanelImage(const DisplayInfo& info, const cv::Mat& panel, const std:
          panel.rows, panel.type());
 }
 
+cv::Mat panelFromLevels(const cv::Mat& levels, const DisplayInfo& info) {
+  if (levels.type() != CV_8UC1 && levels.type() != CV_32FC1)
+    fail(Errc::InvalidArgument, "panel levels: {} is not CV_8UC1 or CV_32FC1", cv::typeToString(levels.type()));
+  if (levels.cols != info.panelWidth_px || levels.rows != info.panelHeight_px)
+    fail(Errc::InvalidArgument, "panel levels: {} x {}, the display {} has a {} x {} panel", levels.cols, levels.rows,
+         info.deviceId, info.panelWidth_px, info.panelHeight_px);
+  cv::Mat mono;
+  if (levels.type() == CV_8UC1) {
+    mono = levels;
+  } else {
+    double lo = 0, hi = 0;
+    cv::minMaxLoc(levels, &lo, &hi);
+    if (!(lo >= 0 && hi <= 1))  // (NaN fails both)
+      fail(Errc::InvalidArgument, "panel levels: drive levels {} .. {} are outside [0, 1]", lo, hi);
+    levels.convertTo(mono, CV_8U, 255.0);
+  }
+  if (info.subpixelsPerPixel() == 1) return mono;
+  cv::Mat panel;
+  cv::merge(std::vector<cv::Mat>(static_cast<size_t>(info.subpixelsPerPixel()), mono), panel);
+  return panel;
+}
+
 }  // namespace lfi

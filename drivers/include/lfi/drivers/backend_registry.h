@@ -21,6 +21,7 @@
 #include <fmt/ranges.h>
 
 #include <algorithm>
+#include <charconv>
 #include <functional>
 #include <map>
 #include <memory>
@@ -56,6 +57,21 @@ std::string percentEncodeUriPart(std::string_view part, std::string_view alsoEnc
 
 // Non-empty and only [a-z0-9+.-].
 bool validDeviceScheme(const std::string& scheme);
+
+// The number the URI's query gives for `key` (all of the value, in C++'s
+// from_chars syntax), or `fallback` without the key. Throws Errc::Config
+// "<kind> URI '<uri>': <key> = '<value>' is not a number in <lo> .. <hi>".
+template <typename T>
+T uriNumber(const DeviceUri& uri, std::string_view kind, const std::string& key, T fallback, T lo, T hi) {
+  const auto it = uri.query.find(key);
+  if (it == uri.query.end()) return fallback;
+  const std::string& text = it->second;
+  T value{};
+  const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), value);
+  if (ec != std::errc() || end != text.data() + text.size() || !(value >= lo && value <= hi))
+    fail(Errc::Config, "{} URI '{}': {} = '{}' is not a number in {} .. {}", kind, uri.text, key, text, lo, hi);
+  return value;
+}
 
 template <typename Device>
 struct DeviceBackend {

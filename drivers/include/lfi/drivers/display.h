@@ -186,6 +186,12 @@ const char* toString(Display::State state);
 // a non-empty panelWidth_px x panelHeight_px image of info.panelType().
 void requirePanelImage(const DisplayInfo& info, const cv::Mat& panel, const std::string& device);
 
+// The panel image that drives every subpixel of each panel pixel at its level:
+// `levels` is CV_8UC1 (drive levels) or CV_32FC1 (fractions of full drive in
+// [0, 1], rounded to the nearest of 256 levels), the panel's size. Throws
+// Errc::InvalidArgument for another type or size or a level outside [0, 1].
+cv::Mat panelFromLevels(const cv::Mat& levels, const DisplayInfo& info);
+
 // For backends: throws Errc::InvalidArgument "<device>: <method> is not allowed in
 // state <state> (allowed: ...)" unless `current` is one of `allowed`.
 void requireDisplayState(Display::State current, std::initializer_list<Display::State> allowed, const char* method,
