@@ -1,5 +1,6 @@
-// lfi emit BENCH: the bench's display shows the reference package's light
-// field (or a given one) at the package's drive scale, until stopped.
+// lfi emit BENCH: the bench's display shows the reference package's
+// reference (its panel image, or its light field at the package's drive
+// scale) or a given light field, until stopped.
 
 #include "bench_cli.h"
 #include "cli_util.h"
@@ -31,22 +32,27 @@ struct EmitArgs {
 int runEmit(const EmitArgs& a, const GlobalOptions&) {
   const lfi::BenchFile bench = lfi::readBenchFile(a.bench);
   lfi::LightField lightField;
+  cv::Mat panel;  // a reference measured through the display: its panel image
   double white = bench.white;
   if (a.lightField.empty()) {
     const lfi::ReferencePackage package = lfi::readReferencePackage(bench.referenceFolder, &bench);
     lightField = package.lightField;
+    panel = package.panel;
     white = package.info.white;
   } else {
     lightField = lfi::readLightFieldExr(a.lightField);
   }
   if (!(white > 0)) white = lfi::Controller::defaultWhite(lightField);
   auto display = lfi::openBenchDisplay(bench);
-  const lfi::PresentResult r = display->show(lightField, white);
+  const lfi::PresentResult r = panel.empty() ? display->show(lightField, white)
+                                             : display->show(lfi::panelFromLevels(panel, display->info()));
   if (r.status != lfi::PresentStatus::Presented)
-    lfi::fail(lfi::Errc::Device, "emit: display '{}' did not show the light field ({}{}{})", bench.displayUri,
-              lfi::toString(r.status), r.message.empty() ? "" : ": ", r.message);
+    lfi::fail(lfi::Errc::Device, "emit: display '{}' did not show the {} ({}{}{})", bench.displayUri,
+              panel.empty() ? "light field" : "reference's panel image", lfi::toString(r.status),
+              r.message.empty() ? "" : ": ", r.message);
   StopOnSignal stop;
-  fmt::print(stderr, "emit: showing on {} (white = {:.4g}); {}\n", bench.displayUri, white,
+  fmt::print(stderr, "emit: showing on {} {}; {}\n", bench.displayUri,
+             panel.empty() ? fmt::format("the light field (white = {:.4g})", white) : "the reference's panel image",
              a.seconds > 0 ? fmt::format("for {} s", a.seconds) : std::string("Ctrl-C stops"));
   const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(a.seconds);
   while (!StopOnSignal::stopRequested() && (a.seconds <= 0 || std::chrono::steady_clock::now() < end))

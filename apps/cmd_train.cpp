@@ -6,7 +6,7 @@
 #include "commands.h"
 
 #include "lfi/controller/bench_devices.h"
-#include "lfi/controller/controller.h"
+#include "lfi/controller/inspector.h"
 #include "lfi/controller/inspection_record.h"
 #include "lfi/controller/reference_package.h"
 #include "lfi/core/error.h"
@@ -38,9 +38,8 @@ int runTrain(const TrainArgs& a, const GlobalOptions& global) {
   lfi::ReferencePackage package = lfi::readReferencePackage(bench.referenceFolder, &bench);
   auto display = lfi::openBenchDisplay(devices);
   auto camera = lfi::openBenchCamera(devices);
-  lfi::StoredLightField reference(package.lightField, "the reference package's light field");
-  lfi::Controller controller(reference, *display, *camera, lfi::controllerOptions(bench, bench.inspectionFrames));
-  controller.emit(package.lightField, package.info.white);
+  lfi::Inspector inspector(bench, package, *display, *camera);
+  inspector.showReference();
   ProgressBar bar;
   for (int i = 0; i < a.images; ++i) {
     if (a.prompt) {
@@ -50,7 +49,7 @@ int runTrain(const TrainArgs& a, const GlobalOptions& global) {
     } else if (!global.quiet) {
       bar("golden model", static_cast<double>(i) / a.images);
     }
-    package.trainer.add(controller.inspect());
+    package.trainer.add(inspector.takeImage());
   }
   if (!a.prompt && !global.quiet) bar("golden model", 1);
   package.info.updated_utc = lfi::utcNow();

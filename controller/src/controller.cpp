@@ -22,7 +22,31 @@ std::string displayName(const Display& display) {
   }
 }
 
+double fullScale(PixelFormat format) {
+  switch (format) {
+    case PixelFormat::Mono8: return 255;
+    case PixelFormat::Mono12: return 4095;
+    case PixelFormat::Mono16: break;
+  }
+  return 65535;
+}
+
 }  // namespace
+
+// The bench as a capture through it sees it: the controller's own show and inspect.
+class Controller::Probe final : public BenchProbe {
+public:
+  explicit Probe(Controller& c) : c_(c) {}
+  DisplayInfo display() const override { return c_.display_.info(); }
+  double cameraFullScale_dn() const override { return fullScale(c_.camera_.settings().pixelFormat); }
+  cv::Mat take(const cv::Mat& levels) override {
+    c_.showPanel(levels);
+    return c_.inspect();
+  }
+
+private:
+  Controller& c_;
+};
 
 Controller::Controller(LightFieldCapture& capture, Display& display, Camera& camera, ControllerOptions options)
     : capture_(capture), display_(display), camera_(camera), options_(options) {
@@ -46,9 +70,20 @@ Controller::~Controller() {
 
 LightField Controller::captureReference(const Progress& progress) {
   spdlog::info("capture: {}", capture_.description());
-  return capture_.capture([&](double f) {
+  referencePanel_ = cv::Mat();
+  const auto report = [&](double f) {
     if (progress) progress("capture", f);
-  });
+  };
+  if (!capture_.measuresThroughBench()) return capture_.capture(report);
+  Probe probe(*this);
+  capture_.setBench(&probe);
+  struct Detach {
+    LightFieldCapture& capture;
+    ~Detach() { capture.setBench(nullptr); }
+  } detach{capture_};
+  LightField lightField = capture_.capture(report);
+  referencePanel_ = capture_.panelImage();
+  return lightField;
 }
 
 double Controller::defaultWhite(const LightField& lightField) {
@@ -69,12 +104,30 @@ void Controller::emit(const LightField& reference, double white) {
   // of a stream started before the panel settles may too (the caller may start
   // one after this): inspect() waits for the panel and (re)starts the stream.
   staleFrames_ = true;
-  const PresentResult r = display_.show(reference, white_);
+  const std::uint32_t sequence = shown(display_.show(reference, white_), "the light field");
+  spdlog::info("emit: light field shown (sequence {}, white = {:.4g})", sequence, white_);
+}
+
+void Controller::showPanel(const cv::Mat& levels) {
+  const cv::Mat panel = panelFromLevels(levels, display_.info());
+  white_ = 1;
+  staleFrames_ = true;  // (as emit())
+  shown(display_.show(panel), "the panel image");
+}
+
+void Controller::emitReference(const LightField& reference) {
+  if (referencePanel_.empty())
+    emit(reference);
+  else
+    showPanel(referencePanel_);
+}
+
+std::uint32_t Controller::shown(const PresentResult& r, const char* what) {
   if (r.status != PresentStatus::Presented)
-    fail(Errc::Device, "emit: display '{}' did not show the light field ({}{}{})", displayName(display_),
-         toString(r.status), r.message.empty() ? "" : ": ", r.message);
+    fail(Errc::Device, "emit: display '{}' did not show {} ({}{}{})", displayName(display_), what, toString(r.status),
+         r.message.empty() ? "" : ": ", r.message);
   shown_ = std::chrono::steady_clock::now();
-  spdlog::info("emit: light field shown (sequence {}, white = {:.4g})", r.sequence, white_);
+  return r.sequence;
 }
 
 cv::Mat Controller::inspect() {
@@ -147,7 +200,7 @@ cv::Mat Controller::inspect() {
 cv::Mat Controller::run(const Progress& progress) {
   const LightField reference = captureReference(progress);
   if (progress) progress("emit", 0);
-  emit(reference);
+  emitReference(reference);
   if (progress) progress("inspect", 0);
   cv::Mat image = inspect();
   if (progress) progress("inspect", 1);

@@ -19,16 +19,24 @@ Inspector::Inspector(const BenchFile& bench, const ReferencePackage& package, Di
       frame_(bench.partFrame(package.mask.cols, package.mask.rows)),
       finder_(package.trainer.model(noiseOfMean(bench.noise, bench.inspectionFrames)), package.mask,
               bench.detection()),
+      panel_(package.panel),
       reference_(std::make_unique<StoredLightField>(package.lightField, "the reference package's light field")),
       controller_(*reference_, display, camera, controllerOptions(bench, bench.inspectionFrames)) {}
 
 Inspector::~Inspector() = default;
 
-void Inspector::showReference() { controller_.emit(reference_->lightField(), white_); }
+void Inspector::showReference() {
+  if (panel_.empty())
+    controller_.emit(reference_->lightField(), white_);
+  else
+    controller_.showPanel(panel_);
+}
+
+cv::Mat Inspector::takeImage() { return controller_.inspect(); }
 
 PartInspection Inspector::inspectPart() {
   PartInspection result;
-  result.image = controller_.inspect();
+  result.image = takeImage();
   const auto start = std::chrono::steady_clock::now();
   result.verdict = judge(result.image);
   result.analysis_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();

@@ -108,6 +108,15 @@ void writeReferencePackage(const fs::path& folder, const ReferencePackage& p, Ov
                                 {"pixel_crc32", pixelChecksum(spread)}}},
                 {"mask.exr", {{"content", "the part: 1 where defects are looked for"},
                               {"pixel_crc32", pixelChecksum(mask01)}}}};
+  if (!p.panel.empty()) {
+    double lo = 0, hi = 0;
+    if (p.panel.type() == CV_32FC1) cv::minMaxLoc(p.panel, &lo, &hi);
+    if (p.panel.type() != CV_32FC1 || !(lo >= 0 && hi <= 1))
+      fail(Errc::InvalidArgument, "reference package: the panel image ({}, drive levels {} .. {}) is not CV_32FC1 "
+           "drive levels in 0 .. 1", cv::typeToString(p.panel.type()), lo, hi);
+    j["files"]["panel.exr"] = {{"content", "the reference panel image the display shows: drive levels 0 .. 1"},
+                               {"pixel_crc32", pixelChecksum(p.panel)}};
+  }
   j["units"] = "lengths mm, times µs; images in camera pixels, row 0 at the top";
   writeFolderAtomically(folder, overwrite, [&](const fs::path& tmp) {
     writeLightFieldExr(tmp / "lightfield.exr", p.lightField);
@@ -115,6 +124,9 @@ void writeReferencePackage(const fs::path& folder, const ReferencePackage& p, Ov
     writeImage(tmp / "spread.exr", spread, "golden model: sample standard deviation of the trained images",
                kCameraDigitalNumbers);
     writeImage(tmp / "mask.exr", mask01, "the part's mask: 1 where defects are looked for", "mask (0 or 1)");
+    if (!p.panel.empty())
+      writeImage(tmp / "panel.exr", p.panel, "the reference panel image: column x right, row y down, as the "
+                 "display's panel", "drive level (0 .. 1 of full)");
     std::ofstream out(tmp / "reference.json");
     out << j.dump(2, ' ', false, ordered_json::error_handler_t::replace) << "\n";  // (non-UTF-8 names: U+FFFD)
     out.close();
@@ -177,6 +189,15 @@ ReferencePackage readReferencePackage(const fs::path& folder, const BenchFile* b
   const cv::Mat mask01 = readImage(folder, "mask.exr", j["files"], size);
   p.lightField = readLightFieldExr(packageFile(folder, "lightfield.exr"));
   checkPixels(folder, "lightfield.exr", j["files"], p.lightField.lensletImage());
+  if (j["files"].contains("panel.exr")) {
+    p.panel = readRadianceExr(packageFile(folder, "panel.exr"));
+    checkPixels(folder, "panel.exr", j["files"], p.panel);
+    double lo = 0, hi = 0;
+    cv::minMaxLoc(p.panel, &lo, &hi);
+    if (!(lo >= 0 && hi <= 1))
+      fail(Errc::InvalidFile, "reference package '{}': panel.exr's drive levels {} .. {} are outside 0 .. 1",
+           folder.string(), lo, hi);
+  }
   try {
     p.trainer = GoldenModelTrainer::resume(mean, spread, images, type);
   } catch (const Error& e) {

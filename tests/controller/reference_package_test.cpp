@@ -474,6 +474,40 @@ TEST_F(ReferencePackageTest, ImageFromAnotherPackageIsAChecksumError) {
   EXPECT_NO_THROW(readReferencePackage(folder, nullptr));
 }
 
+TEST_F(ReferencePackageTest, APanelReferenceReadsBackAndIsChecked) {
+  // A reference measured through the display keeps its panel image (drive levels) besides the light field.
+  ReferencePackage written = package(frames(3, CV_16UC1, 16), 16);
+  written.panel.create(30, 40, CV_32FC1);
+  cv::RNG(16).fill(written.panel, cv::RNG::UNIFORM, 0.0, 1.0);
+  const fs::path folder = folder_ / "reference", other = folder_ / "other";
+  writeReferencePackage(folder, written, Overwrite::Refuse);
+  EXPECT_EQ(namesIn(folder), (std::vector<std::string>{"ideal.exr", "lightfield.exr", "mask.exr", "panel.exr",
+                                                       "reference.json", "spread.exr"}));
+  const ReferencePackage read = readReferencePackage(folder, nullptr);
+  ASSERT_EQ(read.panel.size(), written.panel.size());
+  EXPECT_EQ(cv::countNonZero(read.panel != written.panel), 0);
+  EXPECT_TRUE(package(frames(3, CV_16UC1, 16), 16).panel.empty()) << "a light field reference has none";
+  // Another package's panel, and a missing one.
+  written.panel.setTo(0.5);
+  writeReferencePackage(other, written, Overwrite::Refuse);
+  fs::copy_file(other / "panel.exr", folder / "panel.exr", fs::copy_options::overwrite_existing);
+  EXPECT_TRUE(throwsError([&] { readReferencePackage(folder, nullptr); }, Errc::Checksum,
+                          {folder.string(), "panel.exr", "another package"}));
+  fs::remove(folder / "panel.exr");
+  EXPECT_TRUE(throwsError([&] { readReferencePackage(folder, nullptr); }, Errc::InvalidFile,
+                          {folder.string(), "panel.exr", "missing"}));
+  // Drive levels past full drive: refused when written, and when read (with a checksum that matches them).
+  written.panel.at<float>(3, 4) = 1.5f;
+  EXPECT_TRUE(throwsError([&] { writeReferencePackage(folder_ / "third", written, Overwrite::Refuse); },
+                          Errc::InvalidArgument, {"drive levels", "1.5"}));
+  writeRadianceExr(folder / "panel.exr", written.panel, {0, "panel", "drive level"}, Overwrite::Allow);
+  editJson(folder, [&](nlohmann::ordered_json& j) {
+    j["files"]["panel.exr"]["pixel_crc32"] = pixelChecksum(written.panel);
+  });
+  EXPECT_TRUE(throwsError([&] { readReferencePackage(folder, nullptr); }, Errc::InvalidFile,
+                          {folder.string(), "panel.exr", "1.5"}));
+}
+
 TEST_F(ReferencePackageTest, ImageOfAnotherSizeIsInvalidFileNamingBothSizes) {
   const fs::path folder = folder_ / "reference", other = folder_ / "other";
   writeReferencePackage(folder, package(frames(2, CV_16UC1, 15), 15), Overwrite::Refuse);

@@ -50,14 +50,27 @@ public:
   Controller(const Controller&) = delete;
   Controller& operator=(const Controller&) = delete;
 
-  // Step 1. The display must not be needed for it; the camera is untouched.
+  // Step 1. A capture with a sensor of its own leaves the display and camera
+  // untouched; one that measures through the bench (coded:) shows its patterns
+  // with the display and takes them with the camera (as emit() and inspect()),
+  // and measures the panel image to show besides (referencePanel()).
   LightField captureReference(const Progress& progress = {});
+  // The panel image the last captureReference() measured through the bench:
+  // CV_32FC1 drive levels in [0, 1]; empty after a capture with its own sensor.
+  const cv::Mat& referencePanel() const { return referencePanel_; }
   // Step 2. The display must be Open or Showing; a rejected or timed-out frame
   // throws Errc::Device with the device's reason. `white` (radiance shown at
   // full drive level) replaces the option's, e.g. to show several light fields
   // on one scale.
   void emit(const LightField& reference);
   void emit(const LightField& lightField, double white);
+  // Step 2 for a panel image: `levels` CV_8UC1 drive levels or CV_32FC1 in
+  // [0, 1] of full drive, the panel's size, every subpixel of a pixel alike.
+  // Throws as emit().
+  void showPanel(const cv::Mat& levels);
+  // Step 2 for what captureReference() returned: its panel image when it
+  // measured one, else the light field.
+  void emitReference(const LightField& reference);
   // The 99.9th percentile of the light field's radiance (1 when that is not
   // positive): the drive scale emit() uses when the option's white is 0.
   static double defaultWhite(const LightField& lightField);
@@ -74,10 +87,14 @@ public:
   // Steps 1-3.
   cv::Mat run(const Progress& progress = {});
 
-  // The drive level scale used by the last emit(): radiance shown at full level.
+  // The drive level scale used by the last emit(): radiance shown at full
+  // level (1 after showPanel(): the levels are the drive).
   double white() const { return white_; }
 
 private:
+  class Probe;
+  // Throws Errc::Device unless `result` is Presented; returns its sequence.
+  std::uint32_t shown(const PresentResult& result, const char* what);
   LightFieldCapture& capture_;
   Display& display_;
   Camera& camera_;
@@ -86,6 +103,7 @@ private:
   bool staleFrames_ = false;  // the display changed since the stream inspect() last used started
   std::chrono::steady_clock::time_point shown_;  // when the last emit() returned
   double white_ = 0;
+  cv::Mat referencePanel_;
 };
 
 }  // namespace lfi

@@ -1,6 +1,7 @@
 #pragma once
 // Part after part against a reference package (reference_package.h): the
-// package's light field shown once with the drive scale it was trained with,
+// package's reference shown once (its panel image, or its light field with
+// the drive scale it was trained with),
 // then for each part its image (the mean of the bench's `frames`), the
 // golden-model comparison (defects.h) and the verdict by the bench's rules
 // (verdict.h). No ground truth is used. The camera noise floor of the model is
@@ -30,8 +31,11 @@ public:
   Inspector(const BenchFile& bench, const ReferencePackage& package, Display& display, Camera& camera);
   ~Inspector();
 
-  // Shows the reference light field (Errc::Device when the display refuses it).
+  // Shows the reference: the package's panel image when it has one, else its
+  // light field (Errc::Device when the display refuses it).
   void showReference();
+  // The part's image, not judged; throws what Controller::inspect throws.
+  cv::Mat takeImage();
   // Takes the part's image and judges it; throws what Controller::inspect throws.
   PartInspection inspectPart();
   // Judges an image (CV_8U, CV_16U or CV_32F, the package's size).
@@ -45,7 +49,8 @@ private:
   cv::Mat mask_;
   PartFrame frame_;
   DefectFinder finder_;
-  std::unique_ptr<StoredLightField> reference_;  // what showReference() shows (the controller's capture)
+  cv::Mat panel_;                                 // the package's panel image, or empty
+  std::unique_ptr<StoredLightField> reference_;  // else its light field (also the controller's capture)
   Controller controller_;
 };
 

@@ -13,6 +13,9 @@
 //   spread.exr       their sample standard deviation (DN; 0 from one image),
 //                    without the camera-noise floor the model adds (golden_model.h)
 //   mask.exr         the part: 1 where defects are looked for, 0 elsewhere
+//   panel.exr        with a capture through the bench (coded:) only: the panel
+//                    image the display shows (drive levels 0 .. 1, the panel's
+//                    columns and rows); lightfield.exr is then its light field
 //
 // Images are the camera's (row 0 at the top); EXR files carry their own
 // parametrisation and checksums (docs/file-formats.md).
@@ -47,6 +50,7 @@ struct ReferenceInfo {
 struct ReferencePackage {
   ReferenceInfo info;
   LightField lightField;
+  cv::Mat panel;               // CV_32FC1 drive levels in [0, 1], or empty: the display shows lightField
   GoldenModelTrainer trainer;  // the golden model's statistics; trainer.count() images trained
   cv::Mat mask;                // CV_8UC1, the images' size, 255 = the part
 };
