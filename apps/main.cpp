@@ -4,6 +4,7 @@
 
 #include "commands.h"
 
+#include "lfi/controller/coded_capture.h"
 #include "lfi/core/error.h"
 #include "lfi/core/log.h"
 #include "lfi/drivers/backend_registry.h"
@@ -48,9 +49,10 @@ int main(int argc, char** argv) {
   lfi::initLogging(global.quiet ? -1 : verbosity);
 
   try {
-    // Every device URI scheme a subcommand may be given (aravis:, usb:, sim:).
+    // Every device URI scheme a subcommand may be given (aravis:, usb:, sim:, coded:).
     lfi::registerDriverBackends();
     lfi::sim::registerSimBackends();
+    lfi::registerControllerBackends();
     for (const lfi::cli::Command& command : commands)
       if (*command.subcommand) return command.run(global);
   } catch (const lfi::Error& e) {

@@ -1,0 +1,120 @@
+#pragma once
+// The coded reference capture (`coded:`): the bench measures its own reference
+// through its display and camera, with the intact part in place. Binary Gray
+// code patterns over the panel's columns and rows (calib/coded_patterns.h)
+// tell, for every camera pixel, which panel pixel's light reaches it through
+// the part and the telecentric stop; those panel pixels, lit, are the inverse
+// schlieren reference, and their weights are then refined in a closed loop
+// (calib/coded_reference.h) until the intact part looks uniform.
+//
+//   step        frames                         what
+//   patterns    2·⌈log2 W⌉ + 2·⌈log2 H⌉ + 2     all white, all black, then each
+//                                              pattern and its inverse (W × H panel)
+//   refine      1 .. 1 + iterations            the reference panel shown and taken;
+//                                              stops at the uniformity target
+//
+// Each frame is the controller's inspection image (the mean of the bench's
+// inspection frames). Decoding thresholds are calib::DecodeSettings' 8-bit
+// figures scaled to the camera's full scale. The refinement's target level is
+// the `target_percentile` of the decoded camera pixels' levels under the first
+// reference panel (at full drive a panel pixel can only be dimmed), and the
+// loop stops when the coefficient of variation over the decoded pixels is at
+// most `target_cv`.
+//
+// Refusals (Errc::Device, naming the bench's display and camera):
+//   - the display not visible: no camera pixel brighter by minLit under the
+//     all-white panel than under the all-black one;
+//   - a camera that saturates: more than 1 % of the lit pixels at its full
+//     scale under the all-white panel;
+//   - the part missing: every decoded ray leaves the display within one panel
+//     pixel's angle of the axis (nothing deflects it; `allow_undeflected=1` for
+//     a part that does not);
+//   - too few camera pixels decoded: fewer than `min_decoded` of the lit ones;
+//   - a display that refuses a frame or a camera that fails: the frame's number.
+//
+// URI: coded:[?target_cv=&iterations=&target_percentile=&min_decoded=&
+//      min_confidence=&second_share=&distance_mm=&allow_undeflected=]
+//   key                 default  meaning
+//   target_cv           0.05     uniformity target (standard deviation / mean)
+//   iterations          8        most refinement steps
+//   target_percentile   0.1      the target level's percentile, (0, 1)
+//   min_decoded         0.5      fraction of lit camera pixels that must decode
+//   min_confidence      0.25     a decoded pixel's panel pixels are lit from this confidence on
+//   second_share        0.1      a camera pixel decodes to two panel columns (rows) when the
+//                                second has this share of its light (DecodeSettings::secondShare)
+//   distance_mm         0        Δ recorded in the light field (0: not set)
+//   allow_undeflected   0        1: accept a part that deflects no ray
+//
+// The light field (capture()'s result) is the reference panel decoded through
+// the display's optics (display_optics.h, decodePanelImage) at white = 1:
+// elements of the optics' pitch (the lenslet or pinhole pitch; a lenticular
+// sheet's lens pitch along a row), n × n directions with n = ⌈2·gap / panel
+// pixel pitch⌉ (one sample per panel pixel's angle at the axis), covering the
+// panel.
+
+#include "lfi/drivers/light_field_capture.h"
+
+#include <chrono>
+#include <memory>
+#include <string>
+
+namespace lfi {
+
+struct CodedCaptureSettings {
+  int rounds = 3;
+  double maxLightLeft = 0.02;
+  double targetCv = 0.05;
+  int iterations = 8;
+  double targetPercentile = 0.1;
+  double minDecoded = 0.5;
+  double minConfidence = 0.25;
+  double secondShare = 0.1;
+  double distance_mm = 0;
+  bool allowUndeflected = false;
+};
+
+// What the last capture did.
+struct CodedCaptureReport {
+  int panelWidth = 0, panelHeight = 0;
+  int patternFrames = 0;  // white, black and the patterns
+  int refineFrames = 0;   // reference panels shown and taken
+  double seconds = 0;     // the whole capture
+  int rounds = 0;             // of patterns
+  double lightLeft = 1;       // after the last round (1: not measured, one round)
+  int lit = 0, decoded = 0;  // camera pixels, in the first round
+  int panelPixelsLit = 0;    // in the reference panel
+  double cvFirst = 0, cvFinal = 0;  // uniformity under the first and the final reference panel
+  double target_dn = 0;
+  bool converged = false;  // cvFinal <= target_cv
+};
+
+class CodedCapture final : public LightFieldCapture {
+public:
+  // Throws Errc::InvalidArgument naming a setting out of range.
+  explicit CodedCapture(CodedCaptureSettings settings);
+
+  // The light field's geometry once the bench is set (before: only distance_mm).
+  LightFieldGeometry geometry() const override;
+  // Errc::InvalidArgument without a bench; the refusals above.
+  LightField capture(const std::function<void(double)>& progress = {}) override;
+  std::string description() const override;
+  bool measuresThroughBench() const override { return true; }
+  void setBench(BenchProbe* bench) override { bench_ = bench; }
+  cv::Mat panelImage() const override { return panel_; }
+
+  const CodedCaptureReport& report() const { return report_; }
+
+private:
+  CodedCaptureSettings settings_;
+  BenchProbe* bench_ = nullptr;
+  cv::Mat panel_;
+  CodedCaptureReport report_;
+};
+
+// The geometry of the light field a coded capture writes for a display (above).
+LightFieldGeometry codedLightFieldGeometry(const DisplayInfo& display, double distance_mm);
+
+// Registers the controller's backends: coded: (light field capture). Idempotent.
+void registerControllerBackends();
+
+}  // namespace lfi

@@ -1,0 +1,292 @@
+#include "lfi/controller/coded_capture.h"
+
+#include "lfi/calib/coded_patterns.h"
+#include "lfi/calib/coded_reference.h"
+#include "lfi/core/error.h"
+#include "lfi/core/image.h"
+#include "lfi/core/log.h"
+#include "lfi/drivers/capture_registry.h"
+#include "lfi/drivers/display_optics.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+namespace lfi {
+
+namespace {
+
+constexpr double kMostSaturated = 0.01;  // of the lit pixels at full scale under the all-white panel
+constexpr double kDeflectedShare = 0.01;  // of the decoded pixels beyond two panel pixels' angle: a part
+constexpr double kRegionFraction = 0.8;   // of white − black's 99th percentile: a pixel that sees the panel fully
+
+// A frame as the decoder takes it: CV_16UC1, rounded and clamped.
+cv::Mat toDecodable(const cv::Mat& frame) {
+  cv::Mat out;
+  frame.convertTo(out, CV_16U);
+  return out;
+}
+
+// The optics' pitch in mm: a lens (pinhole) array's, or a lenticular sheet's along a row.
+double opticsPitch_mm(const DisplayInfo& d) {
+  return fullParallax(d.optics.type) ? d.optics.arrayPitch_mm : d.optics.lensPitch_px * d.pixelPitch_mm;
+}
+
+}  // namespace
+
+LightFieldGeometry codedLightFieldGeometry(const DisplayInfo& display, double distance_mm) {
+  display.validate();
+  const double element = opticsPitch_mm(display);
+  LightFieldGeometry g;
+  g.angular = std::clamp(static_cast<int>(std::ceil(2 * display.optics.gap_mm / display.pixelPitch_mm)), 1, 1024);
+  g.pixelPitch_mm = element / g.angular;
+  g.spatialX = std::max(1, static_cast<int>(std::ceil(display.panelWidth_px * display.pixelPitch_mm / element)));
+  g.spatialY = std::max(1, static_cast<int>(std::ceil(display.panelHeight_px * display.pixelPitch_mm / element)));
+  g.distance_mm = distance_mm;
+  return g;
+}
+
+CodedCapture::CodedCapture(CodedCaptureSettings s) : settings_(s) {
+  const auto check = [](bool ok, const char* key, double value, const char* range) {
+    if (!ok) fail(Errc::InvalidArgument, "coded capture: {} = {} is outside {}", key, value, range);
+  };
+  check(s.targetCv > 0 && s.targetCv < 1, "target_cv", s.targetCv, "(0, 1)");
+  check(s.iterations >= 0 && s.iterations <= 100, "iterations", s.iterations, "0 .. 100");
+  check(s.targetPercentile > 0 && s.targetPercentile < 1, "target_percentile", s.targetPercentile, "(0, 1)");
+  check(s.minDecoded > 0 && s.minDecoded <= 1, "min_decoded", s.minDecoded, "(0, 1]");
+  check(s.minConfidence >= 0 && s.minConfidence <= 1, "min_confidence", s.minConfidence, "[0, 1]");
+  check(s.rounds >= 1 && s.rounds <= 16, "rounds", s.rounds, "1 .. 16");
+  check(s.maxLightLeft >= 0 && s.maxLightLeft < 1, "max_light_left", s.maxLightLeft, "[0, 1)");
+  check(s.secondShare >= 0 && s.secondShare < 0.5, "second_share", s.secondShare, "[0, 0.5)");
+  check(s.distance_mm >= 0 && std::isfinite(s.distance_mm), "distance_mm", s.distance_mm, "[0, inf)");
+}
+
+LightFieldGeometry CodedCapture::geometry() const {
+  if (!bench_) {
+    LightFieldGeometry g;
+    g.distance_mm = settings_.distance_mm;
+    return g;
+  }
+  return codedLightFieldGeometry(bench_->display(), settings_.distance_mm);
+}
+
+std::string CodedCapture::description() const {
+  std::string text = fmt::format("coded: Gray code patterns through the bench's display and camera (target cv {}, "
+                                 "at most {} refinements)", settings_.targetCv, settings_.iterations);
+  const CodedCaptureReport& r = report_;
+  if (r.patternFrames > 0)
+    text += fmt::format("; {} x {} panel: {} pattern frames in {} rounds and {} refinement frames in {:.1f} s, {} of "
+                        "{} lit camera pixels decoded in the first round, {:.1f} % of the light left, {} panel "
+                        "pixels lit, cv {:.3f} → {:.3f}", r.panelWidth, r.panelHeight, r.patternFrames, r.rounds,
+                        r.refineFrames, r.seconds, r.decoded, r.lit, 100 * r.lightLeft, r.panelPixelsLit, r.cvFirst,
+                        r.cvFinal);
+  return text;
+}
+
+namespace {
+
+// The share of the lit camera pixels' light (white − black) that `white` still has: the light of the panel
+// pixels not yet found.
+double lightLeft(const cv::Mat& white, const cv::Mat& firstWhite, const cv::Mat& black, const cv::Mat& lit) {
+  cv::Mat left, all;
+  cv::max(white - black, 0, left);
+  cv::max(firstWhite - black, 0, all);
+  const double total = cv::sum(all.setTo(0, ~lit))[0];
+  return total > 0 ? cv::sum(left.setTo(0, ~lit))[0] / total : 0;
+}
+
+// Fails unless some decoded ray is deflected: through no part, the telecentric camera sees only the rays along the
+// axis.
+void requireDeflection(const calib::PanelCorrespondence& c, const DisplayOptics& optics, const std::string& display) {
+  const DisplayInfo& info = optics.info();
+  const double pixelAngle = info.pixelPitch_mm / info.optics.gap_mm;
+  const int centre = info.subpixelsPerPixel() / 2;
+  int deflected = 0;
+  for (int row = 0; row < c.panel.rows; ++row)
+    for (int col = 0; col < c.panel.cols; ++col) {
+      const cv::Vec2i p = c.panel.at<cv::Vec2i>(row, col);
+      if (p[0] < 0) continue;
+      const Vec3 d = optics.rayFromPixel(p[0], p[1], centre).direction;
+      if (std::atan2(std::hypot(d.x, d.y), d.z) > 2 * pixelAngle) ++deflected;
+    }
+  if (deflected <= kDeflectedShare * c.decoded)
+    fail(Errc::Device, "coded capture: every ray the camera sees leaves display '{}' within two panel pixels' angle "
+         "({:.3g} rad) of the axis: nothing deflects them, is the part missing? (allow_undeflected=1 for a part "
+         "that deflects no ray)", display, 2 * pixelAngle);
+}
+
+// The level `fraction` of the way up the levels of the linked camera pixels in `region`.
+double linkedPercentile(const cv::Mat& image, const calib::PanelLinks& links, const cv::Mat& region,
+                        double fraction) {
+  std::vector<float> levels;
+  levels.reserve(static_cast<size_t>(links.linkedCameraPixels()));
+  for (int row = 0; row < image.rows; ++row)
+    for (int col = 0; col < image.cols; ++col)
+      if (links.linked(row, col) && region.at<std::uint8_t>(row, col) != 0) levels.push_back(image.at<float>(row, col));
+  if (levels.empty()) return 0;
+  const auto nth = levels.begin() + static_cast<std::ptrdiff_t>(fraction * static_cast<double>(levels.size() - 1));
+  std::nth_element(levels.begin(), nth, levels.end());
+  return *nth;
+}
+
+}  // namespace
+
+LightField CodedCapture::capture(const std::function<void(double)>& progress) {
+  if (!bench_)
+    fail(Errc::InvalidArgument, "coded capture: no bench to measure through (a coded: capture runs in a bench's "
+         "controller, with its display and camera)");
+  const auto start = std::chrono::steady_clock::now();
+  BenchProbe& bench = *bench_;
+  const DisplayInfo display = bench.display();
+  const DisplayOptics optics(display);
+  const cv::Size panelSize(display.panelWidth_px, display.panelHeight_px);
+  const calib::CodedPatternSet set = calib::grayCodePatterns(panelSize.width, panelSize.height);
+  // (For the progress: every round and every refinement.)
+  const int mostFrames = 2 + settings_.rounds * (set.layout.patternCount() + 1) + 1 + settings_.iterations;
+  report_ = {};
+  report_.panelWidth = panelSize.width;
+  report_.panelHeight = panelSize.height;
+  int taken = 0;
+  const auto take = [&](const cv::Mat& levels, const char* what) {
+    if (progress) progress(std::min(1.0, static_cast<double>(taken) / mostFrames));
+    try {
+      cv::Mat image = bench.take(levels);
+      ++taken;
+      return image;
+    } catch (const Error& e) {
+      fail(e.code(), "coded capture: frame {} ({}) of display '{}': {}", taken + 1, what, display.deviceId, e.what());
+    }
+  };
+
+  // White and black first: the refusals that need no pattern come before the patterns' time.
+  const double fullScale = bench.cameraFullScale_dn();
+  const double dnPer8Bit = fullScale / 255;
+  calib::DecodeSettings decode;
+  decode.secondShare = settings_.secondShare;
+  decode.minLit_dn = std::max(1, static_cast<int>(std::lround(decode.minLit_dn * dnPer8Bit)));
+  decode.minContrast_dn = std::max(1, static_cast<int>(std::lround(decode.minContrast_dn * dnPer8Bit)));
+  const cv::Mat whiteImage = take(set.white, "all white"), blackImage = take(set.black, "all black");
+  const cv::Mat lit = (whiteImage - blackImage) >= decode.minLit_dn;
+  const int litPixels = cv::countNonZero(lit);
+  if (litPixels == 0)
+    fail(Errc::Device, "coded capture: the camera sees no change between the all-white and the all-black panel of "
+         "display '{}' (none of its {} pixels by {} DN): the display is not in the camera's view, or it is dark "
+         "or covered", display.deviceId, lit.total(), decode.minLit_dn);
+  const int saturated = cv::countNonZero(lit & (whiteImage >= fullScale - 0.5));
+  if (saturated > kMostSaturated * litPixels)
+    fail(Errc::Device, "coded capture: {} of the {} lit camera pixels are at the camera's full scale ({} DN) under "
+         "the all-white panel: lower the exposure or the gain", saturated, litPixels, fullScale);
+
+  // The region uniformity is measured over: the camera pixels that see the panel fully.
+  cv::Mat range = whiteImage - blackImage;
+  const cv::Mat region = lit & (range >= kRegionFraction * percentile(range, 0.99));
+
+  // Rounds of patterns, each with the panel pixels found so far left dark, until little light is left.
+  calib::PanelLinks links(whiteImage.size(), panelSize);
+  const cv::Mat black = toDecodable(blackImage);
+  cv::Mat found = cv::Mat::zeros(panelSize, CV_8UC1);
+  for (int round = 0; round < settings_.rounds; ++round) {
+    cv::Mat roundWhite = whiteImage;
+    if (round > 0) {
+      cv::Mat levels = set.white.clone();
+      levels.setTo(0, found);
+      roundWhite = take(levels, "all white but the panel pixels found");
+      report_.lightLeft = lightLeft(roundWhite, whiteImage, blackImage, lit);
+      spdlog::info("coded capture: {:.1f} % of the light is left after round {}", 100 * report_.lightLeft, round);
+      if (report_.lightLeft <= settings_.maxLightLeft) break;
+    }
+    std::vector<cv::Mat> frames;
+    frames.reserve(set.patterns.size());
+    for (size_t k = 0; k < set.patterns.size(); ++k) {
+      cv::Mat levels = set.patterns[k].clone();
+      levels.setTo(0, found);
+      frames.push_back(toDecodable(take(levels, k % 2 == 0 ? "pattern" : "inverse pattern")));
+    }
+    const calib::PanelCorrespondence c =
+        calib::decodeGrayCode(frames, toDecodable(roundWhite), black, set.layout, decode);
+    if (round == 0) {
+      report_.lit = c.lit;
+      report_.decoded = c.decoded;
+      if (c.decoded < settings_.minDecoded * c.lit)
+        fail(Errc::Device, "coded capture: {} of the {} camera pixels that see display '{}' decoded to a panel "
+             "pixel, fewer than min_decoded = {}: the patterns blur (focus, vibration, a frame rate the panel does "
+             "not keep up with) or the camera's pixels each see many panel pixels", c.decoded, c.lit,
+             display.deviceId, settings_.minDecoded);
+      if (!settings_.allowUndeflected) requireDeflection(c, optics, display.deviceId);
+    }
+    report_.rounds = round + 1;
+    const int added = links.add(c, {}, settings_.minConfidence);
+    spdlog::info("coded capture: round {}: {} of {} lit camera pixels decoded", round + 1, added, c.lit);
+    if (added == 0) break;
+    found = panelWeights(links) > 0;
+  }
+  report_.patternFrames = taken;
+
+  // The reference panel, then its closed-loop refinement: until the target, the most steps, or a step that does
+  // not improve on the best (which is kept).
+  cv::Mat weights = calib::panelWeights(links);
+  cv::Mat image = take(weights, "reference panel");
+  calib::Uniformity u = calib::uniformity(image, links, region);
+  report_.cvFirst = u.cv;
+  report_.target_dn = linkedPercentile(image, links, region, settings_.targetPercentile);
+  spdlog::info("coded capture: reference panel: mean {:.1f} DN, cv {:.4f}; target {:.1f} DN", u.mean_dn, u.cv,
+               report_.target_dn);
+  cv::Mat best = weights;
+  double bestCv = u.cv;
+  for (int step = 0; step < settings_.iterations && bestCv > settings_.targetCv && report_.target_dn > 0; ++step) {
+    weights = calib::refinePanelWeights(weights, links, image, region, report_.target_dn);
+    image = take(weights, "refined reference panel");
+    u = calib::uniformity(image, links, region);
+    spdlog::info("coded capture: refinement {}: mean {:.1f} DN, cv {:.4f}", step + 1, u.mean_dn, u.cv);
+    if (!(u.cv < bestCv)) break;
+    best = weights;
+    bestCv = u.cv;
+  }
+  report_.refineFrames = taken - report_.patternFrames;
+  report_.cvFinal = bestCv;
+  report_.converged = bestCv <= settings_.targetCv;
+  report_.panelPixelsLit = cv::countNonZero(best);
+  if (!report_.converged)
+    spdlog::warn("coded capture: the intact part's image is uniform to cv {:.4f} after {} refinement frames, not "
+                 "the target {}", bestCv, report_.refineFrames - 1, settings_.targetCv);
+  panel_ = best;
+  LightField lightField = decodePanelImage(panelFromLevels(best, display), optics,
+                                          codedLightFieldGeometry(display, settings_.distance_mm));
+  report_.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  if (progress) progress(1);
+  return lightField;
+}
+
+void registerControllerBackends() {
+  backendRegistry<LightFieldCapture>().addOnce(LightFieldCaptureBackend{
+      .scheme = "coded",
+      .queryKeys = {"rounds", "max_light_left", "target_cv", "iterations", "target_percentile", "min_decoded",
+                    "min_confidence", "second_share", "distance_mm", "allow_undeflected"},
+      .description = "coded:[?rounds=&max_light_left=&target_cv=&iterations=&target_percentile=&min_decoded=&"
+                     "min_confidence=&second_share=&distance_mm=&allow_undeflected=]  Gray code patterns through the "
+                     "bench's display and camera",
+      .factory =
+          [](const DeviceUri& uri) -> std::unique_ptr<LightFieldCapture> {
+            if (!uri.path.empty())
+              fail(Errc::Config, "light field capture URI '{}': coded: takes no path (its devices are the bench's)",
+                   uri.text);
+            constexpr const char* kind = "light field capture";
+            CodedCaptureSettings s;
+            s.rounds = uriNumber(uri, kind, "rounds", s.rounds, 1, 16);
+            s.maxLightLeft = uriNumber(uri, kind, "max_light_left", s.maxLightLeft, 0.0, 0.999);
+            s.targetCv = uriNumber(uri, kind, "target_cv", s.targetCv, 1e-6, 0.999);
+            s.iterations = uriNumber(uri, kind, "iterations", s.iterations, 0, 100);
+            s.targetPercentile = uriNumber(uri, kind, "target_percentile", s.targetPercentile, 1e-6, 0.999999);
+            s.minDecoded = uriNumber(uri, kind, "min_decoded", s.minDecoded, 1e-6, 1.0);
+            s.minConfidence = uriNumber(uri, kind, "min_confidence", s.minConfidence, 0.0, 1.0);
+            s.secondShare = uriNumber(uri, kind, "second_share", s.secondShare, 0.0, 0.499);
+            s.distance_mm = uriNumber(uri, kind, "distance_mm", s.distance_mm, 0.0, 1e6);
+            s.allowUndeflected = uriNumber(uri, kind, "allow_undeflected", 0, 0, 1) == 1;
+            return std::make_unique<CodedCapture>(s);
+          },
+  });
+}
+
+}  // namespace lfi
