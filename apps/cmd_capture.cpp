@@ -11,9 +11,11 @@
 #include "lfi/controller/inspection_record.h"
 #include "lfi/controller/reference_package.h"
 #include "lfi/core/error.h"
+#include "lfi/core/log.h"
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <memory>
 
 namespace fs = std::filesystem;
@@ -33,7 +35,7 @@ int runCapture(const CaptureArgs& a, const GlobalOptions& global) {
   auto capture = lfi::openBenchCapture(bench);
   auto display = lfi::openBenchDisplay(bench);
   auto camera = lfi::openBenchCamera(bench);
-  if (capture->geometry().distance_mm != bench.distance_mm)
+  if (!capture->measuresThroughBench() && capture->geometry().distance_mm != bench.distance_mm)
     lfi::fail(lfi::Errc::Config, "{}: the capture ({}) records the light field {} mm below the part, the bench's "
               "[geometry] distance_mm is {} mm", bench.file.string(), capture->description(),
               capture->geometry().distance_mm, bench.distance_mm);
@@ -45,7 +47,8 @@ int runCapture(const CaptureArgs& a, const GlobalOptions& global) {
   };
   lfi::ReferencePackage package;
   package.lightField = controller.captureReference(progress);
-  controller.emit(package.lightField);
+  package.panel = controller.referencePanel();
+  controller.emitReference(package.lightField);
   // The golden model learns images as inspections take them: each the mean of the inspection's frames.
   for (int i = 0; i < bench.referenceFrames; ++i) {
     progress("golden model", static_cast<double>(i) / bench.referenceFrames);
@@ -55,9 +58,18 @@ int runCapture(const CaptureArgs& a, const GlobalOptions& global) {
   bar.finish();
   const cv::Mat ideal = package.trainer.mean();
   const lfi::PartFrame frame = bench.partFrame(ideal.cols, ideal.rows);
-  package.mask = lfi::partMask(ideal, frame.origin_px.x, frame.origin_px.y,
-                               bench.maskRadius_mm ? *bench.maskRadius_mm / bench.objectPixel_mm : -1.0,
-                               bench.maskLitFraction);
+  const double radius_px = bench.maskRadius_mm ? *bench.maskRadius_mm / bench.objectPixel_mm : -1.0;
+  package.mask = lfi::partMask(ideal, frame.origin_px.x, frame.origin_px.y, radius_px, bench.maskLitFraction);
+  // How much of the part the reference lets the inspection see: the pixels lit enough, of the part's.
+  const int partPixels = cv::countNonZero(lfi::partMask(ideal, frame.origin_px.x, frame.origin_px.y, radius_px, 0));
+  const int inspected = cv::countNonZero(package.mask);
+  spdlog::info("capture: {}", capture->description());
+  cv::Scalar mean, deviation;
+  cv::meanStdDev(ideal, mean, deviation, package.mask);
+  spdlog::info("capture: the reference lights {} of the part's {} pixels ({:.1f} %) to at least {} of its 99th "
+               "percentile: defects are looked for there; the intact part's image there: mean {:.1f} DN, cv {:.3f}",
+               inspected, partPixels, 100.0 * inspected / std::max(partPixels, 1), bench.maskLitFraction, mean[0],
+               mean[0] > 0 ? deviation[0] / mean[0] : 0.0);
   lfi::ReferenceInfo& info = package.info;
   info.benchFile = fs::absolute(bench.file).string();
   info.benchHash = bench.referenceHash();

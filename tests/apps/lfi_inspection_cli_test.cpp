@@ -46,13 +46,18 @@ class LfiInspectionCli : public testing::Test {
 protected:
   // The shipped bench file with its folders in the test's own.
   void SetUp() override {
-    std::string text = readText(source_ / "data" / "benches" / "inspection_sim.toml");
+    std::string text = readText(source_ / "data" / "benches" / benchName());
     replaceAll(text, "sim:../scenes/", "sim:" + (source_ / "data" / "scenes").string() + "/");
     replaceAll(text, "../../out/bench/", folder_.path().string() + "/");
+    for (const std::string folder : {"reference", "inspections"})  // (one name whatever the bench calls them)
+      if (const auto at = text.find("/coded_" + folder + "\""); at != std::string::npos)
+        text.replace(at, folder.size() + 7, "/" + folder);
     benchText_ = text;
     bench_ = folder_.write("bench.toml", text);
   }
 
+  // The shipped bench this test runs on: its reference from the simulated light field sensor.
+  virtual std::string benchName() const { return "inspection_sim.toml"; }
   std::string bench() const { return shellQuoted(bench_.string()); }
   fs::path reference() const { return folder_ / "reference"; }
 
@@ -83,6 +88,19 @@ protected:
   fs::path bench_;
 };
 
+// The same on each shipped simulated bench: its reference from the simulated light field sensor (sim:) or
+// measured through the display and camera (coded:).
+class LfiInspectionCliEachCapture : public LfiInspectionCli, public testing::WithParamInterface<std::string> {
+protected:
+  std::string benchName() const override { return GetParam(); }
+};
+
+INSTANTIATE_TEST_SUITE_P(Benches, LfiInspectionCliEachCapture,
+                         testing::Values("inspection_sim.toml", "inspection_coded_sim.toml"),
+                         [](const testing::TestParamInfo<std::string>& param) {
+                           return param.param == "inspection_sim.toml" ? std::string("Sim") : std::string("Coded");
+                         });
+
 double distance(const nlohmann::json& defect, double x, double y) {
   return std::hypot(defect["centroid_mm"][0].get<double>() - x, defect["centroid_mm"][1].get<double>() - y);
 }
@@ -94,7 +112,7 @@ double nearest(const nlohmann::json& record, double x, double y) {
   return best;
 }
 
-TEST_F(LfiInspectionCli, TheIntactLensPassesAHundredTimesInARowWithFreshNoise) {
+TEST_P(LfiInspectionCliEachCapture, TheIntactLensPassesAHundredTimesInARowWithFreshNoise) {
   capture();
   const fs::path run = folder_ / "run";
   const auto r = runLfi("-q run " + bench() + " --parts 100 --out " + shellQuoted(run.string()));
@@ -117,7 +135,7 @@ TEST_F(LfiInspectionCli, TheIntactLensPassesAHundredTimesInARowWithFreshNoise) {
   EXPECT_FALSE(fs::exists(run / "images" / "part-000001.exr")) << "save_images = \"failed\" keeps no passed part";
 }
 
-TEST_F(LfiInspectionCli, EveryDefectOfTheStudyIsFoundBlindWhereItIs) {
+TEST_P(LfiInspectionCliEachCapture, EveryDefectOfTheStudyIsFoundBlindWhereItIs) {
   capture();
   // Inclusions (r = 0.5 mm, two pixels across) at the centre and near the rim: each within a pixel of its centre.
   for (const char* material : {"material = \"absorber\"", "material = \"dielectric\"\nior = 1.0"}) {
@@ -177,7 +195,7 @@ TEST_F(LfiInspectionCli, AFailedPartKeepsItsRecordImageAndOverlay) {
   EXPECT_EQ(nlohmann::json::parse(readText(out / "record.json")), record);
 }
 
-TEST_F(LfiInspectionCli, TrainingAddsImagesToTheReferenceWhichEmitShows) {
+TEST_P(LfiInspectionCliEachCapture, TrainingAddsImagesToTheReferenceWhichEmitShows) {
   capture();
   const auto r = runLfi("-q train " + bench() + " --images 3");
   ASSERT_EQ(r.status, 0) << r.output;
@@ -187,6 +205,10 @@ TEST_F(LfiInspectionCli, TrainingAddsImagesToTheReferenceWhichEmitShows) {
   const auto emit = runLfi("emit " + bench() + " --seconds 0.2");
   EXPECT_EQ(emit.status, 0) << emit.output;
   EXPECT_NE(emit.output.find("emit: showing on sim:"), std::string::npos) << emit.output;
+  const bool coded = GetParam() == "inspection_coded_sim.toml";
+  EXPECT_EQ(fs::exists(reference() / "panel.exr"), coded) << "a reference measured through the display keeps its panel";
+  EXPECT_NE(emit.output.find(coded ? "the reference's panel image" : "the light field (white = "), std::string::npos)
+      << emit.output;
 }
 
 TEST_F(LfiInspectionCli, BadBenchFilesAndReferencesAreNamedAndNothingIsWrittenOver) {
