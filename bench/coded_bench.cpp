@@ -6,14 +6,15 @@
 //            (OpenCV's GrayCodePattern: 12 + 12 bits, 48 patterns, white and
 //            black: 50 frames), and the camera's frames of it
 //   timed    decodeGrayCode over the 48 pattern frames, white and black, on
-//            OpenCV's thread pool
+//            OpenCV's thread pool; again with two sources per axis
+//            (secondShare 0.1, as the coded: capture decodes)
 //   bound    one read of every byte of the same 50 frames: a sum over them in
 //            row bands on the same thread pool (what the least decoder must
 //            read, and reads once)
 //   figures  median and 99th percentile (nearest rank) of each over the turns;
 //            ratio: the median of the turns' ratios timed / bound, with their
-//            1st-99th percentile (each turn runs the two back to back, in an
-//            order that alternates from turn to turn)
+//            1st-99th percentile (each turn runs the three back to back, in an
+//            order that rotates from turn to turn)
 //   check    every timed answer: each camera pixel that sees the panel decodes
 //            to exactly the panel pixel it sees, every other one is undecoded,
 //            and the counts agree. Any miss exits 1: a fast wrong answer does
@@ -173,19 +174,27 @@ void benchFormat(const Format& format, cv::Size size, const CodedPatternSet& set
                                 .minContrast_dn = static_cast<int>(4 * std::round(scale)),
                                 .minContrastFraction = 0.2};
 
-  std::vector<double> decodeTime, boundTime, ratio;
+  DecodeSettings twoSources = settings;
+  twoSources.secondShare = 0.1;  // as the coded: capture decodes
+
+  std::vector<double> decodeTime, twoTime, boundTime, ratio, twoRatio;
   volatile std::uint64_t sink = 0;
   for (int turn = 0; turn < turns; ++turn) {
-    PanelCorrespondence c;
-    double td = 0, tb = 0;
-    const std::function<void()> steps[2] = {
+    PanelCorrespondence c, c2;
+    double td = 0, t2 = 0, tb = 0;
+    const std::function<void()> steps[3] = {
         [&] { td = secondsOf([&] { c = decodeGrayCode(patterns, white, black, set, settings); }); },
+        [&] { t2 = secondsOf([&] { c2 = decodeGrayCode(patterns, white, black, set, twoSources); }); },
         [&] {
           tb = secondsOf([&] { sink = format.type == CV_8UC1 ? sumOf<std::uint8_t>(all) : sumOf<std::uint16_t>(all); });
         }};
-    for (int k = 0; k < 2; ++k) steps[(turn + k) % 2]();
+    for (int k = 0; k < 3; ++k) steps[(turn + k) % 3]();
     check(c, view, set.layout);
-    decodeTime.push_back(td), boundTime.push_back(tb), ratio.push_back(td / tb);
+    check(c2, view, set.layout);
+    if (cv::countNonZero(c2.second.reshape(1) != -1) != 0)  // (each camera pixel sees one panel pixel)
+      throw std::runtime_error("self-check: a second source where every camera pixel sees one panel pixel");
+    decodeTime.push_back(td), twoTime.push_back(t2), boundTime.push_back(tb);
+    ratio.push_back(td / tb), twoRatio.push_back(t2 / tb);
   }
   (void)sink;
 
@@ -197,6 +206,9 @@ void benchFormat(const Format& format, cv::Size size, const CodedPatternSet& set
   fmt::print("  {:<34} {:6.1f} ms {:6.1f} ms   {:6.2f} ({:.2f}-{:.2f})\n", "decodeGrayCode",
              1e3 * percentile(decodeTime, 0.5), 1e3 * percentile(decodeTime, 0.99), percentile(ratio, 0.5),
              percentile(ratio, 0.01), percentile(ratio, 0.99));
+  fmt::print("  {:<34} {:6.1f} ms {:6.1f} ms   {:6.2f} ({:.2f}-{:.2f})\n", "decodeGrayCode, two sources",
+             1e3 * percentile(twoTime, 0.5), 1e3 * percentile(twoTime, 0.99), percentile(twoRatio, 0.5),
+             percentile(twoRatio, 0.01), percentile(twoRatio, 0.99));
   fmt::print("  {:<34} {:6.1f} ms {:6.1f} ms   ({:.1f} GB/s)\n", "bound: one read of every frame",
              1e3 * percentile(boundTime, 0.5), 1e3 * percentile(boundTime, 0.99),
              bytes / percentile(boundTime, 0.5) / 1e9);

@@ -60,20 +60,24 @@ void accumulateBit(const T* pattern, const T* inverse, std::uint16_t* code, std:
   }
 }
 
-// The same with the split bits kept apart.
+// The same with the split bits kept apart; the arrays do not overlap.
 template <typename T>
-void accumulateSplitBit(const T* pattern, const T* inverse, const std::uint16_t* splitBelow, std::uint16_t* code,
-                        std::uint16_t* split, std::uint16_t* minSplit, std::uint16_t* maxSplit,
-                        std::uint16_t* minClear, int n) {
+void accumulateSplitBit(const T* __restrict pattern, const T* __restrict inverse,
+                        const std::uint16_t* __restrict splitBelow, std::uint16_t* __restrict code,
+                        std::uint16_t* __restrict split, std::uint16_t* __restrict minSplit,
+                        std::uint16_t* __restrict maxSplit, std::uint16_t* __restrict minClear, int n) {
   for (int i = 0; i < n; ++i) {
+    // (Values, not std::min's references, and masks, all ones where the bit is split: no branch in the loop.)
     const std::uint16_t a = pattern[i], b = inverse[i];
-    const std::uint16_t contrast = static_cast<std::uint16_t>(std::max(a, b) - std::min(a, b));
-    const bool isSplit = contrast < splitBelow[i];
+    const std::uint16_t contrast = static_cast<std::uint16_t>(a > b ? a - b : b - a);
+    const std::uint16_t splitMask = contrast < splitBelow[i] ? 0xffff : 0;
+    const auto least = [](std::uint16_t x, std::uint16_t y) { return x < y ? x : y; };
+    const auto most = [](std::uint16_t x, std::uint16_t y) { return x > y ? x : y; };
     code[i] = static_cast<std::uint16_t>((code[i] << 1) | (a > b ? 1 : 0));
-    split[i] = static_cast<std::uint16_t>((split[i] << 1) | (isSplit ? 1 : 0));
-    minSplit[i] = isSplit ? std::min(minSplit[i], contrast) : minSplit[i];
-    maxSplit[i] = isSplit ? std::max(maxSplit[i], contrast) : maxSplit[i];
-    minClear[i] = isSplit ? minClear[i] : std::min(minClear[i], contrast);
+    split[i] = static_cast<std::uint16_t>((split[i] << 1) | (splitMask & 1));
+    minSplit[i] = least(minSplit[i], static_cast<std::uint16_t>(contrast | ~splitMask));
+    maxSplit[i] = most(maxSplit[i], static_cast<std::uint16_t>(contrast & splitMask));
+    minClear[i] = least(minClear[i], static_cast<std::uint16_t>(contrast | splitMask));
   }
 }
 
@@ -167,14 +171,17 @@ Counts decodeRows(const std::vector<cv::Mat>& frames, const cv::Mat& white, cons
       const T* w = white.ptr<T>(v);
       const T* b = black.ptr<T>(v);
       auto* panel = out.panel.ptr<cv::Vec2i>(v);
-      auto* second = out.second.ptr<cv::Vec2i>(v);
-      auto* share = out.share.ptr<cv::Vec2f>(v);
+      auto* second = twoSources ? out.second.ptr<cv::Vec2i>(v) : nullptr;
+      auto* share = twoSources ? out.share.ptr<cv::Vec2f>(v) : nullptr;
       auto* confidence = out.confidence.ptr<float>(v);
       for (int u = 0; u < width; ++u) {
         const int range = static_cast<int>(w[u]) - static_cast<int>(b[u]);
-        panel[u] = second[u] = cv::Vec2i(-1, -1);
-        share[u] = cv::Vec2f(1, 1);
+        panel[u] = cv::Vec2i(-1, -1);
         confidence[u] = 0;
+        if (twoSources) {
+          second[u] = cv::Vec2i(-1, -1);
+          share[u] = cv::Vec2f(1, 1);
+        }
         if (range < s.minLit_dn) continue;
         ++counts.lit;
         if (twoSources) {
@@ -279,8 +286,10 @@ PanelCorrespondence decodeGrayCode(const std::vector<cv::Mat>& frames, const cv:
   checkInputs(frames, white, black, layout, settings);
   PanelCorrespondence out;
   out.panel.create(white.size(), CV_32SC2);
-  out.second.create(white.size(), CV_32SC2);
-  out.share.create(white.size(), CV_32FC2);
+  if (settings.secondShare > 0) {
+    out.second.create(white.size(), CV_32SC2);
+    out.share.create(white.size(), CV_32FC2);
+  }
   out.confidence.create(white.size(), CV_32FC1);
   std::atomic<int> lit{0}, decoded{0};
   const int rows = white.rows;

@@ -105,6 +105,7 @@ struct DecodeSettings {
 struct PanelCorrespondence {
   cv::Mat panel;       // CV_32SC2, camera size: (x, y) of the panel pixel, (-1, -1) where undecoded
                        // (with two sources: of the brighter column and the brighter row)
+  // With two sources (secondShare > 0; else empty):
   cv::Mat second;      // CV_32SC2: the second source's column and row, -1 for an axis with one source
   cv::Mat share;       // CV_32FC2: the share of the light from `panel`'s column and row (1 with one source)
   cv::Mat confidence;  // CV_32FC1, camera size: as in the header comment, 0 where undecoded
