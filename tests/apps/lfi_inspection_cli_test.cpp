@@ -167,6 +167,43 @@ TEST_P(LfiInspectionCliEachCapture, EveryDefectOfTheStudyIsFoundBlindWhereItIs) 
   }
 }
 
+class LfiCodedBenchCli : public LfiInspectionCli {
+protected:
+  std::string benchName() const override { return "inspection_coded_sim.toml"; }
+};
+
+TEST_F(LfiCodedBenchCli, ACodedReferenceTakesTheDisplayWhereItIs) {
+  // The display 2 mm further from the lens than the bench file's 30 mm, or tilted by 0.5°: the coded reference
+  // is measured through the display where it is, so the intact lens passes and two weak inclusions (Ø1 mm,
+  // index 1.53 in the lens's 1.5168) are found where they are, as on the nominal bench.
+  const std::string weak = "[[object]]\nname = \"a\"\nshape = \"sphere\"\nradius_mm = 0.5\nposition_mm = [3, 3, 0]\n"
+                           "material = \"dielectric\"\nior = 1.53\n[[object]]\nname = \"b\"\nshape = \"sphere\"\n"
+                           "radius_mm = 0.5\nposition_mm = [9, -4, 0]\nmaterial = \"dielectric\"\nior = 1.53\n";
+  const std::string displayAt = "position_mm = [0, 0, -30]\noptics";
+  for (const auto& [name, display] :
+       {std::pair<std::string, std::string>{"further", "position_mm = [0, 0, -32]\noptics"},
+        {"tilted", "position_mm = [0, 0, -30]\nrotation_deg = [0.5, 0, 0]\noptics"}}) {
+    SCOPED_TRACE(name);
+    const fs::path scene = partScene(name, {{displayAt, display}}, "");
+    std::string text = benchText_;
+    replaceAll(text, (source_ / "data" / "scenes" / "inspection_bench.toml").string(), scene.string());
+    replaceAll(text, folder_.path().string() + "/reference", folder_.path().string() + "/reference-" + name);
+    bench_ = folder_.write(name + "-bench.toml", text);
+    capture();
+    const fs::path run = folder_ / ("run-" + name);
+    const auto r = runLfi("-q run " + bench() + " --parts 20 --out " + shellQuoted(run.string()));
+    EXPECT_EQ(r.status, 0) << r.output;
+    std::ifstream records(run / "records.jsonl");
+    int passed = 0;
+    for (std::string line; std::getline(records, line);) passed += nlohmann::json::parse(line)["verdict"] == "pass";
+    EXPECT_EQ(passed, 20);
+    const auto [status, record] = inspect(partScene(name + "-weak", {{displayAt, display}}, weak));
+    EXPECT_EQ(status, 3);
+    EXPECT_LE(nearest(record, 3, 3), kPixel_mm) << record.dump(1);
+    EXPECT_LE(nearest(record, 9, -4), kPixel_mm) << record.dump(1);
+  }
+}
+
 TEST_F(LfiInspectionCli, AFailedPartKeepsItsRecordImageAndOverlay) {
   capture();
   const fs::path out = folder_ / "part";
