@@ -73,8 +73,10 @@ LightFieldGeometry CodedCapture::geometry() const {
 }
 
 std::string CodedCapture::description() const {
-  std::string text = fmt::format("coded: Gray code patterns through the bench's display and camera (target cv {}, "
-                                 "at most {} refinements)", settings_.targetCv, settings_.iterations);
+  std::string text = fmt::format("coded: Gray code patterns through the bench's display and camera (at most {} "
+                                 "rounds to {} % of the light left, then at most {} refinements to cv {})",
+                                 settings_.rounds, 100 * settings_.maxLightLeft, settings_.iterations,
+                                 settings_.targetCv);
   const CodedCaptureReport& r = report_;
   if (r.patternFrames > 0)
     text += fmt::format("; {} x {} panel: {} pattern frames in {} rounds and {} refinement frames in {:.1f} s, {} of "
