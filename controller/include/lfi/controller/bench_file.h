@@ -23,7 +23,7 @@
 //   [display]      uri                    -      required    usb:<vid>:<pid>[/<serial>], sim:<scene-file>
 //                  settle_ms              ms     0           the panel's response time after a show
 //                  white                  -      0           radiance at full drive; 0 = the reference's 99.9th percentile
-//   [capture]      uri  | light_field     -      one of      the reference's capture device, or a light field file
+//   [capture]      uri  | light_field     -      one of      the reference's capture (sim:, coded:), or a light field file
 //   [geometry]     distance_mm            mm     required    Δ: display plane to the part's reference plane
 //                  part_centre_px         px     centre      [column, row] of the part's origin on the image
 //   [reference]    folder                 path   required    the reference package (reference_package.h)

@@ -2,24 +2,32 @@
 // The coded reference capture (`coded:`): the bench measures its own reference
 // through its display and camera, with the intact part in place. Binary Gray
 // code patterns over the panel's columns and rows (calib/coded_patterns.h)
-// tell, for every camera pixel, which panel pixel's light reaches it through
-// the part and the telecentric stop; those panel pixels, lit, are the inverse
-// schlieren reference, and their weights are then refined in a closed loop
-// (calib/coded_reference.h) until the intact part looks uniform.
+// tell, for every camera pixel, which panel pixels' light reaches it through
+// the part and the telecentric stop (one, or two per axis where a camera pixel
+// sees two); those panel pixels, lit, are the inverse schlieren reference, and
+// their weights are then refined in a closed loop (calib/coded_reference.h)
+// until the intact part looks uniform.
 //
 //   step        frames                         what
 //   patterns    2·⌈log2 W⌉ + 2·⌈log2 H⌉ + 2     all white, all black, then each
 //                                              pattern and its inverse (W × H panel)
+//   rounds      1 + 2·⌈log2 W⌉ + 2·⌈log2 H⌉     each further round: the all-white panel
+//               each                           less the panel pixels found (what light is
+//                                              left), then the patterns so masked; until
+//                                              at most max_light_left is left, a round
+//                                              finds nothing, or `rounds` have run
 //   refine      1 .. 1 + iterations            the reference panel shown and taken;
 //                                              stops at the uniformity target
 //
 // Each frame is the controller's inspection image (the mean of the bench's
 // inspection frames). Decoding thresholds are calib::DecodeSettings' 8-bit
-// figures scaled to the camera's full scale. The refinement's target level is
-// the `target_percentile` of the decoded camera pixels' levels under the first
-// reference panel (at full drive a panel pixel can only be dimmed), and the
-// loop stops when the coefficient of variation over the decoded pixels is at
-// most `target_cv`.
+// figures scaled to the camera's full scale. Uniformity is measured over the
+// linked camera pixels that see the panel fully (white − black at least 0.8
+// of its 99th percentile). The refinement's target level is the
+// `target_percentile` of their levels under the first reference panel (at full
+// drive a panel pixel can only be dimmed); the loop stops when their
+// coefficient of variation is at most `target_cv` or a step does not improve
+// it (the best weights are kept).
 //
 // Refusals (Errc::Device, naming the bench's display and camera):
 //   - the display not visible: no camera pixel brighter by minLit under the
@@ -32,13 +40,16 @@
 //   - too few camera pixels decoded: fewer than `min_decoded` of the lit ones;
 //   - a display that refuses a frame or a camera that fails: the frame's number.
 //
-// URI: coded:[?target_cv=&iterations=&target_percentile=&min_decoded=&
-//      min_confidence=&second_share=&distance_mm=&allow_undeflected=]
+// URI: coded:[?rounds=&max_light_left=&target_cv=&iterations=&
+//      target_percentile=&min_decoded=&min_confidence=&second_share=&
+//      distance_mm=&allow_undeflected=]
 //   key                 default  meaning
+//   rounds              3        most rounds of patterns
+//   max_light_left      0.02     stop when at most this share of the lit pixels' light is unfound
 //   target_cv           0.05     uniformity target (standard deviation / mean)
 //   iterations          8        most refinement steps
 //   target_percentile   0.1      the target level's percentile, (0, 1)
-//   min_decoded         0.5      fraction of lit camera pixels that must decode
+//   min_decoded         0.5      fraction of lit camera pixels that must decode (first round)
 //   min_confidence      0.25     a decoded pixel's panel pixels are lit from this confidence on
 //   second_share        0.1      a camera pixel decodes to two panel columns (rows) when the
 //                                second has this share of its light (DecodeSettings::secondShare)
