@@ -79,7 +79,7 @@ std::string CodedCapture::description() const {
                                  settings_.targetCv);
   const CodedCaptureReport& r = report_;
   if (r.patternFrames > 0)
-    text += fmt::format("; {} x {} panel: {} pattern frames in {} rounds and {} refinement frames in {:.1f} s, {} of "
+    text += fmt::format("; {} x {} panel: {} pattern frames in {} rounds and {} of the reference panel in {:.1f} s, {} of "
                         "{} lit camera pixels decoded in the first round, {:.1f} % of the light left, {} panel "
                         "pixels lit, cv {:.3f} → {:.3f}", r.panelWidth, r.panelHeight, r.patternFrames, r.rounds,
                         r.refineFrames, r.seconds, r.decoded, r.lit, 100 * r.lightLeft, r.panelPixelsLit, r.cvFirst,
@@ -185,20 +185,13 @@ LightField CodedCapture::capture(const std::function<void(double)>& progress) {
   cv::Mat range = whiteImage - blackImage;
   const cv::Mat region = lit & (range >= kRegionFraction * percentile(range, 0.99));
 
-  // Rounds of patterns, each with the panel pixels found so far left dark, until little light is left.
+  // Rounds of patterns, each with the panel pixels found so far left dark, each followed by the all-white panel
+  // less what is found (the light left), until little is left.
   calib::PanelLinks links(whiteImage.size(), panelSize);
   const cv::Mat black = toDecodable(blackImage);
   cv::Mat found = cv::Mat::zeros(panelSize, CV_8UC1);
+  cv::Mat roundWhite = whiteImage;
   for (int round = 0; round < settings_.rounds; ++round) {
-    cv::Mat roundWhite = whiteImage;
-    if (round > 0) {
-      cv::Mat levels = set.white.clone();
-      levels.setTo(0, found);
-      roundWhite = take(levels, "all white but the panel pixels found");
-      report_.lightLeft = lightLeft(roundWhite, whiteImage, blackImage, lit);
-      spdlog::info("coded capture: {:.1f} % of the light is left after round {}", 100 * report_.lightLeft, round);
-      if (report_.lightLeft <= settings_.maxLightLeft) break;
-    }
     std::vector<cv::Mat> frames;
     frames.reserve(set.patterns.size());
     for (size_t k = 0; k < set.patterns.size(); ++k) {
@@ -220,9 +213,15 @@ LightField CodedCapture::capture(const std::function<void(double)>& progress) {
     }
     report_.rounds = round + 1;
     const int added = links.add(c, {}, settings_.minConfidence);
-    spdlog::info("coded capture: round {}: {} of {} lit camera pixels decoded", round + 1, added, c.lit);
-    if (added == 0) break;
+    if (added == 0) break;  // (nothing more to find: the light left is as last measured)
     found = panelWeights(links) > 0;
+    cv::Mat levels = set.white.clone();
+    levels.setTo(0, found);
+    roundWhite = take(levels, "all white but the panel pixels found");
+    report_.lightLeft = lightLeft(roundWhite, whiteImage, blackImage, lit);
+    spdlog::info("coded capture: round {}: {} of {} lit camera pixels decoded, {:.1f} % of the light left",
+                 round + 1, added, c.lit, 100 * report_.lightLeft);
+    if (report_.lightLeft <= settings_.maxLightLeft) break;
   }
   report_.patternFrames = taken;
 
@@ -251,7 +250,7 @@ LightField CodedCapture::capture(const std::function<void(double)>& progress) {
   report_.converged = bestCv <= settings_.targetCv;
   report_.panelPixelsLit = cv::countNonZero(best);
   if (!report_.converged)
-    spdlog::warn("coded capture: the intact part's image is uniform to cv {:.4f} after {} refinement frames, not "
+    spdlog::warn("coded capture: the intact part's image is uniform to cv {:.4f} after {} refinements, not "
                  "the target {}", bestCv, report_.refineFrames - 1, settings_.targetCv);
   panel_ = best;
   LightField lightField = decodePanelImage(panelFromLevels(best, display), optics,

@@ -9,13 +9,13 @@
 // until the intact part looks uniform.
 //
 //   step        frames                         what
-//   patterns    2·⌈log2 W⌉ + 2·⌈log2 H⌉ + 2     all white, all black, then each
-//                                              pattern and its inverse (W × H panel)
-//   rounds      1 + 2·⌈log2 W⌉ + 2·⌈log2 H⌉     each further round: the all-white panel
-//               each                           less the panel pixels found (what light is
-//                                              left), then the patterns so masked; until
-//                                              at most max_light_left is left, a round
-//                                              finds nothing, or `rounds` have run
+//   white, black  2                            all white, all black (W × H panel)
+//   rounds      2·⌈log2 W⌉ + 2·⌈log2 H⌉ + 1     each round: every pattern and its inverse
+//               each                           with the panel pixels found so far dark,
+//                                              then the all-white panel less those found
+//                                              now (the light left); until at most
+//                                              max_light_left is left, a round finds
+//                                              nothing, or `rounds` have run
 //   refine      1 .. 1 + iterations            the reference panel shown and taken;
 //                                              stops at the uniformity target
 //
@@ -87,11 +87,11 @@ struct CodedCaptureSettings {
 // What the last capture did.
 struct CodedCaptureReport {
   int panelWidth = 0, panelHeight = 0;
-  int patternFrames = 0;  // white, black and the patterns
-  int refineFrames = 0;   // reference panels shown and taken
+  int patternFrames = 0;  // white, black and every round's patterns and light-left frame
+  int refineFrames = 0;   // reference panels shown and taken (the first and its refinements)
   double seconds = 0;     // the whole capture
   int rounds = 0;             // of patterns
-  double lightLeft = 1;       // after the last round (1: not measured, one round)
+  double lightLeft = 1;       // of the lit pixels' light, after the last round that found any
   int lit = 0, decoded = 0;  // camera pixels, in the first round
   int panelPixelsLit = 0;    // in the reference panel
   double cvFirst = 0, cvFinal = 0;  // uniformity under the first and the final reference panel
