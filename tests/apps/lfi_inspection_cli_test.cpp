@@ -315,13 +315,13 @@ TEST_F(LfiInspectionCli, ARunInterruptedFromTheTerminalEndsWithEveryRecordAndIts
   const fs::path run = folder_ / "run";
   // SIGINT, as Ctrl-C, once the run has written its first record (whatever the machine's load: a fixed delay can
   // end it before its first part) and half a second more: the part in hand is finished, the run ends normally.
-  // (The shell's $0 is the records file, "$@" the lfi command; a run with no record in 120 s is signalled then,
-  // and one that does not stop is ended by timeout, which passes the INT on, after 300 s.)
+  // (The shell's $0 is the records file, "$@" the lfi command. `timeout --foreground` passes the one INT on to
+  // lfi alone: without it, it also sends one to its process group, and a second INT ends lfi at once. A run with
+  // no record in 120 s is signalled then; one that does not stop is killed at 300 s, and fails on its status.)
   const std::string signalAfterFirstRecord =
-      "sh -c 'rec=$0; timeout --preserve-status 300 \"$@\" & pid=$!; i=0; "
-      "while [ ! -s \"$rec\" ] && [ $i -lt 1200 ]; do sleep 0.1; "
-      "i=$((i+1)); done; sleep 0.5; kill -INT $pid; wait $pid' " +
-      shellQuoted((run / "records.jsonl").string()) + " ";
+      "sh -c 'rec=$0; timeout --foreground --preserve-status --signal=KILL 300 \"$@\" & pid=$!; i=0; "
+      "while [ ! -s \"$rec\" ] && [ $i -lt 1200 ]; do sleep 0.1; i=$((i+1)); done; sleep 0.5; kill -INT $pid; "
+      "wait $pid' " + shellQuoted((run / "records.jsonl").string()) + " ";
   const auto r = runLfi("-q run " + bench() + " --out " + shellQuoted(run.string()), true, signalAfterFirstRecord);
   EXPECT_EQ(r.status, 0) << r.output;
   std::ifstream records(run / "records.jsonl");
