@@ -21,7 +21,14 @@ Inspector::Inspector(const BenchFile& bench, const ReferencePackage& package, Di
               bench.detection()),
       panel_(package.panel),
       reference_(std::make_unique<StoredLightField>(package.lightField, "the reference package's light field")),
-      controller_(*reference_, display, camera, controllerOptions(bench, bench.inspectionFrames)) {}
+      controller_(*reference_, display, camera, controllerOptions(bench, bench.inspectionFrames)) {
+  if (panel_.empty()) return;
+  const DisplayInfo info = display.info();
+  if (panel_.cols != info.panelWidth_px || panel_.rows != info.panelHeight_px)
+    fail(Errc::Config, "{}: the reference package's panel image is {} x {}, display '{}' has a {} x {} panel (another "
+         "display at the same URI?): take a new reference with `lfi capture {} --force`", bench.file.string(),
+         panel_.cols, panel_.rows, info.deviceId, info.panelWidth_px, info.panelHeight_px, bench.file.string());
+}
 
 Inspector::~Inspector() = default;
 

@@ -204,6 +204,21 @@ TEST_F(LfiCodedBenchCli, ACodedReferenceTakesTheDisplayWhereItIs) {
   }
 }
 
+TEST_F(LfiCodedBenchCli, APanelReferenceOnAnotherPanelIsRefused) {
+  // The display at the bench's URI replaced by one with another panel: the reference's panel image no longer
+  // fits it, and inspect says so instead of showing it.
+  const fs::path scene = partScene("display", {}, "");
+  std::string text = benchText_;
+  replaceAll(text, (source_ / "data" / "scenes" / "inspection_bench.toml").string(), scene.string());
+  bench_ = folder_.write("display-bench.toml", text);
+  capture();
+  partScene("display", {{"panel_width_px = 800", "panel_width_px = 640"}}, "");
+  const auto r = runLfi("-q inspect " + bench());
+  EXPECT_EQ(r.status, 1) << r.output;
+  for (const char* fragment : {"panel image is 800 x 800", "640 x 800 panel", "lfi capture", "--force"})
+    EXPECT_NE(r.output.find(fragment), std::string::npos) << fragment << "\n" << r.output;
+}
+
 TEST_F(LfiInspectionCli, AFailedPartKeepsItsRecordImageAndOverlay) {
   capture();
   const fs::path out = folder_ / "part";

@@ -22,7 +22,7 @@ inline std::string shellQuoted(const std::string& s) {
 }
 
 // Runs `lfi <arguments>` (arguments as the shell reads them), after `prefix`
-// (e.g. "timeout --signal=INT 2 ").
+// (e.g. "timeout --foreground --signal=INT 2 ").
 inline LfiResult runLfi(const std::string& arguments, bool stderrToo = true, const std::string& prefix = {}) {
   const std::string command =
       prefix + shellQuoted(LFI_EXECUTABLE) + " " + arguments + (stderrToo ? " 2>&1" : " 2>/dev/null");

@@ -28,6 +28,7 @@ struct PartInspection {
 class Inspector {
 public:
   // The devices stay the caller's; the camera must be Configured or Streaming.
+  // Errc::Config when the package's panel image does not fit the display's panel.
   Inspector(const BenchFile& bench, const ReferencePackage& package, Display& display, Camera& camera);
   ~Inspector();
 
