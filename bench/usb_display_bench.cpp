@@ -13,7 +13,7 @@
 #include "lfi/drivers/usb/usb_display.h"
 
 #include "bench_util.h"
-#include "emulated_usb_display.h"
+#include "lfi/emulation/emulated_usb_display.h"
 
 #include <CLI/CLI.hpp>
 #include <fmt/format.h>
@@ -30,16 +30,16 @@ static int run(int argc, char** argv) {
   CLI::App app("lfi-usb-display-bench: upload through the usb: backend into the emulated display");
   app.add_option("frames", frames, "Frames per setting")->check(CLI::Range(1, 100000));
   CLI11_PARSE(app, argc, argv);
-  lfi::testing_support::usePrivateTmpDir();
-  if (!lfi::testing_support::umockdevPreloadActive()) {
+  lfi::emulation::usePrivateTmpDir();
+  if (!lfi::emulation::umockdevPreloadActive()) {
     fmt::print(stderr, "lfi-usb-display-bench: run it through tests/drivers/run_with_umockdev.sh\n");
     return 2;
   }
-  lfi::testing_support::EmulatedDisplayConfig config;
+  lfi::emulation::EmulatedDisplayConfig config;
   config.panelWidth_px = 3840;
   config.panelHeight_px = 2160;
   config.subpixels = lfi::usbdisplay::SubpixelCode::RgbStripe;
-  lfi::testing_support::EmulatedUsbDisplay device(config);
+  lfi::emulation::EmulatedUsbDisplay device(config);
   device.plug();
   cv::Mat panel(config.panelHeight_px, config.panelWidth_px, CV_8UC3);
   cv::randu(panel, 0, 256);

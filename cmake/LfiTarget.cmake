@@ -21,12 +21,13 @@ if(LFI_SANITIZE)
   target_link_options(lfi_options INTERFACE -fsanitize=address,undefined)
 endif()
 
-# lfi_library(<name> SOURCES ... PUBLIC_DEPS ... PRIVATE_DEPS ...): one folder,
+# lfi_library(<name> [NO_INSTALL] SOURCES ... PUBLIC_DEPS ... PRIVATE_DEPS ...): one folder,
 # one library lfi_<name> (lfi::<name>), public headers in
 # <folder>/include/lfi/<name>/. `cmake --install` installs the library, its
-# headers and its target in the lfi CMake package (cmake/LfiInstall.cmake).
+# headers and its target in the lfi CMake package (cmake/LfiInstall.cmake),
+# unless NO_INSTALL.
 function(lfi_library name)
-  cmake_parse_arguments(ARG "" "" "SOURCES;PUBLIC_DEPS;PRIVATE_DEPS" ${ARGN})
+  cmake_parse_arguments(ARG "NO_INSTALL" "" "SOURCES;PUBLIC_DEPS;PRIVATE_DEPS" ${ARGN})
   add_library(lfi_${name} ${ARG_SOURCES})
   add_library(lfi::${name} ALIAS lfi_${name})
   set_target_properties(lfi_${name} PROPERTIES EXPORT_NAME ${name})
@@ -34,6 +35,8 @@ function(lfi_library name)
                                                 $<INSTALL_INTERFACE:${CMAKE_INSTALL_INCLUDEDIR}>)
   target_link_libraries(lfi_${name} PUBLIC ${ARG_PUBLIC_DEPS} PRIVATE $<BUILD_INTERFACE:lfi_options>
                         ${ARG_PRIVATE_DEPS})
-  install(TARGETS lfi_${name} EXPORT lfiTargets)
-  install(DIRECTORY ${CMAKE_CURRENT_SOURCE_DIR}/include/ DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})
+  if(NOT ARG_NO_INSTALL)
+    install(TARGETS lfi_${name} EXPORT lfiTargets)
+    install(DIRECTORY ${CMAKE_CURRENT_SOURCE_DIR}/include/ DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})
+  endif()
 endfunction()

@@ -23,7 +23,7 @@ PACKAGES=(
   libcli11-dev libtomlplusplus-dev nlohmann-json3-dev libspdlog-dev libfmt-dev
   # exact Poisson draws for the camera sensor model (Boost.Random, header-only)
   libboost-dev
-  # tests (the emulated USB display: umockdev)
+  # tests, and the emulated USB display (emulation/: umockdev)
   libgtest-dev libgmock-dev umockdev libumockdev-dev udev
 )
 

@@ -3,10 +3,9 @@
 // checks that umockdev's preload library is active (the process has a private TMPDIR for
 // its testbed) and registers the display backends; helpers compare presented panels.
 
-#include "emulated_usb_display.h"
-
 #include "lfi/drivers/backend_registry.h"
 #include "lfi/drivers/display.h"
+#include "lfi/emulation/emulated_usb_display.h"
 
 #include <gtest/gtest.h>
 #include <opencv2/core.hpp>
@@ -15,13 +14,16 @@
 
 namespace lfi::testing_support {
 
-inline const bool kPrivateTmp = (testing_support::usePrivateTmpDir(), true);
+using emulation::EmulatedDisplayConfig;
+using emulation::EmulatedUsbDisplay;
+
+inline const bool kPrivateTmp = (emulation::usePrivateTmpDir(), true);
 
 class UsbDisplayTest : public ::testing::Test {
 protected:
   void SetUp() override {
     ASSERT_TRUE(kPrivateTmp);
-    ASSERT_TRUE(testing_support::umockdevPreloadActive())
+    ASSERT_TRUE(emulation::umockdevPreloadActive())
         << "umockdev's preload library is not active: run this test through ctest, umockdev-wrapper or "
            "LD_PRELOAD=libumockdev-preload.so.0";
     registerDriverBackends();

@@ -24,8 +24,8 @@
 namespace lfi {
 namespace {
 
-using testing_support::EmulatedDisplayConfig;
-using testing_support::EmulatedUsbDisplay;
+using emulation::EmulatedDisplayConfig;
+using emulation::EmulatedUsbDisplay;
 using testing_support::throwsError;
 using testing_support::UsbDisplayTest;
 

@@ -22,8 +22,8 @@
 namespace lfi {
 namespace {
 
-using testing_support::EmulatedDisplayConfig;
-using testing_support::EmulatedUsbDisplay;
+using emulation::EmulatedDisplayConfig;
+using emulation::EmulatedUsbDisplay;
 using testing_support::throwsError;
 using testing_support::UsbDisplayTest;
 using Clock = std::chrono::steady_clock;

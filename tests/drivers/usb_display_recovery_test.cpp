@@ -22,7 +22,7 @@
 namespace lfi {
 namespace {
 
-using testing_support::EmulatedUsbDisplay;
+using emulation::EmulatedUsbDisplay;
 using testing_support::throwsError;
 using testing_support::UsbDisplayTest;
 using Clock = std::chrono::steady_clock;

@@ -26,7 +26,7 @@
 #include <utility>
 #include <vector>
 
-namespace lfi::testing_support {
+namespace lfi::emulation {
 namespace {
 
 std::string hex(const std::vector<std::uint8_t>& bytes) {
@@ -354,4 +354,4 @@ void EmulatedUsbDisplay::Impl::failAll() {
   frameUnplug = false;
 }
 
-}  // namespace lfi::testing_support
+}  // namespace lfi::emulation

@@ -15,7 +15,7 @@
 #include <utility>
 #include <vector>
 
-namespace lfi::testing_support {
+namespace lfi::emulation {
 namespace {
 
 std::vector<std::uint8_t> utf16Descriptor(const std::string& text) {
@@ -231,4 +231,4 @@ std::vector<std::uint8_t> EmulatedUsbDisplay::Impl::deviceInfo() const {
   return proto::encodeDeviceInfo(info);
 }
 
-}  // namespace lfi::testing_support
+}  // namespace lfi::emulation

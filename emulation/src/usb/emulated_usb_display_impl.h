@@ -3,7 +3,7 @@
 // over emulated_usb_testbed.cpp (umockdev testbed, handler thread, usbdevfs ioctls and URBs)
 // and emulated_usb_device.cpp (the device's protocol state machine).
 
-#include "emulated_usb_display.h"
+#include "lfi/emulation/emulated_usb_display.h"
 
 #include <umockdev.h>
 
@@ -18,7 +18,7 @@
 #include <thread>
 #include <vector>
 
-namespace lfi::testing_support {
+namespace lfi::emulation {
 
 namespace proto = usbdisplay;
 
@@ -112,4 +112,4 @@ struct EmulatedUsbDisplay::Impl {
   std::vector<std::uint8_t> deviceInfo() const;
 };
 
-}  // namespace lfi::testing_support
+}  // namespace lfi::emulation

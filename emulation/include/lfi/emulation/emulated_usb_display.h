@@ -1,11 +1,12 @@
 #pragma once
-// An emulated lfi USB display for tests: the device side of
-// docs/usb-display-protocol.md behind Linux usbdevfs, built on umockdev. A
-// UMockdevTestbed holds the device's sysfs attributes and descriptors; an ioctl
-// handler (UMockdevIoctlBase, "handle-ioctl") answers what libusb sends to
-// /dev/bus/usb/BBB/DDD: SUBMITURB (control and bulk), REAPURB(NDELAY), DISCARDURB,
-// CLAIMINTERFACE/RELEASEINTERFACE, CLEAR_HALT, GET_CAPABILITIES. The real `usb:`
-// backend talks to it through the real libusb; only the kernel is replaced.
+// An emulated lfi USB display for tests, benchmarks and the simulated bench:
+// the device side of docs/usb-display-protocol.md behind Linux usbdevfs, built
+// on umockdev. A UMockdevTestbed holds the device's sysfs attributes and
+// descriptors; an ioctl handler (UMockdevIoctlBase, "handle-ioctl") answers
+// what libusb sends to /dev/bus/usb/BBB/DDD: SUBMITURB (control and bulk),
+// REAPURB(NDELAY), DISCARDURB, CLAIMINTERFACE/RELEASEINTERFACE, CLEAR_HALT,
+// GET_CAPABILITIES. The real `usb:` backend talks to it through the real
+// libusb; only the kernel is replaced.
 //
 // The process must run with umockdev's preload library (umockdev-wrapper or
 // LD_PRELOAD=libumockdev-preload.so.0), or libusb does not see the testbed.
@@ -25,7 +26,7 @@
 #include <memory>
 #include <string>
 
-namespace lfi::testing_support {
+namespace lfi::emulation {
 
 struct EmulatedDisplayConfig {
   std::uint16_t vendorId = usbdisplay::kDefaultVendorId;
@@ -117,4 +118,4 @@ void usePrivateTmpDir();
 // True when umockdev's preload library is active in this process.
 bool umockdevPreloadActive();
 
-}  // namespace lfi::testing_support
+}  // namespace lfi::emulation

@@ -1,7 +1,7 @@
 // EmulatedUsbDisplay (emulated_usb_display.h): plugging the device in and out, arming
 // faults and reading its state from the test thread, and the process-wide umockdev setup.
 
-#include "emulated_usb_display.h"
+#include "lfi/emulation/emulated_usb_display.h"
 
 #include "emulated_usb_display_impl.h"
 
@@ -19,7 +19,7 @@
 #include <thread>
 #include <utility>
 
-namespace lfi::testing_support {
+namespace lfi::emulation {
 
 EmulatedUsbDisplay::EmulatedUsbDisplay(EmulatedDisplayConfig config) : config_(std::move(config)), impl_(new Impl) {
   if (config_.calibration.pixelPitch_mm == 0) {
@@ -210,4 +210,4 @@ bool umockdevPreloadActive() {
   return preload && std::strstr(preload, "libumockdev-preload") != nullptr;
 }
 
-}  // namespace lfi::testing_support
+}  // namespace lfi::emulation
