@@ -13,11 +13,15 @@
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 
+#include <atomic>
 #include <chrono>
 #include <cstddef>
 #include <cstdint>
+#include <mutex>
 #include <ostream>
 #include <string>
+#include <utility>
+#include <vector>
 
 namespace lfi {
 namespace {
@@ -136,6 +140,47 @@ TEST_F(UsbDisplayTest, PresentedImageIsTheEncodedLightField) {
   const cv::Mat expected = encodeLightField(lf, DisplayOptics(info));
   EXPECT_TRUE(sameBytes(device.presented(), expected));
   EXPECT_GT(cv::countNonZero(expected.reshape(1)), static_cast<int>(expected.total()));  // not a blank panel
+}
+
+TEST_F(UsbDisplayTest, EveryPresentedFrameReachesTheHandlerOnceAndNoRejectedOne) {
+  // What drives a simulated bench's renderer: each frame the device presents, as it presents it, with its
+  // sequence; a frame it rejects never.
+  EmulatedUsbDisplay device;
+  std::mutex mutex;  // (the handler runs on the device's thread)
+  std::vector<std::pair<cv::Mat, std::uint32_t>> seen;
+  device.onPresented([&](const cv::Mat& panel, std::uint32_t sequence) {
+    std::lock_guard lock(mutex);
+    seen.emplace_back(panel.clone(), sequence);
+  });
+  device.plug();
+  auto display = openDisplay("usb:1209:4c46");
+  const DisplayInfo info = display->info();
+  const cv::Mat first = randomPanel(info, 11), second = randomPanel(info, 12);
+  const PresentResult a = display->show(first);
+  device.corruptNextFrame();
+  EXPECT_EQ(display->show(randomPanel(info, 13)).status, PresentStatus::Rejected);
+  const PresentResult b = display->show(second);
+  ASSERT_EQ(a.status, PresentStatus::Presented);
+  ASSERT_EQ(b.status, PresentStatus::Presented);
+  std::lock_guard lock(mutex);
+  ASSERT_EQ(seen.size(), 2u);
+  EXPECT_TRUE(sameBytes(seen[0].first, first));
+  EXPECT_EQ(seen[0].second, a.sequence);
+  EXPECT_TRUE(sameBytes(seen[1].first, second));
+  EXPECT_EQ(seen[1].second, b.sequence);
+}
+
+TEST_F(UsbDisplayTest, ARemovedHandlerIsNotCalled) {
+  EmulatedUsbDisplay device;
+  std::atomic<int> calls{0};
+  device.onPresented([&](const cv::Mat&, std::uint32_t) { ++calls; });
+  device.plug();
+  auto display = openDisplay("usb:1209:4c46");
+  const cv::Mat panel = randomPanel(display->info(), 14);
+  EXPECT_EQ(display->show(panel).status, PresentStatus::Presented);
+  device.onPresented({});
+  EXPECT_EQ(display->show(panel).status, PresentStatus::Presented);
+  EXPECT_EQ(calls.load(), 1);
 }
 
 // An open display is dark at full backlight, as display.h says and the sim:

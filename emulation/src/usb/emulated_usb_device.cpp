@@ -131,6 +131,7 @@ proto::DeviceError EmulatedUsbDisplay::Impl::present(std::uint16_t sequence16) {
   ++state.framesPresented;
   state.showing = true;
   resetFrame();
+  if (presentedHandler) presentedHandler(presented, state.presentedSequence);
   return proto::DeviceError::None;
 }
 

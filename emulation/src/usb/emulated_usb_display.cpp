@@ -188,6 +188,11 @@ cv::Mat EmulatedUsbDisplay::presented() const {
   return impl_->presented.clone();
 }
 
+void EmulatedUsbDisplay::onPresented(PresentedHandler handler) {
+  std::lock_guard lock(impl_->mutex);
+  impl_->presentedHandler = std::move(handler);
+}
+
 std::string EmulatedUsbDisplay::syspath() const { return impl_->syspath; }
 
 void usePrivateTmpDir() {

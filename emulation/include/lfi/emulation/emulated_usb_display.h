@@ -23,6 +23,7 @@
 #include <opencv2/core.hpp>
 
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <string>
 
@@ -102,6 +103,13 @@ public:
   EmulatedDisplayState state() const;
   // The last presented panel (CV_8UC1 or CV_8UC3), empty if none.
   cv::Mat presented() const;
+  // Called with each frame the device presents (valid, as presented() then
+  // returns it) and its sequence: what a simulated bench's renderer shows.
+  // Runs on the handler thread with the device's lock held, before the PRESENT
+  // request is answered: it must not call this device, and should copy what it
+  // keeps and return. An empty function removes it.
+  using PresentedHandler = std::function<void(const cv::Mat& panel, std::uint32_t sequence)>;
+  void onPresented(PresentedHandler handler);
   std::string syspath() const;
 
   struct Impl;
