@@ -22,15 +22,6 @@ std::string displayName(const Display& display) {
   }
 }
 
-double fullScale(PixelFormat format) {
-  switch (format) {
-    case PixelFormat::Mono8: return 255;
-    case PixelFormat::Mono12: return 4095;
-    case PixelFormat::Mono16: break;
-  }
-  return 65535;
-}
-
 }  // namespace
 
 // The bench as a capture through it sees it: the controller's own show and inspect.
@@ -38,7 +29,9 @@ class Controller::Probe final : public BenchProbe {
 public:
   explicit Probe(Controller& c) : c_(c) {}
   DisplayInfo display() const override { return c_.display_.info(); }
-  double cameraFullScale_dn() const override { return fullScale(c_.camera_.settings().pixelFormat); }
+  double cameraFullScale_dn() const override {
+    return (1 << significantBits(c_.camera_.settings().pixelFormat)) - 1;
+  }
   cv::Mat take(const cv::Mat& levels) override {
     c_.showPanel(levels);
     return c_.inspect();

@@ -22,6 +22,18 @@ const char* toString(PixelFormat format) {
   return "unknown";
 }
 
+int significantBits(PixelFormat format) {
+  switch (format) {
+    case PixelFormat::Mono8:
+      return 8;
+    case PixelFormat::Mono12:
+      return 12;
+    case PixelFormat::Mono16:
+      return 16;
+  }
+  return 16;
+}
+
 const char* toString(TriggerMode mode) {
   switch (mode) {
     case TriggerMode::FreeRun:

@@ -31,8 +31,6 @@ struct WireFormat {
 };
 std::vector<WireFormat> wireFormats(PixelFormat format);
 std::vector<std::string> wireFormatNames(PixelFormat format);
-// The fewest bits per pixel any of them takes.
-unsigned bitsOnTheWire(PixelFormat format);
 
 std::string orEmpty(const char* s);
 

@@ -27,9 +27,6 @@ std::vector<std::string> wireFormatNames(PixelFormat format) {
   for (const WireFormat& w : wireFormats(format)) names.emplace_back(w.name);
   return names;
 }
-unsigned bitsOnTheWire(PixelFormat format) {
-  return format == PixelFormat::Mono8 ? 8 : format == PixelFormat::Mono12 ? 12 : 16;
-}
 
 void AravisCamera::configure(const CameraSettings& s) {
   requireCameraState(state_, {State::Open, State::Configured}, "configure", name());

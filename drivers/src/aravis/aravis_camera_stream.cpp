@@ -116,8 +116,9 @@ void AravisCamera::startStream(int bufferCount) {
     fail(Errc::Device, "camera '{}': the device reports a {} x {} px region on its {} x {} px sensor", name(),
          width, height, info_.sensorWidth_px, info_.sensorHeight_px);
   }
+  // (The fewest bytes a frame of the format takes on the wire: Mono12 packed.)
   const std::uint64_t image = static_cast<std::uint64_t>(std::max(width, 0)) * static_cast<std::uint64_t>(
-      std::max(height, 0)) * bitsOnTheWire(settings_.pixelFormat) / 8;
+      std::max(height, 0)) * static_cast<unsigned>(significantBits(settings_.pixelFormat)) / 8;
   if (const std::uint64_t most = 4 * image + (16u << 20); payload < image || payload > most) {
     g_clear_object(&stream_);
     fail(Errc::Device, "camera '{}': the device's PayloadSize of {} bytes does not fit its {} x {} px {} image "

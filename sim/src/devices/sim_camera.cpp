@@ -27,22 +27,6 @@ namespace lfi::sim {
 
 namespace fs = std::filesystem;
 
-namespace {
-
-int formatBits(PixelFormat format) {
-  switch (format) {
-    case PixelFormat::Mono8:
-      return 8;
-    case PixelFormat::Mono12:
-      return 12;
-    case PixelFormat::Mono16:
-      return 16;
-  }
-  return 16;
-}
-
-}  // namespace
-
 std::uint64_t frameNoiseSeed(std::uint64_t sceneSeed, std::uint64_t frameId) {
   return splitMix64(splitMix64(sceneSeed) ^ frameId);
 }
@@ -143,7 +127,7 @@ void SimImager::capture(const CameraSettings& s, std::uint64_t frameId, cv::Mat&
   const cv::Mat roi = full(cv::Rect(s.roiX_px, s.roiY_px, s.roiWidth_px, s.roiHeight_px));
   const cv::Mat dn = model.capture(roi, frameNoiseSeed(seed(), frameId), renderThreads_);
   // The ADC's bit_depth bits, aligned to the format's most significant bits.
-  const int shift = model.bitDepth - formatBits(s.pixelFormat);
+  const int shift = model.bitDepth - significantBits(s.pixelFormat);
   const int type = s.pixelFormat == PixelFormat::Mono8 ? CV_8UC1 : CV_16UC1;
   if (!out.empty() && (out.u == nullptr || out.u->refcount > 1 || !out.isContinuous() || out.isSubmatrix()))
     out.release();  // a caller still holds the previous image: do not overwrite it

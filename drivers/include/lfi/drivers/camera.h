@@ -47,6 +47,8 @@ enum class PixelFormat { Mono8, Mono12, Mono16 };
 enum class TriggerMode { FreeRun, Software, Line };
 
 const char* toString(PixelFormat format);
+// The bits of a pixel's value: 8, 12 or 16 (full scale 2^bits − 1 DN).
+int significantBits(PixelFormat format);
 const char* toString(TriggerMode mode);
 
 // Acquisition settings. The region of interest is in binned pixels, relative to
