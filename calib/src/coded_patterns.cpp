@@ -94,12 +94,15 @@ struct Counts {
 };
 
 // One axis of a pixel with two sources allowed: the panel column (row) of the brighter source, the other's or
-// −1, and the brighter one's share of the light. Two sources differ in exactly the split bits, and each split
-// bit's contrast is the difference of their shares, so with two or more split bits their contrasts must agree
-// (else more than two sources) and be large enough for their signs to tell which code is the brighter one.
+// −1, the brighter one's share of the light, and the smallest contrast of a bit the reading trusts (0xffff: none).
+// Two sources differ in exactly the split bits, and each split bit's contrast is the difference of their
+// shares: with two or more split bits, contrasts that disagree mean more than two sources (read as the
+// brightest alone, every bit trusted as with one source), and each must be readable for its sign to tell which
+// code is the brighter one.
 struct AxisSources {
   int first = -1, second = -1;
   float share = 1;
+  int weakest = 0xffff;
 };
 
 bool decodeAxis(std::uint16_t code, std::uint16_t split, int minSplit, int maxSplit, int range, int size,
@@ -109,8 +112,11 @@ bool decodeAxis(std::uint16_t code, std::uint16_t split, int minSplit, int maxSp
   out.first = grayToBinary(code);
   if (out.first >= size) return false;
   if (splitBits == 0) return true;
-  if (splitBits >= 2 && maxSplit - minSplit > readable) return minSplit >= readable;  // more: the brightest alone
   if (splitBits >= 2 && minSplit < readable) return false;
+  if (splitBits >= 2 && maxSplit - minSplit > readable) {  // more than two: the brightest alone
+    out.weakest = minSplit;
+    return true;
+  }
   out.second = grayToBinary(static_cast<std::uint16_t>(code ^ split));
   if (out.second >= size) return false;
   out.share = static_cast<float>(0.5 * (1 + 0.5 * (minSplit + maxSplit) / range));
@@ -192,7 +198,7 @@ Counts decodeRows(const std::vector<cv::Mat>& frames, const cv::Mat& white, cons
               !decodeAxis(state.row[k], state.split[1][k], state.minSplit[1][k], state.maxSplit[1][k], range,
                           layout.panelHeight, s, y))
             continue;
-          const int clear = std::min<int>(state.minClear[k], range);
+          const int clear = std::min({static_cast<int>(state.minClear[k]), x.weakest, y.weakest, range});
           if (clear < s.minContrast_dn) continue;
           panel[u] = cv::Vec2i(x.first, y.first);
           second[u] = cv::Vec2i(x.second, y.second);

@@ -347,18 +347,19 @@ TEST(DecodeGrayCode, APixelThatSeesTwoColumnsDecodesToBothWithTheirShares) {
   // An 8-column panel (Gray codes 000 001 011 010 110 111 101 100, most significant bit first); a camera pixel's
   // bit k has pattern − inverse = (share of its light from columns with bit k set − the rest) · span.
   const DecodeSettings s{.minLit_dn = 500, .minContrast_dn = 100, .minContrastFraction = 0.2, .secondShare = 0.1};
-  const auto decodes = [&](std::vector<int> contrast, int first, int second, float share) {
+  const auto decodes = [&](std::vector<int> contrast, int first, int second, float share, float confidence) {
     const PanelCorrespondence c = decodeOnePixel(1000, contrast, s, 8);
     ASSERT_EQ(c.decoded, 1);
     EXPECT_EQ(c.panel.at<cv::Vec2i>(0, 0), cv::Vec2i(first, 0));
     EXPECT_EQ(c.second.at<cv::Vec2i>(0, 0), cv::Vec2i(second, -1));
     EXPECT_FLOAT_EQ(c.share.at<cv::Vec2f>(0, 0)[0], share);
     EXPECT_FLOAT_EQ(c.share.at<cv::Vec2f>(0, 0)[1], 1.f) << "one row";
+    EXPECT_FLOAT_EQ(c.confidence.at<float>(0, 0), confidence);
   };
-  // Columns 2 (011, 70 %) and 3 (010, 30 %): the last bit splits at 0.7 − 0.3.
-  decodes({-1000, 1000, 400}, 2, 3, 0.7f);
+  // Columns 2 (011, 70 %) and 3 (010, 30 %): the last bit splits at 0.7 − 0.3; the other bits are whole.
+  decodes({-1000, 1000, 400}, 2, 3, 0.7f, 1.f);
   // Columns 0 (000, 70 %) and 2 (011, 30 %): two bits split alike; their signs name the brighter.
-  decodes({-1000, -400, -400}, 0, 2, 0.7f);
+  decodes({-1000, -400, -400}, 0, 2, 0.7f, 1.f);
   // A 50/50 split of one bit: either code is the first, the pair is the same.
   const PanelCorrespondence even = decodeOnePixel(1000, {-1000, 1000, 0}, s, 8);
   ASSERT_EQ(even.decoded, 1);
@@ -367,7 +368,8 @@ TEST(DecodeGrayCode, APixelThatSeesTwoColumnsDecodesToBothWithTheirShares) {
   EXPECT_FLOAT_EQ(even.share.at<cv::Vec2f>(0, 0)[0], 0.5f);
   // Columns 0 (60 %), 2 (25 %) and 1 (001, 15 %): the split bits disagree (−0.5, −0.2), more than two sources;
   // each readable (0.2 · span), so the brightest alone, as with one source.
-  decodes({-1000, -500, -200}, 0, -1, 1.f);
+  // The confidence is then the weakest bit's, as with one source.
+  decodes({-1000, -500, -200}, 0, -1, 1.f, 0.2f);
   // ... and one not readable: no sign to trust, undecoded.
   EXPECT_EQ(decodeOnePixel(1000, {-1000, -500, -199}, s, 8).decoded, 0);
   // Without secondShare the same pixel of two sources decodes to the brighter one alone, or not at all.

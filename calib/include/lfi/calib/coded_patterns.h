@@ -47,8 +47,9 @@
 // that figure the pixel sees more than two sources, and decodes to the
 // brightest one alone, as with one source. One split bit needs neither.
 // Columns and rows are decoded apart, so a pixel at the corner of four lenses
-// decodes to 2 × 2 panel pixels. The confidence is then taken over the bits
-// that are not split (1 when every bit is).
+// decodes to 2 × 2 panel pixels. The confidence of a pixel read as two
+// sources is taken over the bits that are not split (1 when every bit is);
+// one read as the brightest alone, over all its bits, as with one source.
 //
 // Confidence of a decoded pixel: the smallest |pattern − inverse| over all its
 // bits divided by its white − black, about 1 for a pixel well inside one panel
