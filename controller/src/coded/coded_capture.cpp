@@ -89,14 +89,11 @@ std::string CodedCapture::description() const {
 
 namespace {
 
-// The share of the lit camera pixels' light (white − black) that `white` still has: the light of the panel
-// pixels not yet found.
-double lightLeft(const cv::Mat& white, const cv::Mat& firstWhite, const cv::Mat& black, const cv::Mat& lit) {
-  cv::Mat left, all;
-  cv::max(white - black, 0, left);
-  cv::max(firstWhite - black, 0, all);
-  const double total = cv::sum(all.setTo(0, ~lit))[0];
-  return total > 0 ? cv::sum(left.setTo(0, ~lit))[0] / total : 0;
+// The light (white − black, DN) that `white` gives the lit camera pixels.
+double litLight(const cv::Mat& white, const cv::Mat& black, const cv::Mat& lit) {
+  cv::Mat light;
+  cv::max(white - black, 0, light);
+  return cv::sum(light.setTo(0, ~lit))[0];
 }
 
 // Fails unless some decoded ray is deflected: through no part, the telecentric camera sees only the rays along the
@@ -170,7 +167,8 @@ LightField CodedCapture::capture(const std::function<void(double)>& progress) {
   decode.minLit_dn = std::max(1, static_cast<int>(std::lround(decode.minLit_dn * dnPer8Bit)));
   decode.minContrast_dn = std::max(1, static_cast<int>(std::lround(decode.minContrast_dn * dnPer8Bit)));
   const cv::Mat whiteImage = take(set.white, "all white"), blackImage = take(set.black, "all black");
-  const cv::Mat lit = (whiteImage - blackImage) >= decode.minLit_dn;
+  const cv::Mat range = whiteImage - blackImage;
+  const cv::Mat lit = range >= decode.minLit_dn;
   const int litPixels = cv::countNonZero(lit);
   if (litPixels == 0)
     fail(Errc::Device, "coded capture: the camera sees no change between the all-white and the all-black panel of "
@@ -182,7 +180,6 @@ LightField CodedCapture::capture(const std::function<void(double)>& progress) {
          "the all-white panel: lower the exposure or the gain", saturated, litPixels, fullScale);
 
   // The region uniformity is measured over: the camera pixels that see the panel fully.
-  cv::Mat range = whiteImage - blackImage;
   const cv::Mat region = lit & (range >= kRegionFraction * percentile(range, 0.99));
 
   // Rounds of patterns, each with the panel pixels found so far left dark, each followed by the all-white panel
@@ -191,6 +188,7 @@ LightField CodedCapture::capture(const std::function<void(double)>& progress) {
   const cv::Mat black = toDecodable(blackImage);
   cv::Mat found = cv::Mat::zeros(panelSize, CV_8UC1);
   cv::Mat roundWhite = whiteImage;
+  const double allLight = litLight(whiteImage, blackImage, lit);  // (> 0: some pixel is lit)
   for (int round = 0; round < settings_.rounds; ++round) {
     std::vector<cv::Mat> frames;
     frames.reserve(set.patterns.size());
@@ -218,7 +216,7 @@ LightField CodedCapture::capture(const std::function<void(double)>& progress) {
     cv::Mat levels = set.white.clone();
     levels.setTo(0, found);
     roundWhite = take(levels, "all white but the panel pixels found");
-    report_.lightLeft = lightLeft(roundWhite, whiteImage, blackImage, lit);
+    report_.lightLeft = litLight(roundWhite, blackImage, lit) / allLight;
     spdlog::info("coded capture: round {}: {} of {} lit camera pixels decoded, {:.1f} % of the light left",
                  round + 1, added, c.lit, 100 * report_.lightLeft);
     if (report_.lightLeft <= settings_.maxLightLeft) break;
