@@ -148,10 +148,10 @@ TEST_F(UsbDisplayTest, EveryPresentedFrameReachesTheHandlerOnceAndNoRejectedOne)
   EmulatedUsbDisplay device;
   std::mutex mutex;  // (the handler runs on the device's thread)
   std::vector<std::pair<cv::Mat, std::uint32_t>> seen;
-  device.onPresented([&](const cv::Mat& panel, std::uint32_t sequence) {
+  device.observePanel({.presented = [&](const cv::Mat& panel, std::uint32_t sequence) {
     std::lock_guard lock(mutex);
     seen.emplace_back(panel.clone(), sequence);
-  });
+  }});
   device.plug();
   auto display = openDisplay("usb:1209:4c46");
   const DisplayInfo info = display->info();
@@ -170,17 +170,32 @@ TEST_F(UsbDisplayTest, EveryPresentedFrameReachesTheHandlerOnceAndNoRejectedOne)
   EXPECT_EQ(seen[1].second, b.sequence);
 }
 
-TEST_F(UsbDisplayTest, ARemovedHandlerIsNotCalled) {
+TEST_F(UsbDisplayTest, TheObserverSeesBrightnessAndBlankAndNothingOnceRemoved) {
   EmulatedUsbDisplay device;
-  std::atomic<int> calls{0};
-  device.onPresented([&](const cv::Mat&, std::uint32_t) { ++calls; });
+  std::mutex mutex;
+  std::vector<std::string> seen;
+  const auto note = [&](std::string what) {
+    std::lock_guard lock(mutex);
+    seen.push_back(std::move(what));
+  };
+  device.observePanel({.presented = [&](const cv::Mat&, std::uint32_t s) { note(fmt::format("present {}", s)); },
+                       .brightness = [&](int level) { note(fmt::format("brightness {}", level)); },
+                       .blanked = [&] { note("blank"); }});
   device.plug();
   auto display = openDisplay("usb:1209:4c46");
   const cv::Mat panel = randomPanel(display->info(), 14);
+  {
+    std::lock_guard lock(mutex);
+    seen.clear();  // (what open() does: blank, full brightness; display.h's state after open)
+  }
+  ASSERT_EQ(display->show(panel).status, PresentStatus::Presented);
+  display->setBrightness(7);
+  display->blank();
+  device.observePanel({});
   EXPECT_EQ(display->show(panel).status, PresentStatus::Presented);
-  device.onPresented({});
-  EXPECT_EQ(display->show(panel).status, PresentStatus::Presented);
-  EXPECT_EQ(calls.load(), 1);
+  display->setBrightness(9);
+  std::lock_guard lock(mutex);
+  EXPECT_EQ(seen, (std::vector<std::string>{"present 1", "brightness 7", "blank"}));
 }
 
 // An open display is dark at full backlight, as display.h says and the sim:

@@ -131,7 +131,7 @@ proto::DeviceError EmulatedUsbDisplay::Impl::present(std::uint16_t sequence16) {
   ++state.framesPresented;
   state.showing = true;
   resetFrame();
-  if (presentedHandler) presentedHandler(presented, state.presentedSequence);
+  if (observer.presented) observer.presented(presented, state.presentedSequence);
   return proto::DeviceError::None;
 }
 
@@ -193,10 +193,14 @@ void EmulatedUsbDisplay::Impl::control(std::uint8_t* bytes, int length, Urb& u) 
           stall = true;
         } else {
           state.brightness = value;
+          if (observer.brightness) observer.brightness(value);
         }
         break;
       case proto::Request::Present: stall = present(value) != proto::DeviceError::None; break;
-      case proto::Request::Blank: state.showing = false; break;
+      case proto::Request::Blank:
+        state.showing = false;
+        if (observer.blanked) observer.blanked();
+        break;
       default: stall = true;
     }
   } else {

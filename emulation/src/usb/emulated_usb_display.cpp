@@ -188,9 +188,9 @@ cv::Mat EmulatedUsbDisplay::presented() const {
   return impl_->presented.clone();
 }
 
-void EmulatedUsbDisplay::onPresented(PresentedHandler handler) {
+void EmulatedUsbDisplay::observePanel(PanelObserver observer) {
   std::lock_guard lock(impl_->mutex);
-  impl_->presentedHandler = std::move(handler);
+  impl_->observer = std::move(observer);
 }
 
 std::string EmulatedUsbDisplay::syspath() const { return impl_->syspath; }

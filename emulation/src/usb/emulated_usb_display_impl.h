@@ -88,7 +88,7 @@ struct EmulatedUsbDisplay::Impl {
   std::uint32_t lastErrorSequence = 0;
   std::string lastErrorText;
   cv::Mat presented;
-  EmulatedUsbDisplay::PresentedHandler presentedHandler;
+  EmulatedUsbDisplay::PanelObserver observer;
 
   // emulated_usb_testbed.cpp: the testbed and the handler thread
   void runOnHandlerThread(const std::function<void()>& f);

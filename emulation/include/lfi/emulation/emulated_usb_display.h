@@ -103,13 +103,18 @@ public:
   EmulatedDisplayState state() const;
   // The last presented panel (CV_8UC1 or CV_8UC3), empty if none.
   cv::Mat presented() const;
-  // Called with each frame the device presents (valid, as presented() then
-  // returns it) and its sequence: what a simulated bench's renderer shows.
-  // Runs on the handler thread with the device's lock held, before the PRESENT
-  // request is answered: it must not call this device, and should copy what it
-  // keeps and return. An empty function removes it.
-  using PresentedHandler = std::function<void(const cv::Mat& panel, std::uint32_t sequence)>;
-  void onPresented(PresentedHandler handler);
+  // What the device does to its panel, as a simulated bench's renderer follows
+  // it: each frame it presents (valid, as presented() then returns it) with its
+  // sequence, each brightness it is set to, each blank. Called on the handler
+  // thread with the device's lock held, before the request is answered: a
+  // handler must not call this device, and should copy what it keeps and
+  // return. Empty functions are not called; observePanel({}) stops observing.
+  struct PanelObserver {
+    std::function<void(const cv::Mat& panel, std::uint32_t sequence)> presented;
+    std::function<void(int level)> brightness;
+    std::function<void()> blanked;
+  };
+  void observePanel(PanelObserver observer);
   std::string syspath() const;
 
   struct Impl;
