@@ -29,6 +29,7 @@ constexpr std::size_t kNameSize = 32;
 // client still frees the device soon.
 constexpr guint32 kHeartbeatTimeoutOffset = 0x0938;
 constexpr guint32 kHeartbeatTimeout_ms = 10'000;
+constexpr double kTriggerCheckRate_hz = 1000;
 
 guint32 readRegister(ArvFakeCamera* camera, guint32 address) {
   guint32 value = 0;
@@ -203,6 +204,9 @@ GvCameraServer::GvCameraServer(const GvCameraServerOptions& options, ServedFrame
   arv_fake_camera_write_register(camera, ARV_FAKE_CAMERA_REGISTER_WIDTH, width);
   arv_fake_camera_write_register(camera, ARV_FAKE_CAMERA_REGISTER_HEIGHT, height);
   arv_fake_camera_write_register(camera, kHeartbeatTimeoutOffset, kHeartbeatTimeout_ms);
+  // In trigger mode the device looks for a software trigger once per period
+  // of this rate (Aravis's default, 25 Hz, adds 20 ms to each triggered frame on average).
+  arv_fake_camera_set_trigger_frequency(camera, kTriggerCheckRate_hz);
   arv_fake_camera_set_fill_pattern(camera, &Impl::fill, impl_.get());
 }
 
@@ -215,6 +219,12 @@ GvCameraServer::~GvCameraServer() {
 
 std::string GvCameraServer::deviceId() const {
   return impl_->deviceId();
+}
+
+void GvCameraServer::setPacketLoss(double ratio) {
+  if (!(ratio >= 0 && ratio <= 1))
+    fail(Errc::InvalidArgument, "served camera '{}': packet loss {} is outside 0..1", impl_->deviceId(), ratio);
+  g_object_set(impl_->gvCamera, "gvsp-lost-ratio", ratio, nullptr);
 }
 
 }  // namespace lfi

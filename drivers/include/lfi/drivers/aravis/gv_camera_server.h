@@ -12,6 +12,8 @@
 // description also lists Bayer8/RGB8, which are served black), ExposureTimeAbs
 // (µs, integer, 10..10 000 000), GainRaw (0..10, integer), AcquisitionFrameRate
 // (1..1000 Hz), TriggerMode/TriggerSource (Software). The sensor size is ours.
+// A software trigger is seen within 1 ms (Aravis's device looks for one once
+// per trigger period, set to 1 kHz here).
 //
 // Frames are made on Aravis's device thread, which also answers control
 // requests: a filler slower than a few hundred ms makes clients time out.
@@ -66,6 +68,11 @@ class GvCameraServer {
 
   // "<vendor>-<model>-<serial>", what Aravis's discovery reports.
   std::string deviceId() const;
+
+  // Drops each GVSP packet (leader, payload, trailer) with this probability,
+  // from the next packet on: a lossy network for fault tests. 0 (the start)
+  // drops none. Throws Errc::InvalidArgument outside 0..1.
+  void setPacketLoss(double ratio);
 
   // The constructor's checks of `options` that need no frame filler nor
   // sensor size, for a check before slow work that precedes serving: the
