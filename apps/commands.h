@@ -34,5 +34,7 @@ Command addEmitCommand(CLI::App& app);
 Command addCalibrateDistanceCommand(CLI::App& app);
 Command addLfInfoCommand(CLI::App& app);
 Command addDevicesCommand(CLI::App& app);
+Command addSimBenchCommand(CLI::App& app);
+Command addBenchControlCommand(CLI::App& app);
 
 }  // namespace lfi::cli

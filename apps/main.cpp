@@ -22,6 +22,8 @@ constexpr lfi::cli::Command (*kCommands[])(CLI::App&) = {
     lfi::cli::addStudyCommand,
     lfi::cli::addRenderCommand,
     lfi::cli::addServeCameraCommand,
+    lfi::cli::addSimBenchCommand,
+    lfi::cli::addBenchControlCommand,
     lfi::cli::addCaptureCommand,
     lfi::cli::addTrainCommand,
     lfi::cli::addInspectCommand,

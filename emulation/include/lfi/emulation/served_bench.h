@@ -1,0 +1,101 @@
+#pragma once
+// The simulated bench behind the real drivers: the ray-traced camera of a
+// scene file served as a GigE Vision device (GvCameraServer) and its display
+// emulated as an lfi USB display (EmulatedUsbDisplay), so that the `aravis:`
+// and `usb:` backends drive the simulation exactly as they drive a physical
+// bench. `lfi sim-bench` runs one for a program started under it.
+//
+// What the display is sent drives what the camera sees: every frame the USB
+// device presents, every brightness it is set to and every blank go to the
+// scene's SimBench (sim_bench.h), and the served camera renders each frame from
+// the bench as it is when the frame is made, after its software trigger (a
+// frame shows the panel presented before the trigger, since PRESENT is
+// answered only after the bench has the panel). The radiance is rendered again
+// after each change of the display or the part, on Aravis's device thread,
+// which also answers control requests: a scene whose render takes more than a
+// few hundred ms makes clients time out.
+//
+// The part under the camera is a scene file: the bench's own (the intact part)
+// or another one with the same camera sensor and display panel (the same
+// bench with a defect part in place). putPart() changes it while serving; the
+// display's state goes with it.
+//
+// Faults for tests: the camera off the network and back (its process killed
+// and restarted, as a client sees it), the display unplugged and plugged in
+// again (dark while unplugged), GVSP packet loss, and every fault the emulated
+// USB display knows (display()).
+//
+// Thread-safe. Needs umockdev's testbed (the `usb:` client runs with its
+// preload library: emulated_usb_display.h). Units: the scene's (mm).
+
+#include "lfi/drivers/aravis/gv_camera_server.h"
+#include "lfi/emulation/emulated_usb_display.h"
+
+#include <cstdint>
+#include <filesystem>
+#include <memory>
+#include <string>
+
+namespace lfi::emulation {
+
+struct ServedBenchOptions {
+  std::filesystem::path scene;        // the bench with its intact part: [camera], [display] and the part
+  GvCameraServerOptions camera;       // interface and identity; the sensor size is the scene's
+  EmulatedDisplayConfig display;      // USB identity and bus position; panel, optics and brightness the scene's
+  int renderThreads = 0;              // 0: all cores
+};
+
+// What the bench has done since it started.
+struct ServedBenchCounters {
+  std::uint64_t framesServed = 0;     // frames the camera made
+  double frameSeconds = 0;            // time spent making them (renders included)
+  std::uint64_t panelsPresented = 0;  // frames the display presented
+  std::uint64_t partChanges = 0;
+  std::uint64_t cameraRestarts = 0;
+  std::uint64_t displayReplugs = 0;
+};
+
+class ServedBench {
+ public:
+  // Loads the scene and starts serving both devices. Throws Errc::NotFound
+  // for a missing scene, Errc::Config for one without [camera] or [display]
+  // or with a display the USB protocol cannot describe, and the servers'
+  // errors (Errc::Device for a taken port or interface).
+  explicit ServedBench(ServedBenchOptions options);
+  ~ServedBench();
+  ServedBench(const ServedBench&) = delete;
+  ServedBench& operator=(const ServedBench&) = delete;
+
+  // The URIs a bench file names the devices by: "aravis:<id>", "usb:<vid>:<pid>/<serial>".
+  std::string cameraUri() const;
+  std::string displayUri() const;
+
+  // Puts the part of `scene` under the camera. Throws Errc::Config naming the
+  // file when its camera sensor or display panel differ from the bench's, and
+  // the scene loader's errors; the part in place stays then.
+  void putPart(const std::filesystem::path& scene);
+  std::filesystem::path part() const;
+
+  // The camera leaves the network (no answer to anything, the stream stops) and comes back as a freshly
+  // started device. Idempotent.
+  void stopCamera();
+  void startCamera();
+  bool cameraServing() const;
+  void setPacketLoss(double ratio);  // as GvCameraServer::setPacketLoss; kept across a restart
+
+  // The display unplugged (its panel goes dark) and plugged in again. Idempotent.
+  void unplugDisplay();
+  void plugDisplay();
+  bool displayPlugged() const;
+  // The emulated device, for its own faults (stalls, corrupt or short transfers, silence).
+  EmulatedUsbDisplay& display();
+
+  ServedBenchCounters counters() const;
+
+  struct Impl;
+
+ private:
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace lfi::emulation
