@@ -120,7 +120,18 @@ std::uint32_t Controller::shown(const PresentResult& r, const char* what) {
     fail(Errc::Device, "emit: display '{}' did not show {} ({}{}{})", displayName(display_), what, toString(r.status),
          r.message.empty() ? "" : ": ", r.message);
   shown_ = std::chrono::steady_clock::now();
+  shownSequence_ = r.sequence;
   return r.sequence;
+}
+
+void Controller::requireShowing() {
+  if (!shownSequence_) fail(Errc::InvalidArgument, "inspect: display '{}' was not sent anything to show",
+                            displayName(display_));
+  const DisplayStatus s = display_.status();
+  if (!s.showing || s.presentedSequence != *shownSequence_)
+    fail(Errc::Device, "inspect: display '{}' no longer shows the reference (frame {} was shown; it {}): the image "
+         "taken is not of the reference", displayName(display_), *shownSequence_,
+         s.showing ? fmt::format("shows frame {}", s.presentedSequence) : std::string("is dark"));
 }
 
 cv::Mat Controller::inspect() {

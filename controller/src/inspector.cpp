@@ -39,7 +39,11 @@ void Inspector::showReference() {
     controller_.showPanel(panel_);
 }
 
-cv::Mat Inspector::takeImage() { return controller_.inspect(); }
+cv::Mat Inspector::takeImage() {
+  cv::Mat image = controller_.inspect();
+  controller_.requireShowing();  // (after the exposures: the display showed the reference all through them)
+  return image;
+}
 
 PartInspection Inspector::inspectPart() {
   PartInspection result;

@@ -246,6 +246,28 @@ TEST_F(ControllerTest, InspectionAfterAnEmitSeesOnlyTheNewPanel) {
   // The stream is the controller's: it stops it when it goes.
 }
 
+// An image is of the reference only while the display shows it: a display
+// blanked, sent another frame by someone else, or gone is an error that names
+// it, never an image judged as if it were lit by the reference.
+TEST_F(ControllerTest, ADisplayThatNoLongerShowsTheReferenceIsAnError) {
+  const Rig rig = intactRig(100);
+  Controller controller(*rig.capture, *rig.display, *rig.camera, {});
+  EXPECT_TRUE(throwsError([&] { controller.requireShowing(); }, Errc::InvalidArgument, {"was not sent anything"}));
+  const LightField reference = controller.captureReference();
+  controller.emit(reference);
+  controller.inspect();
+  EXPECT_NO_THROW(controller.requireShowing());
+  const cv::Mat other = cv::Mat::zeros(rig.display->info().panelHeight_px, rig.display->info().panelWidth_px,
+                                       rig.display->info().panelType());
+  ASSERT_EQ(rig.display->show(other).status, PresentStatus::Presented);  // (frame 2, not the controller's)
+  EXPECT_TRUE(throwsError([&] { controller.requireShowing(); }, Errc::Device, {"frame 1 was shown; it shows frame 2"}));
+  rig.display->blank();
+  EXPECT_TRUE(throwsError([&] { controller.requireShowing(); }, Errc::Device, {"no longer shows the reference"}));
+  EXPECT_TRUE(throwsError([&] { controller.requireShowing(); }, Errc::Device, {"is dark"}));
+  controller.emit(reference);
+  EXPECT_NO_THROW(controller.requireShowing());
+}
+
 // With a settle time, no frame that counts starts exposing before the panel has
 // had it (a physical panel's response time).
 TEST_F(ControllerTest, FramesAfterAnEmitStartOnlyAfterTheSettleTime) {

@@ -29,6 +29,7 @@
 
 #include <chrono>
 #include <functional>
+#include <optional>
 
 namespace lfi {
 
@@ -84,6 +85,11 @@ public:
   // in the camera's digital numbers. More than `retries` bad frames throw
   // Errc::Device (Errc::Timeout when nothing arrived at all).
   cv::Mat inspect();
+  // Throws Errc::Device naming the display unless it still shows the frame the
+  // last emit() or showPanel() showed: a display that lost power, was reset or
+  // was sent another frame since shows something else, and an image taken
+  // meanwhile is not one of the reference. One status request to the device.
+  void requireShowing();
   // Steps 1-3.
   cv::Mat run(const Progress& progress = {});
 
@@ -102,6 +108,7 @@ private:
   bool startedCamera_ = false;
   bool staleFrames_ = false;  // the display changed since the stream inspect() last used started
   std::chrono::steady_clock::time_point shown_;  // when the last emit() returned
+  std::optional<std::uint32_t> shownSequence_;    // and the frame it showed
   double white_ = 0;
   cv::Mat referencePanel_;
 };

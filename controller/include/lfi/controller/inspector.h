@@ -35,9 +35,11 @@ public:
   // Shows the reference: the package's panel image when it has one, else its
   // light field (Errc::Device when the display refuses it).
   void showReference();
-  // The part's image, not judged; throws what Controller::inspect throws.
+  // The part's image, not judged; throws what Controller::inspect throws, and
+  // Errc::Device when the display no longer shows the reference after it
+  // (Controller::requireShowing).
   cv::Mat takeImage();
-  // Takes the part's image and judges it; throws what Controller::inspect throws.
+  // Takes the part's image and judges it; throws what takeImage throws.
   PartInspection inspectPart();
   // Judges an image (CV_8U, CV_16U or CV_32F, the package's size).
   PartVerdict judge(const cv::Mat& image) const;
