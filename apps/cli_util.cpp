@@ -55,7 +55,8 @@ void ProgressBar::finish() {
 CLI::Validator threadCount() { return wholeNumberIn(0LL, kMostThreads); }
 CLI::Validator seedValue() { return wholeNumberIn<std::uint64_t>(0, lfi::sim::kLargestSeed); }
 
-void requireOutputFolder(const fs::path& folder, const char* command, const char* source) {
+void requireOutputFolder(const fs::path& given, const char* command, const char* source) {
+  const fs::path folder = given.empty() ? fs::path(".") : given;  // (the parent of a bare file name)
   std::error_code made;
   fs::create_directories(folder, made);
   if (made || !fs::is_directory(folder, made))

@@ -58,7 +58,7 @@ CLI::Validator seedValue();
 
 // Makes the folder that --out (or `source`) names or holds and checks that
 // files can be written into it, before any work: Errc::Io naming the source
-// and the reason.
+// and the reason. An empty path is the working folder (a bare file name's parent).
 void requireOutputFolder(const std::filesystem::path& folder, const char* command, const char* source = "--out");
 
 // Refuses to start when one of `files` exists, unless `force`; Errc::Io when

@@ -54,7 +54,7 @@ void calibrateDistance(const DeviceOptions& o, const std::vector<double>& candid
   refuseExisting(outputs, force, "calibrate-distance");
   OpenDevices bench = openDevices(o, "calibrate-distance");
   // Where the result goes must take it before the scan, not after (and a bad device leaves no folder behind).
-  requireOutputFolder(out.parent_path().empty() ? fs::path(".") : out.parent_path(), "calibrate-distance");
+  requireOutputFolder(out.parent_path(), "calibrate-distance");
   const lfi::CameraSettings settings = bench.camera->settings();
   cv::Mat roi;
   if (!roiBox.empty()) {

@@ -325,6 +325,16 @@ TEST_F(LfiInspectionCli, DevicesChecksWhatABenchNames) {
   EXPECT_NE(physical.output.find("display   usb:1209:4c46  NOT AVAILABLE"), std::string::npos) << physical.output;
 }
 
+// A bench file named bare in its own folder, with bare folder names in it: their parent is the working folder.
+TEST_F(LfiInspectionCli, ABenchInTheWorkingFolderKeepsItsReferenceThere) {
+  std::string text = benchText_;
+  replaceAll(text, "folder = \"" + folder_.path().string() + "/reference\"", "folder = \"reference\"");
+  folder_.write("bare.toml", text);
+  const auto r = runLfi("-q capture bare.toml", true, "cd " + shellQuoted(folder_.path().string()) + " && ");
+  EXPECT_EQ(r.status, 0) << r.output;
+  EXPECT_TRUE(fs::exists(folder_ / "reference" / "reference.json")) << r.output;
+}
+
 TEST_F(LfiInspectionCli, ARunInterruptedFromTheTerminalEndsWithEveryRecordAndItsSummary) {
   capture();
   const fs::path run = folder_ / "run";
