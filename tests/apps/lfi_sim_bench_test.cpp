@@ -1,0 +1,187 @@
+// `lfi sim-bench` and `lfi bench-control` as a bench user runs them: a run of
+// 50 parts through the real drivers with the camera taken off the network 5
+// times and the display unplugged 5 times, which records each fault against
+// the part in hand, loses nothing and goes on when the device is back; the
+// program's exit status passed on; and requests and benches it refuses, with
+// errors that name them.
+
+#include "lfi_process.h"
+#include "test_folder.h"
+
+#include <fmt/format.h>
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+namespace {
+
+namespace fs = std::filesystem;
+using lfi::testing_support::runLfi;
+using lfi::testing_support::shellQuoted;
+
+std::string readText(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+class LfiSimBench : public testing::Test {
+protected:
+  void SetUp() override {
+    const std::string scenes = (source_ / "data" / "scenes").string();
+    // The shipped simulated bench, served; and a bench of its served devices with the simulated sensor's
+    // reference (the quicker one), waiting for devices that drop out. 16 frames a part (about 0.1 s)
+    // keep a run of 50 parts long enough for 10 faults a second long, with parts between them.
+    std::string text = readText(source_ / "data" / "benches" / "inspection_sim.toml");
+    for (size_t at; (at = text.find("sim:../scenes/")) != std::string::npos;) text.replace(at, 14, "sim:" + scenes + "/");
+    served_ = folder_.write("served.toml", text);
+    hil_ = folder_.write("hil.toml", fmt::format(R"(format = "lfi-inspection-bench"
+version = 1
+[camera]
+uri = "aravis:lfi-SimCamera-LFISIM01"
+exposure_us = 10000
+pixel_format = "Mono16"
+object_pixel_mm = 0.5
+dn_per_electron = 6.24
+read_noise_dn = 15.7
+grab_timeout_ms = 1000
+retries = 0
+[display]
+uri = "usb:1209:4c46/LFI-SIM-0001"
+[capture]
+uri = "sim:{0}/inspection_bench.toml?distance_mm=30"
+[geometry]
+distance_mm = 30
+part_centre_px = [27.5, 27.5]
+[reference]
+folder = "reference"
+mask_radius_mm = 12.2
+[inspection]
+frames = 16
+smallest_defect_mm = 1.0
+closing_mm = 0.5
+[output]
+folder = "out"
+save_images = "none"
+[run]
+on_device_loss = "wait"
+wait_limit_s = 60
+)", scenes));
+  }
+
+  // `lfi sim-bench` on the served bench running `sh -c SCRIPT`.
+  lfi::testing_support::LfiResult simBench(const std::string& script) {
+    return runLfi("-q sim-bench " + shellQuoted(served_.string()) + " -- sh -c " + shellQuoted(script), true,
+                  "timeout --foreground --signal=KILL 600 ");
+  }
+
+  const fs::path source_ = LFI_SOURCE_DIR;
+  lfi::testing_support::TestFolder folder_{"lfi-sim-bench"};
+  fs::path served_, hil_;
+};
+
+// Each fault is injected once the run has gone 3 parts past the last one (so that it hits a run in full
+// flow, and never the same outage twice) and lasts 1 s, longer than the camera's grab timeout and the
+// run's first back-off: the part in hand must see it. The run then waits for the device with its
+// back-off and goes on. Every part is the intact one, so an image taken while the display was dark
+// would fail: none may be judged.
+TEST_F(LfiSimBench, ARunOfFiftyPartsRidesOutTheCameraGoneAndTheDisplayUnpluggedFiveTimesEach) {
+  const std::string lfi = shellQuoted(LFI_EXECUTABLE), bench = shellQuoted(hil_.string());
+  const fs::path run = folder_ / "run", records = run / "records.jsonl";
+  const std::string script = fmt::format(R"sh(set -u
+{0} -q capture {1} || exit 10
+{0} -q run {1} --parts 50 --out {2} & run=$!
+count() {{ if [ -f {3} ]; then wc -l < {3}; else echo 0; fi; }}
+until_records() {{ i=0; while [ "$(count)" -lt "$1" ]; do i=$((i+1)); [ $i -gt 2400 ] && exit 12; sleep 0.05; done; }}
+n=3
+for device in camera display camera display camera display camera display camera display; do
+  until_records $n
+  if [ $device = camera ]; then
+    {0} -q bench-control camera off >/dev/null || exit 11; sleep 1; {0} -q bench-control camera on >/dev/null || exit 11
+  else
+    {0} -q bench-control display unplug >/dev/null || exit 11; sleep 1; {0} -q bench-control display plug >/dev/null || exit 11
+  fi
+  n=$(( $(count) + 4 ))
+done
+wait $run
+)sh", lfi, bench, shellQuoted(run.string()), shellQuoted(records.string()));
+  const auto r = simBench(script);
+  ASSERT_EQ(r.status, 0) << r.output;
+  std::vector<nlohmann::json> lines;
+  std::ifstream in(records);
+  for (std::string line; std::getline(in, line);) {
+    lines.push_back(nlohmann::json::parse(line, nullptr, false));
+    ASSERT_FALSE(lines.back().is_discarded()) << "a torn record: " << line;
+  }
+  ASSERT_EQ(lines.size(), 50u);
+  std::vector<std::string> faults;
+  for (size_t i = 0; i < lines.size(); ++i) {
+    const auto& j = lines[i];
+    EXPECT_EQ(j["part"], i + 1);
+    if (j["status"] == "error") {
+      const std::string error = j["error"];
+      const bool camera = error.find("lfi-SimCamera-LFISIM01") != std::string::npos;
+      const bool display = error.find("LFI-SIM-0001") != std::string::npos || error.find("display") != std::string::npos;
+      EXPECT_TRUE(camera != display) << "names the device that failed: " << error;
+      faults.push_back(camera ? "camera" : "display");
+      ASSERT_LT(i + 1, lines.size());
+      EXPECT_EQ(lines[i + 1]["status"], "inspected") << "the run goes on once the device is back";
+    } else {
+      EXPECT_EQ(j["verdict"], "pass") << j.dump();
+    }
+  }
+  EXPECT_EQ(faults, (std::vector<std::string>{"camera", "display", "camera", "display", "camera", "display", "camera",
+                                              "display", "camera", "display"}));
+  EXPECT_NE(readText(run / "summary.html").find("<td>50</td><td>40</td><td>0</td><td>10</td>"), std::string::npos);
+}
+
+TEST_F(LfiSimBench, TheProgramsExitStatusIsTheBenchsAndTheEnvironmentNamesTheDevices) {
+  const auto r = simBench("echo \"$LFI_SIM_BENCH_CAMERA $LFI_SIM_BENCH_DISPLAY\"; test -S \"$LFI_SIM_BENCH_CONTROL\"; "
+                          "exit 7");
+  EXPECT_EQ(r.status, 7) << r.output;
+  EXPECT_NE(r.output.find("aravis:lfi-SimCamera-LFISIM01 usb:1209:4c46/LFI-SIM-0001"), std::string::npos) << r.output;
+  const auto killed = simBench("kill -TERM $$");
+  EXPECT_EQ(killed.status, 128 + 15) << killed.output;
+}
+
+TEST_F(LfiSimBench, RequestsItCannotDoAreRefusedWithTheReasonAndTheBenchGoesOn) {
+  std::string scene = readText(source_ / "data" / "scenes" / "inspection_bench.toml");
+  scene.replace(scene.find("width = 56"), 10, "width = 64");
+  const fs::path otherCamera = folder_.write("other-camera.toml", scene);
+  const std::string lfi = shellQuoted(LFI_EXECUTABLE);
+  const auto r = simBench(fmt::format(
+      "{0} bench-control part {1}; echo \"status $?\"; {0} bench-control juggle; echo \"status $?\"; "
+      "{0} bench-control packet-loss 2; echo \"status $?\"; {0} bench-control part /no/such.toml; echo \"status $?\"; "
+      "{0} bench-control status",
+      lfi, shellQuoted(otherCamera.string())));
+  EXPECT_EQ(r.status, 0) << r.output;
+  for (const char* expected :
+       {"its camera (64 x 56 pixels of 0.1215 mm) is not the bench's (56 x 56", "unknown request 'juggle'",
+        "packet-loss '2': a fraction 0..1", "no such scene file '/no/such.toml'", "part "})
+    EXPECT_NE(r.output.find(expected), std::string::npos) << expected << "\n" << r.output;
+  EXPECT_EQ(r.output.find("status 0"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("inspection_bench.toml; camera serving; display plugged"), std::string::npos)
+      << "the intact part stays in place: " << r.output;
+}
+
+TEST_F(LfiSimBench, ABenchThatIsNotSimulatedAndAControlSocketNobodyServesAreNamed) {
+  const auto notSimulated = runLfi("-q sim-bench " + shellQuoted(hil_.string()) + " -- true");
+  EXPECT_EQ(notSimulated.status, 1);
+  EXPECT_NE(notSimulated.output.find("is not a simulated bench: its camera ('aravis:lfi-SimCamera-LFISIM01')"),
+            std::string::npos)
+      << notSimulated.output;
+  const auto nobody = runLfi("-q bench-control --socket " + shellQuoted((folder_ / "none.sock").string()) + " status");
+  EXPECT_EQ(nobody.status, 1);
+  EXPECT_NE(nobody.output.find("is `lfi sim-bench` running?"), std::string::npos) << nobody.output;
+  const auto unset = runLfi("-q bench-control status", true, "env -u LFI_SIM_BENCH_CONTROL ");
+  EXPECT_EQ(unset.status, 1);
+  EXPECT_NE(unset.output.find("LFI_SIM_BENCH_CONTROL is not set"), std::string::npos) << unset.output;
+}
+
+}  // namespace
