@@ -8,7 +8,9 @@
 // reference and inspects the parts one after another, putting each under the
 // camera with `lfi bench-control part`, as a line would.
 
+#include "gige_device_process.h"
 #include "lfi_process.h"
+#include "study_parts.h"
 #include "test_folder.h"
 
 #include <fmt/format.h>
@@ -29,6 +31,8 @@ namespace {
 namespace fs = std::filesystem;
 using lfi::testing_support::runLfi;
 using lfi::testing_support::shellQuoted;
+using lfi::testing_support::StudyPart;
+using lfi::testing_support::studyParts;
 
 std::string readText(const fs::path& p) {
   std::ifstream in(p, std::ios::binary);
@@ -46,40 +50,6 @@ void replaceOnce(std::string& text, const std::string& from, const std::string& 
 void replaceAll(std::string& text, const std::string& from, const std::string& to) {
   ASSERT_NE(text.find(from), std::string::npos) << from;
   for (size_t at = 0; (at = text.find(from, at)) != std::string::npos; at += to.size()) text.replace(at, from.size(), to);
-}
-
-// The bench's object pixel (0.5 mm): what a defect's position is known to.
-constexpr double kPixel_mm = 0.5;
-// The lens's camera-side face: z = t/2 - (R - sqrt(R² - r²)) at radial distance r (R = 51.5, t = 5).
-double cameraFaceZ(double r) { return 2.5 - (51.5 - std::sqrt(51.5 * 51.5 - r * r)); }
-
-// A part of the study and where its defects are (none: the whole part is off, or it is intact).
-struct Part {
-  std::string name;
-  std::vector<std::pair<std::string, std::string>> edits;  // of the bench's scene text
-  std::string extra;                                       // objects appended
-  std::vector<std::pair<double, double>> defects_mm;       // known positions on the part
-  double within_mm = 0;                                    // ... and how near the detector places them
-  bool intact = false;
-};
-
-std::vector<Part> studyParts() {
-  const auto spheres = [](const char* material) {
-    return fmt::format("[[object]]\nname = \"centre\"\nshape = \"sphere\"\nradius_mm = 0.5\n{0}\n"
-                       "[[object]]\nname = \"rim\"\nshape = \"sphere\"\nradius_mm = 0.5\nposition_mm = [10, 0, 0]\n"
-                       "{0}\n", material);
-  };
-  return {
-      {"intact", {}, "", {}, 0, true},
-      // Ø1 mm spheres, two pixels across: within a pixel of their centres.
-      {"particles", {}, spheres("material = \"absorber\""), {{0, 0}, {10, 0}}, kPixel_mm},
-      {"bubbles", {}, spheres("material = \"dielectric\"\nior = 1.0"), {{0, 0}, {10, 0}}, kPixel_mm},
-      // A 2 mm sphere cut out of the camera-side face 6 mm off axis: its region's centroid inside its outline.
-      {"cut", {}, fmt::format("[[object.cut]]\nposition_mm = [6, 0, {:.6f}]\nradius_mm = 2\n", cameraFaceZ(6)),
-       {{6, 0}}, 2.0},
-      {"index", {{"ior = 1.5168", "ior = 1.66848"}}, "", {}},
-      {"moved", {{"material = \"dielectric\"", "material = \"dielectric\"\nposition_mm = [0, 0, -3]"}}, "", {}},
-  };
 }
 
 struct Inspection {
@@ -125,11 +95,9 @@ protected:
     hilBench_ = folder_.write("hil-bench.toml", text);
     // The sim-bench that serves them: the in-process bench's scene.
     servedBench_ = simBench_;
-    for (const Part& part : studyParts()) {
-      std::string scene = readText(source_ / "data" / "scenes" / "inspection_bench.toml");
-      for (const auto& [from, to] : part.edits) replaceOnce(scene, from, to);
-      scenes_[part.name] = folder_.write(part.name + ".toml", scene + "\n" + part.extra + "\n");
-    }
+    const std::string scene = readText(source_ / "data" / "scenes" / "inspection_bench.toml");
+    for (const StudyPart& part : studyParts())
+      scenes_[part.name] = folder_.write(part.name + ".toml", lfi::testing_support::studyPartScene(scene, part));
   }
 
   // lfi capture, then lfi inspect --part of each part, all in the lfi process's sim: devices.
@@ -137,7 +105,7 @@ protected:
     std::map<std::string, Inspection> out;
     const auto capture = runLfi("-q capture " + shellQuoted(simBench_.string()));
     EXPECT_EQ(capture.status, 0) << capture.output;
-    for (const Part& part : studyParts()) {
+    for (const StudyPart& part : studyParts()) {
       const auto r = runLfi("-q inspect " + shellQuoted(simBench_.string()) + " --json --part " +
                                 shellQuoted(scenes_[part.name].string()), false);
       out[part.name] = {r.status, nlohmann::json::parse(r.output, nullptr, false)};
@@ -149,7 +117,7 @@ protected:
   std::map<std::string, Inspection> overRealDrivers() {
     const std::string lfi = shellQuoted(LFI_EXECUTABLE), bench = shellQuoted(hilBench_.string());
     std::string script = "set -u\n" + lfi + " -q capture " + bench + " || exit 10\n";
-    for (const Part& part : studyParts()) {
+    for (const StudyPart& part : studyParts()) {
       const std::string out = shellQuoted((folder_ / ("hil-" + part.name)).string());
       script += lfi + " -q bench-control part " + (part.intact ? "" : shellQuoted(scenes_[part.name].string())) +
                 " >/dev/null || exit 11\n" + lfi + " -q inspect " + bench + " --json > " + out + ".json\necho $? > " +
@@ -160,7 +128,7 @@ protected:
                           true, "timeout --foreground --signal=KILL 600 ");
     EXPECT_EQ(r.status, 0) << r.output;
     std::map<std::string, Inspection> out;
-    for (const Part& part : studyParts()) {
+    for (const StudyPart& part : studyParts()) {
       const fs::path base = folder_ / ("hil-" + part.name);
       Inspection& i = out[part.name];
       std::istringstream(readText(base.string() + ".status")) >> i.status;
@@ -170,6 +138,7 @@ protected:
   }
 
   const fs::path source_ = LFI_SOURCE_DIR;
+  lfi::testing_support::LoopbackGigeLock lock_;  // (sim-bench serves on 127.0.0.1:3956)
   lfi::testing_support::TestFolder folder_{"lfi-hil-loop"};
   fs::path simBench_, hilBench_, servedBench_;
   std::map<std::string, fs::path> scenes_;
@@ -188,7 +157,7 @@ INSTANTIATE_TEST_SUITE_P(Captures, LfiHilLoop, testing::Values("sim", "coded"),
 TEST_P(LfiHilLoop, TheRealDriversGiveTheVerdictsAndDefectsOfTheInProcessLoop) {
   const auto local = inProcess();
   const auto remote = overRealDrivers();
-  for (const Part& part : studyParts()) {
+  for (const StudyPart& part : studyParts()) {
     SCOPED_TRACE(part.name);
     const Inspection &a = local.at(part.name), &b = remote.at(part.name);
     ASSERT_FALSE(a.record.is_discarded());
@@ -204,7 +173,7 @@ TEST_P(LfiHilLoop, TheRealDriversGiveTheVerdictsAndDefectsOfTheInProcessLoop) {
       if (da.is_null() || db.is_null()) continue;
       EXPECT_LE(std::hypot(da["centroid_mm"][0].get<double>() - db["centroid_mm"][0].get<double>(),
                            da["centroid_mm"][1].get<double>() - db["centroid_mm"][1].get<double>()),
-                kPixel_mm)
+                lfi::testing_support::kInspectionPixel_mm)
           << da.dump() << "\n" << db.dump();
     }
   }

@@ -5,6 +5,7 @@
 // program's exit status passed on; and requests and benches it refuses, with
 // errors that name them.
 
+#include "gige_device_process.h"
 #include "lfi_process.h"
 #include "test_folder.h"
 
@@ -82,6 +83,7 @@ wait_limit_s = 60
   }
 
   const fs::path source_ = LFI_SOURCE_DIR;
+  lfi::testing_support::LoopbackGigeLock lock_;  // (sim-bench serves on 127.0.0.1:3956)
   lfi::testing_support::TestFolder folder_{"lfi-sim-bench"};
   fs::path served_, hil_;
 };
