@@ -5,6 +5,7 @@
 #include "aravis_camera_impl.h"
 
 #include "lfi/drivers/backend_registry.h"
+#include "lfi/drivers/driver_trace.h"
 
 #include <spdlog/spdlog.h>
 
@@ -36,6 +37,12 @@ std::string orEmpty(const char* s) {
 
 // Throws if `error` is set, freeing it. `call` names the Aravis function (and feature).
 void check(GError* error, const std::string& device, const std::string& call) {
+  if (driverTraceOn()) {
+    const auto args = call.find('(');
+    traceDriverCall("aravis", device, call.substr(0, args),
+                    (args == std::string::npos ? std::string() : call.substr(args)) +
+                        (error ? " failed: " + orEmpty(error->message) : std::string()));
+  }
   if (error == nullptr) return;
   const Errc code = errcFor(error);
   const std::string message = orEmpty(error->message);
@@ -70,6 +77,7 @@ void AravisCamera::open() {
       fail(notFound ? Errc::NotFound : Errc::Device, "camera '{}': arv_camera_new failed: {}; {}", name(), message,
            describe(devices));
     }
+    traceDriverCall("aravis", name(), "arv_camera_new");
     camera_ = throughLoopbackIfOwnAddress(std::exchange(camera_, nullptr), name());
   }
   try {

@@ -4,6 +4,7 @@
 
 #include "aravis_camera_impl.h"
 
+#include "lfi/drivers/driver_trace.h"
 #include "lfi/drivers/pixel_unpack.h"
 
 #include <arpa/inet.h>
@@ -132,6 +133,8 @@ void AravisCamera::startStream(int bufferCount) {
     g_clear_object(&stream_);
     check(error, name(), call);
   }
+  traceDriverCall("aravis", name(), "arv_camera_start_acquisition",
+                  fmt::format("({} buffers of {} bytes)", bufferCount, payload));
   statistics_ = {};
   frameWidth_ = width, frameHeight_ = height;
   state_ = State::Streaming;
@@ -180,6 +183,7 @@ void AravisCamera::grabInto(Frame& frame, std::chrono::milliseconds timeout) {
     if (buffer != nullptr || left <= kSlice) break;
   }
   if (buffer == nullptr) {
+    traceDriverCall("aravis", name(), "arv_stream_timeout_pop_buffer", "no buffer");
     if (controlLost_) declareLost("Aravis reported the control channel lost (heartbeat)");
     frame.status = FrameStatus::Timeout;
     frame.frameId = 0;
@@ -200,6 +204,8 @@ void AravisCamera::grabInto(Frame& frame, std::chrono::milliseconds timeout) {
   frame.timestamp_ns = arv_buffer_get_timestamp(buffer);
   if (frame.timestamp_ns == 0) frame.timestamp_ns = arv_buffer_get_system_timestamp(buffer);
   frame.status = status == ARV_BUFFER_STATUS_SUCCESS ? FrameStatus::Complete : FrameStatus::Incomplete;
+  traceDriverCall("aravis", name(), "arv_stream_timeout_pop_buffer",
+                  fmt::format("frame {} status {}", frame.frameId, static_cast<int>(status)));
   if (const auto refused = copyImage(buffer, frame.image)) {
     if (frame.status == FrameStatus::Complete)
       fail(Errc::Device, "camera '{}': frame {} is complete but {}", name(), frame.frameId, *refused);

@@ -4,6 +4,7 @@
 #include "usb_display_impl.h"
 
 #include "lfi/drivers/display_calibration_file.h"
+#include "lfi/drivers/driver_trace.h"
 
 #include "lfi/core/error.h"
 
@@ -115,6 +116,7 @@ PresentResult UsbDisplay::show(const cv::Mat& panel) {
   for (int attempt = 0;; ++attempt) {
     std::size_t sent = 0;
     const BulkOutcome outcome = sendFrame(sent);
+    traceDriverCall("usb", name_, "bulk OUT", fmt::format("frame {}: {} of {} bytes", sequence, sent, frame_.size()));
     if (outcome == BulkOutcome::Ok) break;
     resync_ = true;  // the device may hold part of the frame (cleared below for a stall)
     if (outcome == BulkOutcome::NoDevice) vanished(fmt::format("bulk OUT of frame {}", sequence));
@@ -246,9 +248,12 @@ void UsbDisplay::readIdentity() {
 int UsbDisplay::control(int direction, proto::Request request, std::uint16_t value, unsigned char* data,
                         std::uint16_t length) {
   const std::uint8_t type = direction == LIBUSB_ENDPOINT_IN ? proto::kRequestTypeIn : proto::kRequestTypeOut;
-  return libusb_control_transfer(handle_, type, static_cast<std::uint8_t>(request), value,
-                                 static_cast<std::uint16_t>(interface_), data, length,
-                                 static_cast<unsigned>(options_.controlTimeout.count()));
+  const int rc = libusb_control_transfer(handle_, type, static_cast<std::uint8_t>(request), value,
+                                         static_cast<std::uint16_t>(interface_), data, length,
+                                         static_cast<unsigned>(options_.controlTimeout.count()));
+  traceDriverCall("usb", name_, proto::toString(request),
+                  fmt::format("value {} length {}: {}", value, length, rc < 0 ? libusb_error_name(rc) : "ok"));
+  return rc;
 }
 
 // CLEAR_FEATURE(ENDPOINT_HALT) of the frame endpoint, which also resets the
@@ -259,6 +264,7 @@ int UsbDisplay::control(int direction, proto::Request request, std::uint16_t val
 // A refusal (LIBUSB_ERROR_PIPE and the like) is Errc::Device.
 bool UsbDisplay::clearHalt() {
   const int rc = libusb_clear_halt(handle_, endpoint_);
+  traceDriverCall("usb", name_, "CLEAR_HALT", rc < 0 ? libusb_error_name(rc) : "ok");
   if (rc == LIBUSB_ERROR_NO_DEVICE) vanished("CLEAR_HALT");
   resync_ = rc != 0;
   if (rc == 0) return true;

@@ -5,6 +5,7 @@
 
 #include "lfi/core/error.h"
 #include "lfi/drivers/backend_registry.h"
+#include "lfi/drivers/driver_trace.h"
 
 #include <fmt/format.h>
 #include <fmt/ranges.h>
@@ -119,7 +120,9 @@ void UsbDisplay::openDevice() {
   if (!found)
     fail(Errc::Device, "{}: no vendor interface (class 0x{:02x}, subclass 0x{:02x}) with a bulk OUT endpoint", name_,
          proto::kInterfaceClass, proto::kInterfaceSubclass);
-  if (const int rc = libusb_claim_interface(handle_, interface_); rc != 0) {
+  const int claim = libusb_claim_interface(handle_, interface_);
+  traceDriverCall("usb", name_, "CLAIM_INTERFACE", claim < 0 ? libusb_error_name(claim) : "ok");
+  if (const int rc = claim; rc != 0) {
     if (rc == LIBUSB_ERROR_NO_DEVICE) vanished("CLAIM_INTERFACE");
     fail(Errc::Device, "{}: cannot claim interface {}: {}{}", name_, interface_, libusb_error_name(rc),
          rc != LIBUSB_ERROR_BUSY ? ""

@@ -5,6 +5,7 @@
 
 #include "lfi/drivers/backend_registry.h"
 #include "lfi/drivers/camera.h"
+#include "lfi/drivers/driver_trace.h"
 
 #include <memory>
 #include <string_view>
@@ -18,7 +19,10 @@ BackendRegistry<Camera>& backendRegistry<Camera>();
 
 // Parses `uri`, checks its query keys against the backend's and runs the
 // factory. An unknown scheme throws Errc::Config listing the known schemes; an
-// unknown key throws Errc::Config listing the accepted keys.
-inline std::unique_ptr<Camera> openCamera(std::string_view uri) { return backendRegistry<Camera>().open(uri); }
+// unknown key throws Errc::Config listing the accepted keys. With the driver
+// trace on (driver_trace.h) the camera traces its calls.
+inline std::unique_ptr<Camera> openCamera(std::string_view uri) {
+  return traceCalls(backendRegistry<Camera>().open(uri), uri);
+}
 
 }  // namespace lfi

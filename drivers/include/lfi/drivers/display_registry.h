@@ -5,6 +5,7 @@
 
 #include "lfi/drivers/backend_registry.h"
 #include "lfi/drivers/display.h"
+#include "lfi/drivers/driver_trace.h"
 
 #include <memory>
 #include <string_view>
@@ -18,6 +19,9 @@ BackendRegistry<Display>& backendRegistry<Display>();
 
 // Parses `uri`, checks its query keys against the backend's and runs the
 // factory. An unknown scheme or key throws Errc::Config listing what is known.
-inline std::unique_ptr<Display> openDisplay(std::string_view uri) { return backendRegistry<Display>().open(uri); }
+// With the driver trace on (driver_trace.h) the display traces its calls.
+inline std::unique_ptr<Display> openDisplay(std::string_view uri) {
+  return traceCalls(backendRegistry<Display>().open(uri), uri);
+}
 
 }  // namespace lfi
