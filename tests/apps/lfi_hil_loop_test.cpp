@@ -21,6 +21,7 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <set>
 #include <sstream>
 #include <string>
 #include <utility>
@@ -69,6 +70,25 @@ double nearest(const nlohmann::json& record, double x, double y, nlohmann::json*
   return best;
 }
 
+// One line of a driver trace: the process, the layer, the call.
+struct TraceLine {
+  std::string pid, layer, call, detail;
+};
+
+std::vector<TraceLine> readTrace(const fs::path& file) {
+  std::vector<TraceLine> lines;
+  std::istringstream in(readText(file));
+  for (std::string line; std::getline(in, line);) {
+    if (line.empty() || line[0] == '#') continue;
+    std::vector<std::string> f;
+    std::istringstream columns(line);
+    for (std::string c; std::getline(columns, c, '\t');) f.push_back(c);
+    EXPECT_GE(f.size(), 5u) << line;
+    if (f.size() >= 5) lines.push_back({f[1], f[2], f[4], f.size() > 5 ? f[5] : ""});
+  }
+  return lines;
+}
+
 // Param: the reference's capture, "sim" (the simulated light field sensor) or "coded" (through the display).
 class LfiHilLoop : public testing::TestWithParam<std::string> {
 protected:
@@ -103,11 +123,12 @@ protected:
   // lfi capture, then lfi inspect --part of each part, all in the lfi process's sim: devices.
   std::map<std::string, Inspection> inProcess() {
     std::map<std::string, Inspection> out;
-    const auto capture = runLfi("-q capture " + shellQuoted(simBench_.string()));
+    const std::string trace = "LFI_DRIVER_TRACE=" + shellQuoted(localTrace().string()) + " ";
+    const auto capture = runLfi("-q capture " + shellQuoted(simBench_.string()), true, trace);
     EXPECT_EQ(capture.status, 0) << capture.output;
     for (const StudyPart& part : studyParts()) {
       const auto r = runLfi("-q inspect " + shellQuoted(simBench_.string()) + " --json --part " +
-                                shellQuoted(scenes_[part.name].string()), false);
+                                shellQuoted(scenes_[part.name].string()), false, trace);
       out[part.name] = {r.status, nlohmann::json::parse(r.output, nullptr, false)};
     }
     return out;
@@ -125,7 +146,8 @@ protected:
     }
     const fs::path file = folder_.write("hil.sh", script);
     const auto r = runLfi("-q sim-bench " + shellQuoted(servedBench_.string()) + " -- sh " + shellQuoted(file.string()),
-                          true, "timeout --foreground --signal=KILL 600 ");
+                          true, "LFI_DRIVER_TRACE=" + shellQuoted(remoteTrace().string()) +
+                                    " timeout --foreground --signal=KILL 600 ");
     EXPECT_EQ(r.status, 0) << r.output;
     std::map<std::string, Inspection> out;
     for (const StudyPart& part : studyParts()) {
@@ -136,6 +158,60 @@ protected:
     }
     return out;
   }
+
+  // The run over the real drivers made every call of the Camera and Display interfaces that the bench
+  // path makes in process (the set of calls the sim: devices saw), and each reached the wire: between a
+  // call's line and the one before it of the same device in the same process, the real backend's own
+  // lines show the Aravis calls and USB requests it takes.
+  void checkDriverCalls() const {
+    const auto local = readTrace(localTrace()), remote = readTrace(remoteTrace());
+    std::set<std::string> made, reached;
+    for (const TraceLine& l : local)
+      if (l.layer == "camera" || l.layer == "display") made.insert(l.layer + "." + l.call);
+    for (const TraceLine& l : remote)
+      if (l.layer == "camera" || l.layer == "display") reached.insert(l.layer + "." + l.call);
+    for (const std::string& call : made) EXPECT_TRUE(reached.count(call)) << call << " never reached the real drivers";
+    for (const char* call : {"camera.open", "camera.configure", "camera.start", "camera.trigger", "camera.grab",
+                             "camera.stop", "camera.close", "display.open", "display.show", "display.status",
+                             "display.close"})
+      EXPECT_TRUE(made.count(call)) << call << ": the bench path makes it (a sim: device saw none)";
+    // What each interface call must have done on the wire.
+    const std::map<std::string, std::vector<std::string>> wire = {
+        {"camera.open", {"arv_camera_new"}},
+        {"camera.configure", {"arv_camera_set_exposure_time", "arv_camera_set_pixel_format_from_string",
+                              "arv_camera_set_trigger"}},
+        {"camera.start", {"arv_camera_start_acquisition"}},
+        {"camera.trigger", {"arv_camera_software_trigger"}},
+        {"camera.grab", {"arv_stream_timeout_pop_buffer"}},
+        {"camera.stop", {"arv_camera_stop_acquisition"}},
+        {"display.open", {"CLAIM_INTERFACE", "GET_DEVICE_INFO", "GET_CALIBRATION"}},
+        {"display.show", {"bulk OUT", "PRESENT"}},
+        {"display.status", {"GET_STATUS"}},
+        {"display.blank", {"BLANK"}},
+        {"display.brightness", {"SET_BRIGHTNESS"}}};
+    std::map<std::string, std::set<std::string>> since;  // per process and interface layer: wire calls since its last line
+    std::map<std::string, int> checked;
+    for (const TraceLine& l : remote) {
+      const bool camera = l.layer == "camera" || l.layer == "aravis";
+      std::set<std::string>& pending = since[l.pid + (camera ? "camera" : "display")];
+      if (l.layer == "aravis" || l.layer == "usb") {
+        pending.insert(l.call);
+        continue;
+      }
+      const std::string call = l.layer + "." + l.call;
+      if (const auto it = wire.find(call); it != wire.end() && l.detail.rfind("failed", 0) != 0) {
+        for (const std::string& w : it->second) EXPECT_TRUE(pending.count(w)) << call << " without " << w;
+        ++checked[call];
+      }
+      pending.clear();
+    }
+    for (const std::string& call : made)
+      EXPECT_TRUE(!wire.count(call) || checked[call] > 0) << call << " never went through the real driver whole";
+  }
+
+  // The driver traces (driver_trace.h) of the two wirings' processes.
+  fs::path localTrace() const { return folder_ / "in-process.trace"; }
+  fs::path remoteTrace() const { return folder_ / "hil.trace"; }
 
   const fs::path source_ = LFI_SOURCE_DIR;
   lfi::testing_support::LoopbackGigeLock lock_;  // (sim-bench serves on 127.0.0.1:3956)
@@ -177,6 +253,7 @@ TEST_P(LfiHilLoop, TheRealDriversGiveTheVerdictsAndDefectsOfTheInProcessLoop) {
           << da.dump() << "\n" << db.dump();
     }
   }
+  checkDriverCalls();
   // The records name the bench that took them: the sim: devices' in process, the served devices' over the drivers.
   EXPECT_EQ(fs::path(local.at("cut").record["bench"]["file"].get<std::string>()), fs::absolute(simBench_));
   EXPECT_EQ(fs::path(remote.at("cut").record["bench"]["file"].get<std::string>()), fs::absolute(hilBench_));
