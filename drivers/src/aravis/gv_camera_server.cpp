@@ -12,8 +12,10 @@
 #include <spdlog/spdlog.h>
 
 #include <cerrno>
+#include <chrono>
 #include <cstring>
 #include <mutex>
+#include <thread>
 
 namespace lfi {
 namespace {
@@ -45,6 +47,7 @@ struct GvCameraServer::Impl {
   ArvGvFakeCamera* gvCamera = nullptr;
   ArvFakeCamera* camera = nullptr;  // owned by gvCamera
   std::string lastWarning;  // (Aravis's device thread only)
+  std::mutex lineMutex;     // one line edge at a time
 
   // Aravis's fill-pattern callback, on its device thread. Inside it
   // arv_buffer_get_data() reports size 0 (the buffer's parts are not set up
@@ -219,6 +222,29 @@ GvCameraServer::~GvCameraServer() {
 
 std::string GvCameraServer::deviceId() const {
   return impl_->deviceId();
+}
+
+bool GvCameraServer::fireLine(int timeout_ms) {
+  std::lock_guard lock(impl_->lineMutex);
+  ArvFakeCamera* camera = impl_->camera;
+  constexpr guint32 kLine0 = 0, kSoftware = 1;  // TriggerSource values in Aravis's fake camera description
+  if (readRegister(camera, ARV_FAKE_CAMERA_REGISTER_TRIGGER_MODE) != 1 ||
+      readRegister(camera, ARV_FAKE_CAMERA_REGISTER_TRIGGER_SOURCE) != kLine0 ||
+      arv_fake_camera_get_acquisition_status(camera) == 0)
+    return false;
+  arv_fake_camera_write_register(camera, ARV_FAKE_CAMERA_REGISTER_TRIGGER_SOURCE, kSoftware);
+  arv_fake_camera_write_register(camera, ARV_FAKE_CAMERA_REGISTER_TRIGGER_SOFTWARE, 1);
+  // The device thread clears the trigger register when it takes the trigger, before it makes the frame.
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::milliseconds(timeout_ms);
+  bool taken = false;
+  while (!(taken = readRegister(camera, ARV_FAKE_CAMERA_REGISTER_TRIGGER_SOFTWARE) == 0) &&
+         std::chrono::steady_clock::now() < deadline)
+    std::this_thread::sleep_for(std::chrono::microseconds(100));
+  if (!taken) arv_fake_camera_write_register(camera, ARV_FAKE_CAMERA_REGISTER_TRIGGER_SOFTWARE, 0);
+  // (unless the client changed the source meanwhile)
+  if (readRegister(camera, ARV_FAKE_CAMERA_REGISTER_TRIGGER_SOURCE) == kSoftware)
+    arv_fake_camera_write_register(camera, ARV_FAKE_CAMERA_REGISTER_TRIGGER_SOURCE, kLine0);
+  return taken;
 }
 
 void GvCameraServer::setPacketLoss(double ratio) {

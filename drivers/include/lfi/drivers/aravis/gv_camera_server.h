@@ -11,7 +11,8 @@
 // binning), BinningHorizontal/Vertical 1..16, PixelFormat Mono8/Mono16 (the
 // description also lists Bayer8/RGB8, which are served black), ExposureTimeAbs
 // (µs, integer, 10..10 000 000), GainRaw (0..10, integer), AcquisitionFrameRate
-// (1..1000 Hz), TriggerMode/TriggerSource (Software). The sensor size is ours.
+// (1..1000 Hz), TriggerMode/TriggerSource (Software, Line0: fireLine()). The
+// sensor size is ours.
 // A software trigger is seen within 1 ms (Aravis's device looks for one once
 // per trigger period, set to 1 kHz here).
 //
@@ -73,6 +74,16 @@ class GvCameraServer {
   // from the next packet on: a lossy network for fault tests. 0 (the start)
   // drops none. Throws Errc::InvalidArgument outside 0..1.
   void setPacketLoss(double ratio);
+
+  // A rising edge on the camera's input line Line0 (a part sensor's): while
+  // the client acquires with TriggerMode On and TriggerSource Line0, the
+  // device exposes one frame, as a camera's hardware trigger does; in any
+  // other mode, or when the device does not take it within `timeout_ms`,
+  // nothing happens. Returns whether a frame was triggered. (Aravis's device
+  // knows software triggers only: the edge reaches it as one, and its
+  // TriggerSource reads Software for the instant until it takes it, at most
+  // one trigger period.)
+  bool fireLine(int timeout_ms = 200);
 
   // The constructor's checks of `options` that need no frame filler nor
   // sensor size, for a check before slow work that precedes serving: the
