@@ -53,7 +53,7 @@ int runBenchControl(const BenchControlArgs& a) {
 
 Command addBenchControlCommand(CLI::App& app) {
   auto* command = app.add_subcommand(
-      "bench-control", "Send a request to a running `lfi sim-bench`: part [SCENE], camera off|on, display "
+      "bench-control", "Send a request to a running `lfi sim-bench`: part [SCENE], trigger, camera off|on, display "
                        "unplug|plug|stall|corrupt|short|hang|answer, packet-loss R, status");
   auto a = std::make_shared<BenchControlArgs>();
   command->add_option("request", a->request, "The request's words")->required();

@@ -86,9 +86,15 @@ std::string control(lfi::emulation::ServedBench& bench, const fs::path& intact, 
   std::getline(in >> std::ws, what);
   while (!what.empty() && what.back() == ' ') what.pop_back();
   std::string done;
+  const auto line = [](bool triggered) {
+    return triggered ? "; Line0 triggered a frame"
+                     : "; Line0 fired (no frame: the camera does not acquire with TriggerSource Line0)";
+  };
   if (verb == "part") {
-    bench.putPart(what.empty() ? intact : fs::path(what));
-    done = "part " + bench.part().string();
+    const bool triggered = bench.putPart(what.empty() ? intact : fs::path(what));
+    done = "part " + bench.part().string() + line(triggered);
+  } else if (verb == "trigger" && what.empty()) {
+    done = std::string("trigger") + line(bench.fireLine());
   } else if (verb == "camera" && (what == "off" || what == "on")) {
     if (what == "off") bench.stopCamera();
     else bench.startCamera();
@@ -115,7 +121,7 @@ std::string control(lfi::emulation::ServedBench& bench, const fs::path& intact, 
   } else if (verb == "status" && what.empty()) {
     return "ok " + status(bench);
   } else {
-    return fmt::format("error unknown request '{}' (part [SCENE] | camera off|on | packet-loss R | display "
+    return fmt::format("error unknown request '{}' (part [SCENE] | trigger | camera off|on | packet-loss R | display "
                        "unplug|plug|stall|corrupt|short|hang|answer | status)", request);
   }
   spdlog::info("sim-bench: {}", done);

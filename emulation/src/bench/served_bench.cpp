@@ -186,7 +186,7 @@ std::string ServedBench::displayUri() const {
   return fmt::format("usb:{:04x}:{:04x}/{}", c.vendorId, c.productId, c.serial);
 }
 
-void ServedBench::putPart(const fs::path& scene) {
+bool ServedBench::putPart(const fs::path& scene) {
   Impl& d = *impl_;
   auto imager = std::make_unique<sim::SimImager>(scene);
   imager->setRenderOptions(d.options.renderThreads, {});
@@ -203,15 +203,23 @@ void ServedBench::putPart(const fs::path& scene) {
     fail(Errc::Config, "part '{}': its [display] panel is not the bench's ({} x {} pixels of {} mm); a part's scene "
          "is the bench's with another part in place", scene.string(), panel.panelWidth_px, panel.panelHeight_px,
          panel.pixelPitch_mm);
-  std::lock_guard lock(d.displayMutex);
-  d.replay(imager->bench());
   {
+    std::lock_guard lock(d.displayMutex);
+    d.replay(imager->bench());
     std::lock_guard swap(d.partMutex);
     d.imager = std::move(imager);
     d.part = scene;
   }
-  std::lock_guard counting(d.countersMutex);
-  ++d.counters.partChanges;
+  {
+    std::lock_guard counting(d.countersMutex);
+    ++d.counters.partChanges;
+  }
+  return fireLine();
+}
+
+bool ServedBench::fireLine() {
+  std::lock_guard lock(impl_->devicesMutex);
+  return impl_->camera && impl_->camera->fireLine();
 }
 
 fs::path ServedBench::part() const {

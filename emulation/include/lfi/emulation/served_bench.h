@@ -18,7 +18,9 @@
 // The part under the camera is a scene file: the bench's own (the intact part)
 // or another one with the same camera sensor and display panel (the same
 // bench with a defect part in place). putPart() changes it while serving; the
-// display's state goes with it.
+// display's state goes with it. As on a line, a part in place fires the
+// camera's input line Line0 (its part sensor): a camera acquiring with
+// TriggerSource Line0 exposes one frame of it.
 //
 // Faults for tests: the camera off the network and back (its process killed
 // and restarted, as a client sees it), the display unplugged and plugged in
@@ -70,10 +72,13 @@ class ServedBench {
   std::string cameraUri() const;
   std::string displayUri() const;
 
-  // Puts the part of `scene` under the camera. Throws Errc::Config naming the
-  // file when its camera sensor or display panel differ from the bench's, and
-  // the scene loader's errors; the part in place stays then.
-  void putPart(const std::filesystem::path& scene);
+  // Puts the part of `scene` under the camera, then fires the line; returns
+  // whether that triggered a frame. Throws Errc::Config naming the file when
+  // its camera sensor or display panel differ from the bench's, and the scene
+  // loader's errors; the part in place stays then, and the line does not fire.
+  bool putPart(const std::filesystem::path& scene);
+  // An edge on the camera's Line0 (GvCameraServer::fireLine); false when the camera is off.
+  bool fireLine();
   std::filesystem::path part() const;
 
   // The camera leaves the network (no answer to anything, the stream stops) and comes back as a freshly
