@@ -7,12 +7,15 @@
 
 #include "gige_device_process.h"
 #include "lfi_process.h"
+#include "study_parts.h"
 #include "test_folder.h"
 
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -30,6 +33,12 @@ std::string readText(const fs::path& p) {
   std::stringstream ss;
   ss << in.rdbuf();
   return ss.str();
+}
+
+void replaceOnce(std::string& text, const std::string& from, const std::string& to) {
+  const auto at = text.find(from);
+  ASSERT_NE(at, std::string::npos) << from;
+  text.replace(at, from.size(), to);
 }
 
 class LfiSimBench : public testing::Test {
@@ -141,6 +150,55 @@ wait $run
   EXPECT_EQ(faults, (std::vector<std::string>{"camera", "display", "camera", "display", "camera", "display", "camera",
                                               "display", "camera", "display"}));
   EXPECT_NE(readText(run / "summary.html").find("<td>50</td><td>40</td><td>0</td><td>10</td>"), std::string::npos);
+}
+
+// A line: each part put under the camera fires its input line Line0, and a run whose camera is triggered
+// by that line inspects the part, one image each. The records follow the parts in the order the line
+// brought them, with each part's verdict. The reference is taken with software triggers (the trigger is
+// not part of what a reference depends on); a part is put only once the camera takes the edge (it
+// acquires once the run has shown the reference) and the record of the one before is written.
+TEST_F(LfiSimBench, ALineTriggeredRunInspectsEachPartTheLineBringsInItsOrder) {
+  std::string text = readText(hil_);
+  replaceOnce(text, "grab_timeout_ms", "trigger = \"line\"\ntrigger_line = \"Line0\"\ngrab_timeout_ms");
+  replaceOnce(text, "frames = 16", "frames = 1");  // (one edge, one frame)
+  replaceOnce(text, "on_device_loss = \"wait\"", "on_device_loss = \"stop\"");
+  const fs::path line = folder_.write("line.toml", text);
+  const std::string sceneText = readText(source_ / "data" / "scenes" / "inspection_bench.toml");
+  const std::string lfi = shellQuoted(LFI_EXECUTABLE);
+  const fs::path run = folder_ / "run", records = run / "records.jsonl";
+  std::string script = fmt::format(R"sh(set -u
+{0} -q capture {1} || exit 10
+{0} -q run {2} --parts {3} --out {4} & run=$!
+count() {{ if [ -f {5} ]; then wc -l < {5}; else echo 0; fi; }}
+bring() {{ i=0; until {0} -q bench-control part "$1" | grep -q "triggered a frame"; do i=$((i+1)); [ $i -gt 600 ] && exit 12; sleep 0.1; done; }}
+until_records() {{ i=0; while [ "$(count)" -lt "$1" ]; do i=$((i+1)); [ $i -gt 1200 ] && exit 13; sleep 0.05; done; }}
+)sh", lfi, shellQuoted(hil_.string()), shellQuoted(line.string()), lfi::testing_support::studyParts().size(),
+                                   shellQuoted(run.string()), shellQuoted(records.string()));
+  int k = 0;
+  for (const auto& part : lfi::testing_support::studyParts()) {
+    const fs::path scene = folder_.write(part.name + ".toml", lfi::testing_support::studyPartScene(sceneText, part));
+    script += fmt::format("bring {}\nuntil_records {}\n", shellQuoted(scene.string()), ++k);
+  }
+  script += "wait $run\n";
+  const auto r = simBench(script);
+  ASSERT_EQ(r.status, 0) << r.output;
+  std::vector<nlohmann::json> lines;
+  std::ifstream in(records);
+  for (std::string l; std::getline(in, l);) lines.push_back(nlohmann::json::parse(l, nullptr, false));
+  const auto parts = lfi::testing_support::studyParts();
+  ASSERT_EQ(lines.size(), parts.size()) << r.output;
+  for (size_t i = 0; i < parts.size(); ++i) {
+    SCOPED_TRACE(parts[i].name);
+    ASSERT_FALSE(lines[i].is_discarded());
+    EXPECT_EQ(lines[i]["status"], "inspected") << lines[i].dump();
+    EXPECT_EQ(lines[i]["verdict"], parts[i].intact ? "pass" : "fail") << lines[i].dump();
+    for (const auto& [x, y] : parts[i].defects_mm) {
+      double best = 1e9;
+      for (const auto& d : lines[i]["defects"])
+        best = std::min(best, std::hypot(d["centroid_mm"][0].get<double>() - x, d["centroid_mm"][1].get<double>() - y));
+      EXPECT_LE(best, parts[i].within_mm) << lines[i].dump();
+    }
+  }
 }
 
 TEST_F(LfiSimBench, TheProgramsExitStatusIsTheBenchsAndTheEnvironmentNamesTheDevices) {
