@@ -137,21 +137,24 @@ void Controller::requireShowing() {
 cv::Mat Controller::inspect() {
   // Frames exposed before the last emit() wait in the camera's buffers (a
   // free-running camera fills them; a late triggered frame may too): start a
-  // new acquisition, so that every frame averaged is exposed after it. The
-  // stream stays whoever's it was.
+  // new acquisition, so that every frame averaged is exposed after it, unless
+  // the stream is a software-triggered one of ours that every trigger has been
+  // answered on (it holds no frame). The stream stays whoever's it was.
   // Frames are averaged as they arrive: a few buffers beyond them ride out a
   // stall of this thread; more would only hold memory (a 4K Mono16 frame is
   // 16 MB). A frame lost to a full pool is an underrun, not a bad frame.
   const int buffers = std::clamp(options_.frames, 2, 14) + 2;
-  const bool restart = camera_.state() == Camera::State::Streaming && staleFrames_;
-  if (restart || camera_.state() == Camera::State::Configured)
-    std::this_thread::sleep_until(shown_ + options_.settle);  // the panel settles before the stream (re)starts
-  if (restart) {
-    camera_.stop();
+  const bool streaming = camera_.state() == Camera::State::Streaming;
+  const bool empty = streaming && ownStream_ && ownSoftware_ && pendingFrames_ == 0;
+  const bool restart = streaming && staleFrames_ && !empty;
+  if ((streaming && staleFrames_) || camera_.state() == Camera::State::Configured)
+    std::this_thread::sleep_until(shown_ + options_.settle);  // the panel settles before the first exposure
+  if (restart || camera_.state() == Camera::State::Configured) {
+    if (restart) camera_.stop();
+    else startedCamera_ = true;
     camera_.start(buffers);
-  } else if (camera_.state() == Camera::State::Configured) {
-    camera_.start(buffers);
-    startedCamera_ = true;
+    ownStream_ = true;
+    pendingFrames_ = 0;
   }
   staleFrames_ = false;
   if (camera_.state() != Camera::State::Streaming)
@@ -159,6 +162,7 @@ cv::Mat Controller::inspect() {
          toString(camera_.state()));
   const CameraSettings settings = camera_.settings();
   const bool software = settings.trigger == TriggerMode::Software;
+  ownSoftware_ = software;  // (a streaming camera's settings do not change)
   // A frame takes its exposure, and as long again for readout and transfer at most, beyond the option's wait.
   // (At most a day more, checkedGrabTimeout's cap; none for an exposure that is not a number.)
   const double extra_ms = std::min(std::max(0.0, 2 * settings.exposure_us / 1000), 86'400'000.0);
@@ -168,8 +172,12 @@ cv::Mat Controller::inspect() {
   int good = 0, bad = 0, timeouts = 0;
   Frame frame;
   while (good < options_.frames) {
-    if (software) camera_.softwareTrigger();
+    if (software) {
+      camera_.softwareTrigger();
+      ++pendingFrames_;
+    }
     camera_.grabInto(frame, timeout);
+    if (software && frame.status != FrameStatus::Timeout) pendingFrames_ = std::max(0, pendingFrames_ - 1);
     if (frame.status != FrameStatus::Complete) {
       (frame.status == FrameStatus::Timeout ? timeouts : bad) += 1;
       if (bad + timeouts > options_.retries) {

@@ -51,11 +51,15 @@ material = "absorber"
 }
 
 // A camera that passes everything to another and records the timestamps of
-// the complete frames grabbed through it: what the controller averaged.
+// the complete frames grabbed through it (what the controller averaged) and
+// the stream starts; `loseNextFrame` makes the next grab time out without
+// taking the frame, which stays in the stream (a frame late beyond the timeout).
 class RecordingCamera : public Camera {
 public:
   explicit RecordingCamera(Camera& inner) : inner_(inner) {}
   std::vector<std::int64_t> timestamps_ns;
+  int starts = 0;
+  bool loseNextFrame = false;
 
   State state() const override { return inner_.state(); }
   void open() override { inner_.open(); }
@@ -63,10 +67,17 @@ public:
   CameraInfo info() const override { return inner_.info(); }
   void configure(const CameraSettings& settings) override { inner_.configure(settings); }
   CameraSettings settings() const override { return inner_.settings(); }
-  void start(int bufferCount) override { inner_.start(bufferCount); }
+  void start(int bufferCount) override {
+    inner_.start(bufferCount);
+    ++starts;
+  }
   void stop() override { inner_.stop(); }
   void softwareTrigger() override { inner_.softwareTrigger(); }
   void grabInto(Frame& frame, std::chrono::milliseconds timeout) override {
+    if (std::exchange(loseNextFrame, false)) {
+      frame.status = FrameStatus::Timeout;
+      return;
+    }
     inner_.grabInto(frame, timeout);
     if (frame.status == FrameStatus::Complete) timestamps_ns.push_back(frame.timestamp_ns);
   }
@@ -300,6 +311,33 @@ TEST_F(ControllerTest, FramesAfterAnEmitStartOnlyAfterTheSettleTime) {
   options.settle = std::chrono::milliseconds(-1);
   EXPECT_TRUE(throwsError([&] { Controller(*rig.capture, *rig.display, *rig.camera, options); },
                           Errc::InvalidArgument, {"settle"}));
+}
+
+// A software-triggered stream holds no frame once every trigger has been
+// answered: a new panel needs no restart of it (tens of ms on a GigE camera).
+// One whose trigger went unanswered may get the late frame of the old panel:
+// it is restarted, and the image is of the new panel.
+TEST_F(ControllerTest, ASoftwareTriggeredStreamRestartsForANewPanelOnlyAfterAnUnansweredTrigger) {
+  const Rig rig = intactRig(0);
+  CameraSettings settings = rig.camera->settings();
+  settings.trigger = TriggerMode::Software;
+  rig.camera->configure(settings);
+  RecordingCamera camera(*rig.camera);
+  Controller controller(*rig.capture, *rig.display, camera, {.frames = 2});
+  const LightField reference = controller.captureReference();
+  controller.emit(reference);
+  const double lit = lensAndCentre(controller.inspect()).first;
+  EXPECT_EQ(camera.starts, 1);
+  controller.emit(reference);
+  EXPECT_NEAR(lensAndCentre(controller.inspect()).first, lit, 0.05 * lit);
+  EXPECT_EQ(camera.starts, 1) << "every trigger was answered: the stream holds nothing of the old panel";
+  camera.loseNextFrame = true;  // (its frame, of the lit panel, stays in the stream)
+  controller.inspect();
+  const DisplayInfo info = rig.display->info();
+  controller.showPanel(cv::Mat::zeros(info.panelHeight_px, info.panelWidth_px, CV_8UC1));
+  const double dark = lensAndCentre(controller.inspect()).first;
+  EXPECT_EQ(camera.starts, 2) << "a trigger went unanswered: the stream restarts";
+  EXPECT_LT(dark, 0.05 * lit) << "the late frame of the lit panel was averaged into the dark one";
 }
 
 // A camera the caller started stays the caller's after the controller restarted it.

@@ -80,8 +80,12 @@ public:
   // that was streaming when the display changed is stopped and started again
   // (with the same small pool; its statistics start again, its frame ids go
   // on as the backend numbers them),
-  // dropping the frames it had taken of the old panel. Returns the mean of
-  // `frames` complete frames, CV_32FC1,
+  // dropping the frames it had taken of the old panel — unless it is
+  // software-triggered on a stream this controller started and every frame
+  // it triggered has come (complete or not): such a stream holds no frame,
+  // and restarting a GigE camera's acquisition takes tens of milliseconds.
+  // (The controller takes a stream it started to stay its own.) Returns the
+  // mean of `frames` complete frames, CV_32FC1,
   // in the camera's digital numbers. More than `retries` bad frames throw
   // Errc::Device (Errc::Timeout when nothing arrived at all).
   cv::Mat inspect();
@@ -107,6 +111,9 @@ private:
   ControllerOptions options_;
   bool startedCamera_ = false;
   bool staleFrames_ = false;  // the display changed since the stream inspect() last used started
+  bool ownStream_ = false;    // the camera's stream is one inspect() started
+  bool ownSoftware_ = false;  // ... software-triggered
+  int pendingFrames_ = 0;     // software triggers on it that no frame has answered yet
   std::chrono::steady_clock::time_point shown_;  // when the last emit() returned
   std::optional<std::uint32_t> shownSequence_;    // and the frame it showed
   double white_ = 0;
