@@ -31,7 +31,7 @@ constexpr std::size_t kNameSize = 32;
 // client still frees the device soon.
 constexpr guint32 kHeartbeatTimeoutOffset = 0x0938;
 constexpr guint32 kHeartbeatTimeout_ms = 10'000;
-constexpr double kTriggerCheckRate_hz = 1000;
+constexpr double kTriggerCheckRate_hz = 200;
 
 guint32 readRegister(ArvFakeCamera* camera, guint32 address) {
   guint32 value = 0;
@@ -208,7 +208,10 @@ GvCameraServer::GvCameraServer(const GvCameraServerOptions& options, ServedFrame
   arv_fake_camera_write_register(camera, ARV_FAKE_CAMERA_REGISTER_HEIGHT, height);
   arv_fake_camera_write_register(camera, kHeartbeatTimeoutOffset, kHeartbeatTimeout_ms);
   // In trigger mode the device looks for a software trigger once per period
-  // of this rate (Aravis's default, 25 Hz, adds 20 ms to each triggered frame on average).
+  // of this rate (Aravis's default, 25 Hz, adds 20 ms to each triggered frame
+  // on average). Its loop waits in whole milliseconds and spins through the
+  // last one of each period: at 1 kHz it would spin all the time and take the
+  // CPU its client needs (on 2 cores the frame then reaches the client no sooner).
   arv_fake_camera_set_trigger_frequency(camera, kTriggerCheckRate_hz);
   arv_fake_camera_set_fill_pattern(camera, &Impl::fill, impl_.get());
 }

@@ -13,8 +13,8 @@
 // (µs, integer, 10..10 000 000), GainRaw (0..10, integer), AcquisitionFrameRate
 // (1..1000 Hz), TriggerMode/TriggerSource (Software, Line0: fireLine()). The
 // sensor size is ours.
-// A software trigger is seen within 1 ms (Aravis's device looks for one once
-// per trigger period, set to 1 kHz here).
+// A software trigger is seen within 5 ms (Aravis's device looks for one once
+// per trigger period, set to 200 Hz here).
 //
 // Frames are made on Aravis's device thread, which also answers control
 // requests: a filler slower than a few hundred ms makes clients time out.
@@ -82,7 +82,7 @@ class GvCameraServer {
   // nothing happens. Returns whether a frame was triggered. (Aravis's device
   // knows software triggers only: the edge reaches it as one, and its
   // TriggerSource reads Software for the instant until it takes it, at most
-  // one trigger period.)
+  // one trigger period, 5 ms.)
   bool fireLine(int timeout_ms = 200);
 
   // The constructor's checks of `options` that need no frame filler nor
