@@ -4,6 +4,7 @@
 #include "lfi/emulation/served_bench.h"
 
 #include "lfi/core/error.h"
+#include "lfi/drivers/driver_trace.h"
 #include "lfi/drivers/usb/usb_display_protocol.h"
 #include "lfi/sim/devices/sim_camera.h"
 
@@ -112,9 +113,11 @@ struct ServedBench::Impl {
              frame.rows, frame.type(), image.cols, image.rows, image.type());
       frame.copyTo(image);
     }
+    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    traceDriverCall("served", options.camera.serial, "frame", fmt::format("{} in {:.3f} ms", request.frameId, 1e3 * seconds));
     std::lock_guard lock(countersMutex);
     ++counters.framesServed;
-    counters.frameSeconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    counters.frameSeconds += seconds;
   }
 
   void startCamera() {
@@ -130,11 +133,12 @@ struct ServedBench::Impl {
   // The display's observer: each change goes to the part's bench, before the device answers the request.
   EmulatedUsbDisplay::PanelObserver observer() {
     return {.presented =
-                [this](const cv::Mat& presented, std::uint32_t) {
+                [this](const cv::Mat& presented, std::uint32_t sequence) {
                   std::lock_guard lock(displayMutex);
                   panel = presented;
                   lit = true;
                   bench().showPanel(panel);
+                  traceDriverCall("served", options.display.serial, "present", std::to_string(sequence));
                   std::lock_guard counting(countersMutex);
                   ++counters.panelsPresented;
                 },
