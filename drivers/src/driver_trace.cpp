@@ -22,7 +22,7 @@ namespace lfi {
 namespace {
 
 constexpr char kHeader[] = "# lfi driver trace, version 1: time (s since the Unix epoch), pid, layer "
-                           "(camera|display|aravis|usb), device, call, detail; tab-separated\n";
+                           "(camera|display|aravis|usb|served), device, call, detail; tab-separated\n";
 
 // The trace file, opened at the first call; -1 when the trace is off.
 int traceFile() {

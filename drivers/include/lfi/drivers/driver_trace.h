@@ -12,9 +12,11 @@
 //   layer    camera | display: a call of the Camera or Display interface, on
 //            any backend (openCamera and openDisplay wrap the device);
 //            aravis | usb: what the real backend then did: an Aravis call and
-//            its arguments, a USB request by name, a bulk transfer's bytes
+//            its arguments, a USB request by name, a bulk transfer's bytes;
+//            served: the device side of a simulated bench (`lfi sim-bench`):
+//            a frame made, a panel taken
 //   device   the URI the device was opened by (camera, display), the
-//            backend's name for it (aravis, usb)
+//            backend's name for it (aravis, usb), its serial (served)
 //   call     the method or request
 //   detail   arguments and results
 //
