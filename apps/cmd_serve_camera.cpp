@@ -55,22 +55,8 @@ void serveCamera(const fs::path& sceneFile, lfi::GvCameraServerOptions options, 
   const std::string device = "lfi-served:" + sceneFile.string();
   cv::Mat frame;
   lfi::GvCameraServer server(options, [&](const lfi::ServedFrameRequest& request, cv::Mat& image) {
-    lfi::CameraSettings s;
-    s.exposure_us = request.exposure_us;
-    s.gain = request.gain;
-    s.pixelFormat = *request.pixelFormat;
-    s.binning = request.binning;
-    s.roiX_px = request.offsetX_px;
-    s.roiY_px = request.offsetY_px;
-    s.roiWidth_px = request.width_px;
-    s.roiHeight_px = request.height_px;
-    s = imager.resolve(s, device);
-    imager.capture(s, request.frameId, frame);
-    // Into the outgoing buffer: copyTo would reallocate `image` for another size or type, and a black frame go out.
-    if (frame.size() != image.size() || frame.type() != image.type())
-      lfi::fail(lfi::Errc::Device, "the frame made is {} x {} (type {}), the buffer {} x {} (type {})", frame.cols,
-                frame.rows, frame.type(), image.cols, image.rows, image.type());
-    frame.copyTo(image);
+    imager.capture(imager.resolve(request.settings(), device), request.frameId, frame);
+    lfi::writeServedFrame(frame, image);
   });
   fmt::print("{}\n", server.deviceId());
   std::fflush(stdout);

@@ -227,6 +227,26 @@ std::string GvCameraServer::deviceId() const {
   return impl_->deviceId();
 }
 
+CameraSettings ServedFrameRequest::settings() const {
+  CameraSettings s;
+  s.exposure_us = exposure_us;
+  s.gain = gain;
+  s.pixelFormat = pixelFormat.value();
+  s.binning = binning;
+  s.roiX_px = offsetX_px;
+  s.roiY_px = offsetY_px;
+  s.roiWidth_px = width_px;
+  s.roiHeight_px = height_px;
+  return s;
+}
+
+void writeServedFrame(const cv::Mat& frame, cv::Mat& image) {
+  if (frame.size() != image.size() || frame.type() != image.type())
+    fail(Errc::Device, "the frame made is {} x {} (type {}), the buffer {} x {} (type {})", frame.cols, frame.rows,
+         frame.type(), image.cols, image.rows, image.type());
+  frame.copyTo(image);
+}
+
 bool GvCameraServer::fireLine(int timeout_ms) {
   std::lock_guard lock(impl_->lineMutex);
   ArvFakeCamera* camera = impl_->camera;

@@ -96,25 +96,13 @@ struct ServedBench::Impl {
     const auto start = std::chrono::steady_clock::now();
     {
       std::lock_guard lock(partMutex);
-      CameraSettings s;
-      s.exposure_us = request.exposure_us;
-      s.gain = request.gain;
-      s.pixelFormat = *request.pixelFormat;
-      s.binning = request.binning;
-      s.roiX_px = request.offsetX_px;
-      s.roiY_px = request.offsetY_px;
-      s.roiWidth_px = request.width_px;
-      s.roiHeight_px = request.height_px;
-      s = imager->resolve(s, "served camera '" + options.camera.serial + "'");
-      imager->capture(s, request.frameId, frame);
-      // Into the outgoing buffer: copyTo would reallocate `image` for another size or type, and a black frame go out.
-      if (frame.size() != image.size() || frame.type() != image.type())
-        fail(Errc::Device, "the frame made is {} x {} (type {}), the buffer {} x {} (type {})", frame.cols,
-             frame.rows, frame.type(), image.cols, image.rows, image.type());
-      frame.copyTo(image);
+      imager->capture(imager->resolve(request.settings(), "served camera '" + options.camera.serial + "'"),
+                      request.frameId, frame);
+      writeServedFrame(frame, image);
     }
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    traceDriverCall("served", options.camera.serial, "frame", fmt::format("{} in {:.3f} ms", request.frameId, 1e3 * seconds));
+    traceDriverCall("served", options.camera.serial, "frame",
+                    fmt::format("{} in {:.3f} ms", request.frameId, 1e3 * seconds));
     std::lock_guard lock(countersMutex);
     ++counters.framesServed;
     counters.frameSeconds += seconds;

@@ -42,7 +42,16 @@ struct ServedFrameRequest {
   std::optional<PixelFormat> pixelFormat;  // unset for a format we do not serve
   double exposure_us = 0;
   double gain = 0;  // GainRaw
+
+  // As camera settings (exposure, gain, format, binning, region; the rest
+  // default). Requires pixelFormat: the filler is called only with one.
+  CameraSettings settings() const;
 };
+
+// Copies a frame made for a request into the outgoing buffer `image`. Throws
+// Errc::Device for another size or type (copyTo would reallocate the buffer's
+// wrapper, and a black frame go out).
+void writeServedFrame(const cv::Mat& frame, cv::Mat& image);
 
 // Writes one frame: `image` is height x width, CV_8UC1 (Mono8) or CV_16UC1
 // (Mono16), and wraps the outgoing buffer (zeroed). Runs on Aravis's device
