@@ -12,6 +12,7 @@
 #include "lfi_process.h"
 #include "study_parts.h"
 #include "test_folder.h"
+#include "text_edit.h"
 
 #include <fmt/format.h>
 #include <gtest/gtest.h>
@@ -30,28 +31,13 @@
 namespace {
 
 namespace fs = std::filesystem;
+using lfi::testing_support::readText;
+using lfi::testing_support::replaceOnce;
+using lfi::testing_support::replaceAll;
 using lfi::testing_support::runLfi;
 using lfi::testing_support::shellQuoted;
 using lfi::testing_support::StudyPart;
 using lfi::testing_support::studyParts;
-
-std::string readText(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
-
-void replaceOnce(std::string& text, const std::string& from, const std::string& to) {
-  const auto at = text.find(from);
-  ASSERT_NE(at, std::string::npos) << from;
-  text.replace(at, from.size(), to);
-}
-
-void replaceAll(std::string& text, const std::string& from, const std::string& to) {
-  ASSERT_NE(text.find(from), std::string::npos) << from;
-  for (size_t at = 0; (at = text.find(from, at)) != std::string::npos; at += to.size()) text.replace(at, from.size(), to);
-}
 
 struct Inspection {
   int status = -1;  // lfi inspect's: 0 pass, 3 fail

@@ -5,7 +5,9 @@
 // and bad bench files, references and arguments get errors that name them.
 
 #include "lfi_process.h"
+#include "study_parts.h"
 #include "test_folder.h"
+#include "text_edit.h"
 
 #include <fmt/format.h>
 #include <gtest/gtest.h>
@@ -22,25 +24,14 @@
 namespace {
 
 namespace fs = std::filesystem;
+using lfi::testing_support::readText;
+using lfi::testing_support::replaceAll;
 using lfi::testing_support::runLfi;
 using lfi::testing_support::shellQuoted;
 
-std::string readText(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
-
-void replaceAll(std::string& text, const std::string& from, const std::string& to) {
-  ASSERT_NE(text.find(from), std::string::npos) << from;
-  for (size_t at = 0; (at = text.find(from, at)) != std::string::npos; at += to.size()) text.replace(at, from.size(), to);
-}
-
-// The study's lens (data/scenes/inspection_bench.toml) seen by the bench: 0.5 mm object pixels.
-constexpr double kPixel_mm = 0.5;
-// Its camera-side face: z = t/2 - (R - sqrt(R² - r²)) at radial distance r (R = 51.5, t = 5).
-double cameraFaceZ(double r) { return 2.5 - (51.5 - std::sqrt(51.5 * 51.5 - r * r)); }
+// The study's lens (data/scenes/inspection_bench.toml) as the bench sees it (study_parts.h).
+constexpr double kPixel_mm = lfi::testing_support::kInspectionPixel_mm;
+using lfi::testing_support::inspectionLensFaceZ;
 
 class LfiInspectionCli : public testing::Test {
 protected:
@@ -151,7 +142,7 @@ TEST_P(LfiInspectionCliEachCapture, EveryDefectOfTheStudyIsFoundBlindWhereItIs) 
   }
   {  // A 2 mm sphere cut out of the camera-side face 6 mm off axis: wider than three pixels, so inside its outline.
     const std::string cut =
-        fmt::format("[[object.cut]]\nposition_mm = [6, 0, {:.6f}]\nradius_mm = 2\n", cameraFaceZ(6));
+        fmt::format("[[object.cut]]\nposition_mm = [6, 0, {:.6f}]\nradius_mm = 2\n", inspectionLensFaceZ(6));
     const auto [status, record] = inspect(partScene("cut", {}, cut));
     EXPECT_EQ(status, 3);
     ASSERT_FALSE(record["defects"].empty());

@@ -9,6 +9,7 @@
 #include "lfi_process.h"
 #include "study_parts.h"
 #include "test_folder.h"
+#include "text_edit.h"
 
 #include <fmt/format.h>
 #include <gtest/gtest.h>
@@ -25,21 +26,10 @@
 namespace {
 
 namespace fs = std::filesystem;
+using lfi::testing_support::readText;
+using lfi::testing_support::replaceOnce;
 using lfi::testing_support::runLfi;
 using lfi::testing_support::shellQuoted;
-
-std::string readText(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
-
-void replaceOnce(std::string& text, const std::string& from, const std::string& to) {
-  const auto at = text.find(from);
-  ASSERT_NE(at, std::string::npos) << from;
-  text.replace(at, from.size(), to);
-}
 
 class LfiSimBench : public testing::Test {
 protected:

@@ -12,6 +12,7 @@
 #include "lfi_test_support.h"
 #include "study_parts.h"
 #include "test_folder.h"
+#include "text_edit.h"
 
 #include "lfi/controller/bench_devices.h"
 #include "lfi/controller/coded_capture.h"
@@ -39,15 +40,9 @@ namespace lfi {
 namespace {
 
 namespace fs = std::filesystem;
+using testing_support::readText;
 using testing_support::StudyPart;
 using testing_support::studyParts;
-
-std::string readText(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
 
 enum class Wiring { AllSim, ServedCamera, ServedDisplay };
 void PrintTo(Wiring w, std::ostream* os) {
