@@ -26,6 +26,7 @@
 #include <cstring>
 #include <fstream>
 #include <memory>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -156,11 +157,11 @@ void runUnderPreload() {
 // testbed), the devices' URIs and the control socket, and the caller's TMPDIR
 // (ours is the testbed's private one).
 std::vector<std::string> childEnvironment(const lfi::emulation::ServedBench& bench, const fs::path& control,
-                                          const char* callerTmpDir) {
+                                          const std::optional<std::string>& callerTmpDir) {
   std::vector<std::string> env;
   for (char** e = environ; *e; ++e)
     if (std::strncmp(*e, "TMPDIR=", 7) != 0 && std::strncmp(*e, "LFI_SIM_BENCH_", 14) != 0) env.emplace_back(*e);
-  if (callerTmpDir) env.push_back(std::string("TMPDIR=") + callerTmpDir);
+  if (callerTmpDir) env.push_back("TMPDIR=" + *callerTmpDir);
   env.push_back(std::string(kControlSocketVariable) + "=" + control.string());
   env.push_back("LFI_SIM_BENCH_CAMERA=" + bench.cameraUri());
   env.push_back("LFI_SIM_BENCH_DISPLAY=" + bench.displayUri());
@@ -179,8 +180,8 @@ int runSimBench(SimBenchArgs a) {
   const BenchFile file = readBenchFile(a.bench);
   const fs::path intact = benchScene(file);
   a.options.scene = intact;
-  const char* tmp = std::getenv("TMPDIR");
-  const std::string callerTmpDir = tmp ? tmp : "";
+  std::optional<std::string> callerTmpDir;
+  if (const char* tmp = std::getenv("TMPDIR")) callerTmpDir = tmp;
   lfi::emulation::usePrivateTmpDir();  // (the testbed's files, removed at exit)
   lfi::emulation::ServedBench bench(a.options);
   if (!a.part.empty()) bench.putPart(a.part);
@@ -191,7 +192,7 @@ int runSimBench(SimBenchArgs a) {
 
   pid_t child = 0;
   if (!a.command.empty()) {
-    const std::vector<std::string> env = childEnvironment(bench, socket, tmp ? callerTmpDir.c_str() : nullptr);
+    const std::vector<std::string> env = childEnvironment(bench, socket, callerTmpDir);
     std::vector<char*> argv, envp;
     for (const std::string& s : a.command) argv.push_back(const_cast<char*>(s.c_str()));
     argv.push_back(nullptr);
