@@ -87,9 +87,10 @@ wait_limit_s = 60
   fs::path served_, hil_;
 };
 
-// Each fault is injected once the run has gone 3 parts past the last one (so that it hits a run in full
-// flow, and never the same outage twice) and lasts 1 s, longer than the camera's grab timeout and the
-// run's first back-off: the part in hand must see it. The run then waits for the device with its
+// Each fault is injected once the run has recorded the one before and inspected a part since (so that
+// it hits a run in full flow, and never the same outage twice), at part 2, 6, 10, ... at the earliest,
+// and lasts 1 s, longer than the camera's grab timeout and the run's first back-off: the part in hand
+// must see it. The run then waits for the device with its
 // back-off and goes on. Every part is the intact one, so an image taken while the display was dark
 // would fail: none may be judged.
 TEST_F(LfiSimBench, ARunOfFiftyPartsRidesOutTheCameraGoneAndTheDisplayUnpluggedFiveTimesEach) {
@@ -99,16 +100,22 @@ TEST_F(LfiSimBench, ARunOfFiftyPartsRidesOutTheCameraGoneAndTheDisplayUnpluggedF
 {0} -q capture {1} || exit 10
 {0} -q run {1} --parts 50 --out {2} & run=$!
 count() {{ if [ -f {3} ]; then wc -l < {3}; else echo 0; fi; }}
-until_records() {{ i=0; while [ "$(count)" -lt "$1" ]; do i=$((i+1)); [ $i -gt 2400 ] && exit 12; sleep 0.05; done; }}
-n=3
+errors() {{ if [ -f {3} ]; then grep -c '"status":"error"' {3} || true; else echo 0; fi; }}
+recovered() {{ tail -n 1 {3} 2>/dev/null | grep -q '"status":"inspected"'; }}
+# Fault k (from 0) once the run is at part 2 + 4k or beyond, has recorded the k faults before, and
+# inspected a part since the last: never two faults in one outage, and all ten well within 50 parts.
+k=0
 for device in camera display camera display camera display camera display camera display; do
-  until_records $n
+  i=0
+  until [ "$(count)" -ge $((2 + 4 * k)) ] && [ "$(errors)" -eq $k ] && recovered; do
+    i=$((i+1)); [ $i -gt 2400 ] && exit 12; sleep 0.05
+  done
   if [ $device = camera ]; then
     {0} -q bench-control camera off >/dev/null || exit 11; sleep 1; {0} -q bench-control camera on >/dev/null || exit 11
   else
     {0} -q bench-control display unplug >/dev/null || exit 11; sleep 1; {0} -q bench-control display plug >/dev/null || exit 11
   fi
-  n=$(( $(count) + 4 ))
+  k=$((k+1))
 done
 wait $run
 )sh", lfi, bench, shellQuoted(run.string()), shellQuoted(records.string()));
