@@ -7,7 +7,6 @@
 #include <fmt/format.h>
 #include <opencv2/core.hpp>
 
-#include <algorithm>
 #include <filesystem>
 
 namespace lfi {

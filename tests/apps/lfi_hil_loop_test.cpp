@@ -20,7 +20,6 @@
 
 #include <cmath>
 #include <filesystem>
-#include <fstream>
 #include <map>
 #include <set>
 #include <sstream>
@@ -99,8 +98,6 @@ protected:
       replaceOnce(text, "uri = \"coded:?distance_mm=30\"",
                   "uri = \"sim:" + scenes + "inspection_bench.toml?distance_mm=30\"");
     hilBench_ = folder_.write("hil-bench.toml", text);
-    // The sim-bench that serves them: the in-process bench's scene.
-    servedBench_ = simBench_;
     const std::string scene = readText(source_ / "data" / "scenes" / "inspection_bench.toml");
     for (const StudyPart& part : studyParts())
       scenes_[part.name] = folder_.write(part.name + ".toml", lfi::testing_support::studyPartScene(scene, part));
@@ -131,7 +128,7 @@ protected:
                 out + ".status\n";
     }
     const fs::path file = folder_.write("hil.sh", script);
-    const auto r = runLfi("-q sim-bench " + shellQuoted(servedBench_.string()) + " -- sh " + shellQuoted(file.string()),
+    const auto r = runLfi("-q sim-bench " + shellQuoted(simBench_.string()) + " -- sh " + shellQuoted(file.string()),
                           true, "LFI_DRIVER_TRACE=" + shellQuoted(remoteTrace().string()) +
                                     " timeout --foreground --signal=KILL 600 ");
     EXPECT_EQ(r.status, 0) << r.output;
@@ -202,7 +199,7 @@ protected:
   const fs::path source_ = LFI_SOURCE_DIR;
   lfi::testing_support::LoopbackGigeLock lock_;  // (sim-bench serves on 127.0.0.1:3956)
   lfi::testing_support::TestFolder folder_{"lfi-hil-loop"};
-  fs::path simBench_, hilBench_, servedBench_;
+  fs::path simBench_, hilBench_;  // (sim-bench serves the in-process bench's scene)
   std::map<std::string, fs::path> scenes_;
 };
 
