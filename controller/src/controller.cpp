@@ -51,6 +51,11 @@ Controller::Controller(LightFieldCapture& capture, Display& display, Camera& cam
     fail(Errc::InvalidArgument, "controller: settle = {} ms must be >= 0", options_.settle.count());
 }
 
+BenchProbe& Controller::probe() {
+  if (!probe_) probe_ = std::make_unique<Probe>(*this);
+  return *probe_;
+}
+
 Controller::~Controller() {
   if (startedCamera_ && camera_.state() == Camera::State::Streaming) {
     try {
@@ -68,8 +73,7 @@ LightField Controller::captureReference(const Progress& progress) {
     if (progress) progress("capture", f);
   };
   if (!capture_.measuresThroughBench()) return capture_.capture(report);
-  Probe probe(*this);
-  capture_.setBench(&probe);
+  capture_.setBench(&probe());
   struct Detach {
     LightFieldCapture& capture;
     ~Detach() { capture.setBench(nullptr); }

@@ -20,6 +20,8 @@ struct SceneCamera {
   double pixelPitch_mm = 0.5;
   int width_px = 64;
   int height_px = 64;
+  double positionX_mm = 0;  // the camera's axis across the plane
+  double positionY_mm = 0;
   double positionZ_mm = 200;
   double fullWell_e = 20000;
   double readNoise_e = 5;
@@ -42,7 +44,7 @@ stop_diameter_mm = {}
 pixel_pitch_mm = {}
 width = {}
 height = {}
-position_mm = [0, 0, {}]
+position_mm = [{}, {}, {}]
 rotation_deg = [180, 0, 0]
 [camera_sensor]
 full_well_e = {}
@@ -50,8 +52,8 @@ read_noise_e = {}
 bit_depth = {}
 )",
                                  c.samplesPerPixel, c.seed, c.focalLength_mm, c.imageDistance_mm, c.stopDiameter_mm,
-                                 c.pixelPitch_mm, c.width_px, c.height_px, c.positionZ_mm, c.fullWell_e,
-                                 c.readNoise_e, c.bitDepth);
+                                 c.pixelPitch_mm, c.width_px, c.height_px, c.positionX_mm, c.positionY_mm,
+                                 c.positionZ_mm, c.fullWell_e, c.readNoise_e, c.bitDepth);
   if (c.electronsPerUnitPerUs) text += fmt::format("electrons_per_unit_per_us = {}\n", *c.electronsPerUnitPerUs);
   return text;
 }

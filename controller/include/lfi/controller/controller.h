@@ -29,6 +29,7 @@
 
 #include <chrono>
 #include <functional>
+#include <memory>
 #include <optional>
 
 namespace lfi {
@@ -97,6 +98,10 @@ public:
   // Steps 1-3.
   cv::Mat run(const Progress& progress = {});
 
+  // The bench as a measurement through it sees it (light_field_capture.h):
+  // take(levels) is showPanel(levels) then inspect().
+  BenchProbe& probe();
+
   // The drive level scale used by the last emit(): radiance shown at full
   // level (1 after showPanel(): the levels are the drive).
   double white() const { return white_; }
@@ -118,6 +123,7 @@ private:
   std::optional<std::uint32_t> shownSequence_;    // and the frame it showed
   double white_ = 0;
   cv::Mat referencePanel_;
+  std::unique_ptr<Probe> probe_;
 };
 
 }  // namespace lfi

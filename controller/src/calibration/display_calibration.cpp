@@ -1,0 +1,242 @@
+#include "lfi/controller/display_calibration.h"
+
+#include "lfi/calib/coded_patterns.h"
+#include "lfi/calib/coded_reference.h"
+#include "lfi/core/error.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <map>
+
+namespace lfi {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double seconds(Clock::duration d) {
+  return std::chrono::duration<double>(d).count();
+}
+
+// Panel pixel (col, row) ↔ the display frame (display.h): the pixel's centre.
+Vec2 pixelCentre(const DisplayInfo& d, double col, double row) {
+  return {(col + 0.5 - 0.5 * d.panelWidth_px) * d.pixelPitch_mm,
+          (0.5 * d.panelHeight_px - row - 0.5) * d.pixelPitch_mm};
+}
+
+void checkSettings(const DisplayCalibrationSettings& s) {
+  const auto check = [](bool ok, const char* key, double value, const char* range) {
+    if (!ok) fail(Errc::InvalidArgument, "display calibration: {} = {} is outside {}", key, value, range);
+  };
+  check(s.spotPeriod >= 2 && s.spotPeriod <= 16, "spot_period", s.spotPeriod, "2 .. 16");
+  check(s.spotRadius > 0 && s.spotRadius < 0.5, "spot_radius", s.spotRadius, "(0, 0.5) pitches");
+  check(s.minDecoded > 0 && s.minDecoded <= 1, "min_decoded", s.minDecoded, "(0, 1]");
+  check(s.secondShare >= 0 && s.secondShare < 0.5, "second_share", s.secondShare, "[0, 0.5)");
+  check(s.coverageFactor > 0 && s.coverageFactor <= 10, "coverage_factor", s.coverageFactor, "(0, 10]");
+}
+
+// A lens's index as a map key.
+using LensIndex = std::array<int, 2>;
+
+}  // namespace
+
+DisplayCalibration calibrateDisplay(BenchProbe& bench, const DisplayCalibrationSettings& settings,
+                                    const std::function<void(double)>& progress) {
+  checkSettings(settings);
+  const auto start = Clock::now();
+  Clock::duration compute{};
+  DisplayCalibration out;
+  out.coverageFactor = settings.coverageFactor;
+  const DisplayInfo info = bench.display();
+  info.validate();
+  out.nominal = info;
+  const std::string& name = info.deviceId;
+  if (!fullParallax(info.optics.type))
+    fail(Errc::Device,
+         "display calibration: display '{}' has {} optics; the calibration measures lens and pinhole "
+         "arrays (a lenticular sheet's or a line barrier's is not built)",
+         name, toString(info.optics.type));
+  const cv::Size panel(info.panelWidth_px, info.panelHeight_px);
+  const calib::CodedPatternSet set = calib::grayCodePatterns(panel.width, panel.height);
+  const int totalFrames = set.layout.frameCount() + settings.spotPeriod * settings.spotPeriod;
+  const auto take = [&](const cv::Mat& levels, const char* what) {
+    if (progress) progress(static_cast<double>(out.frames) / totalFrames);
+    try {
+      cv::Mat image = bench.take(levels);
+      ++out.frames;
+      return image;
+    } catch (const Error& e) {
+      fail(e.code(), "display calibration: frame {} ({}) of display '{}': {}", out.frames + 1, what, name, e.what());
+    }
+  };
+  const auto toDecodable = [](const cv::Mat& frame) {
+    cv::Mat decodable;
+    frame.convertTo(decodable, CV_16U);
+    return decodable;
+  };
+
+  // Which panel pixels each camera pixel sees along the axis.
+  const double dnPer8Bit = bench.cameraFullScale_dn() / 255;
+  calib::DecodeSettings decode;
+  decode.secondShare = settings.secondShare;
+  decode.minLit_dn = std::max(1, static_cast<int>(std::lround(decode.minLit_dn * dnPer8Bit)));
+  decode.minContrast_dn = std::max(1, static_cast<int>(std::lround(decode.minContrast_dn * dnPer8Bit)));
+  const cv::Mat white = take(set.white, "all white"), black = take(set.black, "all black");
+  out.image = white.size();
+  std::vector<cv::Mat> frames;
+  for (size_t k = 0; k < set.patterns.size(); ++k)
+    frames.push_back(toDecodable(take(set.patterns[k], k % 2 == 0 ? "pattern" : "inverse pattern")));
+  auto computeStart = Clock::now();
+  const calib::PanelCorrespondence c =
+      calib::decodeGrayCode(frames, toDecodable(white), toDecodable(black), set.layout, decode);
+  out.lit = c.lit;
+  out.decoded = c.decoded;
+  if (c.lit == 0)
+    fail(Errc::Device,
+         "display calibration: the camera sees no change between the all-white and the all-black "
+         "panel of display '{}' (none of its {} pixels by {} DN): the display is not in the camera's view, or it "
+         "is dark or covered",
+         name, white.total(), decode.minLit_dn);
+  if (c.decoded < settings.minDecoded * c.lit)
+    fail(Errc::Device,
+         "display calibration: {} of the {} camera pixels that see display '{}' decoded, fewer than "
+         "min_decoded = {}: the patterns blur, or something in the camera's view scatters the light",
+         c.decoded, c.lit, name, settings.minDecoded);
+
+  // The decoded panel pixels, weighted by the light each link carries, clustered per lens.
+  calib::PanelLinks links(white.size(), panel);
+  links.add(c, {}, 0);
+  cv::Mat light;
+  cv::max(white - black, 0, light);
+  std::map<int, double> panelWeight;
+  for (const calib::PanelLinks::Link& link : links.links()) {
+    const double w = link.share * light.at<float>(link.camera / white.cols, link.camera % white.cols);
+    if (w > 0) panelWeight[link.panel] += w;
+  }
+  std::vector<calib::WeightedPoint> points;
+  points.reserve(panelWeight.size());
+  for (const auto& [p, w] : panelWeight) points.push_back({pixelCentre(info, p % panel.width, p / panel.width), w});
+  const double pitch0 = info.optics.arrayPitch_mm;
+  std::vector<calib::WeightedPoint> centres;
+  if (!points.empty()) {
+    centres = calib::clusterPoints(points, 0.25 * pitch0);
+    // A cluster of little light is a misdecoded pixel, not a lens.
+    std::vector<double> weights;
+    for (const calib::WeightedPoint& w : centres) weights.push_back(w.weight);
+    std::nth_element(weights.begin(), weights.begin() + static_cast<std::ptrdiff_t>(weights.size() / 2), weights.end());
+    const double floor = 0.1 * weights[weights.size() / 2];
+    std::erase_if(centres, [&](const calib::WeightedPoint& w) { return w.weight < floor; });
+  }
+  out.lensesFound = static_cast<int>(centres.size());
+  try {
+    out.lattice =
+        calib::fitLensLattice(centres, info.optics.packing, pitch0, info.optics.rotation_rad, info.pixelPitch_mm);
+  } catch (const Error& e) {
+    fail(e.code(), "display calibration of display '{}': {}", name, e.what());
+  }
+  const calib::LatticeFit& lattice = out.lattice;
+
+  // A first camera scale from the decoded links: where each lens shows, weighted by its light.
+  std::map<LensIndex, std::pair<Vec2, double>> seen;
+  for (const calib::PanelLinks::Link& link : links.links()) {
+    const int row = link.camera / white.cols, col = link.camera % white.cols;
+    const double w = link.share * light.at<float>(row, col);
+    const Vec2 p = pixelCentre(info, link.panel % panel.width, link.panel / panel.width);
+    const LensIndex lens = lattice.nearestIndex(p);
+    if (!(w > 0) || (p - lattice.centre(lens[0], lens[1])).length() > 0.25 * lattice.pitch_mm) continue;
+    auto& [sum, weight] = seen.try_emplace(lens, Vec2(0, 0), 0.0).first->second;
+    sum += w * Vec2(col, row);
+    weight += w;
+  }
+  std::vector<calib::CameraPoint> rough;
+  for (const auto& [lens, s] : seen) rough.push_back({s.first / s.second, lattice.centre(lens[0], lens[1]), lens});
+  calib::CameraScaleFit first;
+  try {
+    first = calib::fitCameraScale(rough, out.image);
+  } catch (const Error& e) {
+    fail(e.code(), "display calibration of display '{}': {}", name, e.what());
+  }
+  compute += Clock::now() - computeStart;
+
+  // Spots: every s-th lens along each lattice axis, s² frames.
+  const int s = settings.spotPeriod;
+  const double halfWidth = 0.5 * panel.width * info.pixelPitch_mm, halfHeight = 0.5 * panel.height * info.pixelPitch_mm;
+  const double inside = 0.5 * lattice.pitch_mm;
+  const double radius_mm = std::max(settings.spotRadius * lattice.pitch_mm, 1.5 * info.pixelPitch_mm);
+  int iMin = 1 << 30, iMax = -(1 << 30), jMin = 1 << 30, jMax = -(1 << 30);
+  for (const Vec2& corner : {Vec2(-halfWidth, -halfHeight), Vec2(halfWidth, -halfHeight), Vec2(-halfWidth, halfHeight),
+                             Vec2(halfWidth, halfHeight)}) {
+    const LensIndex k = lattice.nearestIndex(corner);
+    iMin = std::min(iMin, k[0] - 2), iMax = std::max(iMax, k[0] + 2);
+    jMin = std::min(jMin, k[1] - 2), jMax = std::max(jMax, k[1] + 2);
+  }
+  const cv::Matx22d cameraFromDisplay = first.displayFromCamera.inv();
+  const Vec2 imageCentre(0.5 * (out.image.width - 1), 0.5 * (out.image.height - 1));
+  const double window_px = std::max(1.5, 0.45 * s * lattice.pitch_mm / first.objectPixel_mm);
+  const int reach = static_cast<int>(std::ceil(radius_mm / info.pixelPitch_mm));
+  struct Found {
+    calib::CameraPoint point;
+    double light;
+  };
+  std::vector<Found> spots;
+  for (int a = 0; a < s; ++a)
+    for (int b = 0; b < s; ++b) {
+      cv::Mat levels = cv::Mat::zeros(panel, CV_8UC1);
+      std::vector<LensIndex> lit;
+      for (int i = iMin; i <= iMax; ++i)
+        for (int j = jMin; j <= jMax; ++j) {
+          if (((i % s) + s) % s != a || ((j % s) + s) % s != b) continue;
+          const Vec2 centre = lattice.centre(i, j);
+          if (std::abs(centre.x) > halfWidth - inside || std::abs(centre.y) > halfHeight - inside) continue;
+          lit.push_back({i, j});
+          const double col = centre.x / info.pixelPitch_mm + 0.5 * panel.width - 0.5;
+          const double row = 0.5 * panel.height - 0.5 - centre.y / info.pixelPitch_mm;
+          for (int y = static_cast<int>(row) - reach; y <= static_cast<int>(row) + reach + 1; ++y)
+            for (int x = static_cast<int>(col) - reach; x <= static_cast<int>(col) + reach + 1; ++x)
+              if (x >= 0 && y >= 0 && x < panel.width && y < panel.height &&
+                  (pixelCentre(info, x, y) - centre).length() <= radius_mm)
+                levels.at<std::uint8_t>(y, x) = 255;
+        }
+      const cv::Mat image = take(levels, "spots") - black;
+      computeStart = Clock::now();
+      for (const LensIndex& lens : lit) {
+        const Vec2 centre = lattice.centre(lens[0], lens[1]);
+        const cv::Vec2d d = cameraFromDisplay * cv::Vec2d(centre.x - first.centre_mm.x, centre.y - first.centre_mm.y);
+        if (auto spot = calib::spotCentroid(image, imageCentre + Vec2(d[0], d[1]), window_px, 0))
+          spots.push_back({{spot->centre_px, centre, lens}, spot->light});
+      }
+      compute += Clock::now() - computeStart;
+    }
+  computeStart = Clock::now();
+  // A spot of a lens the image or the panel's edge cuts holds less light.
+  std::vector<calib::CameraPoint> spotPoints;
+  if (!spots.empty()) {
+    std::vector<double> lights;
+    for (const Found& f : spots) lights.push_back(f.light);
+    std::nth_element(lights.begin(), lights.begin() + static_cast<std::ptrdiff_t>(lights.size() / 2), lights.end());
+    const double median = lights[lights.size() / 2];
+    for (const Found& f : spots)
+      if (f.light >= 0.5 * median) spotPoints.push_back(f.point);
+  }
+  out.spots = static_cast<int>(spotPoints.size());
+  try {
+    out.camera = calib::fitCameraScale(spotPoints, out.image,
+                                       {lattice.pitchSigma_mm / lattice.pitch_mm, lattice.offsetSigma_mm});
+  } catch (const Error& e) {
+    fail(e.code(), "display calibration of display '{}': {}", name, e.what());
+  }
+  compute += Clock::now() - computeStart;
+
+  out.optics = info.optics;
+  out.optics.arrayPitch_mm = lattice.pitch_mm;
+  out.optics.rotation_rad = lattice.rotation_rad;
+  out.optics.arrayOffsetX_mm = lattice.offset_mm.x;
+  out.optics.arrayOffsetY_mm = lattice.offset_mm.y;
+  if (progress) progress(1);
+  out.seconds = seconds(Clock::now() - start);
+  out.computeSeconds = seconds(compute);
+  return out;
+}
+
+}  // namespace lfi

@@ -1,0 +1,249 @@
+// The display's lens array and the camera's scale measured through the
+// ray-traced bench, camera noise on, against the truth the scene gives: the
+// array's pitch, rotation and offset, the camera's magnification and where it
+// looks. Trials over the ranges a bench's parts come in (pitch ±1 %, rotation
+// ±1°, offset ±half a pitch, camera scale ±2 %, camera axis ±1 mm), each with
+// its own noise draw; and every refusal against a bench that gives it.
+
+#include "lfi/controller/display_calibration.h"
+#include "lfi/controller/controller.h"
+#include "lfi/core/error.h"
+#include "lfi/drivers/camera_registry.h"
+#include "lfi/drivers/display_registry.h"
+#include "lfi/drivers/optics/lens_lattice.h"
+#include "lfi/sim/devices/sim_camera.h"
+
+#include "lfi_test_support.h"
+#include "scene_text.h"
+#include "test_folder.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+#include <string>
+
+namespace {
+
+using namespace lfi;
+using lfi::testing_support::cameraSceneText;
+using lfi::testing_support::lensObject;
+using lfi::testing_support::TestFolder;
+using lfi::testing_support::throwsError;
+
+// The bench of data/scenes/inspection_bench.toml without its lens: a 56 x 56 Mono12 camera (0.1215 mm pixels at
+// magnification 0.2435) over an 800 x 800 panel of 0.0315 mm pixels behind a 1 mm lens array, 30 mm below the
+// camera's focus.
+constexpr double kFocal_mm = 20.03, kImageDistance_mm = 24.9075, kSensorPixel_mm = 0.1215;
+constexpr int kPanel_px = 800;
+constexpr double kPanelPixel_mm = 0.0315;
+
+struct Truth {
+  std::string optics = "lenslet_array";
+  std::string packing = "square";
+  double pitch_mm = 1.0;
+  double rotation_rad = 0;
+  Vec2 offset_mm{0, 0};
+  double sensorPixel_mm = kSensorPixel_mm;
+  Vec2 cameraAxis_mm{0, 0};
+  int seed = 1;
+  bool part = false;
+
+  // One camera pixel on the part: the sensor pixel over the magnification b / w (docs/camera.md).
+  double objectPixel_mm() const {
+    const double w = 1 / (1 / kFocal_mm - 1 / kImageDistance_mm);
+    return sensorPixel_mm * w / kImageDistance_mm;
+  }
+};
+
+std::string sceneText(const Truth& t) {
+  std::string text =
+      cameraSceneText({.samplesPerPixel = t.optics == "pinhole_array" ? 256 : 8,
+                       .seed = t.seed,
+                       .focalLength_mm = kFocal_mm,
+                       .imageDistance_mm = kImageDistance_mm,
+                       .stopDiameter_mm = 0.609,
+                       .pixelPitch_mm = t.sensorPixel_mm,
+                       .width_px = 56,
+                       .height_px = 56,
+                       .positionX_mm = t.cameraAxis_mm.x,
+                       .positionY_mm = t.cameraAxis_mm.y,
+                       .positionZ_mm = 102.5,
+                       .fullWell_e = 10500,
+                       .readNoise_e = 2.4,
+                       .bitDepth = 12}) +
+      fmt::format("[display]\nposition_mm = [0, 0, -30]\noptics = \"{}\"\npanel_width_px = {}\npanel_height_px = {}\n",
+                  t.optics, kPanel_px, kPanel_px);
+  if (t.optics != "lenticular")
+    text += fmt::format(
+        "packing = \"{}\"\narray_pitch_mm = {:.17g}\nrotation_rad = {:.17g}\n"
+        "array_offset_mm = [{:.17g}, {:.17g}]\n",
+        t.packing, t.pitch_mm, t.rotation_rad, t.offset_mm.x, t.offset_mm.y);
+  // A pinhole array passes the light of a hole, 0.8 % of a lens's: its panel is that much brighter, and it takes
+  // that many more samples for a camera pixel's rays to find the holes.
+  if (t.optics == "pinhole_array") text += "brightness = 100\n";
+  if (t.part) text += lensObject({.radius_mm = 51.5, .centreThickness_mm = 5, .diameter_mm = 25.4, .ior = 1.5168});
+  return text;
+}
+
+class DisplayCalibrationTest : public testing::Test {
+ protected:
+  void SetUp() override { sim::registerSimBackends(); }
+
+  DisplayCalibration calibrate(const Truth& truth, const DisplayCalibrationSettings& settings = {}) {
+    const std::string uri = "sim:" + dir_.write("scene.toml", sceneText(truth)).string();
+    auto display = openDisplay(uri);
+    auto camera = openCamera(uri);
+    CameraSettings cameraSettings;
+    cameraSettings.exposure_us = 10000;
+    cameraSettings.pixelFormat = PixelFormat::Mono12;
+    cameraSettings.trigger = TriggerMode::Software;
+    camera->configure(cameraSettings);
+    StoredNothing nothing;
+    Controller controller(nothing, *display, *camera);
+    return calibrateDisplay(controller.probe(), settings);
+  }
+
+  // A capture the controller is built with and the calibration never uses.
+  class StoredNothing final : public LightFieldCapture {
+   public:
+    LightFieldGeometry geometry() const override { return {}; }
+    LightField capture(const std::function<void(double)>&) override {
+      fail(Errc::InvalidArgument, "no capture in a calibration");
+    }
+    std::string description() const override { return "none"; }
+  };
+
+  TestFolder dir_{"display_calibration"};
+};
+
+// Tolerances, each what a display or camera calibrated that well would still get right:
+//   pitch and rotation: the lens centres at the panel's edge (12.6 mm out) within a quarter of a panel pixel;
+//   offset: within a quarter of a panel pixel;
+//   camera scale: a point at the field's edge (28 px out) within a tenth of a camera pixel (0.05 mm);
+//   the display point at the image's centre: within a tenth of a camera pixel.
+constexpr double kEdge_mm = 0.5 * kPanel_px * kPanelPixel_mm;
+constexpr double kPitchTolerance_mm = 0.25 * kPanelPixel_mm / kEdge_mm;  // per mm of pitch
+constexpr double kRotationTolerance_rad = 0.25 * kPanelPixel_mm / kEdge_mm;
+constexpr double kOffsetTolerance_mm = 0.25 * kPanelPixel_mm;
+constexpr double kScaleTolerance = 0.1 / 28;  // relative
+constexpr double kCentreTolerance_px = 0.1;
+
+TEST_F(DisplayCalibrationTest, RecoversTheArrayAndTheCameraScaleOverTheirRanges) {
+  std::mt19937 random(20261128);
+  std::uniform_real_distribution<double> unit(-1, 1);
+  struct Coverage {
+    int trials = 0, pitch = 0, rotation = 0, offset = 0, scale = 0;
+  } covered;
+  const int trials = 14;
+  for (int trial = 0; trial < trials; ++trial) {
+    Truth truth;
+    truth.seed = trial + 1;
+    // Two of every seven trials a pinhole array, one a hexagonal lens array.
+    if (trial % 7 == 3 || trial % 7 == 6) truth.optics = "pinhole_array";
+    if (trial % 7 == 5) truth.packing = "hexagonal";
+    truth.pitch_mm = 1.0 * (1 + 0.01 * unit(random));
+    truth.rotation_rad = unit(random) * M_PI / 180;
+    truth.offset_mm = {0.5 * truth.pitch_mm * unit(random), 0.5 * truth.pitch_mm * unit(random)};
+    truth.sensorPixel_mm = kSensorPixel_mm * (1 + 0.02 * unit(random));
+    truth.cameraAxis_mm = {unit(random), unit(random)};
+    SCOPED_TRACE(
+        fmt::format("trial {}: {} {} pitch {} mm, rotation {} rad, offset ({}, {}) mm, object pixel {} mm, "
+                    "camera axis at ({}, {}) mm",
+                    trial, truth.packing, truth.optics, truth.pitch_mm, truth.rotation_rad, truth.offset_mm.x,
+                    truth.offset_mm.y, truth.objectPixel_mm(), truth.cameraAxis_mm.x, truth.cameraAxis_mm.y));
+    const DisplayCalibration c = calibrate(truth);
+    const double k = c.coverageFactor;
+    const calib::LatticeFit& lattice = c.lattice;
+    EXPECT_EQ(lattice.packing, truth.packing == "square" ? LensPacking::Square : LensPacking::Hexagonal);
+    const double pitchError = lattice.pitch_mm - truth.pitch_mm;
+    EXPECT_LE(std::abs(pitchError), kPitchTolerance_mm * truth.pitch_mm);
+    const double rotationError = lattice.rotation_rad - truth.rotation_rad;
+    EXPECT_LE(std::abs(rotationError), kRotationTolerance_rad);
+    // The offset names a lens; the truth's lens nearest to it.
+    const LensLattice trueLattice(lattice.packing, truth.pitch_mm, truth.rotation_rad, truth.offset_mm);
+    const Vec2 offsetError = lattice.offset_mm - trueLattice.nearestCentre(lattice.offset_mm);
+    EXPECT_LE(offsetError.length(), kOffsetTolerance_mm);
+    const double scaleError = c.camera.objectPixel_mm - truth.objectPixel_mm();
+    EXPECT_LE(std::abs(scaleError), kScaleTolerance * truth.objectPixel_mm());
+    // The camera looks down at the display (rotation_deg = [180, 0, 0]): its rows along +x, its columns down -y.
+    EXPECT_TRUE(c.camera.mirrored);
+    EXPECT_LE(std::abs(c.camera.rotation_rad), kRotationTolerance_rad);
+    const Vec2 centreError = c.camera.centre_mm - truth.cameraAxis_mm;
+    EXPECT_LE(centreError.length(), kCentreTolerance_px * truth.objectPixel_mm());
+
+    ++covered.trials;
+    covered.pitch += std::abs(pitchError) <= k * lattice.pitchSigma_mm;
+    covered.rotation += std::abs(rotationError) <= k * lattice.rotationSigma_rad;
+    covered.offset += std::abs(offsetError.x) <= k * lattice.offsetSigma_mm.x &&
+                      std::abs(offsetError.y) <= k * lattice.offsetSigma_mm.y;
+    covered.scale += std::abs(scaleError) <= k * c.camera.objectPixelSigma_mm;
+  }
+  // The stated uncertainties (k = 2) cover the error in at least 90 % of the trials.
+  const int least = static_cast<int>(std::ceil(0.9 * covered.trials));
+  EXPECT_GE(covered.pitch, least);
+  EXPECT_GE(covered.rotation, least);
+  EXPECT_GE(covered.offset, least);
+  EXPECT_GE(covered.scale, least);
+}
+
+TEST_F(DisplayCalibrationTest, ADisplayOutOfTheCamerasViewIsRefused) {
+  Truth truth;
+  truth.cameraAxis_mm = {60, 0};  // the field (28 mm) beside the panel (25.2 mm)
+  EXPECT_TRUE(throwsError([&] { calibrate(truth); }, Errc::Device, {"not in the camera's view"}));
+}
+
+TEST_F(DisplayCalibrationTest, TooLittleOfTheDisplayInViewIsRefused) {
+  Truth truth;
+  truth.cameraAxis_mm = {25, 0};  // a strip of about one lens column of the panel in the field
+  EXPECT_TRUE(throwsError([&] { calibrate(truth); }, Errc::Device, {"sees too little of the display"}));
+}
+
+TEST_F(DisplayCalibrationTest, APartInViewLeavesTheLensCentresOffTheLatticeAndIsRefused) {
+  Truth truth;
+  truth.part = true;  // the study's lens bends the rays the camera takes to other panel points than the centres
+  EXPECT_TRUE(throwsError([&] { calibrate(truth); }, Errc::Device, {"too large for the model"}));
+}
+
+TEST_F(DisplayCalibrationTest, AnotherPackingThanTheDisplayStatesIsRefused) {
+  Truth truth;
+  truth.packing = "hexagonal";  // the scene's truth; the display states the same: the fit is told square below
+  const std::string uri = "sim:" + dir_.write("scene.toml", sceneText(truth)).string();
+  auto display = openDisplay(uri);
+  auto camera = openCamera(uri);
+  CameraSettings settings;
+  settings.exposure_us = 10000;
+  camera->configure(settings);
+  // A probe that states a square array for the hexagonal one.
+  class Misstated final : public BenchProbe {
+   public:
+    explicit Misstated(BenchProbe& inner) : inner_(inner) {}
+    DisplayInfo display() const override {
+      DisplayInfo info = inner_.display();
+      info.optics.packing = LensPacking::Square;
+      return info;
+    }
+    double cameraFullScale_dn() const override { return inner_.cameraFullScale_dn(); }
+    cv::Mat take(const cv::Mat& levels) override { return inner_.take(levels); }
+
+   private:
+    BenchProbe& inner_;
+  };
+  StoredNothing nothing;
+  Controller controller(nothing, *display, *camera);
+  Misstated probe(controller.probe());
+  EXPECT_TRUE(throwsError([&] { calibrateDisplay(probe); }, Errc::Device, {"square lattice"}));
+}
+
+TEST_F(DisplayCalibrationTest, ALenticularDisplayIsRefusedByName) {
+  Truth truth;
+  truth.optics = "lenticular";
+  EXPECT_TRUE(throwsError([&] { calibrate(truth); }, Errc::Device, {"lenticular"}));
+}
+
+TEST_F(DisplayCalibrationTest, SettingsOutOfRangeAreNamed) {
+  EXPECT_TRUE(throwsError([&] { calibrate(Truth{}, {.spotPeriod = 1}); }, Errc::InvalidArgument, {"spot_period"}));
+  EXPECT_TRUE(throwsError([&] { calibrate(Truth{}, {.spotRadius = 0.5}); }, Errc::InvalidArgument, {"spot_radius"}));
+}
+
+}  // namespace
