@@ -173,12 +173,13 @@ std::optional<Spot> spotCentroid(const cv::Mat& image, const Vec2& guess, double
   Vec2 centre = guess;
   Spot spot;
   for (int iteration = 0; iteration < 5; ++iteration) {
+    // (Outside the image by far, or not a number: no window, and no integer conversion of it.)
+    if (!(std::abs(centre.x) < 1e9 && std::abs(centre.y) < 1e9 && radius_px < 1e9)) return std::nullopt;
     const int x0 = static_cast<int>(std::ceil(centre.x - radius_px)),
               x1 = static_cast<int>(std::floor(centre.x + radius_px));
     const int y0 = static_cast<int>(std::ceil(centre.y - radius_px)),
               y1 = static_cast<int>(std::floor(centre.y + radius_px));
-    if (!std::isfinite(centre.x) || !std::isfinite(centre.y) || x0 < 0 || y0 < 0 || x1 >= image.cols ||
-        y1 >= image.rows)
+    if (x0 < 0 || y0 < 0 || x1 >= image.cols || y1 >= image.rows)
       return std::nullopt;
     double sum = 0, sx = 0, sy = 0;
     for (int y = y0; y <= y1; ++y) {

@@ -241,6 +241,8 @@ TEST(SpotCentroid, FindsASymmetricSpotsCentreAndRefusesOneOutOfTheImage) {
   EXPECT_NEAR(spot->centre_px.y, centre.y, 0.01);
   EXPECT_FALSE(spotCentroid(image, {3, 20}, 7, 0));     // the window leaves the image
   EXPECT_FALSE(spotCentroid(image, {16, 23}, 7, 1e6));  // too little light
+  EXPECT_FALSE(spotCentroid(image, {NAN, 23}, 7, 0));    // no guess
+  EXPECT_FALSE(spotCentroid(image, {1e300, 23}, 7, 0));  // none within reach of an integer
 }
 
 }  // namespace
