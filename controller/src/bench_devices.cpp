@@ -16,7 +16,51 @@ std::unique_ptr<Camera> openBenchCamera(const BenchFile& bench) {
   return camera;
 }
 
-std::unique_ptr<Display> openBenchDisplay(const BenchFile& bench) { return openDisplay(bench.displayUri); }
+namespace {
+
+// The bench's display with the optics its [display.optics] states in place of the device's own: what a light
+// field is encoded through (Display::show) and what a coded capture decodes with.
+class CalibratedDisplay final : public Display {
+ public:
+  CalibratedDisplay(std::unique_ptr<Display> inner, const DisplayOpticsParams& optics, std::string benchFile)
+      : inner_(std::move(inner)), optics_(optics), benchFile_(std::move(benchFile)) {}
+  State state() const override { return inner_->state(); }
+  std::string name() const override { return inner_->name(); }
+  void open() override { inner_->open(); }
+  void close() noexcept override { inner_->close(); }
+  DisplayInfo info() const override {
+    DisplayInfo info = inner_->info();
+    if (info.optics.type != optics_.type)
+      fail(Errc::Config, "{}: [display.optics] states {} optics; display '{}' has {} optics", benchFile_,
+           toString(optics_.type), inner_->name(), toString(info.optics.type));
+    info.optics = optics_;
+    try {
+      info.validate();
+    } catch (const Error& e) {
+      fail(Errc::Config, "{}: [display.optics] on display '{}': {}", benchFile_, inner_->name(), e.what());
+    }
+    return info;
+  }
+  PresentResult show(const cv::Mat& panel) override { return inner_->show(panel); }
+  void blank() override { inner_->blank(); }
+  void setBrightness(int level) override { inner_->setBrightness(level); }
+  DisplayStatus status() override { return inner_->status(); }
+
+ private:
+  std::unique_ptr<Display> inner_;
+  DisplayOpticsParams optics_;
+  std::string benchFile_;
+};
+
+}  // namespace
+
+std::unique_ptr<Display> openBenchDisplay(const BenchFile& bench) {
+  auto display = openDisplay(bench.displayUri);
+  if (!bench.displayOptics) return display;
+  auto calibrated = std::make_unique<CalibratedDisplay>(std::move(display), *bench.displayOptics, bench.file.string());
+  if (calibrated->state() != Display::State::Closed) calibrated->info();  // a class that does not fit: named now
+  return calibrated;
+}
 
 std::unique_ptr<LightFieldCapture> openBenchCapture(const BenchFile& bench) {
   if (!bench.captureUri.empty()) return openLightFieldCapture(bench.captureUri);

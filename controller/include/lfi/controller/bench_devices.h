@@ -31,6 +31,8 @@ private:
 
 // The camera, opened and configured with the bench's settings.
 std::unique_ptr<Camera> openBenchCamera(const BenchFile& bench);
+// The display, with the optics of [display.optics] in place of the device's own when the bench states them
+// (Errc::Config naming the bench file when they are of another class than the device's, or out of range).
 std::unique_ptr<Display> openBenchDisplay(const BenchFile& bench);
 // The capture device, or the bench's light field file as a StoredLightField.
 std::unique_ptr<LightFieldCapture> openBenchCapture(const BenchFile& bench);

@@ -23,6 +23,10 @@
 //   [display]      uri                    -      required    usb:<vid>:<pid>[/<serial>], sim:<scene-file>
 //                  settle_ms              ms     0           the panel's response time after a show
 //                  white                  -      0           radiance at full drive; 0 = the reference's 99.9th percentile
+//   [display.optics]  optics, ...          mm/rad none        the display's optics as calibrated (`lfi calibrate
+//                                                             display`), in place of what the device states: the
+//                                                             keys of display_calibration_file.h, the class and
+//                                                             every value it needs
 //   [capture]      uri  | light_field     -      one of      the reference's capture (sim:, coded:), or a light field file
 //   [geometry]     distance_mm            mm     required    Δ: display plane to the part's reference plane
 //                  part_centre_px         px     centre      [column, row] of the part's origin on the image
@@ -48,6 +52,7 @@
 // the part's frame as verdict.h defines it.
 
 #include "lfi/drivers/camera.h"
+#include "lfi/drivers/display.h"
 #include "lfi/inspection/defects.h"
 #include "lfi/inspection/golden_model.h"
 #include "lfi/inspection/verdict.h"
@@ -74,6 +79,7 @@ struct BenchFile {
   std::string displayUri;
   int settle_ms = 0;
   double white = 0;
+  std::optional<DisplayOpticsParams> displayOptics;  // [display.optics]
   // [capture]: exactly one of the two
   std::string captureUri;
   std::filesystem::path lightFieldFile;
