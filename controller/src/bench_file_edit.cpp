@@ -1,0 +1,210 @@
+#include "lfi/controller/bench_file_edit.h"
+
+#include "lfi/controller/bench_file.h"
+#include "lfi/core/atomic_file.h"
+#include "lfi/core/error.h"
+
+#include <fmt/format.h>
+#include <toml++/toml.h>
+
+#include <algorithm>
+#include <fstream>
+#include <sstream>
+#include <vector>
+
+namespace fs = std::filesystem;
+
+namespace lfi {
+
+namespace {
+
+bool bareKey(const std::string& key) {
+  return !key.empty() && std::all_of(key.begin(), key.end(), [](char c) {
+    return (c >= 'A' && c <= 'Z') || (c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') || c == '_' || c == '-';
+  });
+}
+
+std::vector<std::string> splitPath(const std::string& path) {
+  std::vector<std::string> parts;
+  for (size_t start = 0;;) {
+    const size_t dot = path.find('.', start);
+    parts.push_back(path.substr(start, dot == std::string::npos ? std::string::npos : dot - start));
+    if (!bareKey(parts.back()))
+      fail(Errc::InvalidArgument, "bench file edit: '{}' is not a table name of bare keys", path);
+    if (dot == std::string::npos) return parts;
+    start = dot + 1;
+  }
+}
+
+toml::table parseText(const std::string& text, const fs::path& file) {
+  try {
+    return toml::parse(text, file.string());
+  } catch (const toml::parse_error& e) {
+    fail(Errc::Config, "{}:{}:{}: {}", file.string(), e.source().begin.line, e.source().begin.column, e.description());
+  }
+}
+
+// The byte offset of a toml++ source position (1-based line, 1-based column in code points).
+size_t offsetOf(const std::string& text, const toml::source_position& at) {
+  size_t offset = 0;
+  for (toml::source_index line = 1; line < at.line; ++line) {
+    const size_t end = text.find('\n', offset);
+    if (end == std::string::npos) return text.size();
+    offset = end + 1;
+  }
+  for (toml::source_index column = 1; column < at.column && offset < text.size() && text[offset] != '\n'; ++column) {
+    ++offset;  // past the lead byte, then any continuation bytes of the code point
+    while (offset < text.size() && (static_cast<unsigned char>(text[offset]) & 0xC0) == 0x80) ++offset;
+  }
+  return offset;
+}
+
+size_t lineEnd(const std::string& text, size_t offset) {
+  const size_t end = text.find('\n', offset);
+  return end == std::string::npos ? text.size() : end;
+}
+
+// The table at `parts`, or nullptr; one that only exists as a parent of another ([a.b] without [a]) counts as
+// absent too (it has no place of its own in the text).
+const toml::table* findTable(const toml::table& root, const std::vector<std::string>& parts, size_t count) {
+  const toml::table* t = &root;
+  for (size_t k = 0; k < count && t; ++k) {
+    const toml::node* n = t->get(parts[k]);
+    t = n ? n->as_table() : nullptr;
+  }
+  if (t && count > 0 && t->source().begin.line == 0) return nullptr;
+  return t;
+}
+
+// The offset just after the line of the table's last key (its header's line when it has no key).
+size_t afterLastKey(const std::string& text, const toml::table& table) {
+  toml::source_index line = table.source().begin.line;
+  for (auto&& [k, v] : table)
+    if (!v.is_table() && v.source().end.line > line) line = v.source().end.line;
+  const size_t end = lineEnd(text, offsetOf(text, {line, 1}));
+  return end == text.size() ? end : end + 1;
+}
+
+std::string withComment(const std::string& value, const std::string& comment) {
+  return comment.empty() ? value : value + "  # " + comment;
+}
+
+}  // namespace
+
+BenchFileEdit::BenchFileEdit(fs::path file) : file_(std::move(file)) {
+  std::ifstream in(file_, std::ios::binary);
+  if (!in) fail(Errc::NotFound, "bench file '{}' cannot be read", file_.string());
+  std::ostringstream text;
+  text << in.rdbuf();
+  original_ = text_ = text.str();
+  parseText(text_, file_);
+}
+
+void BenchFileEdit::set(const std::string& table, const std::string& key, const std::string& value,
+                        const std::string& comment) {
+  const std::vector<std::string> parts = splitPath(table);
+  if (!bareKey(key)) fail(Errc::InvalidArgument, "bench file edit: '{}' is not a bare key", key);
+  if (comment.find('\n') != std::string::npos || value.find('\n') != std::string::npos)
+    fail(Errc::InvalidArgument, "bench file edit: a value or comment of more than one line for {}.{}", table, key);
+  const toml::table root = parseText(text_, file_);
+  const std::string line = withComment(fmt::format("{} = {}", key, value), comment);
+  if (const toml::table* t = findTable(root, parts, parts.size())) {
+    if (const toml::node* old = t->get(key)) {
+      if (old->is_table())
+        fail(Errc::InvalidArgument, "bench file edit: {}.{} in '{}' is a table, not a value", table, key,
+             file_.string());
+      // The value in place; with a comment, the rest of its last line (the old comment) goes.
+      const size_t begin = offsetOf(text_, old->source().begin), end = offsetOf(text_, old->source().end);
+      const size_t stop = comment.empty() ? end : lineEnd(text_, end);
+      text_.replace(begin, stop - begin, withComment(value, comment));
+      return;
+    }
+    text_.insert(afterLastKey(text_, *t), line + "\n");
+    return;
+  }
+  // A new table: after its parent's keys, or at the end.
+  const std::string header = fmt::format("[{}]\n{}\n", table, line);
+  if (const toml::table* parent = parts.size() > 1 ? findTable(root, parts, parts.size() - 1) : nullptr) {
+    text_.insert(afterLastKey(text_, *parent), header);
+    return;
+  }
+  if (!text_.empty() && text_.back() != '\n') text_ += '\n';
+  text_ += "\n" + header;
+}
+
+std::string BenchFileEdit::changes() const {
+  const auto lines = [](const std::string& text) {
+    std::vector<std::string> out;
+    std::istringstream in(text);
+    for (std::string line; std::getline(in, line);) out.push_back(line);
+    return out;
+  };
+  const std::vector<std::string> a = lines(original_), b = lines(text_);
+  // The longest common subsequence of lines, then the lines off it.
+  std::vector<std::vector<int>> common(a.size() + 1, std::vector<int>(b.size() + 1, 0));
+  for (size_t i = a.size(); i-- > 0;)
+    for (size_t j = b.size(); j-- > 0;)
+      common[i][j] = a[i] == b[j] ? common[i + 1][j + 1] + 1 : std::max(common[i + 1][j], common[i][j + 1]);
+  std::string out;
+  size_t i = 0, j = 0;
+  while (i < a.size() || j < b.size()) {
+    if (i < a.size() && j < b.size() && a[i] == b[j]) {
+      ++i, ++j;
+    } else if (i < a.size() && (j == b.size() || common[i + 1][j] >= common[i][j + 1])) {
+      out += "- " + a[i++] + "\n";
+    } else {
+      out += "+ " + b[j++] + "\n";
+    }
+  }
+  return out;
+}
+
+PublishedCalibration publishCalibration(const BenchFileEdit& edit, const std::string& what, const std::string& stampUtc,
+                                        const std::string& recordJson) {
+  const fs::path& file = edit.file();
+  std::string stamp = stampUtc;
+  std::erase(stamp, ':');
+  const fs::path folder = file.parent_path() / (file.stem().string() + ".calibrations");
+  PublishedCalibration out{folder / (stamp + "-" + what + ".before.toml"), folder / (stamp + "-" + what + ".json")};
+  {
+    std::ifstream in(file, std::ios::binary);
+    std::ostringstream now;
+    now << in.rdbuf();
+    if (!in || now.str() != edit.original())
+      fail(Errc::Exists,
+           "bench file '{}' changed since the calibration read it: not replaced (run the "
+           "calibration again)",
+           file.string());
+  }
+  std::error_code ec;
+  fs::create_directories(folder, ec);
+  if (ec) fail(Errc::Io, "cannot create the calibration folder '{}': {}", folder.string(), ec.message());
+  writeFileAtomically(out.backup, Overwrite::Refuse, edit.original());
+  // From here on a failure takes the backup and the record back: no record of a calibration not applied.
+  struct Undo {
+    std::vector<fs::path> files;
+    ~Undo() {
+      std::error_code ignored;
+      for (const fs::path& f : files) fs::remove(f, ignored);
+    }
+  } undo{{out.backup}};
+  writeFileAtomically(out.record, Overwrite::Refuse, recordJson);
+  undo.files.push_back(out.record);
+  writeFileAtomically(file, Overwrite::Allow, [&](const fs::path& temporary) {
+    {
+      std::ofstream o(temporary, std::ios::binary);
+      o << edit.text();
+      if (!o.flush()) fail(Errc::Io, "cannot write '{}'", temporary.string());
+    }
+    try {
+      readBenchFile(temporary);
+    } catch (const Error& e) {
+      fail(Errc::Config, "the calibrated bench file would not read back, '{}' is left as it was: {}", file.string(),
+           e.what());
+    }
+  });
+  undo.files.clear();
+  return out;
+}
+
+}  // namespace lfi

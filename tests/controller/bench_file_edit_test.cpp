@@ -1,0 +1,130 @@
+// Editing a bench file's values in place (what the calibrations write), the
+// [display.optics] table it adds, and publishing a calibration: the file
+// replaced atomically with its previous text and a record kept beside it,
+// nothing replaced when anything is wrong.
+
+#include "lfi/controller/bench_file_edit.h"
+
+#include "bench_file_fixture.h"
+#include "text_edit.h"
+
+#include <gtest/gtest.h>
+
+namespace lfi::bench_file_test {
+namespace {
+
+using lfi::testing_support::readText;
+
+class BenchFileEditTest : public BenchFileTest {};
+
+TEST_F(BenchFileEditTest, AValueIsReplacedWhereItStandsAndEverythingElseIsKept) {
+  const std::string text = replaced(kBench, "object_pixel_mm = 0.5", "object_pixel_mm = 0.5    # 0.1215 / 0.243 µm");
+  BenchFileEdit edit(write(text));
+  edit.set("camera", "object_pixel_mm", "0.4991");
+  EXPECT_EQ(edit.text(), replaced(text, "object_pixel_mm = 0.5 ", "object_pixel_mm = 0.4991 "));
+  // With a comment, the line's comment is replaced.
+  edit.set("camera", "object_pixel_mm", "0.4992", "calibrated");
+  EXPECT_EQ(edit.text(),
+            replaced(text, "object_pixel_mm = 0.5    # 0.1215 / 0.243 µm", "object_pixel_mm = 0.4992  # calibrated"));
+  EXPECT_EQ(edit.original(), text);
+  EXPECT_EQ(edit.changes(),
+            "- object_pixel_mm = 0.5    # 0.1215 / 0.243 µm\n"
+            "+ object_pixel_mm = 0.4992  # calibrated\n");
+}
+
+TEST_F(BenchFileEditTest, ValuesAfterTextOfManyBytesPerCharacterAndOverLinesAreFound) {
+  // toml++ counts columns in characters: "µ" and "Δ" take two bytes each.
+  const std::string text =
+      replaced(kBench, "part_centre_px = [27.5, 27.5]", "\"Δµ\" = 1\npart_centre_px = [27.5,\n    27.5]  # the axis");
+  BenchFileEdit edit(write(text));
+  edit.set("geometry", "part_centre_px", "[28, 26.5]");
+  EXPECT_EQ(edit.text(), replaced(text, "[27.5,\n    27.5]", "[28, 26.5]"));
+}
+
+TEST_F(BenchFileEditTest, AMissingKeyGoesAfterItsTablesLastKeyAndAMissingTableAfterItsParents) {
+  BenchFileEdit edit(write(kBench));
+  edit.set("display", "settle_ms", "20");
+  edit.set("display.optics", "optics", "\"lenslet_array\"", "stated");
+  edit.set("display.optics", "array_pitch_mm", "1.0004");
+  edit.set("run", "wait_limit_s", "5");
+  EXPECT_EQ(edit.text(), replaced(kBench, "uri = \"usb:1209:4c46/LFI-0001\"\n",
+                                  "uri = \"usb:1209:4c46/LFI-0001\"\nsettle_ms = 20\n[display.optics]\n"
+                                  "optics = \"lenslet_array\"  # stated\narray_pitch_mm = 1.0004\n") +
+                             "\n[run]\nwait_limit_s = 5\n");
+}
+
+TEST_F(BenchFileEditTest, NamesThatAreNotBareKeysAndTablesAsValuesAreRefused) {
+  BenchFileEdit edit(write(kBench));
+  EXPECT_TRUE(throwsError([&] { edit.set("camera", "a b", "1"); }, Errc::InvalidArgument, {"bare key"}));
+  EXPECT_TRUE(throwsError([&] { edit.set("camera.", "gain", "1"); }, Errc::InvalidArgument, {"bare keys"}));
+  EXPECT_TRUE(throwsError([&] { edit.set("camera", "gain", "1\n[x]"); }, Errc::InvalidArgument, {"one line"}));
+  edit.set("display.optics", "optics", "\"lenslet_array\"");
+  EXPECT_TRUE(throwsError([&] { edit.set("display", "optics", "1"); }, Errc::InvalidArgument, {"is a table"}));
+  EXPECT_TRUE(throwsError([&] { BenchFileEdit(write("a = [")); }, Errc::Config, {"bench.toml:1:"}));
+  EXPECT_TRUE(throwsError([&] { BenchFileEdit(folder_ / "none.toml"); }, Errc::NotFound, {"none.toml"}));
+}
+
+TEST_F(BenchFileEditTest, PublishingKeepsThePreviousFileAndARecordAndReplacesTheBench) {
+  const fs::path file = write(kBench);
+  BenchFileEdit edit(file);
+  edit.set("camera", "object_pixel_mm", "0.4991", "calibrated");
+  const PublishedCalibration p = publishCalibration(edit, "display", "2026-11-28T10:00:00Z", "{\"a\": 1}\n");
+  EXPECT_EQ(p.backup, folder_ / "benches" / "bench.calibrations" / "2026-11-28T100000Z-display.before.toml");
+  EXPECT_EQ(p.record, folder_ / "benches" / "bench.calibrations" / "2026-11-28T100000Z-display.json");
+  EXPECT_EQ(readText(p.backup), kBench);
+  EXPECT_EQ(readText(p.record), "{\"a\": 1}\n");
+  EXPECT_EQ(readText(file), edit.text());
+  EXPECT_DOUBLE_EQ(readBenchFile(file).objectPixel_mm, 0.4991);
+  // The same name again: the record is never overwritten, and the bench (now the edit's text) stays.
+  BenchFileEdit again(file);
+  again.set("camera", "object_pixel_mm", "0.4993");
+  EXPECT_TRUE(throwsError([&] { publishCalibration(again, "display", "2026-11-28T10:00:00Z", "{}"); }, Errc::Exists,
+                          {"2026-11-28T100000Z-display.before.toml"}));
+  EXPECT_DOUBLE_EQ(readBenchFile(file).objectPixel_mm, 0.4991);
+}
+
+TEST_F(BenchFileEditTest, NothingIsReplacedWhenTheBenchChangedMeanwhileOrTheEditDoesNotRead) {
+  const fs::path file = write(kBench);
+  BenchFileEdit edit(file);
+  edit.set("camera", "object_pixel_mm", "0.4991");
+  const std::string changed = replaced(kBench, "exposure_us = 10000", "exposure_us = 20000");
+  write(changed);
+  EXPECT_TRUE(throwsError([&] { publishCalibration(edit, "display", "2026-11-28T10:00:00Z", "{}"); }, Errc::Exists,
+                          {"changed since the calibration read it"}));
+  EXPECT_EQ(readText(file), changed);
+
+  // A value the bench refuses: the file, and no backup or record, is left.
+  BenchFileEdit bad(file);
+  bad.set("camera", "object_pixel_mm", "-1");
+  EXPECT_TRUE(throwsError([&] { publishCalibration(bad, "display", "2026-11-28T10:00:01Z", "{}"); }, Errc::Config,
+                          {"would not read back", "object_pixel_mm"}));
+  EXPECT_EQ(readText(file), changed);
+  EXPECT_FALSE(fs::exists(folder_ / "benches" / "bench.calibrations" / "2026-11-28T100001Z-display.json"));
+  EXPECT_FALSE(fs::exists(folder_ / "benches" / "bench.calibrations" / "2026-11-28T100001Z-display.before.toml"));
+}
+
+TEST_F(BenchFileEditTest, TheDisplayOpticsTableReadsAsAClassAndItsValuesAndIsPartOfTheReference) {
+  const std::string optics =
+      "\n[display.optics]\noptics = \"lenslet_array\"\npacking = \"square\"\n"
+      "array_pitch_mm = 1.0004\nrotation_rad = 0.002\narray_offset_mm = [0.1, -0.2]\n"
+      "gap_mm = 1.37\n";
+  const std::string text =
+      replaced(kBench, "uri = \"usb:1209:4c46/LFI-0001\"\n", "uri = \"usb:1209:4c46/LFI-0001\"\n" + optics);
+  const BenchFile b = read(text);
+  ASSERT_TRUE(b.displayOptics);
+  EXPECT_EQ(b.displayOptics->type, OpticsType::LensletArray);
+  EXPECT_DOUBLE_EQ(b.displayOptics->arrayPitch_mm, 1.0004);
+  EXPECT_DOUBLE_EQ(b.displayOptics->arrayOffsetY_mm, -0.2);
+  EXPECT_DOUBLE_EQ(b.displayOptics->focalLength_mm, 1.37);  // the gap, as a lens focused on the panel
+  EXPECT_NE(b.referenceHash(), read(kBench).referenceHash());
+  EXPECT_NE(b.referenceHash(), read(replaced(text, "1.0004", "1.0005")).referenceHash());
+  // A class and its values, or nothing.
+  const fs::path noClass = write(replaced(text, "optics = \"lenslet_array\"\n", ""));
+  EXPECT_TRUE(throwsError([&] { readBenchFile(noClass); }, Errc::Config, {"[display.optics] names no class"}));
+  EXPECT_TRUE(refusedAt(replaced(text, "gap_mm = 1.37\n", "gap_mm = 1.37\nslant_rad = 0.1\n"),
+                        lineOf(text, "gap_mm") + 1,
+                        "key 'display.optics.slant_rad' is not a parameter of lenslet_array optics"));
+}
+
+}  // namespace
+}  // namespace lfi::bench_file_test
