@@ -31,6 +31,7 @@ Command addTrainCommand(CLI::App& app);
 Command addInspectCommand(CLI::App& app);
 Command addRunCommand(CLI::App& app);
 Command addEmitCommand(CLI::App& app);
+Command addCalibrateCommand(CLI::App& app);
 Command addCalibrateDistanceCommand(CLI::App& app);
 Command addLfInfoCommand(CLI::App& app);
 Command addDevicesCommand(CLI::App& app);

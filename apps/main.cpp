@@ -29,6 +29,7 @@ constexpr lfi::cli::Command (*kCommands[])(CLI::App&) = {
     lfi::cli::addInspectCommand,
     lfi::cli::addRunCommand,
     lfi::cli::addEmitCommand,
+    lfi::cli::addCalibrateCommand,
     lfi::cli::addCalibrateDistanceCommand,
     lfi::cli::addLfInfoCommand,
     lfi::cli::addDevicesCommand,

@@ -42,10 +42,13 @@
 
 #include "lfi/calib/camera_scale.h"
 #include "lfi/calib/lattice_fit.h"
+#include "lfi/controller/bench_file.h"
+#include "lfi/controller/bench_file_edit.h"
 #include "lfi/drivers/display.h"
 #include "lfi/drivers/light_field_capture.h"
 
 #include <functional>
+#include <string>
 
 namespace lfi {
 
@@ -77,5 +80,19 @@ struct DisplayCalibration {
 // refusals above; what the devices throw, with the frame named.
 DisplayCalibration calibrateDisplay(BenchProbe& bench, const DisplayCalibrationSettings& settings = {},
                                     const std::function<void(double)>& progress = {});
+
+// What `lfi calibrate display` writes into a bench file (bench_file_edit.h):
+// [camera] object_pixel_mm, and [display.optics] with the class, the packing,
+// the measured pitch, rotation and offset, and the values it does not measure
+// (gap, focal length, fill factor or pinhole diameter) as the display states
+// them; each line's comment names the calibration, its time and its U (k).
+void setDisplayCalibration(BenchFileEdit& edit, const DisplayCalibration& calibration, const std::string& stampUtc);
+
+// The calibration's record (JSON, format "lfi-calibration-record" version 1):
+// what, when, how, the devices, every value with its standard and expanded
+// uncertainty, the residuals, the frames and the time taken; the values
+// before (the bench's scale, the optics the display stated), as `previous`.
+std::string displayCalibrationRecord(const DisplayCalibration& calibration, const BenchFile& bench,
+                                     const std::string& stampUtc, const std::string& cameraDescription);
 
 }  // namespace lfi

@@ -1,0 +1,116 @@
+// lfi calibrate display BENCH: the display's lens array and the camera's
+// scale through the bench's own devices (docs/calibration.md), written into
+// the bench file with a backup and a record, or printed with --dry-run.
+
+#include "bench_cli.h"
+#include "cli_util.h"
+#include "commands.h"
+
+#include "lfi/controller/bench_devices.h"
+#include "lfi/controller/display_calibration.h"
+#include "lfi/controller/inspection_record.h"
+#include "lfi/core/error.h"
+#include "lfi/core/log.h"
+
+#include <fmt/format.h>
+
+#include <memory>
+
+namespace fs = std::filesystem;
+
+namespace lfi::cli {
+
+namespace {
+
+struct CalibrateArgs {
+  std::string what;
+  fs::path bench;
+  fs::path part;  // a simulated bench's scene during the calibration
+  bool dryRun = false;
+  int frames = 0;  // 0: the bench's [inspection] frames
+  lfi::DisplayCalibrationSettings settings;
+};
+
+void printDisplayCalibration(const lfi::DisplayCalibration& c) {
+  const double k = c.coverageFactor;
+  const calib::LatticeFit& l = c.lattice;
+  const calib::CameraScaleFit& m = c.camera;
+  fmt::print("display {} ({} {}), {} array: {} lens centres ({} left out), residual {:.2g} mm\n", c.nominal.deviceId,
+             c.nominal.vendor, c.nominal.model, toString(c.optics.type), l.centres, l.outliers, l.residualRms_mm);
+  fmt::print("  pitch      {:.6f} mm    U {:.2g} mm   (stated {:.6f})\n", l.pitch_mm, k * l.pitchSigma_mm,
+             c.nominal.optics.arrayPitch_mm);
+  fmt::print("  rotation   {:+.6f} rad  U {:.2g} rad  (stated {:+.6f})\n", l.rotation_rad, k * l.rotationSigma_rad,
+             c.nominal.optics.rotation_rad);
+  fmt::print("  offset     [{:+.5f}, {:+.5f}] mm  U [{:.2g}, {:.2g}] mm  (stated [{:+.5f}, {:+.5f}])\n", l.offset_mm.x,
+             l.offset_mm.y, k * l.offsetSigma_mm.x, k * l.offsetSigma_mm.y, c.nominal.optics.arrayOffsetX_mm,
+             c.nominal.optics.arrayOffsetY_mm);
+  fmt::print("camera: {} spots, residual {:.2g} mm\n", c.spots, m.residualRms_mm);
+  fmt::print("  object pixel  {:.6f} mm  U {:.2g} mm  (along a row {:.6f}, down a column {:.6f})\n", m.objectPixel_mm,
+             k * m.objectPixelSigma_mm, m.pixelX_mm, m.pixelY_mm);
+  fmt::print("  rotation {:+.5f} rad{}; the image's centre sees the display at [{:+.4f}, {:+.4f}] mm\n", m.rotation_rad,
+             m.mirrored ? ", mirrored" : "", m.centre_mm.x, m.centre_mm.y);
+  fmt::print("  distortion at the corner {:+.3f} px  U {:.2g} px (reported, not applied)\n", m.distortion_px,
+             k * m.distortionSigma_px);
+  fmt::print("U: expanded uncertainty, k = {:g}; {} frames in {:.2f} s ({:.0f} ms of it decoding and fitting)\n", k,
+             c.frames, c.seconds, 1000 * c.computeSeconds);
+}
+
+int runCalibrate(const CalibrateArgs& a, const GlobalOptions& global) {
+  const lfi::BenchFile bench = lfi::readBenchFile(a.bench);
+  lfi::BenchFileEdit edit(a.bench);  // the text as it is now: a file edited meanwhile is not replaced
+  const lfi::BenchFile devices = a.part.empty() ? bench : withSimulatedPart(bench, a.part);
+  auto capture = lfi::openBenchCapture(devices);
+  auto display = lfi::openBenchDisplay(devices);
+  auto camera = lfi::openBenchCamera(devices);
+  lfi::Controller controller(*capture, *display, *camera,
+                             lfi::controllerOptions(bench, a.frames > 0 ? a.frames : bench.inspectionFrames));
+  ProgressBar bar;
+  const lfi::DisplayCalibration c = lfi::calibrateDisplay(controller.probe(), a.settings, [&](double f) {
+    if (!global.quiet) bar("calibrate display", f);
+  });
+  bar.finish();
+  printDisplayCalibration(c);
+
+  const std::string stamp = lfi::utcNow();
+  lfi::setDisplayCalibration(edit, c, stamp);
+  if (a.dryRun) {
+    fmt::print("--dry-run: {} would change:\n{}", a.bench.string(), edit.changes());
+    return 0;
+  }
+  const lfi::PublishedCalibration published = lfi::publishCalibration(
+      edit, "display", stamp,
+      lfi::displayCalibrationRecord(c, bench, stamp, lfi::describeCamera(*camera, bench.cameraUri)));
+  spdlog::info("calibrate: {} written; the file before is {}, the record {}", a.bench.string(),
+               published.backup.string(), published.record.string());
+  spdlog::info("calibrate: the reference package depends on these values: take it again (lfi capture {} --force)",
+               a.bench.string());
+  fmt::print("{}\n", a.bench.string());
+  return 0;
+}
+
+}  // namespace
+
+Command addCalibrateCommand(CLI::App& app) {
+  auto* command = app.add_subcommand("calibrate",
+                                     "Calibrate a bench with its own devices and write the result into its bench file "
+                                     "(display: the display's lens array and the camera's scale, nothing in view)");
+  auto a = std::make_shared<CalibrateArgs>();
+  command->add_option("what", a->what, "What to calibrate: display")->required()->check(CLI::IsMember({"display"}));
+  addBenchArgument(*command, a->bench);
+  command->add_flag("--dry-run", a->dryRun, "Measure and print what would change, write nothing");
+  command
+      ->add_option("--part", a->part,
+                   "A simulated bench: the scene under its camera during the calibration, one without the part "
+                   "(data/scenes/inspection_bench_empty.toml); a physical bench: take the part away")
+      ->check(CLI::ExistingFile);
+  command->add_option("--frames", a->frames, "Frames averaged per image (default: the bench's [inspection] frames)")
+      ->check(CLI::Range(1, 10000));
+  command
+      ->add_option("--spot-period", a->settings.spotPeriod,
+                   "Light one lens in this many along each lattice axis per spot frame")
+      ->check(CLI::Range(2, 16))
+      ->capture_default_str();
+  return {command, [a](const GlobalOptions& global) { return runCalibrate(*a, global); }};
+}
+
+}  // namespace lfi::cli

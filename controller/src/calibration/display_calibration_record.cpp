@@ -1,0 +1,110 @@
+// The display calibration's results in a bench file and its record.
+
+#include "lfi/controller/display_calibration.h"
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+namespace lfi {
+
+namespace {
+
+// Enough digits that the value's rounding stays far below its uncertainty.
+std::string number(double value) {
+  return fmt::format("{:.9g}", value);
+}
+
+nlohmann::json measured(double value, double sigma, double k, const char* unit) {
+  return {{"value", value}, {"standard_uncertainty", sigma}, {"expanded_uncertainty", k * sigma}, {"unit", unit}};
+}
+
+}  // namespace
+
+void setDisplayCalibration(BenchFileEdit& edit, const DisplayCalibration& c, const std::string& stampUtc) {
+  const double k = c.coverageFactor;
+  const auto within = [&](double sigma, const char* unit) {
+    return fmt::format("lfi calibrate display {}: U = {:.2g} {} (k = {:g})", stampUtc, k * sigma, unit, k);
+  };
+  edit.set("camera", "object_pixel_mm", number(c.camera.objectPixel_mm), within(c.camera.objectPixelSigma_mm, "mm"));
+  const DisplayOpticsParams& o = c.optics;
+  const std::string stated = "as the display states it (not measured)";
+  edit.set("display.optics", "optics", fmt::format("\"{}\"", toString(o.type)), stated);
+  edit.set("display.optics", "packing", fmt::format("\"{}\"", toString(o.packing)), stated);
+  edit.set("display.optics", "array_pitch_mm", number(o.arrayPitch_mm), within(c.lattice.pitchSigma_mm, "mm"));
+  edit.set("display.optics", "rotation_rad", number(o.rotation_rad), within(c.lattice.rotationSigma_rad, "rad"));
+  edit.set("display.optics", "array_offset_mm",
+           fmt::format("[{}, {}]", number(o.arrayOffsetX_mm), number(o.arrayOffsetY_mm)),
+           fmt::format("lfi calibrate display {}: U = [{:.2g}, {:.2g}] mm (k = {:g})", stampUtc,
+                       k * c.lattice.offsetSigma_mm.x, k * c.lattice.offsetSigma_mm.y, k));
+  edit.set("display.optics", "gap_mm", number(o.gap_mm), stated);
+  if (o.type == OpticsType::LensletArray) {
+    edit.set("display.optics", "focal_length_mm", number(o.focalLength_mm), stated);
+    edit.set("display.optics", "fill_factor", number(o.fillFactor), stated);
+  } else {
+    edit.set("display.optics", "pinhole_diameter_mm", number(o.pinholeDiameter_mm), stated);
+  }
+}
+
+std::string displayCalibrationRecord(const DisplayCalibration& c, const BenchFile& bench, const std::string& stampUtc,
+                                     const std::string& cameraDescription) {
+  const double k = c.coverageFactor;
+  const DisplayInfo& d = c.nominal;
+  nlohmann::json record = {
+      {"format", "lfi-calibration-record"},
+      {"version", 1},
+      {"what", "display"},
+      {"time_utc", stampUtc},
+      {"bench", bench.file.string()},
+      {"units",
+       "mm, rad, camera pixels (px); the display frame of display.h (origin at the panel's centre, x "
+       "along the columns, y up the panel)"},
+      {"method",
+       "Gray code through the display and the telecentric camera with nothing in view: the panel "
+       "pixels seen along the axis clustered per lens and fitted with the lens lattice; then spots "
+       "under every s-th lens, their centroids against the lattice fitted with an affine camera "
+       "(docs/calibration.md)"},
+      {"coverage_factor", k},
+      {"display",
+       {{"uri", bench.displayUri},
+        {"vendor", d.vendor},
+        {"model", d.model},
+        {"serial", d.serial},
+        {"panel_px", {d.panelWidth_px, d.panelHeight_px}},
+        {"pixel_pitch_mm", d.pixelPitch_mm},
+        {"optics", toString(d.optics.type)},
+        {"packing", toString(d.optics.packing)}}},
+      {"camera",
+       {{"uri", bench.cameraUri}, {"device", cameraDescription}, {"image_px", {c.image.width, c.image.height}}}},
+      {"previous",
+       {{"object_pixel_mm", bench.objectPixel_mm},
+        {"array_pitch_mm", d.optics.arrayPitch_mm},
+        {"rotation_rad", d.optics.rotation_rad},
+        {"array_offset_mm", {d.optics.arrayOffsetX_mm, d.optics.arrayOffsetY_mm}}}},
+      {"lens_array",
+       {{"pitch", measured(c.lattice.pitch_mm, c.lattice.pitchSigma_mm, k, "mm")},
+        {"rotation", measured(c.lattice.rotation_rad, c.lattice.rotationSigma_rad, k, "rad")},
+        {"offset_x", measured(c.lattice.offset_mm.x, c.lattice.offsetSigma_mm.x, k, "mm")},
+        {"offset_y", measured(c.lattice.offset_mm.y, c.lattice.offsetSigma_mm.y, k, "mm")},
+        {"residual_rms_mm", c.lattice.residualRms_mm},
+        {"centres", c.lattice.centres},
+        {"outliers", c.lattice.outliers}}},
+      {"camera_scale",
+       {{"object_pixel", measured(c.camera.objectPixel_mm, c.camera.objectPixelSigma_mm, k, "mm")},
+        {"pixel_x_mm", c.camera.pixelX_mm},
+        {"pixel_y_mm", c.camera.pixelY_mm},
+        {"rotation_rad", c.camera.rotation_rad},
+        {"mirrored", c.camera.mirrored},
+        {"image_centre_on_display_mm", {c.camera.centre_mm.x, c.camera.centre_mm.y}},
+        {"distortion_at_corner", measured(c.camera.distortion_px, c.camera.distortionSigma_px, k, "px")},
+        {"residual_rms_mm", c.camera.residualRms_mm},
+        {"spots", c.spots}}},
+      {"frames", c.frames},
+      {"camera_pixels_lit", c.lit},
+      {"camera_pixels_decoded", c.decoded},
+      {"seconds", c.seconds},
+      {"compute_seconds", c.computeSeconds},
+  };
+  return record.dump(2) + "\n";
+}
+
+}  // namespace lfi

@@ -1,0 +1,152 @@
+// `lfi calibrate display BENCH` as a user runs it, on the simulated inspection
+// bench whose display's lens array is not where the bench file says (the
+// bench states the nominal 1 mm square array at no rotation and no offset;
+// the scene's has another pitch, rotation and offset): the bench file gets
+// the measured values and the camera's scale, keeps the rest of its text,
+// and a backup and a record lie beside it; a dry run writes nothing; a part
+// in view is refused and nothing is written; the calibrated bench captures its
+// reference and passes the intact part.
+
+#include "lfi_process.h"
+#include "text_edit.h"
+
+#include <fmt/format.h>
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+namespace {
+
+namespace fs = std::filesystem;
+using lfi::testing_support::readText;
+using lfi::testing_support::replaceOnce;
+using Result = lfi::testing_support::LfiResult;
+
+Result lfi(const std::string& arguments) {
+  return lfi::testing_support::runLfi(arguments);
+}
+std::string quoted(const fs::path& p) {
+  return "'" + p.string() + "'";
+}
+
+// The scene's lens array, the truth.
+constexpr double kPitch_mm = 1.006, kRotation_rad = 0.012, kOffsetX_mm = 0.23, kOffsetY_mm = -0.31;
+// The camera's object pixel: 0.1215 mm sensor pixels at the magnification b / w of f = 20.03 mm, b = 24.9075 mm.
+const double kObjectPixel_mm = 0.1215 / 24.9075 / (1 / 20.03 - 1 / 24.9075);
+
+class LfiCalibrate : public testing::Test {
+ protected:
+  void SetUp() override {
+    fs::create_directories(dir_);
+    std::string scene = readText(fs::path(LFI_SOURCE_DIR) / "data/scenes/inspection_bench.toml");
+    replaceOnce(
+        scene, "panel_height_px = 800\n",
+        fmt::format("panel_height_px = 800\narray_pitch_mm = {}\nrotation_rad = {}\narray_offset_mm = [{}, {}]\n",
+                    kPitch_mm, kRotation_rad, kOffsetX_mm, kOffsetY_mm));
+    write("scene.toml", scene);
+    write("empty.toml", scene.substr(0, scene.find("[[object]]")));
+    std::string bench = readText(fs::path(LFI_SOURCE_DIR) / "data/benches/inspection_sim.toml");
+    lfi::testing_support::replaceAll(bench, "../scenes/inspection_bench.toml", "scene.toml");
+    lfi::testing_support::replaceAll(bench, "../../out/bench/", "out/");
+    replaceOnce(bench, "\n[capture]",
+                "\n[display.optics]  # the display's factory calibration\noptics = \"lenslet_array\"\npacking = "
+                "\"square\"\narray_pitch_mm = 1.0\nrotation_rad = 0\narray_offset_mm = [0, 0]\ngap_mm = 1.37\n\n"
+                "[capture]");
+    bench_ = write("bench.toml", bench);
+    original_ = bench;
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+
+  fs::path write(const std::string& name, const std::string& text) {
+    std::ofstream(dir_ / name) << text;
+    return dir_ / name;
+  }
+
+  const fs::path dir_ = fs::temp_directory_path() / fmt::format("lfi-calibrate-{}", ::getpid());
+  fs::path bench_;
+  std::string original_;
+};
+
+TEST_F(LfiCalibrate, DisplayWritesTheMeasuredArrayAndScaleIntoTheBenchWithABackupAndARecord) {
+  const Result run = lfi("-q calibrate display " + quoted(bench_) + " --part " + quoted(dir_ / "empty.toml"));
+  ASSERT_EQ(run.status, 0) << run.output;
+  const fs::path folder = dir_ / "bench.calibrations";
+  ASSERT_TRUE(fs::is_directory(folder));
+  fs::path record, backup;
+  for (const auto& entry : fs::directory_iterator(folder))
+    (entry.path().extension() == ".json" ? record : backup) = entry.path();
+  ASSERT_FALSE(record.empty());
+  ASSERT_FALSE(backup.empty());
+  EXPECT_EQ(readText(backup), original_);
+
+  // The record: every value with its uncertainty; the truth within the expanded uncertainty's tolerance (the
+  // display calibration test checks the uncertainty's coverage over many benches; here: the file's values).
+  const auto r = nlohmann::json::parse(readText(record));
+  EXPECT_EQ(r["format"], "lfi-calibration-record");
+  EXPECT_EQ(r["what"], "display");
+  EXPECT_EQ(r["frames"], 58);
+  const auto value = [&](const char* group, const char* name) { return r[group][name]["value"].get<double>(); };
+  // Tolerances (docs/calibration.md): the lens centres at the panel's edge (12.6 mm) within a quarter panel pixel;
+  // a point at the field's edge (28 px) within a tenth of a camera pixel.
+  EXPECT_NEAR(value("lens_array", "pitch"), kPitch_mm, 0.25 * 0.0315 / 12.6);
+  EXPECT_NEAR(value("lens_array", "rotation"), kRotation_rad, 0.25 * 0.0315 / 12.6);
+  EXPECT_NEAR(value("lens_array", "offset_x"), kOffsetX_mm, 0.25 * 0.0315);
+  EXPECT_NEAR(value("lens_array", "offset_y"), kOffsetY_mm, 0.25 * 0.0315);
+  EXPECT_NEAR(value("camera_scale", "object_pixel"), kObjectPixel_mm, kObjectPixel_mm * 0.1 / 28);
+  EXPECT_EQ(r["previous"]["array_pitch_mm"], 1.0);
+
+  // The bench file: the same values (to the digits written), its other text as it was.
+  const std::string text = readText(bench_);
+  const auto line = [&](const std::string& key) {
+    const size_t at = text.find("\n" + key + " = ");
+    return at == std::string::npos ? std::string() : text.substr(at + 1, text.find('\n', at + 1) - at - 1);
+  };
+  EXPECT_NE(line("array_pitch_mm").find(fmt::format("{:.9g}", value("lens_array", "pitch"))), std::string::npos)
+      << line("array_pitch_mm");
+  EXPECT_NE(line("object_pixel_mm").find(fmt::format("{:.9g}", value("camera_scale", "object_pixel"))),
+            std::string::npos)
+      << line("object_pixel_mm");
+  EXPECT_NE(line("array_pitch_mm").find("U = "), std::string::npos) << line("array_pitch_mm");
+  EXPECT_NE(text.find("relative = 6                 # 6 sigma"), std::string::npos) << "a comment was lost";
+  EXPECT_NE(text.find("[display.optics]  # the display's factory calibration"), std::string::npos);
+
+  // The calibrated bench takes its reference and passes the intact part through the calibrated optics.
+  const Result capture = lfi("-q capture " + quoted(bench_));
+  ASSERT_EQ(capture.status, 0) << capture.output;
+  const Result inspect = lfi("-q inspect " + quoted(bench_));
+  EXPECT_EQ(inspect.status, 0) << inspect.output;
+}
+
+TEST_F(LfiCalibrate, ADryRunPrintsTheChangesAndWritesNothing) {
+  const Result run =
+      lfi("-q calibrate display " + quoted(bench_) + " --part " + quoted(dir_ / "empty.toml") + " --dry-run");
+  ASSERT_EQ(run.status, 0) << run.output;
+  EXPECT_NE(run.output.find("would change"), std::string::npos) << run.output;
+  EXPECT_NE(run.output.find("- array_pitch_mm = 1.0"), std::string::npos) << run.output;
+  EXPECT_NE(run.output.find("+ array_pitch_mm = 1.00"), std::string::npos) << run.output;
+  EXPECT_EQ(readText(bench_), original_);
+  EXPECT_FALSE(fs::exists(dir_ / "bench.calibrations"));
+}
+
+TEST_F(LfiCalibrate, APartInViewIsRefusedAndNothingIsWritten) {
+  const Result run = lfi("-q calibrate display " + quoted(bench_));  // the scene's lens under the camera
+  EXPECT_EQ(run.status, 1) << run.output;
+  EXPECT_NE(run.output.find("too large for the model"), std::string::npos) << run.output;
+  EXPECT_EQ(readText(bench_), original_);
+  EXPECT_FALSE(fs::exists(dir_ / "bench.calibrations"));
+}
+
+TEST_F(LfiCalibrate, OpticsOfAnotherClassThanTheDisplaysAreNamed) {
+  std::string bench = original_;
+  replaceOnce(bench, "optics = \"lenslet_array\"\n", "optics = \"pinhole_array\"\npinhole_diameter_mm = 0.1\n");
+  write("bench.toml", bench);
+  const Result run = lfi("-q calibrate display " + quoted(bench_) + " --part " + quoted(dir_ / "empty.toml"));
+  EXPECT_EQ(run.status, 1) << run.output;
+  EXPECT_NE(run.output.find("[display.optics] states pinhole_array optics"), std::string::npos) << run.output;
+}
+
+}  // namespace
