@@ -36,8 +36,96 @@ void checkSettings(const DisplayCalibrationSettings& s) {
   check(s.coverageFactor > 0 && s.coverageFactor <= 10, "coverage_factor", s.coverageFactor, "(0, 10]");
 }
 
-// A lens's index as a map key.
 using LensIndex = std::array<int, 2>;
+
+double median(std::vector<double> v) {
+  const auto mid = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
+  std::nth_element(v.begin(), mid, v.end());
+  return *mid;
+}
+
+// What a fit throws, with the display named.
+template <typename Fit>
+auto named(const std::string& display, Fit&& fit) {
+  try {
+    return fit();
+  } catch (const Error& e) {
+    fail(e.code(), "display calibration of display '{}': {}", display, e.what());
+  }
+}
+
+// The decoded panel pixels, weighted by the light each link carries, clustered per lens; clusters of little
+// light (a misdecoded pixel, not a lens) left out.
+std::vector<calib::WeightedPoint> lensCentres(const calib::PanelLinks& links, const cv::Mat& light,
+                                              const DisplayInfo& info) {
+  std::map<int, double> panelWeight;
+  for (const calib::PanelLinks::Link& link : links.links()) {
+    const double w = link.share * light.at<float>(link.camera / light.cols, link.camera % light.cols);
+    if (w > 0) panelWeight[link.panel] += w;
+  }
+  if (panelWeight.empty()) return {};
+  std::vector<calib::WeightedPoint> points;
+  for (const auto& [p, w] : panelWeight)
+    points.push_back({pixelCentre(info, p % info.panelWidth_px, p / info.panelWidth_px), w});
+  std::vector<calib::WeightedPoint> centres = calib::clusterPoints(points, 0.25 * info.optics.arrayPitch_mm);
+  std::vector<double> weights;
+  for (const calib::WeightedPoint& c : centres) weights.push_back(c.weight);
+  const double floor = 0.1 * median(weights);
+  std::erase_if(centres, [&](const calib::WeightedPoint& c) { return c.weight < floor; });
+  return centres;
+}
+
+// A first camera scale from the decoded links: where each lens shows, weighted by its light.
+std::vector<calib::CameraPoint> roughSpots(const calib::PanelLinks& links, const cv::Mat& light,
+                                           const DisplayInfo& info, const calib::LatticeFit& lattice) {
+  std::map<LensIndex, std::pair<Vec2, double>> seen;
+  for (const calib::PanelLinks::Link& link : links.links()) {
+    const int row = link.camera / light.cols, col = link.camera % light.cols;
+    const double w = link.share * light.at<float>(row, col);
+    const Vec2 p = pixelCentre(info, link.panel % info.panelWidth_px, link.panel / info.panelWidth_px);
+    const LensIndex lens = lattice.nearestIndex(p);
+    if (!(w > 0) || (p - lattice.centre(lens[0], lens[1])).length() > 0.25 * lattice.pitch_mm) continue;
+    auto& [sum, weight] = seen.try_emplace(lens, Vec2(0, 0), 0.0).first->second;
+    sum += w * Vec2(col, row);
+    weight += w;
+  }
+  std::vector<calib::CameraPoint> rough;
+  for (const auto& [lens, s] : seen) rough.push_back({s.first / s.second, lattice.centre(lens[0], lens[1]), lens});
+  return rough;
+}
+
+// The panel of spot frame (a, b): a disc of `radius_mm` about every lens (i, j) with i ≡ a, j ≡ b (mod s) whose
+// cell lies on the panel; those lenses in `lit`.
+cv::Mat spotPanel(const DisplayInfo& info, const calib::LatticeFit& lattice, int s, int a, int b, double radius_mm,
+                  std::vector<LensIndex>& lit) {
+  const cv::Size panel(info.panelWidth_px, info.panelHeight_px);
+  const double q = info.pixelPitch_mm;
+  const double halfWidth = 0.5 * panel.width * q, halfHeight = 0.5 * panel.height * q;
+  const double inside = 0.5 * lattice.pitch_mm;
+  int iMin = 1 << 30, iMax = -(1 << 30), jMin = 1 << 30, jMax = -(1 << 30);
+  for (const Vec2& corner : {Vec2(-halfWidth, -halfHeight), Vec2(halfWidth, -halfHeight), Vec2(-halfWidth, halfHeight),
+                             Vec2(halfWidth, halfHeight)}) {
+    const LensIndex k = lattice.nearestIndex(corner);
+    iMin = std::min(iMin, k[0] - 2), iMax = std::max(iMax, k[0] + 2);
+    jMin = std::min(jMin, k[1] - 2), jMax = std::max(jMax, k[1] + 2);
+  }
+  const int reach = static_cast<int>(std::ceil(radius_mm / q));
+  cv::Mat levels = cv::Mat::zeros(panel, CV_8UC1);
+  lit.clear();
+  for (int i = iMin; i <= iMax; ++i)
+    for (int j = jMin; j <= jMax; ++j) {
+      if (((i % s) + s) % s != a || ((j % s) + s) % s != b) continue;
+      const Vec2 centre = lattice.centre(i, j);
+      if (std::abs(centre.x) > halfWidth - inside || std::abs(centre.y) > halfHeight - inside) continue;
+      lit.push_back({i, j});
+      const int col = static_cast<int>(centre.x / q + 0.5 * panel.width - 0.5);
+      const int row = static_cast<int>(0.5 * panel.height - 0.5 - centre.y / q);
+      for (int y = std::max(0, row - reach); y <= std::min(panel.height - 1, row + reach + 1); ++y)
+        for (int x = std::max(0, col - reach); x <= std::min(panel.width - 1, col + reach + 1); ++x)
+          if ((pixelCentre(info, x, y) - centre).length() <= radius_mm) levels.at<std::uint8_t>(y, x) = 255;
+    }
+  return levels;
+}
 
 }  // namespace
 
@@ -104,101 +192,32 @@ DisplayCalibration calibrateDisplay(BenchProbe& bench, const DisplayCalibrationS
          "min_decoded = {}: the patterns blur, or something in the camera's view scatters the light",
          c.decoded, c.lit, name, settings.minDecoded);
 
-  // The decoded panel pixels, weighted by the light each link carries, clustered per lens.
   calib::PanelLinks links(white.size(), panel);
   links.add(c, {}, 0);
   cv::Mat light;
   cv::max(white - black, 0, light);
-  std::map<int, double> panelWeight;
-  for (const calib::PanelLinks::Link& link : links.links()) {
-    const double w = link.share * light.at<float>(link.camera / white.cols, link.camera % white.cols);
-    if (w > 0) panelWeight[link.panel] += w;
-  }
-  std::vector<calib::WeightedPoint> points;
-  points.reserve(panelWeight.size());
-  for (const auto& [p, w] : panelWeight) points.push_back({pixelCentre(info, p % panel.width, p / panel.width), w});
-  const double pitch0 = info.optics.arrayPitch_mm;
-  std::vector<calib::WeightedPoint> centres;
-  if (!points.empty()) {
-    centres = calib::clusterPoints(points, 0.25 * pitch0);
-    // A cluster of little light is a misdecoded pixel, not a lens.
-    std::vector<double> weights;
-    for (const calib::WeightedPoint& w : centres) weights.push_back(w.weight);
-    std::nth_element(weights.begin(), weights.begin() + static_cast<std::ptrdiff_t>(weights.size() / 2), weights.end());
-    const double floor = 0.1 * weights[weights.size() / 2];
-    std::erase_if(centres, [&](const calib::WeightedPoint& w) { return w.weight < floor; });
-  }
+  const std::vector<calib::WeightedPoint> centres = lensCentres(links, light, info);
   out.lensesFound = static_cast<int>(centres.size());
-  try {
-    out.lattice =
-        calib::fitLensLattice(centres, info.optics.packing, pitch0, info.optics.rotation_rad, info.pixelPitch_mm);
-  } catch (const Error& e) {
-    fail(e.code(), "display calibration of display '{}': {}", name, e.what());
-  }
+  out.lattice = named(name, [&] {
+    return calib::fitLensLattice(centres, info.optics.packing, info.optics.arrayPitch_mm, info.optics.rotation_rad,
+                                 info.pixelPitch_mm);
+  });
   const calib::LatticeFit& lattice = out.lattice;
-
-  // A first camera scale from the decoded links: where each lens shows, weighted by its light.
-  std::map<LensIndex, std::pair<Vec2, double>> seen;
-  for (const calib::PanelLinks::Link& link : links.links()) {
-    const int row = link.camera / white.cols, col = link.camera % white.cols;
-    const double w = link.share * light.at<float>(row, col);
-    const Vec2 p = pixelCentre(info, link.panel % panel.width, link.panel / panel.width);
-    const LensIndex lens = lattice.nearestIndex(p);
-    if (!(w > 0) || (p - lattice.centre(lens[0], lens[1])).length() > 0.25 * lattice.pitch_mm) continue;
-    auto& [sum, weight] = seen.try_emplace(lens, Vec2(0, 0), 0.0).first->second;
-    sum += w * Vec2(col, row);
-    weight += w;
-  }
-  std::vector<calib::CameraPoint> rough;
-  for (const auto& [lens, s] : seen) rough.push_back({s.first / s.second, lattice.centre(lens[0], lens[1]), lens});
-  calib::CameraScaleFit first;
-  try {
-    first = calib::fitCameraScale(rough, out.image);
-  } catch (const Error& e) {
-    fail(e.code(), "display calibration of display '{}': {}", name, e.what());
-  }
+  const calib::CameraScaleFit first =
+      named(name, [&] { return calib::fitCameraScale(roughSpots(links, light, info, lattice), out.image); });
   compute += Clock::now() - computeStart;
 
-  // Spots: every s-th lens along each lattice axis, s² frames.
+  // Spots: every s-th lens along each lattice axis, s² frames; each found about where the first scale puts it.
   const int s = settings.spotPeriod;
-  const double halfWidth = 0.5 * panel.width * info.pixelPitch_mm, halfHeight = 0.5 * panel.height * info.pixelPitch_mm;
-  const double inside = 0.5 * lattice.pitch_mm;
   const double radius_mm = std::max(settings.spotRadius * lattice.pitch_mm, 1.5 * info.pixelPitch_mm);
-  int iMin = 1 << 30, iMax = -(1 << 30), jMin = 1 << 30, jMax = -(1 << 30);
-  for (const Vec2& corner : {Vec2(-halfWidth, -halfHeight), Vec2(halfWidth, -halfHeight), Vec2(-halfWidth, halfHeight),
-                             Vec2(halfWidth, halfHeight)}) {
-    const LensIndex k = lattice.nearestIndex(corner);
-    iMin = std::min(iMin, k[0] - 2), iMax = std::max(iMax, k[0] + 2);
-    jMin = std::min(jMin, k[1] - 2), jMax = std::max(jMax, k[1] + 2);
-  }
   const cv::Matx22d cameraFromDisplay = first.displayFromCamera.inv();
   const Vec2 imageCentre(0.5 * (out.image.width - 1), 0.5 * (out.image.height - 1));
   const double window_px = std::max(1.5, 0.45 * s * lattice.pitch_mm / first.objectPixel_mm);
-  const int reach = static_cast<int>(std::ceil(radius_mm / info.pixelPitch_mm));
-  struct Found {
-    calib::CameraPoint point;
-    double light;
-  };
-  std::vector<Found> spots;
+  std::vector<std::pair<calib::CameraPoint, double>> spots;  // and each one's light
+  std::vector<LensIndex> lit;
   for (int a = 0; a < s; ++a)
     for (int b = 0; b < s; ++b) {
-      cv::Mat levels = cv::Mat::zeros(panel, CV_8UC1);
-      std::vector<LensIndex> lit;
-      for (int i = iMin; i <= iMax; ++i)
-        for (int j = jMin; j <= jMax; ++j) {
-          if (((i % s) + s) % s != a || ((j % s) + s) % s != b) continue;
-          const Vec2 centre = lattice.centre(i, j);
-          if (std::abs(centre.x) > halfWidth - inside || std::abs(centre.y) > halfHeight - inside) continue;
-          lit.push_back({i, j});
-          const double col = centre.x / info.pixelPitch_mm + 0.5 * panel.width - 0.5;
-          const double row = 0.5 * panel.height - 0.5 - centre.y / info.pixelPitch_mm;
-          for (int y = static_cast<int>(row) - reach; y <= static_cast<int>(row) + reach + 1; ++y)
-            for (int x = static_cast<int>(col) - reach; x <= static_cast<int>(col) + reach + 1; ++x)
-              if (x >= 0 && y >= 0 && x < panel.width && y < panel.height &&
-                  (pixelCentre(info, x, y) - centre).length() <= radius_mm)
-                levels.at<std::uint8_t>(y, x) = 255;
-        }
-      const cv::Mat image = take(levels, "spots") - black;
+      const cv::Mat image = take(spotPanel(info, lattice, s, a, b, radius_mm, lit), "spots") - black;
       computeStart = Clock::now();
       for (const LensIndex& lens : lit) {
         const Vec2 centre = lattice.centre(lens[0], lens[1]);
@@ -213,19 +232,16 @@ DisplayCalibration calibrateDisplay(BenchProbe& bench, const DisplayCalibrationS
   std::vector<calib::CameraPoint> spotPoints;
   if (!spots.empty()) {
     std::vector<double> lights;
-    for (const Found& f : spots) lights.push_back(f.light);
-    std::nth_element(lights.begin(), lights.begin() + static_cast<std::ptrdiff_t>(lights.size() / 2), lights.end());
-    const double median = lights[lights.size() / 2];
-    for (const Found& f : spots)
-      if (f.light >= 0.5 * median) spotPoints.push_back(f.point);
+    for (const auto& spot : spots) lights.push_back(spot.second);
+    const double least = 0.5 * median(lights);
+    for (const auto& [point, spotLight] : spots)
+      if (spotLight >= least) spotPoints.push_back(point);
   }
   out.spots = static_cast<int>(spotPoints.size());
-  try {
-    out.camera = calib::fitCameraScale(spotPoints, out.image,
-                                       {lattice.pitchSigma_mm / lattice.pitch_mm, lattice.offsetSigma_mm});
-  } catch (const Error& e) {
-    fail(e.code(), "display calibration of display '{}': {}", name, e.what());
-  }
+  out.camera = named(name, [&] {
+    return calib::fitCameraScale(spotPoints, out.image,
+                                 {lattice.pitchSigma_mm / lattice.pitch_mm, lattice.offsetSigma_mm});
+  });
   compute += Clock::now() - computeStart;
 
   out.optics = info.optics;
