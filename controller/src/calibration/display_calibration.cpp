@@ -1,5 +1,7 @@
 #include "lfi/controller/display_calibration.h"
 
+#include "gray_code_view.h"
+
 #include "lfi/calib/coded_patterns.h"
 #include "lfi/calib/coded_reference.h"
 #include "lfi/core/error.h"
@@ -17,12 +19,6 @@ using Clock = std::chrono::steady_clock;
 
 double seconds(Clock::duration d) {
   return std::chrono::duration<double>(d).count();
-}
-
-// Panel pixel (col, row) ↔ the display frame (display.h): the pixel's centre.
-Vec2 pixelCentre(const DisplayInfo& d, double col, double row) {
-  return {(col + 0.5 - 0.5 * d.panelWidth_px) * d.pixelPitch_mm,
-          (0.5 * d.panelHeight_px - row - 0.5) * d.pixelPitch_mm};
 }
 
 void checkSettings(const DisplayCalibrationSettings& s) {
@@ -66,7 +62,7 @@ std::vector<calib::WeightedPoint> lensCentres(const calib::PanelLinks& links, co
   if (panelWeight.empty()) return {};
   std::vector<calib::WeightedPoint> points;
   for (const auto& [p, w] : panelWeight)
-    points.push_back({pixelCentre(info, p % info.panelWidth_px, p / info.panelWidth_px), w});
+    points.push_back({detail::panelPixelCentre(info, p % info.panelWidth_px, p / info.panelWidth_px), w});
   std::vector<calib::WeightedPoint> centres = calib::clusterPoints(points, 0.25 * info.optics.arrayPitch_mm);
   std::vector<double> weights;
   for (const calib::WeightedPoint& c : centres) weights.push_back(c.weight);
@@ -82,7 +78,7 @@ std::vector<calib::CameraPoint> roughSpots(const calib::PanelLinks& links, const
   for (const calib::PanelLinks::Link& link : links.links()) {
     const int row = link.camera / light.cols, col = link.camera % light.cols;
     const double w = link.share * light.at<float>(row, col);
-    const Vec2 p = pixelCentre(info, link.panel % info.panelWidth_px, link.panel / info.panelWidth_px);
+    const Vec2 p = detail::panelPixelCentre(info, link.panel % info.panelWidth_px, link.panel / info.panelWidth_px);
     const LensIndex lens = lattice.nearestIndex(p);
     if (!(w > 0) || (p - lattice.centre(lens[0], lens[1])).length() > 0.25 * lattice.pitch_mm) continue;
     auto& [sum, weight] = seen.try_emplace(lens, Vec2(0, 0), 0.0).first->second;
@@ -122,7 +118,8 @@ cv::Mat spotPanel(const DisplayInfo& info, const calib::LatticeFit& lattice, int
       const int row = static_cast<int>(0.5 * panel.height - 0.5 - centre.y / q);
       for (int y = std::max(0, row - reach); y <= std::min(panel.height - 1, row + reach + 1); ++y)
         for (int x = std::max(0, col - reach); x <= std::min(panel.width - 1, col + reach + 1); ++x)
-          if ((pixelCentre(info, x, y) - centre).length() <= radius_mm) levels.at<std::uint8_t>(y, x) = 255;
+          if ((detail::panelPixelCentre(info, x, y) - centre).length() <= radius_mm)
+            levels.at<std::uint8_t>(y, x) = 255;
     }
   return levels;
 }
@@ -146,8 +143,8 @@ DisplayCalibration calibrateDisplay(BenchProbe& bench, const DisplayCalibrationS
          "arrays (a lenticular sheet's or a line barrier's is not built)",
          name, toString(info.optics.type));
   const cv::Size panel(info.panelWidth_px, info.panelHeight_px);
-  const calib::CodedPatternSet set = calib::grayCodePatterns(panel.width, panel.height);
-  const int totalFrames = set.layout.frameCount() + settings.spotPeriod * settings.spotPeriod;
+  const int totalFrames = calib::GrayCodeLayout::forPanel(panel.width, panel.height).frameCount() +
+                          settings.spotPeriod * settings.spotPeriod;
   const auto take = [&](const cv::Mat& levels, const char* what) {
     if (progress) progress(static_cast<double>(out.frames) / totalFrames);
     try {
@@ -158,44 +155,22 @@ DisplayCalibration calibrateDisplay(BenchProbe& bench, const DisplayCalibrationS
       fail(e.code(), "display calibration: frame {} ({}) of display '{}': {}", out.frames + 1, what, name, e.what());
     }
   };
-  const auto toDecodable = [](const cv::Mat& frame) {
-    cv::Mat decodable;
-    frame.convertTo(decodable, CV_16U);
-    return decodable;
-  };
 
   // Which panel pixels each camera pixel sees along the axis.
-  const double dnPer8Bit = bench.cameraFullScale_dn() / 255;
-  calib::DecodeSettings decode;
-  decode.secondShare = settings.secondShare;
-  decode.minLit_dn = std::max(1, static_cast<int>(std::lround(decode.minLit_dn * dnPer8Bit)));
-  decode.minContrast_dn = std::max(1, static_cast<int>(std::lround(decode.minContrast_dn * dnPer8Bit)));
-  const cv::Mat white = take(set.white, "all white"), black = take(set.black, "all black");
-  out.image = white.size();
-  std::vector<cv::Mat> frames;
-  for (size_t k = 0; k < set.patterns.size(); ++k)
-    frames.push_back(toDecodable(take(set.patterns[k], k % 2 == 0 ? "pattern" : "inverse pattern")));
+  const detail::GrayCodeView view = detail::takeGrayCode(
+      take, info, bench.cameraFullScale_dn(), settings.secondShare, settings.minDecoded, "display calibration",
+      "the patterns blur, or something in the camera's view scatters the light");
   auto computeStart = Clock::now();
-  const calib::PanelCorrespondence c =
-      calib::decodeGrayCode(frames, toDecodable(white), toDecodable(black), set.layout, decode);
+  compute += std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(view.decodeSeconds));
+  const calib::PanelCorrespondence& c = view.correspondence;
+  const cv::Mat& black = view.black;
+  const cv::Mat& light = view.light;
+  out.image = view.white.size();
   out.lit = c.lit;
   out.decoded = c.decoded;
-  if (c.lit == 0)
-    fail(Errc::Device,
-         "display calibration: the camera sees no change between the all-white and the all-black "
-         "panel of display '{}' (none of its {} pixels by {} DN): the display is not in the camera's view, or it "
-         "is dark or covered",
-         name, white.total(), decode.minLit_dn);
-  if (c.decoded < settings.minDecoded * c.lit)
-    fail(Errc::Device,
-         "display calibration: {} of the {} camera pixels that see display '{}' decoded, fewer than "
-         "min_decoded = {}: the patterns blur, or something in the camera's view scatters the light",
-         c.decoded, c.lit, name, settings.minDecoded);
 
-  calib::PanelLinks links(white.size(), panel);
+  calib::PanelLinks links(out.image, panel);
   links.add(c, {}, 0);
-  cv::Mat light;
-  cv::max(white - black, 0, light);
   const std::vector<calib::WeightedPoint> centres = lensCentres(links, light, info);
   out.lensesFound = static_cast<int>(centres.size());
   out.lattice = named(name, [&] {
