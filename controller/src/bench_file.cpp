@@ -99,6 +99,18 @@ void readGeometry(ConfigTable t, BenchFile& b) {
     const auto c = t.numbers("part_centre_px", 2, std::nullopt, -1e6, 1e6);
     b.partCentre_px = Vec2(c[0], c[1]);
   }
+  if (t.has("display_per_pixel_mm") != t.has("display_at_image_centre_mm"))
+    fail(Errc::Config, "{} needs display_per_pixel_mm and display_at_image_centre_mm together",
+         t.where(t.has("display_per_pixel_mm") ? "display_per_pixel_mm" : "display_at_image_centre_mm"));
+  if (t.has("display_per_pixel_mm")) {
+    const auto a = t.numbers("display_per_pixel_mm", 4, std::nullopt, -1e3, 1e3);
+    const auto c = t.numbers("display_at_image_centre_mm", 2, std::nullopt, -1e6, 1e6);
+    CameraOnDisplay m{cv::Matx22d(a[0], a[1], a[2], a[3]), Vec2(c[0], c[1])};
+    if (!(std::abs(cv::determinant(m.perPixel_mm)) > 0))
+      fail(Errc::Config, "{} = [{}, {}, {}, {}] maps the image onto a line", t.where("display_per_pixel_mm"), a[0],
+           a[1], a[2], a[3]);
+    b.cameraOnDisplay = m;
+  }
   t.finish();
 }
 
@@ -183,7 +195,9 @@ BenchFile readBenchFile(const fs::path& file) {
              b);
   readDisplay(*table("display", {"uri", "settle_ms", "white", "optics"}, true), b);
   readCapture(*table("capture", {"uri", "light_field"}, true), b);
-  readGeometry(*table("geometry", {"distance_mm", "part_centre_px"}, true), b);
+  readGeometry(*table("geometry",
+                      {"distance_mm", "part_centre_px", "display_per_pixel_mm", "display_at_image_centre_mm"}, true),
+               b);
   readReference(*table("reference", {"folder", "frames", "mask_radius_mm", "mask_lit_fraction"}, true), b);
   if (auto t = table("inspection",
                      {"frames", "absolute_dn", "relative", "smallest_defect_mm", "closing_mm", "min_defect_area_mm2",
@@ -231,6 +245,16 @@ std::string BenchFile::referenceHash() const {
     h *= 1099511628211ull;
   }
   return fmt::format("{:016x}", h);
+}
+
+Vec2 CameraOnDisplay::displayPoint(const Vec2& px, cv::Size image) const {
+  const cv::Vec2d d = perPixel_mm * cv::Vec2d(px.x - 0.5 * (image.width - 1), px.y - 0.5 * (image.height - 1));
+  return atImageCentre_mm + Vec2(d[0], d[1]);
+}
+
+Vec2 CameraOnDisplay::cameraPoint(const Vec2& q, cv::Size image) const {
+  const cv::Vec2d d = perPixel_mm.inv() * cv::Vec2d(q.x - atImageCentre_mm.x, q.y - atImageCentre_mm.y);
+  return {d[0] + 0.5 * (image.width - 1), d[1] + 0.5 * (image.height - 1)};
 }
 
 PartFrame BenchFile::partFrame(int width_px, int height_px) const {

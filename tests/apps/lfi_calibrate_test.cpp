@@ -111,6 +111,10 @@ TEST_F(LfiCalibrate, DisplayWritesTheMeasuredArrayAndScaleIntoTheBenchWithABacku
             std::string::npos)
       << line("object_pixel_mm");
   EXPECT_NE(line("array_pitch_mm").find("U = "), std::string::npos) << line("array_pitch_mm");
+  // Where the camera looks on the display: the scene's camera axis is the display's centre.
+  EXPECT_NE(line("display_per_pixel_mm").find("["), std::string::npos) << text;
+  EXPECT_NEAR(r["camera_scale"]["image_centre_on_display_mm"][0].get<double>(), 0, 0.1 * kObjectPixel_mm);
+  EXPECT_NEAR(r["camera_scale"]["image_centre_on_display_mm"][1].get<double>(), 0, 0.1 * kObjectPixel_mm);
   EXPECT_NE(text.find("relative = 6                 # 6 sigma"), std::string::npos) << "a comment was lost";
   EXPECT_NE(text.find("[display.optics]  # the display's factory calibration"), std::string::npos);
 

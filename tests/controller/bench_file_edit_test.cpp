@@ -126,5 +126,27 @@ TEST_F(BenchFileEditTest, TheDisplayOpticsTableReadsAsAClassAndItsValuesAndIsPar
                         "key 'display.optics.slant_rad' is not a parameter of lenslet_array optics"));
 }
 
+TEST_F(BenchFileEditTest, WhereTheCameraLooksOnTheDisplayReadsAsAnAffineMapBothWays) {
+  const std::string text = replaced(kBench, "part_centre_px = [27.5, 27.5]\n",
+                                    "part_centre_px = [27.5, 27.5]\ndisplay_per_pixel_mm = [0.5, 0.01, 0.01, -0.5]\n"
+                                    "display_at_image_centre_mm = [1, -2]\n");
+  const BenchFile b = read(text);
+  ASSERT_TRUE(b.cameraOnDisplay);
+  const cv::Size image(56, 56);
+  const Vec2 q = b.cameraOnDisplay->displayPoint({27.5 + 2, 27.5 + 4}, image);
+  EXPECT_NEAR(q.x, 1 + 0.5 * 2 + 0.01 * 4, 1e-12);
+  EXPECT_NEAR(q.y, -2 + 0.01 * 2 - 0.5 * 4, 1e-12);
+  const Vec2 back = b.cameraOnDisplay->cameraPoint(q, image);
+  EXPECT_NEAR(back.x, 29.5, 1e-12);
+  EXPECT_NEAR(back.y, 31.5, 1e-12);
+  EXPECT_FALSE(read(kBench).cameraOnDisplay);
+  EXPECT_TRUE(
+      refusedAt(replaced(text, "display_at_image_centre_mm = [1, -2]\n", ""), lineOf(text, "display_per_pixel_mm"),
+                "key 'geometry.display_per_pixel_mm' needs display_per_pixel_mm and display_at_image_centre_mm"));
+  EXPECT_TRUE(refusedAt(replaced(text, "[0.5, 0.01, 0.01, -0.5]", "[0.5, 0.5, 0.5, 0.5]"),
+                        lineOf(text, "display_per_pixel_mm"),
+                        "key 'geometry.display_per_pixel_mm' = [0.5, 0.5, 0.5, 0.5] maps the image onto a line"));
+}
+
 }  // namespace
 }  // namespace lfi::bench_file_test

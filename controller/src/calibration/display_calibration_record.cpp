@@ -26,6 +26,14 @@ void setDisplayCalibration(BenchFileEdit& edit, const DisplayCalibration& c, con
     return fmt::format("lfi calibrate display {}: U = {:.2g} {} (k = {:g})", stampUtc, k * sigma, unit, k);
   };
   edit.set("camera", "object_pixel_mm", number(c.camera.objectPixel_mm), within(c.camera.objectPixelSigma_mm, "mm"));
+  const cv::Matx22d& a = c.camera.displayFromCamera;
+  edit.set("geometry", "display_per_pixel_mm",
+           fmt::format("[{}, {}, {}, {}]", number(a(0, 0)), number(a(0, 1)), number(a(1, 0)), number(a(1, 1))),
+           within(c.camera.objectPixelSigma_mm, "mm (scale)"));
+  edit.set("geometry", "display_at_image_centre_mm",
+           fmt::format("[{}, {}]", number(c.camera.centre_mm.x), number(c.camera.centre_mm.y)),
+           fmt::format("lfi calibrate display {}: U = [{:.2g}, {:.2g}] mm (k = {:g})", stampUtc,
+                       k * c.camera.centreSigma_mm.x, k * c.camera.centreSigma_mm.y, k));
   const DisplayOpticsParams& o = c.optics;
   const std::string stated = "as the display states it (not measured)";
   edit.set("display.optics", "optics", fmt::format("\"{}\"", toString(o.type)), stated);

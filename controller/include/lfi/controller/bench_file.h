@@ -30,6 +30,11 @@
 //   [capture]      uri  | light_field     -      one of      the reference's capture (sim:, coded:), or a light field file
 //   [geometry]     distance_mm            mm     required    Δ: display plane to the part's reference plane
 //                  part_centre_px         px     centre      [column, row] of the part's origin on the image
+//                  display_per_pixel_mm   mm/px  none        [a, b, c, d]: the display point a camera pixel sees,
+//                                                             (x, y) = [[a, b], [c, d]] (u - u0, v - v0) + the
+//                                                             next key, (u0, v0) the image's centre (both keys or
+//                                                             neither; `lfi calibrate display` writes them)
+//                  display_at_image_centre_mm mm none        [x, y]: the display point the image's centre sees
 //   [reference]    folder                 path   required    the reference package (reference_package.h)
 //                  frames                 -      16          frames of the intact part the golden model starts from
 //                  mask_radius_mm         mm     none        the part: a disc around part_centre_px (none: whole image)
@@ -66,6 +71,17 @@ namespace lfi {
 enum class SaveImages { All, Failed, None };
 enum class OnDeviceLoss { Stop, Wait };
 
+// Where the camera's pixels look on the display's plane (the display frame):
+// an object-side telecentric camera sees every plane along its axis alike.
+struct CameraOnDisplay {
+  cv::Matx22d perPixel_mm;  // the display's (x, y) per camera pixel (u, v)
+  Vec2 atImageCentre_mm{0, 0};
+  // The display point camera pixel `px` sees, and the camera pixel that sees display point `q`, on an image of
+  // `image` pixels.
+  Vec2 displayPoint(const Vec2& px, cv::Size image) const;
+  Vec2 cameraPoint(const Vec2& q, cv::Size image) const;
+};
+
 struct BenchFile {
   std::filesystem::path file;  // as given
   // [camera]
@@ -86,6 +102,7 @@ struct BenchFile {
   // [geometry]
   double distance_mm = 0;
   std::optional<Vec2> partCentre_px;  // none: the image's centre
+  std::optional<CameraOnDisplay> cameraOnDisplay;
   // [reference]
   std::filesystem::path referenceFolder;
   int referenceFrames = 16;

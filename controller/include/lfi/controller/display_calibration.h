@@ -82,7 +82,9 @@ DisplayCalibration calibrateDisplay(BenchProbe& bench, const DisplayCalibrationS
                                     const std::function<void(double)>& progress = {});
 
 // What `lfi calibrate display` writes into a bench file (bench_file_edit.h):
-// [camera] object_pixel_mm, and [display.optics] with the class, the packing,
+// [camera] object_pixel_mm, [geometry] display_per_pixel_mm and
+// display_at_image_centre_mm (where the camera looks on the display), and
+// [display.optics] with the class, the packing,
 // the measured pitch, rotation and offset, and the values it does not measure
 // (gap, focal length, fill factor or pinhole diameter) as the display states
 // them; each line's comment names the calibration, its time and its U (k).
