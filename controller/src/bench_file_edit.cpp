@@ -132,6 +132,29 @@ void BenchFileEdit::set(const std::string& table, const std::string& key, const 
   text_ += "\n" + header;
 }
 
+std::optional<std::string> BenchFileEdit::string(const std::string& table, const std::string& key) const {
+  const std::vector<std::string> parts = splitPath(table);
+  const toml::table root = parseText(text_, file_);
+  const toml::table* t = findTable(root, parts, parts.size());
+  if (!t) return std::nullopt;
+  const toml::node* n = t->get(key);
+  if (!n || !n->is_string()) return std::nullopt;
+  return n->value<std::string>();
+}
+
+std::string tomlString(const std::string& text) {
+  std::string out = "\"";
+  for (const char c : text) {
+    if (c == '"' || c == '\\') out += '\\';
+    if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f) {
+      out += fmt::format("\\u{:04X}", static_cast<unsigned>(static_cast<unsigned char>(c)));
+      continue;
+    }
+    out += c;
+  }
+  return out + "\"";
+}
+
 std::string BenchFileEdit::changes() const {
   const auto lines = [](const std::string& text) {
     std::vector<std::string> out;

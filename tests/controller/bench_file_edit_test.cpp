@@ -148,5 +148,17 @@ TEST_F(BenchFileEditTest, WhereTheCameraLooksOnTheDisplayReadsAsAnAffineMapBothW
                         "key 'geometry.display_per_pixel_mm' = [0.5, 0.5, 0.5, 0.5] maps the image onto a line"));
 }
 
+TEST_F(BenchFileEditTest, StringsReadAsTheTextHoldsThemAndWriteBackEscaped) {
+  BenchFileEdit edit(write(kBench));
+  EXPECT_EQ(edit.string("capture", "uri"), "sim:../scenes/bench.toml?distance_mm=30");
+  EXPECT_FALSE(edit.string("camera", "exposure_us"));  // a number
+  EXPECT_FALSE(edit.string("camera", "none"));
+  EXPECT_FALSE(edit.string("none", "uri"));
+  const std::string odd = "a \"b\" c:\\d\te";
+  edit.set("capture", "uri", tomlString(odd));
+  EXPECT_EQ(edit.string("capture", "uri"), odd);
+  EXPECT_EQ(tomlString("x\"y"), "\"x\\\"y\"");
+}
+
 }  // namespace
 }  // namespace lfi::bench_file_test

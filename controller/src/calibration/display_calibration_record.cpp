@@ -2,55 +2,41 @@
 
 #include "lfi/controller/display_calibration.h"
 
+#include "optics_table.h"
+#include "record_json.h"
+
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
 namespace lfi {
 
-namespace {
-
-// Enough digits that the value's rounding stays far below its uncertainty.
-std::string number(double value) {
-  return fmt::format("{:.9g}", value);
-}
-
-nlohmann::json measured(double value, double sigma, double k, const char* unit) {
-  return {{"value", value}, {"standard_uncertainty", sigma}, {"expanded_uncertainty", k * sigma}, {"unit", unit}};
-}
-
-}  // namespace
+using detail::measured;
+using detail::tomlNumber;
 
 void setDisplayCalibration(BenchFileEdit& edit, const DisplayCalibration& c, const std::string& stampUtc) {
   const double k = c.coverageFactor;
   const auto within = [&](double sigma, const char* unit) {
     return fmt::format("lfi calibrate display {}: U = {:.2g} {} (k = {:g})", stampUtc, k * sigma, unit, k);
   };
-  edit.set("camera", "object_pixel_mm", number(c.camera.objectPixel_mm), within(c.camera.objectPixelSigma_mm, "mm"));
+  edit.set("camera", "object_pixel_mm", tomlNumber(c.camera.objectPixel_mm),
+           within(c.camera.objectPixelSigma_mm, "mm"));
   const cv::Matx22d& a = c.camera.displayFromCamera;
   edit.set("geometry", "display_per_pixel_mm",
-           fmt::format("[{}, {}, {}, {}]", number(a(0, 0)), number(a(0, 1)), number(a(1, 0)), number(a(1, 1))),
+           fmt::format("[{}, {}, {}, {}]", tomlNumber(a(0, 0)), tomlNumber(a(0, 1)), tomlNumber(a(1, 0)),
+                       tomlNumber(a(1, 1))),
            within(c.camera.objectPixelSigma_mm, "mm (scale)"));
   edit.set("geometry", "display_at_image_centre_mm",
-           fmt::format("[{}, {}]", number(c.camera.centre_mm.x), number(c.camera.centre_mm.y)),
+           fmt::format("[{}, {}]", tomlNumber(c.camera.centre_mm.x), tomlNumber(c.camera.centre_mm.y)),
            fmt::format("lfi calibrate display {}: U = [{:.2g}, {:.2g}] mm (k = {:g})", stampUtc,
                        k * c.camera.centreSigma_mm.x, k * c.camera.centreSigma_mm.y, k));
   const DisplayOpticsParams& o = c.optics;
-  const std::string stated = "as the display states it (not measured)";
-  edit.set("display.optics", "optics", fmt::format("\"{}\"", toString(o.type)), stated);
-  edit.set("display.optics", "packing", fmt::format("\"{}\"", toString(o.packing)), stated);
-  edit.set("display.optics", "array_pitch_mm", number(o.arrayPitch_mm), within(c.lattice.pitchSigma_mm, "mm"));
-  edit.set("display.optics", "rotation_rad", number(o.rotation_rad), within(c.lattice.rotationSigma_rad, "rad"));
+  detail::setOpticsTable(edit, o, "as the display states it (not measured)");
+  edit.set("display.optics", "array_pitch_mm", tomlNumber(o.arrayPitch_mm), within(c.lattice.pitchSigma_mm, "mm"));
+  edit.set("display.optics", "rotation_rad", tomlNumber(o.rotation_rad), within(c.lattice.rotationSigma_rad, "rad"));
   edit.set("display.optics", "array_offset_mm",
-           fmt::format("[{}, {}]", number(o.arrayOffsetX_mm), number(o.arrayOffsetY_mm)),
+           fmt::format("[{}, {}]", tomlNumber(o.arrayOffsetX_mm), tomlNumber(o.arrayOffsetY_mm)),
            fmt::format("lfi calibrate display {}: U = [{:.2g}, {:.2g}] mm (k = {:g})", stampUtc,
                        k * c.lattice.offsetSigma_mm.x, k * c.lattice.offsetSigma_mm.y, k));
-  edit.set("display.optics", "gap_mm", number(o.gap_mm), stated);
-  if (o.type == OpticsType::LensletArray) {
-    edit.set("display.optics", "focal_length_mm", number(o.focalLength_mm), stated);
-    edit.set("display.optics", "fill_factor", number(o.fillFactor), stated);
-  } else {
-    edit.set("display.optics", "pinhole_diameter_mm", number(o.pinholeDiameter_mm), stated);
-  }
 }
 
 std::string displayCalibrationRecord(const DisplayCalibration& c, const BenchFile& bench, const std::string& stampUtc,

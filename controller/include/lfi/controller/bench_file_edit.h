@@ -14,6 +14,7 @@
 // it was read is not replaced.
 
 #include <filesystem>
+#include <optional>
 #include <string>
 
 namespace lfi {
@@ -30,6 +31,9 @@ class BenchFileEdit {
   // or for a key that holds a table.
   void set(const std::string& table, const std::string& key, const std::string& value, const std::string& comment = {});
 
+  // The string `key` of `table` holds in the text as it is now; empty when the key is absent or not a string.
+  std::optional<std::string> string(const std::string& table, const std::string& key) const;
+
   const std::filesystem::path& file() const { return file_; }
   const std::string& original() const { return original_; }
   const std::string& text() const { return text_; }
@@ -40,6 +44,9 @@ class BenchFileEdit {
   std::filesystem::path file_;
   std::string original_, text_;
 };
+
+// `text` as a TOML basic string, quotes and escapes included.
+std::string tomlString(const std::string& text);
 
 struct PublishedCalibration {
   std::filesystem::path backup;  // the bench file as it was

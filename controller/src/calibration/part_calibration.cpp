@@ -1,0 +1,389 @@
+#include "lfi/controller/part_calibration.h"
+
+#include "gray_code_view.h"
+
+#include "lfi/core/error.h"
+#include "lfi/drivers/display_optics.h"
+
+#include <opencv2/core.hpp>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <map>
+#include <random>
+
+namespace lfi {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+constexpr int kMinPixels = 50;
+constexpr int kMostSteps = 30;
+constexpr double kLateralStep_mm = 0.01;  // the offsets' derivative in L, by differences
+
+// A decoded camera pixel through the part.
+struct Pixel {
+  Vec2 x;       // where the camera pixel looks on the display's plane
+  Vec2 offset;  // o = p − c: the decoded panel point within its lens
+  Vec2 lens;    // c
+  int lensId = 0;
+  bool confident = false;  // decoded with at least min_confidence: its offset counts
+};
+
+void checkSettings(const PartCalibrationSettings& s) {
+  const auto check = [](bool ok, const char* key, double value, const char* range) {
+    if (!ok) fail(Errc::InvalidArgument, "part calibration: {} = {} is outside {}", key, value, range);
+  };
+  check(s.search > 0 && s.search < 1, "search", s.search, "(0, 1)");
+  check(s.minConfidence >= 0 && s.minConfidence <= 1, "min_confidence", s.minConfidence, "[0, 1]");
+  check(s.minDecoded > 0 && s.minDecoded <= 1, "min_decoded", s.minDecoded, "(0, 1]");
+  check(s.bootstrap >= 10 && s.bootstrap <= 100000, "bootstrap", s.bootstrap, "10 .. 100000");
+  check(s.coverageFactor > 0 && s.coverageFactor <= 10, "coverage_factor", s.coverageFactor, "(0, 10]");
+}
+
+double median(std::vector<double> v) {
+  const auto mid = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
+  std::nth_element(v.begin(), mid, v.end());
+  return *mid;
+}
+
+// The exit rays of every pixel's camera ray with the part's reference point at L.
+std::vector<std::optional<PartRay>> traceAll(const PartModel& part, const std::vector<Pixel>& pixels, const Vec2& L) {
+  std::vector<std::optional<PartRay>> out(pixels.size());
+  cv::parallel_for_(cv::Range(0, static_cast<int>(pixels.size())), [&](const cv::Range& r) {
+    for (int i = r.start; i < r.end; ++i) out[static_cast<size_t>(i)] = part.exit(pixels[static_cast<size_t>(i)].x - L);
+  });
+  return out;
+}
+
+Vec2 slope(const PartRay& ray) {
+  return {ray.direction.x / ray.direction.z, ray.direction.y / ray.direction.z};
+}
+
+// The offsets' fit: θ = (g, L_x, L_y).
+struct OffsetFit {
+  double gap = 0;
+  Vec2 lateral{0, 0};
+  cv::Matx33d covariance = cv::Matx33d::zeros();
+  double rms = 0;
+  std::vector<size_t> kept;
+  std::vector<std::optional<PartRay>> rays;  // at `lateral`
+};
+
+OffsetFit fitOffsets(const PartModel& part, const std::vector<Pixel>& pixels, double gap0, double pixelPitch_mm,
+                     const std::string& display) {
+  OffsetFit fit;
+  fit.gap = gap0;
+  for (size_t i = 0; i < pixels.size(); ++i)
+    if (pixels[i].confident) fit.kept.push_back(i);
+  for (int round = 0; round < 3; ++round) {
+    bool converged = false;
+    cv::Matx33d jtj;
+    for (int step = 0; step < kMostSteps && !converged; ++step) {
+      fit.rays = traceAll(part, pixels, fit.lateral);
+      const auto rx = traceAll(part, pixels, fit.lateral + Vec2(kLateralStep_mm, 0));
+      const auto ry = traceAll(part, pixels, fit.lateral + Vec2(0, kLateralStep_mm));
+      jtj = cv::Matx33d::zeros();
+      cv::Vec3d jtr(0, 0, 0);
+      for (size_t i : fit.kept) {
+        if (!fit.rays[i] || !rx[i] || !ry[i]) continue;
+        const Vec2 m = slope(*fit.rays[i]);
+        const Vec2 dmx = (slope(*rx[i]) - m) / kLateralStep_mm, dmy = (slope(*ry[i]) - m) / kLateralStep_mm;
+        const Vec2 r = pixels[i].offset + fit.gap * m;
+        const cv::Vec3d jx(m.x, fit.gap * dmx.x, fit.gap * dmy.x), jy(m.y, fit.gap * dmx.y, fit.gap * dmy.y);
+        jtj += jx * jx.t() + jy * jy.t();
+        jtr += jx * r.x + jy * r.y;
+      }
+      const cv::Vec3d delta = -(jtj.inv(cv::DECOMP_SVD) * jtr);
+      fit.gap += delta[0];
+      fit.lateral += Vec2(delta[1], delta[2]);
+      if (!(fit.gap > 0.5 * gap0 && fit.gap < 2 * gap0) || !std::isfinite(fit.lateral.x) ||
+          !std::isfinite(fit.lateral.y))
+        fail(Errc::Device,
+             "part calibration of display '{}': the fit did not converge (the gap went to {:.4g} mm, "
+             "outside half to twice the stated {:.4g} mm): the part is not the model's, or not where the bench "
+             "expects it",
+             display, fit.gap, gap0);
+      converged = std::abs(delta[0]) < 1e-9 && std::abs(delta[1]) < 1e-7 && std::abs(delta[2]) < 1e-7;
+    }
+    if (!converged)
+      fail(Errc::Device, "part calibration of display '{}': the fit did not converge in {} steps", display, kMostSteps);
+    // Residuals at the solution; pixels beyond five robust standard deviations (at least half a panel pixel) out.
+    fit.rays = traceAll(part, pixels, fit.lateral);
+    std::vector<double> components;
+    for (size_t i = 0; i < pixels.size(); ++i)
+      if (fit.rays[i] && pixels[i].confident) {
+        const Vec2 r = pixels[i].offset + fit.gap * slope(*fit.rays[i]);
+        components.push_back(std::abs(r.x));
+        components.push_back(std::abs(r.y));
+      }
+    const double limit = std::max(5 * 1.4826 * median(components), 0.5 * pixelPitch_mm);
+    std::vector<size_t> kept;
+    for (size_t i = 0; i < pixels.size(); ++i)
+      if (fit.rays[i] && pixels[i].confident && (pixels[i].offset + fit.gap * slope(*fit.rays[i])).length() <= limit)
+        kept.push_back(i);
+    const bool same = kept == fit.kept;
+    fit.kept = std::move(kept);
+    if (fit.kept.size() < static_cast<size_t>(kMinPixels))
+      fail(Errc::Device, "part calibration of display '{}': {} camera pixels fit the part's model, fewer than {}",
+           display, fit.kept.size(), kMinPixels);
+    if (same) break;
+  }
+  // Covariances: plain, and clustered by decoded lens; each parameter's the larger.
+  const auto rx = traceAll(part, pixels, fit.lateral + Vec2(kLateralStep_mm, 0));
+  const auto ry = traceAll(part, pixels, fit.lateral + Vec2(0, kLateralStep_mm));
+  cv::Matx33d jtj = cv::Matx33d::zeros();
+  double rss = 0;
+  std::map<int, std::pair<cv::Vec3d, cv::Vec3d>> groups;  // per decoded lens: Σ Jᵀ r, and Σ J (x and y rows apart)
+  std::map<int, cv::Vec3d> groupsY;
+  size_t n = 0;
+  for (size_t i : fit.kept) {
+    if (!rx[i] || !ry[i]) continue;
+    const Vec2 m = slope(*fit.rays[i]);
+    const Vec2 dmx = (slope(*rx[i]) - m) / kLateralStep_mm, dmy = (slope(*ry[i]) - m) / kLateralStep_mm;
+    const Vec2 r = pixels[i].offset + fit.gap * m;
+    const cv::Vec3d jx(m.x, fit.gap * dmx.x, fit.gap * dmy.x), jy(m.y, fit.gap * dmx.y, fit.gap * dmy.y);
+    jtj += jx * jx.t() + jy * jy.t();
+    rss += r.length2();
+    auto& g = groups[pixels[i].lensId];
+    g.first += jx * r.x + jy * r.y;
+    g.second += jx;
+    groupsY[pixels[i].lensId] += jy;
+    ++n;
+  }
+  const cv::Matx33d inverse = jtj.inv(cv::DECOMP_SVD);
+  const cv::Matx33d plain = rss / std::max(1.0, 2.0 * static_cast<double>(n) - 3) * inverse;
+  cv::Matx33d meat = cv::Matx33d::zeros(), shared = cv::Matx33d::zeros();
+  for (const auto& [lens, sums] : groups) {
+    meat += sums.first * sums.first.t();
+    shared += sums.second * sums.second.t();
+    const cv::Vec3d& y = groupsY[lens];
+    shared += y * y.t();
+  }
+  const double count = static_cast<double>(groups.size());
+  const cv::Matx33d clustered = count / std::max(1.0, count - 3) * inverse * meat * inverse;
+  // The pixels of one lens see about the same panel pixel: an error of a pixel / √12 they share, per axis.
+  const cv::Matx33d quantisation = pixelPitch_mm * pixelPitch_mm / 12 * inverse * shared * inverse;
+  for (int a = 0; a < 3; ++a) {
+    const cv::Matx33d* largest = &plain;
+    if (clustered(a, a) > largest->operator()(a, a)) largest = &clustered;
+    if (quantisation(a, a) > largest->operator()(a, a)) largest = &quantisation;
+    for (int b = 0; b < 3; ++b) fit.covariance(a, b) = (*largest)(a, b);
+  }
+  fit.rms = std::sqrt(rss / (2.0 * static_cast<double>(std::max<size_t>(n, 1))));
+  return fit;
+}
+
+// How far q lies outside the cell of the lens at `centre` (0 inside), capped at half a pitch: the cell's
+// sides are perpendicular to the directions of the neighbouring lenses, half a pitch from the centre.
+struct Cells {
+  std::vector<Vec2> normals;
+  double half = 0;
+  double outside(const Vec2& q, const Vec2& centre) const {
+    const Vec2 v = q - centre;
+    double sum = 0;
+    for (const Vec2& n : normals) {
+      const double excess = std::max(0.0, std::abs(v.dot(n)) - half);
+      sum += excess * excess;
+    }
+    return std::min(std::sqrt(sum), half);
+  }
+};
+
+Cells cellsOf(const DisplayOpticsParams& o) {
+  Cells cells;
+  cells.half = 0.5 * o.arrayPitch_mm;
+  const int sides = o.packing == LensPacking::Square ? 2 : 3;
+  const double step = o.packing == LensPacking::Square ? M_PI / 2 : M_PI / 3;
+  for (int k = 0; k < sides; ++k)
+    cells.normals.push_back({std::cos(o.rotation_rad + k * step), std::sin(o.rotation_rad + k * step)});
+  return cells;
+}
+
+// Δ's objective: each pixel's q(Δ) = a + Δ b against its decoded lens, weighted.
+struct Membership {
+  std::vector<Vec2> a, b, lens;
+  std::vector<int> lensId;
+  Cells cells;
+  double cost(double distance, const std::vector<double>& weight) const {
+    double sum = 0;
+    for (size_t i = 0; i < a.size(); ++i) {
+      const double d = cells.outside(a[i] + distance * b[i], lens[i]);
+      sum += weight[i] * d * d;
+    }
+    return sum;
+  }
+  // The minimum over [from, to]: a grid of `step`, then golden-section search about the best node.
+  double minimise(double from, double to, double step, const std::vector<double>& weight) const {
+    double best = from, bestCost = cost(from, weight);
+    for (double d = from + step; d <= to + 1e-12; d += step)
+      if (const double c = cost(d, weight); c < bestCost) best = d, bestCost = c;
+    double lo = std::max(from, best - step), hi = std::min(to, best + step);
+    const double ratio = (std::sqrt(5.0) - 1) / 2;
+    double x1 = hi - ratio * (hi - lo), x2 = lo + ratio * (hi - lo);
+    double f1 = cost(x1, weight), f2 = cost(x2, weight);
+    while (hi - lo > 1e-5) {
+      if (f1 < f2) {
+        hi = x2, x2 = x1, f2 = f1;
+        x1 = hi - ratio * (hi - lo), f1 = cost(x1, weight);
+      } else {
+        lo = x1, x1 = x2, f1 = f2;
+        x2 = lo + ratio * (hi - lo), f2 = cost(x2, weight);
+      }
+    }
+    return 0.5 * (lo + hi);
+  }
+};
+
+}  // namespace
+
+PartCalibration calibratePart(BenchProbe& bench, const PartModel& part, const CameraOnDisplay& camera,
+                              double statedDistance_mm, const PartCalibrationSettings& settings,
+                              const std::function<void(double)>& progress) {
+  checkSettings(settings);
+  if (!(statedDistance_mm > 0) || !std::isfinite(statedDistance_mm))
+    fail(Errc::InvalidArgument, "part calibration: the stated distance {} mm must be positive", statedDistance_mm);
+  const auto start = Clock::now();
+  PartCalibration out;
+  out.coverageFactor = settings.coverageFactor;
+  out.statedDistance_mm = statedDistance_mm;
+  const DisplayInfo info = bench.display();
+  info.validate();
+  out.nominal = info;
+  const std::string& name = info.deviceId;
+  if (!fullParallax(info.optics.type))
+    fail(Errc::Device,
+         "part calibration: display '{}' has {} optics; the calibration measures through lens and "
+         "pinhole arrays (a lenticular sheet's or a line barrier's is not built)",
+         name, toString(info.optics.type));
+  const int totalFrames = calib::GrayCodeLayout::forPanel(info.panelWidth_px, info.panelHeight_px).frameCount();
+  const auto take = [&](const cv::Mat& levels, const char* what) {
+    if (progress) progress(static_cast<double>(out.frames) / totalFrames);
+    try {
+      cv::Mat image = bench.take(levels);
+      ++out.frames;
+      return image;
+    } catch (const Error& e) {
+      fail(e.code(), "part calibration: frame {} ({}) of display '{}': {}", out.frames + 1, what, name, e.what());
+    }
+  };
+  const detail::GrayCodeView view =
+      detail::takeGrayCode(take, info, bench.cameraFullScale_dn(), 0, settings.minDecoded, "part calibration",
+                           "the patterns blur, or the part scatters more light than it refracts");
+  const auto computeStart = Clock::now();
+  const calib::PanelCorrespondence& c = view.correspondence;
+  out.lit = c.lit;
+  out.decoded = c.decoded;
+
+  // Each decoded pixel's place on the display's plane and its panel point within its lens.
+  const DisplayOptics optics(info);
+  const cv::Size image = view.white.size();
+  std::vector<Pixel> pixels;
+  std::map<std::pair<long long, long long>, int> lensIds;
+  int deflected = 0;
+  for (int row = 0; row < image.height; ++row)
+    for (int col = 0; col < image.width; ++col) {
+      const cv::Vec2i p = c.panel.at<cv::Vec2i>(row, col);
+      if (p[0] < 0) continue;
+      const Vec2 panel = detail::panelPixelCentre(info, p[0], p[1]);
+      const Vec2 lens = optics.apertureCentre(panel);
+      const Vec2 offset = panel - lens;
+      if (offset.length() > 2 * info.pixelPitch_mm) ++deflected;
+      const auto key = std::make_pair(std::llround(lens.x * 1e6), std::llround(lens.y * 1e6));
+      const int id = lensIds.try_emplace(key, static_cast<int>(lensIds.size())).first->second;
+      pixels.push_back({camera.displayPoint(Vec2(col, row), image), offset, lens, id,
+                        c.confidence.at<float>(row, col) >= settings.minConfidence});
+    }
+  if (deflected <= 0.01 * static_cast<double>(pixels.size()))
+    fail(Errc::Device,
+         "part calibration: every ray the camera sees leaves display '{}' within two panel pixels of "
+         "its lens's centre: nothing deflects them, is the part missing?",
+         name);
+  // The pixels whose rays the model takes through the part where the bench puts it.
+  {
+    const auto rays = traceAll(part, pixels, {0, 0});
+    std::vector<Pixel> through;
+    for (size_t i = 0; i < pixels.size(); ++i)
+      if (rays[i]) through.push_back(pixels[i]);
+    pixels = std::move(through);
+  }
+  if (pixels.size() < static_cast<size_t>(kMinPixels))
+    fail(Errc::Device,
+         "part calibration: {} decoded camera pixels look through the part, fewer than {}: too few "
+         "decoded pixels (is the part in the camera's view, where the bench expects it?)",
+         pixels.size(), kMinPixels);
+
+  // g and L from the offsets within each lens.
+  const OffsetFit fit = fitOffsets(part, pixels, info.optics.gap_mm, info.pixelPitch_mm, name);
+  out.gap_mm = fit.gap;
+  out.lateral_mm = fit.lateral;
+  out.gapSigma_mm = std::sqrt(fit.covariance(0, 0));
+  out.lateralSigma_mm = {std::sqrt(fit.covariance(1, 1)), std::sqrt(fit.covariance(2, 2))};
+  out.offsetRms_mm = fit.rms;
+  out.pixels = static_cast<int>(fit.kept.size());
+  out.outliers = static_cast<int>(
+      std::count_if(pixels.begin(), pixels.end(), [](const Pixel& p) { return p.confident; }) - fit.kept.size());
+  if (fit.rms > 3 * info.pixelPitch_mm)
+    fail(Errc::Device,
+         "part calibration of display '{}': the panel points decoded through the part lie {:.3g} mm "
+         "(RMS) from where the part's model sends the rays, more than three panel pixels: the residual is too "
+         "large for the model (another part, a part tilted, or the wrong model)",
+         name, fit.rms);
+
+  // Δ from which lens each ray lands in.
+  Membership m;
+  m.cells = cellsOf(info.optics);
+  for (size_t i = 0; i < pixels.size(); ++i) {
+    if (!fit.rays[i]) continue;
+    const PartRay& ray = *fit.rays[i];
+    const Vec2 s = slope(ray);
+    m.a.push_back(Vec2(ray.point.x, ray.point.y) + fit.lateral - ray.point.z * s);
+    m.b.push_back(-s);
+    m.lens.push_back(pixels[i].lens);
+    m.lensId.push_back(pixels[i].lensId);
+  }
+  const double from = statedDistance_mm * (1 - settings.search), to = statedDistance_mm * (1 + settings.search);
+  const double step = std::min(0.05, 0.01 * statedDistance_mm);
+  const std::vector<double> ones(m.a.size(), 1.0);
+  out.distance_mm = m.minimise(from, to, step, ones);
+  if (out.distance_mm < from + step || out.distance_mm > to - step)
+    fail(Errc::Device,
+         "part calibration of display '{}': the fit did not converge: Δ = {:.3f} mm lies at the edge "
+         "of the search ({:.3f} .. {:.3f} mm, the stated {} mm ± {} %)",
+         name, out.distance_mm, from, to, statedDistance_mm, 100 * settings.search);
+  for (size_t i = 0; i < m.a.size(); ++i)
+    if (m.cells.outside(m.a[i] + out.distance_mm * m.b[i], m.lens[i]) > 0.25 * info.optics.arrayPitch_mm)
+      ++out.otherLens;
+  if (out.otherLens > static_cast<int>(m.a.size()) / 3)
+    fail(Errc::Device,
+         "part calibration of display '{}': at the best Δ = {:.3f} mm, {} of {} rays land in another "
+         "lens than the one decoded: the residual is too large for the model",
+         name, out.distance_mm, out.otherLens, m.a.size());
+
+  // Δ's uncertainty: the decoded lenses resampled.
+  std::vector<std::vector<size_t>> byLens(lensIds.size());
+  for (size_t i = 0; i < m.lensId.size(); ++i) byLens[static_cast<size_t>(m.lensId[i])].push_back(i);
+  std::erase_if(byLens, [](const std::vector<size_t>& v) { return v.empty(); });
+  std::mt19937_64 random(settings.seed);
+  std::uniform_int_distribution<size_t> pick(0, byLens.size() - 1);
+  double sum = 0, sum2 = 0;
+  for (int b = 0; b < settings.bootstrap; ++b) {
+    std::vector<double> weight(m.a.size(), 0.0);
+    for (size_t k = 0; k < byLens.size(); ++k)
+      for (size_t i : byLens[pick(random)]) weight[i] += 1;
+    const double d = m.minimise(out.distance_mm - 1, out.distance_mm + 1, 0.5 * step, weight);
+    sum += d;
+    sum2 += d * d;
+  }
+  const double n = settings.bootstrap;
+  out.distanceSigma_mm = std::sqrt(std::max(0.0, (sum2 - sum * sum / n) / (n - 1)));
+  out.partCentre_px = camera.cameraPoint(out.lateral_mm, image);
+  if (progress) progress(1);
+  out.computeSeconds = std::chrono::duration<double>(Clock::now() - computeStart).count() + view.decodeSeconds;
+  out.seconds = std::chrono::duration<double>(Clock::now() - start).count();
+  return out;
+}
+
+}  // namespace lfi

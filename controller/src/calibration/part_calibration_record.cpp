@@ -1,0 +1,87 @@
+// The part calibration's results in a bench file and its record.
+
+#include "lfi/controller/part_calibration.h"
+
+#include "optics_table.h"
+#include "record_json.h"
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include <regex>
+
+namespace lfi {
+
+using detail::measured;
+using detail::tomlNumber;
+
+void setPartCalibration(BenchFileEdit& edit, const BenchFile& bench, const PartCalibration& c,
+                        const std::string& stampUtc) {
+  const double k = c.coverageFactor;
+  const auto within = [&](double sigma, const char* unit) {
+    return fmt::format("lfi calibrate part {}: U = {:.2g} {} (k = {:g})", stampUtc, k * sigma, unit, k);
+  };
+  edit.set("geometry", "distance_mm", tomlNumber(c.distance_mm), within(c.distanceSigma_mm, "mm"));
+  const double perPixel = std::sqrt(std::abs(cv::determinant(bench.cameraOnDisplay->perPixel_mm)));
+  edit.set("geometry", "part_centre_px",
+           fmt::format("[{}, {}]", tomlNumber(c.partCentre_px.x), tomlNumber(c.partCentre_px.y)),
+           fmt::format("lfi calibrate part {}: U = [{:.2g}, {:.2g}] px (k = {:g})", stampUtc,
+                       k * c.lateralSigma_mm.x / perPixel, k * c.lateralSigma_mm.y / perPixel, k));
+  // A capture that records at a distance records at this one.
+  if (const auto uri = edit.string("capture", "uri"); uri && std::regex_search(*uri, std::regex("[?&]distance_mm=")))
+    edit.set(
+        "capture", "uri",
+        tomlString(std::regex_replace(*uri, std::regex("([?&]distance_mm=)[^&]*"), "$01" + tomlNumber(c.distance_mm))),
+        fmt::format("lfi calibrate part {}: at the calibrated Δ", stampUtc));
+  if (!bench.displayOptics) detail::setOpticsTable(edit, c.nominal.optics, "as the display states it (not measured)");
+  edit.set("display.optics", "gap_mm", tomlNumber(c.gap_mm), within(c.gapSigma_mm, "mm"));
+  if (c.nominal.optics.type == OpticsType::LensletArray)
+    edit.set("display.optics", "focal_length_mm", tomlNumber(c.gap_mm),
+             fmt::format("lfi calibrate part {}: the gap (the lenses focused on the panel)", stampUtc));
+}
+
+std::string partCalibrationRecord(const PartCalibration& c, const BenchFile& bench, const PartModel& part,
+                                  const std::string& stampUtc) {
+  const double k = c.coverageFactor;
+  const DisplayInfo& d = c.nominal;
+  nlohmann::json record = {
+      {"format", "lfi-calibration-record"},
+      {"version", 1},
+      {"what", "part"},
+      {"time_utc", stampUtc},
+      {"bench", bench.file.string()},
+      {"units",
+       "mm, camera pixels (px); the display frame of display.h (origin at the panel's centre, x along the "
+       "columns, y up the panel, z towards the camera)"},
+      {"method",
+       "Gray code through the display, the intact part and the telecentric camera; each decoded panel "
+       "point's offset within its lens against the part model's ray slopes (gap, lateral position), "
+       "and the lens each ray lands in against Δ (docs/calibration.md)"},
+      {"part_model", part.description()},
+      {"coverage_factor", k},
+      {"display", {{"uri", bench.displayUri}, {"vendor", d.vendor}, {"model", d.model}, {"serial", d.serial}}},
+      {"camera", {{"uri", bench.cameraUri}}},
+      {"previous",
+       {{"distance_mm", c.statedDistance_mm},
+        {"part_centre_px", bench.partCentre_px ? nlohmann::json{bench.partCentre_px->x, bench.partCentre_px->y}
+                                               : nlohmann::json("the image's centre")},
+        {"gap_mm", d.optics.gap_mm}}},
+      {"distance", measured(c.distance_mm, c.distanceSigma_mm, k, "mm")},
+      {"lateral_x", measured(c.lateral_mm.x, c.lateralSigma_mm.x, k, "mm")},
+      {"lateral_y", measured(c.lateral_mm.y, c.lateralSigma_mm.y, k, "mm")},
+      {"part_centre_px", {c.partCentre_px.x, c.partCentre_px.y}},
+      {"gap", measured(c.gap_mm, c.gapSigma_mm, k, "mm")},
+      {"offset_residual_rms_mm", c.offsetRms_mm},
+      {"pixels", c.pixels},
+      {"outliers", c.outliers},
+      {"rays_in_another_lens", c.otherLens},
+      {"frames", c.frames},
+      {"camera_pixels_lit", c.lit},
+      {"camera_pixels_decoded", c.decoded},
+      {"seconds", c.seconds},
+      {"compute_seconds", c.computeSeconds},
+  };
+  return record.dump(2) + "\n";
+}
+
+}  // namespace lfi
