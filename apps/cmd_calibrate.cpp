@@ -1,6 +1,8 @@
-// lfi calibrate display BENCH: the display's lens array and the camera's
-// scale through the bench's own devices (docs/calibration.md), written into
-// the bench file with a backup and a record, or printed with --dry-run.
+// lfi calibrate display|part BENCH: the display's lens array and the camera's
+// scale (nothing in view), or Δ, the part's place and the display's gap
+// (through the intact part, against its model), measured with the bench's own
+// devices (docs/calibration.md) and written into the bench file with a backup
+// and a record, or printed with --dry-run.
 
 #include "bench_cli.h"
 #include "cli_util.h"
@@ -9,8 +11,10 @@
 #include "lfi/controller/bench_devices.h"
 #include "lfi/controller/display_calibration.h"
 #include "lfi/controller/inspection_record.h"
+#include "lfi/controller/part_calibration.h"
 #include "lfi/core/error.h"
 #include "lfi/core/log.h"
+#include "lfi/sim/scene_part_model.h"
 
 #include <fmt/format.h>
 
@@ -25,10 +29,12 @@ namespace {
 struct CalibrateArgs {
   std::string what;
   fs::path bench;
-  fs::path part;  // a simulated bench's scene during the calibration
+  fs::path part;   // a simulated bench's scene during the calibration
+  fs::path model;  // the part's model (part)
   bool dryRun = false;
   int frames = 0;  // 0: the bench's [inspection] frames
   lfi::DisplayCalibrationSettings settings;
+  lfi::PartCalibrationSettings partSettings;
 };
 
 void printDisplayCalibration(const lfi::DisplayCalibration& c) {
@@ -55,9 +61,36 @@ void printDisplayCalibration(const lfi::DisplayCalibration& c) {
              c.frames, c.seconds, 1000 * c.computeSeconds);
 }
 
+void printPartCalibration(const lfi::PartCalibration& c) {
+  const double k = c.coverageFactor;
+  fmt::print(
+      "display {} ({} {}), through the part: {} camera pixels in the fit ({} left out), offsets' residual "
+      "{:.2g} mm, {} rays in another lens\n",
+      c.nominal.deviceId, c.nominal.vendor, c.nominal.model, c.pixels, c.outliers, c.offsetRms_mm, c.otherLens);
+  fmt::print("  Δ          {:.4f} mm  U {:.2g} mm  (stated {:.4f})\n", c.distance_mm, k * c.distanceSigma_mm,
+             c.statedDistance_mm);
+  fmt::print("  lateral    [{:+.4f}, {:+.4f}] mm  U [{:.2g}, {:.2g}] mm: the part's centre at [{:.2f}, {:.2f}] px\n",
+             c.lateral_mm.x, c.lateral_mm.y, k * c.lateralSigma_mm.x, k * c.lateralSigma_mm.y, c.partCentre_px.x,
+             c.partCentre_px.y);
+  fmt::print("  gap        {:.5f} mm  U {:.2g} mm  (stated {:.5f})\n", c.gap_mm, k * c.gapSigma_mm,
+             c.nominal.optics.gap_mm);
+  fmt::print("U: expanded uncertainty, k = {:g}; {} frames in {:.2f} s ({:.0f} ms of it decoding and fitting)\n", k,
+             c.frames, c.seconds, 1000 * c.computeSeconds);
+}
+
 int runCalibrate(const CalibrateArgs& a, const GlobalOptions& global) {
   const lfi::BenchFile bench = lfi::readBenchFile(a.bench);
   lfi::BenchFileEdit edit(a.bench);  // the text as it is now: a file edited meanwhile is not replaced
+  std::unique_ptr<lfi::sim::ScenePartModel> model;
+  if (a.what == "part") {
+    if (!bench.cameraOnDisplay)
+      lfi::fail(lfi::Errc::Config,
+                "{}: [geometry] display_per_pixel_mm and display_at_image_centre_mm (where the camera looks on the "
+                "display) are not set: run `lfi calibrate display` first, with the part taken away",
+                a.bench.string());
+    if (a.model.empty()) lfi::fail(lfi::Errc::Config, "calibrate part: --model names the part's model (a scene file)");
+    model = std::make_unique<lfi::sim::ScenePartModel>(a.model);
+  }
   const lfi::BenchFile devices = a.part.empty() ? bench : withSimulatedPart(bench, a.part);
   auto capture = lfi::openBenchCapture(devices);
   auto display = lfi::openBenchDisplay(devices);
@@ -65,21 +98,30 @@ int runCalibrate(const CalibrateArgs& a, const GlobalOptions& global) {
   lfi::Controller controller(*capture, *display, *camera,
                              lfi::controllerOptions(bench, a.frames > 0 ? a.frames : bench.inspectionFrames));
   ProgressBar bar;
-  const lfi::DisplayCalibration c = lfi::calibrateDisplay(controller.probe(), a.settings, [&](double f) {
-    if (!global.quiet) bar("calibrate display", f);
-  });
-  bar.finish();
-  printDisplayCalibration(c);
-
+  const auto progress = [&](double f) {
+    if (!global.quiet) bar(fmt::format("calibrate {}", a.what).c_str(), f);
+  };
   const std::string stamp = lfi::utcNow();
-  lfi::setDisplayCalibration(edit, c, stamp);
+  std::string record;
+  if (a.what == "display") {
+    const lfi::DisplayCalibration c = lfi::calibrateDisplay(controller.probe(), a.settings, progress);
+    bar.finish();
+    printDisplayCalibration(c);
+    lfi::setDisplayCalibration(edit, c, stamp);
+    record = lfi::displayCalibrationRecord(c, bench, stamp, lfi::describeCamera(*camera, bench.cameraUri));
+  } else {
+    const lfi::PartCalibration c = lfi::calibratePart(controller.probe(), *model, *bench.cameraOnDisplay,
+                                                      bench.distance_mm, a.partSettings, progress);
+    bar.finish();
+    printPartCalibration(c);
+    lfi::setPartCalibration(edit, bench, c, stamp);
+    record = lfi::partCalibrationRecord(c, bench, *model, stamp);
+  }
   if (a.dryRun) {
     fmt::print("--dry-run: {} would change:\n{}", a.bench.string(), edit.changes());
     return 0;
   }
-  const lfi::PublishedCalibration published = lfi::publishCalibration(
-      edit, "display", stamp,
-      lfi::displayCalibrationRecord(c, bench, stamp, lfi::describeCamera(*camera, bench.cameraUri)));
+  const lfi::PublishedCalibration published = lfi::publishCalibration(edit, a.what, stamp, record);
   spdlog::info("calibrate: {} written; the file before is {}, the record {}", a.bench.string(),
                published.backup.string(), published.record.string());
   spdlog::info("calibrate: the reference package depends on these values: take it again (lfi capture {} --force)",
@@ -91,23 +133,33 @@ int runCalibrate(const CalibrateArgs& a, const GlobalOptions& global) {
 }  // namespace
 
 Command addCalibrateCommand(CLI::App& app) {
-  auto* command = app.add_subcommand("calibrate",
-                                     "Calibrate a bench with its own devices and write the result into its bench file "
-                                     "(display: the display's lens array and the camera's scale, nothing in view)");
+  auto* command = app.add_subcommand(
+      "calibrate",
+      "Calibrate a bench with its own devices and write the result into its bench file (display: the "
+      "display's lens array and the camera's scale, nothing in view; part: Δ, the part's place and the "
+      "display's gap, through the intact part)");
   auto a = std::make_shared<CalibrateArgs>();
-  command->add_option("what", a->what, "What to calibrate: display")->required()->check(CLI::IsMember({"display"}));
+  command->add_option("what", a->what, "What to calibrate: display, then part")
+      ->required()
+      ->check(CLI::IsMember({"display", "part"}));
   addBenchArgument(*command, a->bench);
   command->add_flag("--dry-run", a->dryRun, "Measure and print what would change, write nothing");
   command
       ->add_option("--part", a->part,
-                   "A simulated bench: the scene under its camera during the calibration, one without the part "
-                   "(data/scenes/inspection_bench_empty.toml); a physical bench: take the part away")
+                   "A simulated bench: the scene under its camera during the calibration (display: one without the "
+                   "part, data/scenes/inspection_bench_empty.toml); a physical bench: take the part away (display) "
+                   "or put the intact part in place (part)")
+      ->check(CLI::ExistingFile);
+  command
+      ->add_option("--model", a->model,
+                   "part: the part's model, a scene file whose objects other than the display and emitters are "
+                   "the part, its origin the part's reference point (data/scenes/inspection_bench.toml)")
       ->check(CLI::ExistingFile);
   command->add_option("--frames", a->frames, "Frames averaged per image (default: the bench's [inspection] frames)")
       ->check(CLI::Range(1, 10000));
   command
       ->add_option("--spot-period", a->settings.spotPeriod,
-                   "Light one lens in this many along each lattice axis per spot frame")
+                   "display: light one lens in this many along each lattice axis per spot frame")
       ->check(CLI::Range(2, 16))
       ->capture_default_str();
   return {command, [a](const GlobalOptions& global) { return runCalibrate(*a, global); }};

@@ -1,11 +1,12 @@
-// `lfi calibrate display BENCH` as a user runs it, on the simulated inspection
-// bench whose display's lens array is not where the bench file says (the
-// bench states the nominal 1 mm square array at no rotation and no offset;
-// the scene's has another pitch, rotation and offset): the bench file gets
-// the measured values and the camera's scale, keeps the rest of its text,
-// and a backup and a record lie beside it; a dry run writes nothing; a part
-// in view is refused and nothing is written; the calibrated bench captures its
-// reference and passes the intact part.
+// `lfi calibrate display|part BENCH` as a user runs them, on the simulated
+// inspection bench whose display's lens array is not where the bench file
+// says (the bench states the nominal 1 mm square array at no rotation and no
+// offset; the scene's has another pitch, rotation and offset): the bench file
+// gets the measured values and the camera's scale, keeps the rest of its text,
+// and a backup and a record lie beside it; a dry run writes nothing; a part in
+// view is refused and nothing is written; the calibrated bench captures its
+// reference and passes the intact part. Then the display is knocked further
+// from the part: the part calibration finds where it went.
 
 #include "lfi_process.h"
 #include "text_edit.h"
@@ -151,6 +152,73 @@ TEST_F(LfiCalibrate, OpticsOfAnotherClassThanTheDisplaysAreNamed) {
   const Result run = lfi("-q calibrate display " + quoted(bench_) + " --part " + quoted(dir_ / "empty.toml"));
   EXPECT_EQ(run.status, 1) << run.output;
   EXPECT_NE(run.output.find("[display.optics] states pinhole_array optics"), std::string::npos) << run.output;
+}
+
+// A display knocked 6 mm further from the part than its reference was taken at (beyond the study's ±4 mm Δ
+// tolerance) fails the intact part against its golden model; `lfi calibrate part` finds where it went, the
+// reference taken again at that Δ passes the intact part, and defects are placed on the part, not on the image.
+TEST_F(LfiCalibrate, PartFindsWhereTheDisplayWentAndTheNewReferencePassesTheIntactPart) {
+  std::string scene = readText(dir_ / "scene.toml");
+  replaceOnce(scene, "ior = 1.5168\n", "ior = 1.5168\nposition_mm = [0.4, -0.3, 0]\n");  // the part 0.5 mm off
+  write("scene.toml", scene);
+  ASSERT_EQ(lfi("-q calibrate display " + quoted(bench_) + " --part " + quoted(dir_ / "empty.toml")).status, 0);
+  ASSERT_EQ(lfi("-q capture " + quoted(bench_)).status, 0);
+  ASSERT_EQ(lfi("-q inspect " + quoted(bench_)).status, 0);
+
+  replaceOnce(scene, "position_mm = [0, 0, -30]", "position_mm = [0, 0, -36]");  // the display knocked down
+  write("scene.toml", scene);
+  const Result knocked = lfi("-q inspect " + quoted(bench_));
+  EXPECT_EQ(knocked.status, 3) << "the intact part passed under a display 6 mm off: " << knocked.output;
+
+  const fs::path model = fs::path(LFI_SOURCE_DIR) / "data/scenes/inspection_bench.toml";
+  const Result run = lfi("-q calibrate part " + quoted(bench_) + " --model " + quoted(model));
+  ASSERT_EQ(run.status, 0) << run.output;
+  fs::path record;
+  for (const auto& entry : fs::directory_iterator(dir_ / "bench.calibrations"))
+    if (entry.path().string().ends_with("-part.json")) record = entry.path();
+  ASSERT_FALSE(record.empty());
+  const auto r = nlohmann::json::parse(readText(record));
+  EXPECT_EQ(r["what"], "part");
+  // Tolerances (docs/calibration.md): the display's steepest ray (0.27) at the part within a tenth of a camera
+  // pixel: Δ within 0.05 / 0.27 mm, the lateral position within 0.05 mm.
+  EXPECT_NEAR(r["distance"]["value"].get<double>(), 36, 0.05 / 0.27);
+  EXPECT_NEAR(r["lateral_x"]["value"].get<double>(), 0.4, 0.05);
+  EXPECT_NEAR(r["lateral_y"]["value"].get<double>(), -0.3, 0.05);
+  const std::string text = readText(bench_);
+  EXPECT_NE(text.find(fmt::format("distance_mm = {:.9g}", r["distance"]["value"].get<double>())), std::string::npos)
+      << text;
+  EXPECT_NE(text.find(fmt::format("?distance_mm={:.9g}\"", r["distance"]["value"].get<double>())), std::string::npos)
+      << text;
+
+  ASSERT_EQ(lfi("-q capture " + quoted(bench_) + " --force").status, 0);
+  const Result intact = lfi("-q inspect " + quoted(bench_));
+  EXPECT_EQ(intact.status, 0) << intact.output;
+  // A particle 10 mm from the part's centre: placed there, not 10 mm from the image's centre.
+  std::string rim = scene;
+  rim +=
+      "[[object]]\nname = \"rim\"\nshape = \"sphere\"\nradius_mm = 0.5\nposition_mm = [10.4, -0.3, 0]\n"
+      "material = \"absorber\"\n";
+  const Result defect = lfi("-q inspect " + quoted(bench_) + " --part " + quoted(write("rim.toml", rim)));
+  EXPECT_EQ(defect.status, 3) << defect.output;
+  const size_t at = defect.output.find("FAIL: ");
+  ASSERT_NE(at, std::string::npos) << defect.output;
+  const std::string path = defect.output.substr(at + 6, defect.output.find('\n', at) - at - 6);
+  const auto found = nlohmann::json::parse(readText(fs::path(path).is_absolute() ? fs::path(path) : dir_ / path));
+  ASSERT_EQ(found["defects"].size(), 1u);
+  // Within a camera pixel (0.5 mm) of (10, 0) on the part.
+  EXPECT_NEAR(found["defects"][0]["centroid_mm"][0].get<double>(), 10, 0.5);
+  EXPECT_NEAR(found["defects"][0]["centroid_mm"][1].get<double>(), 0, 0.5);
+}
+
+TEST_F(LfiCalibrate, PartWithoutTheCamerasMapOrAModelIsRefusedBeforeAnyFrame) {
+  const fs::path model = fs::path(LFI_SOURCE_DIR) / "data/scenes/inspection_bench.toml";
+  const Result noMap = lfi("-q calibrate part " + quoted(bench_) + " --model " + quoted(model));
+  EXPECT_EQ(noMap.status, 1) << noMap.output;
+  EXPECT_NE(noMap.output.find("run `lfi calibrate display` first"), std::string::npos) << noMap.output;
+  ASSERT_EQ(lfi("-q calibrate display " + quoted(bench_) + " --part " + quoted(dir_ / "empty.toml")).status, 0);
+  const Result noModel = lfi("-q calibrate part " + quoted(bench_));
+  EXPECT_EQ(noModel.status, 1) << noModel.output;
+  EXPECT_NE(noModel.output.find("--model names the part's model"), std::string::npos) << noModel.output;
 }
 
 }  // namespace
