@@ -111,7 +111,7 @@ int runCalibrate(const CalibrateArgs& a, const GlobalOptions& global) {
     record = lfi::displayCalibrationRecord(c, bench, stamp, lfi::describeCamera(*camera, bench.cameraUri));
   } else {
     const lfi::PartCalibration c = lfi::calibratePart(controller.probe(), *model, *bench.cameraOnDisplay,
-                                                      bench.distance_mm, a.partSettings, progress);
+                                                      bench.distance_mm, bench.partCentre_px, a.partSettings, progress);
     bar.finish();
     printPartCalibration(c);
     lfi::setPartCalibration(edit, bench, c, stamp);

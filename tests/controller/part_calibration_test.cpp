@@ -112,8 +112,9 @@ class PartCalibrationTest : public testing::Test {
 
   PartCalibration calibrate(const Truth& truth, const PartCalibrationSettings& settings = {}) {
     const CameraOnDisplay camera = cameraMap(truth);
-    return measure(
-        truth, [&](BenchProbe& probe) { return calibratePart(probe, *model_, camera, kStatedDistance_mm, settings); });
+    return measure(truth, [&](BenchProbe& probe) {
+      return calibratePart(probe, *model_, camera, kStatedDistance_mm, std::nullopt, settings);
+    });
   }
 
   TestFolder dir_{"part_calibration"};

@@ -72,10 +72,11 @@ struct OffsetFit {
   std::vector<std::optional<PartRay>> rays;  // at `lateral`
 };
 
-OffsetFit fitOffsets(const PartModel& part, const std::vector<Pixel>& pixels, double gap0, double pixelPitch_mm,
-                     const std::string& display) {
+OffsetFit fitOffsets(const PartModel& part, const std::vector<Pixel>& pixels, const Vec2& lateral0, double gap0,
+                     double pixelPitch_mm, const std::string& display) {
   OffsetFit fit;
   fit.gap = gap0;
+  fit.lateral = lateral0;
   for (size_t i = 0; i < pixels.size(); ++i)
     if (pixels[i].confident) fit.kept.push_back(i);
   for (int round = 0; round < 3; ++round) {
@@ -240,8 +241,8 @@ struct Membership {
 }  // namespace
 
 PartCalibration calibratePart(BenchProbe& bench, const PartModel& part, const CameraOnDisplay& camera,
-                              double statedDistance_mm, const PartCalibrationSettings& settings,
-                              const std::function<void(double)>& progress) {
+                              double statedDistance_mm, std::optional<Vec2> statedPartCentre_px,
+                              const PartCalibrationSettings& settings, const std::function<void(double)>& progress) {
   checkSettings(settings);
   if (!(statedDistance_mm > 0) || !std::isfinite(statedDistance_mm))
     fail(Errc::InvalidArgument, "part calibration: the stated distance {} mm must be positive", statedDistance_mm);
@@ -302,8 +303,10 @@ PartCalibration calibratePart(BenchProbe& bench, const PartModel& part, const Ca
          "its lens's centre: nothing deflects them, is the part missing?",
          name);
   // The pixels whose rays the model takes through the part where the bench puts it.
+  const Vec2 stated =
+      camera.displayPoint(statedPartCentre_px.value_or(Vec2(0.5 * (image.width - 1), 0.5 * (image.height - 1))), image);
   {
-    const auto rays = traceAll(part, pixels, {0, 0});
+    const auto rays = traceAll(part, pixels, stated);
     std::vector<Pixel> through;
     for (size_t i = 0; i < pixels.size(); ++i)
       if (rays[i]) through.push_back(pixels[i]);
@@ -316,7 +319,7 @@ PartCalibration calibratePart(BenchProbe& bench, const PartModel& part, const Ca
          pixels.size(), kMinPixels);
 
   // g and L from the offsets within each lens.
-  const OffsetFit fit = fitOffsets(part, pixels, info.optics.gap_mm, info.pixelPitch_mm, name);
+  const OffsetFit fit = fitOffsets(part, pixels, stated, info.optics.gap_mm, info.pixelPitch_mm, name);
   out.gap_mm = fit.gap;
   out.lateral_mm = fit.lateral;
   out.gapSigma_mm = std::sqrt(fit.covariance(0, 0));

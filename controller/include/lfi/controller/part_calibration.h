@@ -53,6 +53,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <optional>
 #include <string>
 
 namespace lfi {
@@ -85,10 +86,13 @@ struct PartCalibration {
 
 // Measures through `bench` (Controller::probe()) with the part in place.
 // `camera` is where the camera looks on the display; `statedDistance_mm` the
-// bench's Δ. Errc::InvalidArgument for settings out of range; the refusals
-// above; what the devices throw, with the frame named.
+// bench's Δ, `statedPartCentre_px` where it puts the part on the image (none:
+// the image's centre), the fit's start. Errc::InvalidArgument for settings
+// out of range; the refusals above; what the devices throw, with the frame
+// named.
 PartCalibration calibratePart(BenchProbe& bench, const PartModel& part, const CameraOnDisplay& camera,
-                              double statedDistance_mm, const PartCalibrationSettings& settings = {},
+                              double statedDistance_mm, std::optional<Vec2> statedPartCentre_px = std::nullopt,
+                              const PartCalibrationSettings& settings = {},
                               const std::function<void(double)>& progress = {});
 
 // What `lfi calibrate part` writes into a bench file: [geometry] distance_mm
