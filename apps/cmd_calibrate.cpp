@@ -92,10 +92,10 @@ int runCalibrate(const CalibrateArgs& a, const GlobalOptions& global) {
     model = std::make_unique<lfi::sim::ScenePartModel>(a.model);
   }
   const lfi::BenchFile devices = a.part.empty() ? bench : withSimulatedPart(bench, a.part);
-  auto capture = lfi::openBenchCapture(devices);
   auto display = lfi::openBenchDisplay(devices);
   auto camera = lfi::openBenchCamera(devices);
-  lfi::Controller controller(*capture, *display, *camera,
+  lfi::NoCapture noCapture;  // (the reference is not needed: the calibrations show their own panels)
+  lfi::Controller controller(noCapture, *display, *camera,
                              lfi::controllerOptions(bench, a.frames > 0 ? a.frames : bench.inspectionFrames));
   ProgressBar bar;
   const auto progress = [&](double f) {

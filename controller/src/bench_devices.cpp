@@ -10,6 +10,10 @@
 
 namespace lfi {
 
+LightField NoCapture::capture(const std::function<void(double)>&) {
+  fail(Errc::InvalidArgument, "this controller has no reference capture: it only shows panels and takes images");
+}
+
 std::unique_ptr<Camera> openBenchCamera(const BenchFile& bench) {
   auto camera = openCamera(bench.cameraUri);
   camera->configure(bench.camera);

@@ -7,6 +7,7 @@
 // every refusal against a bench that gives it.
 
 #include "lfi/controller/display_calibration.h"
+#include "lfi/controller/bench_devices.h"
 #include "lfi/controller/controller.h"
 #include "lfi/core/error.h"
 #include "lfi/drivers/camera_registry.h"
@@ -100,20 +101,10 @@ class DisplayCalibrationTest : public testing::Test {
     cameraSettings.pixelFormat = PixelFormat::Mono12;
     cameraSettings.trigger = TriggerMode::Software;
     camera->configure(cameraSettings);
-    StoredNothing nothing;
+    NoCapture nothing;
     Controller controller(nothing, *display, *camera);
     return calibrateDisplay(controller.probe(), settings);
   }
-
-  // A capture the controller is built with and the calibration never uses.
-  class StoredNothing final : public LightFieldCapture {
-   public:
-    LightFieldGeometry geometry() const override { return {}; }
-    LightField capture(const std::function<void(double)>&) override {
-      fail(Errc::InvalidArgument, "no capture in a calibration");
-    }
-    std::string description() const override { return "none"; }
-  };
 
   TestFolder dir_{"display_calibration"};
 };
@@ -231,7 +222,7 @@ TEST_F(DisplayCalibrationTest, AnotherPackingThanTheDisplayStatesIsRefused) {
    private:
     BenchProbe& inner_;
   };
-  StoredNothing nothing;
+  NoCapture nothing;
   Controller controller(nothing, *display, *camera);
   Misstated probe(controller.probe());
   EXPECT_TRUE(throwsError([&] { calibrateDisplay(probe); }, Errc::Device, {"square lattice"}));

@@ -7,6 +7,7 @@
 // draw; the refusals.
 
 #include "lfi/controller/part_calibration.h"
+#include "lfi/controller/bench_devices.h"
 #include "lfi/controller/controller.h"
 #include "lfi/controller/display_calibration.h"
 #include "lfi/core/error.h"
@@ -79,16 +80,6 @@ class PartCalibrationTest : public testing::Test {
     sim::registerSimBackends();
     model_ = std::make_unique<sim::ScenePartModel>(dir_.write("model.toml", sceneText(Truth{})));
   }
-
-  // A capture the controller is built with and the calibrations never use.
-  class NoCapture final : public LightFieldCapture {
-   public:
-    LightFieldGeometry geometry() const override { return {}; }
-    LightField capture(const std::function<void(double)>&) override {
-      fail(Errc::InvalidArgument, "no capture in a calibration");
-    }
-    std::string description() const override { return "none"; }
-  };
 
   template <typename Measure>
   auto measure(const Truth& truth, Measure&& f) {

@@ -16,7 +16,7 @@ namespace lfi {
 // A light field held in memory (read from a file or a reference package) in
 // the place of a capture device: capture() returns it.
 class StoredLightField final : public LightFieldCapture {
-public:
+ public:
   StoredLightField(LightField lightField, std::string description)
       : lightField_(std::move(lightField)), description_(std::move(description)) {}
   LightFieldGeometry geometry() const override { return lightField_.geometry(); }
@@ -24,9 +24,19 @@ public:
   const LightField& lightField() const { return lightField_; }
   std::string description() const override { return description_; }
 
-private:
+ private:
   LightField lightField_;
   std::string description_;
+};
+
+// The capture of a controller that only shows panels and takes images (the
+// calibrations, through Controller::probe()): there is nothing to capture,
+// and capture() throws Errc::InvalidArgument.
+class NoCapture final : public LightFieldCapture {
+ public:
+  LightFieldGeometry geometry() const override { return {}; }
+  LightField capture(const std::function<void(double)>&) override;
+  std::string description() const override { return "none (a controller that only shows panels and takes images)"; }
 };
 
 // The camera, opened and configured with the bench's settings.
