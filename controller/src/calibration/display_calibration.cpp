@@ -137,24 +137,11 @@ DisplayCalibration calibrateDisplay(BenchProbe& bench, const DisplayCalibrationS
   info.validate();
   out.nominal = info;
   const std::string& name = info.deviceId;
-  if (!fullParallax(info.optics.type))
-    fail(Errc::Device,
-         "display calibration: display '{}' has {} optics; the calibration measures lens and pinhole "
-         "arrays (a lenticular sheet's or a line barrier's is not built)",
-         name, toString(info.optics.type));
+  detail::requireLensArray(info, "display calibration");
   const cv::Size panel(info.panelWidth_px, info.panelHeight_px);
   const int totalFrames = calib::GrayCodeLayout::forPanel(panel.width, panel.height).frameCount() +
                           settings.spotPeriod * settings.spotPeriod;
-  const auto take = [&](const cv::Mat& levels, const char* what) {
-    if (progress) progress(static_cast<double>(out.frames) / totalFrames);
-    try {
-      cv::Mat image = bench.take(levels);
-      ++out.frames;
-      return image;
-    } catch (const Error& e) {
-      fail(e.code(), "display calibration: frame {} ({}) of display '{}': {}", out.frames + 1, what, name, e.what());
-    }
-  };
+  detail::FrameTaker take(bench, "display calibration", name, totalFrames, progress);
 
   // Which panel pixels each camera pixel sees along the axis.
   const detail::GrayCodeView view = detail::takeGrayCode(
@@ -224,6 +211,7 @@ DisplayCalibration calibrateDisplay(BenchProbe& bench, const DisplayCalibrationS
   out.optics.rotation_rad = lattice.rotation_rad;
   out.optics.arrayOffsetX_mm = lattice.offset_mm.x;
   out.optics.arrayOffsetY_mm = lattice.offset_mm.y;
+  out.frames = take.frames();
   if (progress) progress(1);
   out.seconds = seconds(Clock::now() - start);
   out.computeSeconds = seconds(compute);

@@ -8,9 +8,27 @@
 
 namespace lfi::detail {
 
-GrayCodeView takeGrayCode(const std::function<cv::Mat(const cv::Mat&, const char*)>& take, const DisplayInfo& info,
-                          double fullScale_dn, double secondShare, double minDecoded, const char* who,
-                          const char* why) {
+cv::Mat FrameTaker::operator()(const cv::Mat& levels, const char* what) {
+  if (progress_) progress_(static_cast<double>(frames_) / total_);
+  try {
+    cv::Mat image = bench_.take(levels);
+    ++frames_;
+    return image;
+  } catch (const Error& e) {
+    fail(e.code(), "{}: frame {} ({}) of display '{}': {}", who_, frames_ + 1, what, display_, e.what());
+  }
+}
+
+void requireLensArray(const DisplayInfo& info, const char* who) {
+  if (!fullParallax(info.optics.type))
+    fail(Errc::Device,
+         "{}: display '{}' has {} optics; the calibration measures lens and pinhole arrays (a "
+         "lenticular sheet's or a line barrier's is not built)",
+         who, info.deviceId, toString(info.optics.type));
+}
+
+GrayCodeView takeGrayCode(FrameTaker& take, const DisplayInfo& info, double fullScale_dn, double secondShare,
+                          double minDecoded, const char* who, const char* why) {
   const calib::CodedPatternSet set = calib::grayCodePatterns(info.panelWidth_px, info.panelHeight_px);
   const double dnPer8Bit = fullScale_dn / 255;
   calib::DecodeSettings decode;

@@ -6,6 +6,7 @@
 
 #include "lfi/calib/coded_patterns.h"
 #include "lfi/drivers/display.h"
+#include "lfi/drivers/light_field_capture.h"
 
 #include <opencv2/core.hpp>
 
@@ -14,6 +15,27 @@
 
 namespace lfi::detail {
 
+// Shows panels through the bench and takes the camera's images, counting them:
+// `progress` gets the frames taken over `total`, an error names the frame, what
+// it showed and the display. `who` names the calibration in messages.
+class FrameTaker {
+ public:
+  FrameTaker(BenchProbe& bench, const char* who, std::string display, int total, std::function<void(double)> progress)
+      : bench_(bench), who_(who), display_(std::move(display)), total_(total), progress_(std::move(progress)) {}
+  cv::Mat operator()(const cv::Mat& levels, const char* what);
+  int frames() const { return frames_; }
+
+ private:
+  BenchProbe& bench_;
+  const char* who_;
+  std::string display_;
+  int total_ = 0, frames_ = 0;
+  std::function<void(double)> progress_;
+};
+
+// Errc::Device naming the display unless its optics are a lens or pinhole array.
+void requireLensArray(const DisplayInfo& info, const char* who);
+
 struct GrayCodeView {
   cv::Mat white, black;  // CV_32FC1, DN
   cv::Mat light;         // white − black, at least 0
@@ -21,13 +43,12 @@ struct GrayCodeView {
   double decodeSeconds = 0;
 };
 
-// `take(levels, what)` shows a panel and returns the camera's image (CV_32FC1);
-// `fullScale_dn` is the camera's. `who` names the calibration in messages
+// `take` shows the panels; `fullScale_dn` is the camera's. `who` names the calibration in messages
 // ("display calibration"). Errc::Device naming the display for a display out
 // of the camera's view and for fewer than `minDecoded` of the lit pixels
 // decoded (`why` says what to look at then).
-GrayCodeView takeGrayCode(const std::function<cv::Mat(const cv::Mat&, const char*)>& take, const DisplayInfo& info,
-                          double fullScale_dn, double secondShare, double minDecoded, const char* who, const char* why);
+GrayCodeView takeGrayCode(FrameTaker& take, const DisplayInfo& info, double fullScale_dn, double secondShare,
+                          double minDecoded, const char* who, const char* why);
 
 // A panel pixel's centre in the display frame (display.h), mm.
 inline Vec2 panelPixelCentre(const DisplayInfo& d, double col, double row) {

@@ -254,22 +254,9 @@ PartCalibration calibratePart(BenchProbe& bench, const PartModel& part, const Ca
   info.validate();
   out.nominal = info;
   const std::string& name = info.deviceId;
-  if (!fullParallax(info.optics.type))
-    fail(Errc::Device,
-         "part calibration: display '{}' has {} optics; the calibration measures through lens and "
-         "pinhole arrays (a lenticular sheet's or a line barrier's is not built)",
-         name, toString(info.optics.type));
+  detail::requireLensArray(info, "part calibration");
   const int totalFrames = calib::GrayCodeLayout::forPanel(info.panelWidth_px, info.panelHeight_px).frameCount();
-  const auto take = [&](const cv::Mat& levels, const char* what) {
-    if (progress) progress(static_cast<double>(out.frames) / totalFrames);
-    try {
-      cv::Mat image = bench.take(levels);
-      ++out.frames;
-      return image;
-    } catch (const Error& e) {
-      fail(e.code(), "part calibration: frame {} ({}) of display '{}': {}", out.frames + 1, what, name, e.what());
-    }
-  };
+  detail::FrameTaker take(bench, "part calibration", name, totalFrames, progress);
   const detail::GrayCodeView view =
       detail::takeGrayCode(take, info, bench.cameraFullScale_dn(), 0, settings.minDecoded, "part calibration",
                            "the patterns blur, or the part scatters more light than it refracts");
@@ -383,6 +370,7 @@ PartCalibration calibratePart(BenchProbe& bench, const PartModel& part, const Ca
   const double n = settings.bootstrap;
   out.distanceSigma_mm = std::sqrt(std::max(0.0, (sum2 - sum * sum / n) / (n - 1)));
   out.partCentre_px = camera.cameraPoint(out.lateral_mm, image);
+  out.frames = take.frames();
   if (progress) progress(1);
   out.computeSeconds = std::chrono::duration<double>(Clock::now() - computeStart).count() + view.decodeSeconds;
   out.seconds = std::chrono::duration<double>(Clock::now() - start).count();
