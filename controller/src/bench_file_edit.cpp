@@ -174,9 +174,11 @@ std::string BenchFileEdit::changes() const {
     if (i < a.size() && j < b.size() && a[i] == b[j]) {
       ++i, ++j;
     } else if (i < a.size() && (j == b.size() || common[i + 1][j] >= common[i][j + 1])) {
-      out += "- " + a[i++] + "\n";
+      out += fmt::format("- {:4} | {}\n", i + 1, a[i]);
+      ++i;
     } else {
-      out += "+ " + b[j++] + "\n";
+      out += fmt::format("+ {:4} | {}\n", j + 1, b[j]);
+      ++j;
     }
   }
   return out;

@@ -131,8 +131,8 @@ TEST_F(LfiCalibrate, ADryRunPrintsTheChangesAndWritesNothing) {
       lfi("-q calibrate display " + quoted(bench_) + " --part " + quoted(dir_ / "empty.toml") + " --dry-run");
   ASSERT_EQ(run.status, 0) << run.output;
   EXPECT_NE(run.output.find("would change"), std::string::npos) << run.output;
-  EXPECT_NE(run.output.find("- array_pitch_mm = 1.0"), std::string::npos) << run.output;
-  EXPECT_NE(run.output.find("+ array_pitch_mm = 1.00"), std::string::npos) << run.output;
+  EXPECT_NE(run.output.find(" | array_pitch_mm = 1.0\n"), std::string::npos) << run.output;  // the line removed
+  EXPECT_NE(run.output.find(" | array_pitch_mm = 1.00"), std::string::npos) << run.output;   // and written
   EXPECT_EQ(readText(bench_), original_);
   EXPECT_FALSE(fs::exists(dir_ / "bench.calibrations"));
 }

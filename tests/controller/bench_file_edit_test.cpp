@@ -27,9 +27,10 @@ TEST_F(BenchFileEditTest, AValueIsReplacedWhereItStandsAndEverythingElseIsKept) 
   EXPECT_EQ(edit.text(),
             replaced(text, "object_pixel_mm = 0.5    # 0.1215 / 0.243 µm", "object_pixel_mm = 0.4992  # calibrated"));
   EXPECT_EQ(edit.original(), text);
-  EXPECT_EQ(edit.changes(),
-            "- object_pixel_mm = 0.5    # 0.1215 / 0.243 µm\n"
-            "+ object_pixel_mm = 0.4992  # calibrated\n");
+  const int line = lineOf(text, "object_pixel_mm");
+  EXPECT_EQ(edit.changes(), fmt::format("- {:4} | object_pixel_mm = 0.5    # 0.1215 / 0.243 µm\n"
+                                        "+ {:4} | object_pixel_mm = 0.4992  # calibrated\n",
+                                        line, line));
 }
 
 TEST_F(BenchFileEditTest, ValuesAfterTextOfManyBytesPerCharacterAndOverLinesAreFound) {
@@ -47,6 +48,9 @@ TEST_F(BenchFileEditTest, AMissingKeyGoesAfterItsTablesLastKeyAndAMissingTableAf
   edit.set("display.optics", "optics", "\"lenslet_array\"", "stated");
   edit.set("display.optics", "array_pitch_mm", "1.0004");
   edit.set("run", "wait_limit_s", "5");
+  // New lines are numbered where they stand in the edited file.
+  const int added = lineOf(kBench, "uri = \"usb:1209:4c46/LFI-0001\"") + 1;
+  EXPECT_EQ(edit.changes().substr(0, edit.changes().find('\n') + 1), fmt::format("+ {:4} | settle_ms = 20\n", added));
   EXPECT_EQ(edit.text(), replaced(kBench, "uri = \"usb:1209:4c46/LFI-0001\"\n",
                                   "uri = \"usb:1209:4c46/LFI-0001\"\nsettle_ms = 20\n[display.optics]\n"
                                   "optics = \"lenslet_array\"  # stated\narray_pitch_mm = 1.0004\n") +

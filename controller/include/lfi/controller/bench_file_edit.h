@@ -37,7 +37,8 @@ class BenchFileEdit {
   const std::filesystem::path& file() const { return file_; }
   const std::string& original() const { return original_; }
   const std::string& text() const { return text_; }
-  // The lines that change, "- old" and "+ new", for a dry run.
+  // The lines that change, for a dry run: "- <line> | old" with its line in
+  // the file as it is, "+ <line> | new" with its line in the file edited.
   std::string changes() const;
 
  private:
