@@ -6,6 +6,7 @@
 // errors that name them.
 
 #include "gige_device_process.h"
+#include "lfi/controller/bench_file.h"
 #include "lfi_process.h"
 #include "study_parts.h"
 #include "test_folder.h"
@@ -31,14 +32,15 @@ using lfi::testing_support::runLfi;
 using lfi::testing_support::shellQuoted;
 
 class LfiSimBench : public testing::Test {
-protected:
+ protected:
   void SetUp() override {
     const std::string scenes = (source_ / "data" / "scenes").string();
     // The shipped simulated bench, served; and a bench of its served devices with the simulated sensor's
     // reference (the quicker one), waiting for devices that drop out. 16 frames a part (about 0.1 s)
     // keep a run of 50 parts long enough for 10 faults a second long, with parts between them.
     std::string text = readText(source_ / "data" / "benches" / "inspection_sim.toml");
-    for (size_t at; (at = text.find("sim:../scenes/")) != std::string::npos;) text.replace(at, 14, "sim:" + scenes + "/");
+    for (size_t at; (at = text.find("sim:../scenes/")) != std::string::npos;)
+      text.replace(at, 14, "sim:" + scenes + "/");
     served_ = folder_.write("served.toml", text);
     hil_ = folder_.write("hil.toml", fmt::format(R"(format = "lfi-inspection-bench"
 version = 1
@@ -71,7 +73,8 @@ save_images = "none"
 [run]
 on_device_loss = "wait"
 wait_limit_s = 60
-)", scenes));
+)",
+                                                 scenes));
   }
 
   // `lfi sim-bench` on the served bench running `sh -c SCRIPT`.
@@ -117,7 +120,8 @@ for device in camera display camera display camera display camera display camera
   k=$((k+1))
 done
 wait $run
-)sh", lfi, bench, shellQuoted(run.string()), shellQuoted(records.string()));
+)sh",
+                                         lfi, bench, shellQuoted(run.string()), shellQuoted(records.string()));
   const auto r = simBench(script);
   ASSERT_EQ(r.status, 0) << r.output;
   std::vector<nlohmann::json> lines;
@@ -134,7 +138,8 @@ wait $run
     if (j["status"] == "error") {
       const std::string error = j["error"];
       const bool camera = error.find("lfi-SimCamera-LFISIM01") != std::string::npos;
-      const bool display = error.find("LFI-SIM-0001") != std::string::npos || error.find("display") != std::string::npos;
+      const bool display =
+          error.find("LFI-SIM-0001") != std::string::npos || error.find("display") != std::string::npos;
       EXPECT_TRUE(camera != display) << "names the device that failed: " << error;
       faults.push_back(camera ? "camera" : "display");
       ASSERT_LT(i + 1, lines.size());
@@ -162,14 +167,16 @@ TEST_F(LfiSimBench, ALineTriggeredRunInspectsEachPartTheLineBringsInItsOrder) {
   const std::string sceneText = readText(source_ / "data" / "scenes" / "inspection_bench.toml");
   const std::string lfi = shellQuoted(LFI_EXECUTABLE);
   const fs::path run = folder_ / "run", records = run / "records.jsonl";
-  std::string script = fmt::format(R"sh(set -u
+  std::string script =
+      fmt::format(R"sh(set -u
 {0} -q capture {1} || exit 10
 {0} -q run {2} --parts {3} --out {4} & run=$!
 count() {{ if [ -f {5} ]; then wc -l < {5}; else echo 0; fi; }}
 bring() {{ i=0; until {0} -q bench-control part "$1" | grep -q "triggered a frame"; do i=$((i+1)); [ $i -gt 600 ] && exit 12; sleep 0.1; done; }}
 until_records() {{ i=0; while [ "$(count)" -lt "$1" ]; do i=$((i+1)); [ $i -gt 1200 ] && exit 13; sleep 0.05; done; }}
-)sh", lfi, shellQuoted(hil_.string()), shellQuoted(line.string()), lfi::testing_support::studyParts().size(),
-                                   shellQuoted(run.string()), shellQuoted(records.string()));
+)sh",
+                  lfi, shellQuoted(hil_.string()), shellQuoted(line.string()),
+                  lfi::testing_support::studyParts().size(), shellQuoted(run.string()), shellQuoted(records.string()));
   int k = 0;
   for (const auto& part : lfi::testing_support::studyParts()) {
     const fs::path scene = folder_.write(part.name + ".toml", lfi::testing_support::studyPartScene(sceneText, part));
@@ -217,7 +224,8 @@ TEST_F(LfiSimBench, DisplayAndNetworkFaultsReachTheRealDriversAsOnABench) {
 {0} -q bench-control packet-loss 0.05 >/dev/null
 {0} -q run {1} --parts 50 --out {2} | head -1
 {0} -q bench-control status
-)sh", lfi, b, shellQuoted((folder_ / "run").string())));
+)sh",
+                                      lfi, b, shellQuoted((folder_ / "run").string())));
   EXPECT_EQ(r.status, 0) << r.output;
   EXPECT_NE(r.output.find("stalled: 0"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("corrupt: 1"), std::string::npos) << r.output;
@@ -234,9 +242,38 @@ TEST_F(LfiSimBench, DisplayAndNetworkFaultsReachTheRealDriversAsOnABench) {
   EXPECT_GT(served[1] - served[0], 50) << "no frame came incomplete: was the packet loss applied?\n" << r.output;
 }
 
+// The calibrations unchanged over the real drivers: the served display's lens array and the camera's scale with
+// the lens taken away (bench-control part), then Δ and the part's place with it back, written into the bench of
+// the served devices. The served bench is the shipped one: its truth is data/scenes/inspection_bench.toml's.
+TEST_F(LfiSimBench, BothCalibrationsRunOverTheRealDriversAndFindTheServedBench) {
+  const std::string lfi = shellQuoted(LFI_EXECUTABLE), b = shellQuoted(hil_.string());
+  const std::string scenes = (source_ / "data" / "scenes").string();
+  const auto r =
+      simBench(fmt::format(R"sh({0} -q bench-control part {2}/inspection_bench_empty.toml >/dev/null || exit 10
+{0} -q calibrate display {1} --frames 1 || exit 11
+{0} -q bench-control part {2}/inspection_bench.toml >/dev/null || exit 12
+{0} -q calibrate part {1} --frames 1 --model {2}/inspection_bench.toml || exit 13
+)sh",
+                           lfi, b, shellQuoted(scenes)));
+  ASSERT_EQ(r.status, 0) << r.output;
+  const lfi::BenchFile bench = lfi::readBenchFile(hil_);
+  // Tolerances (docs/calibration.md): a point at the field's edge (28 px) within a tenth of a pixel; the lens
+  // centres at the panel's edge (12.6 mm) within a quarter of a 0.0315 mm panel pixel; Δ within 0.05 / 0.27 mm
+  // and the part's place within a tenth of a pixel (0.05 mm).
+  const double objectPixel = 0.1215 * (1 / (1 / 20.03 - 1 / 24.9075)) / 24.9075;
+  EXPECT_NEAR(bench.objectPixel_mm, objectPixel, objectPixel * 0.1 / 28);
+  ASSERT_TRUE(bench.displayOptics);
+  EXPECT_NEAR(bench.displayOptics->arrayPitch_mm, 1.0, 0.25 * 0.0315 / 12.6);
+  EXPECT_NEAR(bench.distance_mm, 30, 0.05 / 0.27);
+  ASSERT_TRUE(bench.partCentre_px);
+  EXPECT_NEAR(bench.partCentre_px->x, 27.5, 0.1);
+  EXPECT_NEAR(bench.partCentre_px->y, 27.5, 0.1);
+}
+
 TEST_F(LfiSimBench, TheProgramsExitStatusIsTheBenchsAndTheEnvironmentNamesTheDevices) {
-  const auto r = simBench("echo \"$LFI_SIM_BENCH_CAMERA $LFI_SIM_BENCH_DISPLAY\"; test -S \"$LFI_SIM_BENCH_CONTROL\"; "
-                          "exit 7");
+  const auto r = simBench(
+      "echo \"$LFI_SIM_BENCH_CAMERA $LFI_SIM_BENCH_DISPLAY\"; test -S \"$LFI_SIM_BENCH_CONTROL\"; "
+      "exit 7");
   EXPECT_EQ(r.status, 7) << r.output;
   EXPECT_NE(r.output.find("aravis:lfi-SimCamera-LFISIM01 usb:1209:4c46/LFI-SIM-0001"), std::string::npos) << r.output;
   const auto killed = simBench("kill -TERM $$");
