@@ -1,6 +1,7 @@
 #include "lfi/calib/lattice_fit.h"
 
 #include "lfi/core/error.h"
+#include "lfi/drivers/optics/lens_lattice.h"
 
 #include <opencv2/core.hpp>
 
@@ -71,24 +72,14 @@ struct Lattice {
     const Vec2 l = unitPoint(packing, i, j);
     return {o.x + a * l.x - b * l.y, o.y + b * l.x + a * l.y};
   }
+  // The index of the lattice point nearest `p`: the lens whose cell (optics/lens_lattice.h) holds it.
   std::array<int, 2> nearest(const Vec2& p) const {
     const double p2 = a * a + b * b;
-    const Vec2 r = p - o;
-    const Vec2 v((a * r.x + b * r.y) / p2, (-b * r.x + a * r.y) / p2);  // M⁻¹ r
-    const double fj = packing == LensPacking::Square ? v.y : v.y / kRowHeight;
-    const double fi = packing == LensPacking::Square ? v.x : v.x - 0.5 * fj;
-    std::array<int, 2> best{0, 0};
-    double bestDistance = std::numeric_limits<double>::infinity();
-    for (int di = 0; di <= 1; ++di)
-      for (int dj = 0; dj <= 1; ++dj) {
-        const int i = static_cast<int>(std::floor(fi)) + di, j = static_cast<int>(std::floor(fj)) + dj;
-        const double d = (point(i, j) - p).length2();
-        if (d < bestDistance) {
-          bestDistance = d;
-          best = {i, j};
-        }
-      }
-    return best;
+    const Vec2 r = LensLattice(packing, std::sqrt(p2), std::atan2(b, a), o).nearestCentre(p) - o;
+    const Vec2 v((a * r.x + b * r.y) / p2, (-b * r.x + a * r.y) / p2);  // M⁻¹ r: the unit coordinates
+    const double j = packing == LensPacking::Square ? v.y : v.y / kRowHeight;
+    const double i = packing == LensPacking::Square ? v.x : v.x - 0.5 * j;
+    return {static_cast<int>(std::lround(i)), static_cast<int>(std::lround(j))};
   }
 };
 
