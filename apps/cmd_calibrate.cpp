@@ -54,7 +54,7 @@ void printDisplayCalibration(const lfi::DisplayCalibration& c) {
   fmt::print("  object pixel  {:.6f} mm  U {:.2g} mm  (along a row {:.6f}, down a column {:.6f})\n", m.objectPixel_mm,
              k * m.objectPixelSigma_mm, m.pixelX_mm, m.pixelY_mm);
   fmt::print("  rotation {:+.5f} rad{}; the image's centre sees the display at [{:+.4f}, {:+.4f}] mm\n", m.rotation_rad,
-             m.mirrored ? ", mirrored" : "", m.centre_mm.x, m.centre_mm.y);
+             m.mirrored ? ", mirrored" : "", m.map.atImageCentre_mm.x, m.map.atImageCentre_mm.y);
   fmt::print("  distortion at the corner {:+.3f} px  U {:.2g} px (reported, not applied)\n", m.distortion_px,
              k * m.distortionSigma_px);
   fmt::print("U: expanded uncertainty, k = {:g}; {} frames in {:.2f} s ({:.0f} ms of it decoding and fitting)\n", k,

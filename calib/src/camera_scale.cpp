@@ -100,10 +100,15 @@ Model solveModel(const std::vector<CameraPoint>& points, const Vec2& centre, dou
 
 }  // namespace
 
-Vec2 CameraScaleFit::displayPoint(const Vec2& camera_px, cv::Size image) const {
-  const Vec2 d = camera_px - imageCentre(image);
-  const cv::Vec2d x = displayFromCamera * cv::Vec2d(d.x, d.y);
-  return {x[0] + centre_mm.x, x[1] + centre_mm.y};
+Vec2 CameraMap::displayPoint(const Vec2& px, cv::Size image) const {
+  const Vec2 d = px - imageCentre(image);
+  const cv::Vec2d x = perPixel_mm * cv::Vec2d(d.x, d.y);
+  return atImageCentre_mm + Vec2(x[0], x[1]);
+}
+
+Vec2 CameraMap::cameraPoint(const Vec2& q, cv::Size image) const {
+  const cv::Vec2d d = perPixel_mm.inv() * cv::Vec2d(q.x - atImageCentre_mm.x, q.y - atImageCentre_mm.y);
+  return imageCentre(image) + Vec2(d[0], d[1]);
 }
 
 CameraScaleFit fitCameraScale(const std::vector<CameraPoint>& points, cv::Size image,
@@ -138,8 +143,7 @@ CameraScaleFit fitCameraScale(const std::vector<CameraPoint>& points, cv::Size i
   };
   CameraScaleFit fit;
   fit.points = static_cast<int>(points.size());
-  fit.displayFromCamera = cv::Matx22d(p[0], p[1], p[2], p[3]);
-  fit.centre_mm = {p[4], p[5]};
+  fit.map = {cv::Matx22d(p[0], p[1], p[2], p[3]), {p[4], p[5]}};
   fit.distortion_px = full.p[6] * r;
   const double det = p[0] * p[3] - p[1] * p[2];
   fit.mirrored = det < 0;
@@ -179,8 +183,7 @@ std::optional<Spot> spotCentroid(const cv::Mat& image, const Vec2& guess, double
               x1 = static_cast<int>(std::floor(centre.x + radius_px));
     const int y0 = static_cast<int>(std::ceil(centre.y - radius_px)),
               y1 = static_cast<int>(std::floor(centre.y + radius_px));
-    if (x0 < 0 || y0 < 0 || x1 >= image.cols || y1 >= image.rows)
-      return std::nullopt;
+    if (x0 < 0 || y0 < 0 || x1 >= image.cols || y1 >= image.rows) return std::nullopt;
     double sum = 0, sx = 0, sy = 0;
     for (int y = y0; y <= y1; ++y) {
       const float* row = image.ptr<float>(y);

@@ -105,7 +105,7 @@ void readGeometry(ConfigTable t, BenchFile& b) {
   if (t.has("display_per_pixel_mm")) {
     const auto a = t.numbers("display_per_pixel_mm", 4, std::nullopt, -1e3, 1e3);
     const auto c = t.numbers("display_at_image_centre_mm", 2, std::nullopt, -1e6, 1e6);
-    CameraOnDisplay m{cv::Matx22d(a[0], a[1], a[2], a[3]), Vec2(c[0], c[1])};
+    calib::CameraMap m{cv::Matx22d(a[0], a[1], a[2], a[3]), Vec2(c[0], c[1])};
     if (!(std::abs(cv::determinant(m.perPixel_mm)) > 0))
       fail(Errc::Config, "{} = [{}, {}, {}, {}] maps the image onto a line", t.where("display_per_pixel_mm"), a[0],
            a[1], a[2], a[3]);
@@ -245,16 +245,6 @@ std::string BenchFile::referenceHash() const {
     h *= 1099511628211ull;
   }
   return fmt::format("{:016x}", h);
-}
-
-Vec2 CameraOnDisplay::displayPoint(const Vec2& px, cv::Size image) const {
-  const cv::Vec2d d = perPixel_mm * cv::Vec2d(px.x - 0.5 * (image.width - 1), px.y - 0.5 * (image.height - 1));
-  return atImageCentre_mm + Vec2(d[0], d[1]);
-}
-
-Vec2 CameraOnDisplay::cameraPoint(const Vec2& q, cv::Size image) const {
-  const cv::Vec2d d = perPixel_mm.inv() * cv::Vec2d(q.x - atImageCentre_mm.x, q.y - atImageCentre_mm.y);
-  return {d[0] + 0.5 * (image.width - 1), d[1] + 0.5 * (image.height - 1)};
 }
 
 PartFrame BenchFile::partFrame(int width_px, int height_px) const {

@@ -191,10 +191,10 @@ TEST(CameraScaleFit, AnAffineCameraIsRecoveredExactly) {
   EXPECT_NEAR(fit.pixelY_mm, t.pixel, 1e-12);
   EXPECT_NEAR(fit.rotation_rad, t.rotation, 1e-12);
   EXPECT_TRUE(fit.mirrored);
-  EXPECT_NEAR(fit.centre_mm.x, t.centre.x, 1e-12);
-  EXPECT_NEAR(fit.centre_mm.y, t.centre.y, 1e-12);
+  EXPECT_NEAR(fit.map.atImageCentre_mm.x, t.centre.x, 1e-12);
+  EXPECT_NEAR(fit.map.atImageCentre_mm.y, t.centre.y, 1e-12);
   EXPECT_NEAR(fit.distortion_px, 0, 1e-9);
-  const Vec2 corner = fit.displayPoint({0, 0}, t.image), expected = t.display({0, 0});
+  const Vec2 corner = fit.map.displayPoint({0, 0}, t.image), expected = t.display({0, 0});
   EXPECT_NEAR(corner.x, expected.x, 1e-12);
   EXPECT_NEAR(corner.y, expected.y, 1e-12);
 }
@@ -239,8 +239,8 @@ TEST(SpotCentroid, FindsASymmetricSpotsCentreAndRefusesOneOutOfTheImage) {
   ASSERT_TRUE(spot);
   EXPECT_NEAR(spot->centre_px.x, centre.x, 0.01);
   EXPECT_NEAR(spot->centre_px.y, centre.y, 0.01);
-  EXPECT_FALSE(spotCentroid(image, {3, 20}, 7, 0));     // the window leaves the image
-  EXPECT_FALSE(spotCentroid(image, {16, 23}, 7, 1e6));  // too little light
+  EXPECT_FALSE(spotCentroid(image, {3, 20}, 7, 0));      // the window leaves the image
+  EXPECT_FALSE(spotCentroid(image, {16, 23}, 7, 1e6));   // too little light
   EXPECT_FALSE(spotCentroid(image, {NAN, 23}, 7, 0));    // no guess
   EXPECT_FALSE(spotCentroid(image, {1e300, 23}, 7, 0));  // none within reach of an integer
 }

@@ -162,7 +162,7 @@ TEST_F(DisplayCalibrationTest, RecoversTheArrayAndTheCameraScaleOverTheirRanges)
     // The camera looks down at the display (rotation_deg = [180, 0, 0]): its rows along +x, its columns down -y.
     EXPECT_TRUE(c.camera.mirrored);
     EXPECT_LE(std::abs(c.camera.rotation_rad), kRotationTolerance_rad);
-    const Vec2 centreError = c.camera.centre_mm - truth.cameraAxis_mm;
+    const Vec2 centreError = c.camera.map.atImageCentre_mm - truth.cameraAxis_mm;
     EXPECT_LE(centreError.length(), kCentreTolerance_px * truth.objectPixel_mm());
 
     ++covered.trials;

@@ -95,18 +95,18 @@ class PartCalibrationTest : public testing::Test {
   }
 
   // The camera's map on the display, measured with the lens taken away (as `lfi calibrate display` does).
-  CameraOnDisplay cameraMap(const Truth& truth) {
+  calib::CameraMap cameraMap(const Truth& truth) {
     Truth empty = truth;
     empty.part = false;
     const DisplayCalibration d = measure(empty, [](BenchProbe& probe) { return calibrateDisplay(probe); });
-    return {d.camera.displayFromCamera, d.camera.centre_mm};
+    return d.camera.map;
   }
 
   // The camera's map is the same on every bench here (the camera and the display's place across the axis do not
   // change; a telecentric camera sees the display's plane at one scale whatever its height): measured once.
   PartCalibration calibrate(const Truth& truth, const PartCalibrationSettings& settings = {}) {
     if (!camera_) camera_ = cameraMap(truth);
-    const CameraOnDisplay camera = *camera_;
+    const calib::CameraMap camera = *camera_;
     return measure(truth, [&](BenchProbe& probe) {
       return calibratePart(probe, *model_, camera, kStatedDistance_mm, std::nullopt, settings);
     });
@@ -114,7 +114,7 @@ class PartCalibrationTest : public testing::Test {
 
   TestFolder dir_{"part_calibration"};
   std::unique_ptr<sim::ScenePartModel> model_;
-  std::optional<CameraOnDisplay> camera_;
+  std::optional<calib::CameraMap> camera_;
 };
 
 // Tolerances, each what the bench needs: Δ and the lateral position off by so little that the rays the display
@@ -167,7 +167,7 @@ TEST_F(PartCalibrationTest, RecoversDistanceLateralPositionAndGapOverTheirRanges
 
 TEST_F(PartCalibrationTest, NoPartInViewIsRefused) {
   Truth truth;
-  const CameraOnDisplay camera = cameraMap(truth);
+  const calib::CameraMap camera = cameraMap(truth);
   truth.part = false;
   EXPECT_TRUE(throwsError(
       [&] { measure(truth, [&](BenchProbe& p) { return calibratePart(p, *model_, camera, kStatedDistance_mm); }); },

@@ -172,7 +172,6 @@ DisplayCalibration calibrateDisplay(BenchProbe& bench, const DisplayCalibrationS
   // Spots: every s-th lens along each lattice axis, s² frames; each found about where the first scale puts it.
   const int s = settings.spotPeriod;
   const double radius_mm = std::max(settings.spotRadius * lattice.pitch_mm, 1.5 * info.pixelPitch_mm);
-  const cv::Matx22d cameraFromDisplay = first.displayFromCamera.inv();
   const Vec2 imageCentre(0.5 * (out.image.width - 1), 0.5 * (out.image.height - 1));
   const double window_px = std::max(1.5, 0.45 * s * lattice.pitch_mm / first.objectPixel_mm);
   std::vector<std::pair<calib::CameraPoint, double>> spots;  // and each one's light
@@ -183,8 +182,7 @@ DisplayCalibration calibrateDisplay(BenchProbe& bench, const DisplayCalibrationS
       computeStart = Clock::now();
       for (const LensIndex& lens : lit) {
         const Vec2 centre = lattice.centre(lens[0], lens[1]);
-        const cv::Vec2d d = cameraFromDisplay * cv::Vec2d(centre.x - first.centre_mm.x, centre.y - first.centre_mm.y);
-        if (auto spot = calib::spotCentroid(image, imageCentre + Vec2(d[0], d[1]), window_px, 0))
+        if (auto spot = calib::spotCentroid(image, first.map.cameraPoint(centre, out.image), window_px, 0))
           spots.push_back({{spot->centre_px, centre, lens}, spot->light});
       }
       compute += Clock::now() - computeStart;

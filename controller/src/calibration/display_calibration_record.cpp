@@ -20,15 +20,16 @@ void setDisplayCalibration(BenchFileEdit& edit, const DisplayCalibration& c, con
   };
   edit.set("camera", "object_pixel_mm", tomlNumber(c.camera.objectPixel_mm),
            within(c.camera.objectPixelSigma_mm, "mm"));
-  const cv::Matx22d& a = c.camera.displayFromCamera;
+  const cv::Matx22d& a = c.camera.map.perPixel_mm;
   edit.set("geometry", "display_per_pixel_mm",
            fmt::format("[{}, {}, {}, {}]", tomlNumber(a(0, 0)), tomlNumber(a(0, 1)), tomlNumber(a(1, 0)),
                        tomlNumber(a(1, 1))),
            within(c.camera.objectPixelSigma_mm, "mm (scale)"));
-  edit.set("geometry", "display_at_image_centre_mm",
-           fmt::format("[{}, {}]", tomlNumber(c.camera.centre_mm.x), tomlNumber(c.camera.centre_mm.y)),
-           fmt::format("lfi calibrate display {}: U = [{:.2g}, {:.2g}] mm (k = {:g})", stampUtc,
-                       k * c.camera.centreSigma_mm.x, k * c.camera.centreSigma_mm.y, k));
+  edit.set(
+      "geometry", "display_at_image_centre_mm",
+      fmt::format("[{}, {}]", tomlNumber(c.camera.map.atImageCentre_mm.x), tomlNumber(c.camera.map.atImageCentre_mm.y)),
+      fmt::format("lfi calibrate display {}: U = [{:.2g}, {:.2g}] mm (k = {:g})", stampUtc,
+                  k * c.camera.centreSigma_mm.x, k * c.camera.centreSigma_mm.y, k));
   const DisplayOpticsParams& o = c.optics;
   detail::setOpticsTable(edit, o, "as the display states it (not measured)");
   edit.set("display.optics", "array_pitch_mm", tomlNumber(o.arrayPitch_mm), within(c.lattice.pitchSigma_mm, "mm"));
@@ -88,7 +89,7 @@ std::string displayCalibrationRecord(const DisplayCalibration& c, const BenchFil
         {"pixel_y_mm", c.camera.pixelY_mm},
         {"rotation_rad", c.camera.rotation_rad},
         {"mirrored", c.camera.mirrored},
-        {"image_centre_on_display_mm", {c.camera.centre_mm.x, c.camera.centre_mm.y}},
+        {"image_centre_on_display_mm", {c.camera.map.atImageCentre_mm.x, c.camera.map.atImageCentre_mm.y}},
         {"distortion_at_corner", measured(c.camera.distortion_px, c.camera.distortionSigma_px, k, "px")},
         {"residual_rms_mm", c.camera.residualRms_mm},
         {"spots", c.spots}}},

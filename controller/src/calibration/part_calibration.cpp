@@ -240,7 +240,7 @@ struct Membership {
 
 }  // namespace
 
-PartCalibration calibratePart(BenchProbe& bench, const PartModel& part, const CameraOnDisplay& camera,
+PartCalibration calibratePart(BenchProbe& bench, const PartModel& part, const calib::CameraMap& camera,
                               double statedDistance_mm, std::optional<Vec2> statedPartCentre_px,
                               const PartCalibrationSettings& settings, const std::function<void(double)>& progress) {
   checkSettings(settings);

@@ -40,6 +40,19 @@
 
 namespace lfi::calib {
 
+// Where an affine camera's pixels look on the display's plane (the display
+// frame): display = perPixel_mm (px − c) + atImageCentre_mm, c the image's
+// centre ((w − 1) / 2, (h − 1) / 2). What fitCameraScale measures, and what a
+// bench file keeps ([geometry] display_per_pixel_mm, display_at_image_centre_mm).
+struct CameraMap {
+  cv::Matx22d perPixel_mm = cv::Matx22d::zeros();  // A: the display's (x, y) per camera pixel (u, v)
+  Vec2 atImageCentre_mm{0, 0};                     // t: the display point the image's centre sees
+  // The display point camera pixel `px` sees, and the camera pixel that sees display point `q`, on an image of
+  // `image` pixels.
+  Vec2 displayPoint(const Vec2& px, cv::Size image) const;
+  Vec2 cameraPoint(const Vec2& q, cv::Size image) const;
+};
+
 struct CameraPoint {
   Vec2 camera_px;
   Vec2 display_mm;
@@ -47,8 +60,7 @@ struct CameraPoint {
 };
 
 struct CameraScaleFit {
-  cv::Matx22d displayFromCamera;        // A, mm per pixel
-  Vec2 centre_mm{0, 0};                 // t: the display point imaged at the image's centre
+  CameraMap map;                        // A and t
   double distortion_px = 0;             // κ R (the second fit)
   double objectPixel_mm = 0;            // √|det A|: one camera pixel's side on the part
   double pixelX_mm = 0, pixelY_mm = 0;  // the lengths of A's columns: a step along a row, down a column
@@ -60,9 +72,6 @@ struct CameraScaleFit {
   Vec2 centreSigma_mm{0, 0};
   double residualRms_mm = 0;  // per axis
   int points = 0;
-
-  // The display point a camera pixel images (the affine camera).
-  Vec2 displayPoint(const Vec2& camera_px, cv::Size image) const;
 };
 
 // Fits the model above. The display positions share the uncertainty of the

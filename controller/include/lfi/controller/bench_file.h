@@ -56,6 +56,7 @@
 // Units: mm, rad, µs; frames: image pixels (OpenCV's: top-left centre (0, 0)),
 // the part's frame as verdict.h defines it.
 
+#include "lfi/calib/camera_scale.h"
 #include "lfi/drivers/camera.h"
 #include "lfi/drivers/display.h"
 #include "lfi/inspection/defects.h"
@@ -70,17 +71,6 @@ namespace lfi {
 
 enum class SaveImages { All, Failed, None };
 enum class OnDeviceLoss { Stop, Wait };
-
-// Where the camera's pixels look on the display's plane (the display frame):
-// an object-side telecentric camera sees every plane along its axis alike.
-struct CameraOnDisplay {
-  cv::Matx22d perPixel_mm;  // the display's (x, y) per camera pixel (u, v)
-  Vec2 atImageCentre_mm{0, 0};
-  // The display point camera pixel `px` sees, and the camera pixel that sees display point `q`, on an image of
-  // `image` pixels.
-  Vec2 displayPoint(const Vec2& px, cv::Size image) const;
-  Vec2 cameraPoint(const Vec2& q, cv::Size image) const;
-};
 
 struct BenchFile {
   std::filesystem::path file;  // as given
@@ -102,7 +92,7 @@ struct BenchFile {
   // [geometry]
   double distance_mm = 0;
   std::optional<Vec2> partCentre_px;  // none: the image's centre
-  std::optional<CameraOnDisplay> cameraOnDisplay;
+  std::optional<calib::CameraMap> cameraOnDisplay;  // where the camera looks on the display
   // [reference]
   std::filesystem::path referenceFolder;
   int referenceFrames = 16;

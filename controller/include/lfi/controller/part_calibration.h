@@ -45,6 +45,7 @@
 // tilted, the wrong model). Errc::Config without the camera's map on the
 // display.
 
+#include "lfi/calib/camera_scale.h"
 #include "lfi/controller/bench_file.h"
 #include "lfi/controller/bench_file_edit.h"
 #include "lfi/core/part_model.h"
@@ -90,7 +91,7 @@ struct PartCalibration {
 // the image's centre), the fit's start. Errc::InvalidArgument for settings
 // out of range; the refusals above; what the devices throw, with the frame
 // named.
-PartCalibration calibratePart(BenchProbe& bench, const PartModel& part, const CameraOnDisplay& camera,
+PartCalibration calibratePart(BenchProbe& bench, const PartModel& part, const calib::CameraMap& camera,
                               double statedDistance_mm, std::optional<Vec2> statedPartCentre_px = std::nullopt,
                               const PartCalibrationSettings& settings = {},
                               const std::function<void(double)>& progress = {});
