@@ -38,12 +38,16 @@ Prediction predict(const cv::Vec<double, kParameters>& p, const Vec2& d, double 
 
 struct Model {
   cv::Vec<double, kParameters> p = cv::Vec<double, kParameters>::all(0);
-  cv::Matx<double, kParameters, kParameters> covariance;
+  cv::Matx<double, kParameters, kParameters> plain, clustered;  // the covariances (camera_scale.h)
   double rss = 0;
+  // A quantity's standard uncertainty from its gradient in the parameters: the larger of the two.
+  double sigma(const cv::Vec<double, kParameters>& g) const {
+    return std::sqrt(std::max({0.0, (g.t() * plain * g)(0), (g.t() * clustered * g)(0)}));
+  }
 };
 
 // Gauss-Newton from A = 0, t = 0, κ = 0 (the first step is the affine least squares); κ stays 0 without
-// `distortion`. The covariance is σ² (JᵀJ)⁻¹ with σ² the residual variance.
+// `distortion`.
 Model solveModel(const std::vector<CameraPoint>& points, const Vec2& centre, double r2, bool distortion) {
   Model m;
   cv::Matx<double, kParameters, kParameters> inverse;
@@ -84,17 +88,11 @@ Model solveModel(const std::vector<CameraPoint>& points, const Vec2& centre, dou
   }
   const int parameters = distortion ? kParameters : kParameters - 1;
   const double dof = 2 * static_cast<double>(points.size()) - parameters;
-  const cv::Matx<double, kParameters, kParameters> plain = m.rss / std::max(1.0, dof) * inverse;
+  m.plain = m.rss / std::max(1.0, dof) * inverse;
   cv::Matx<double, kParameters, kParameters> meat = cv::Matx<double, kParameters, kParameters>::zeros();
   for (const auto& [group, score] : scores) meat += score * score.t();
   const double groups = static_cast<double>(scores.size());
-  const cv::Matx<double, kParameters, kParameters> clustered =
-      groups / std::max(1.0, groups - parameters) * inverse * meat * inverse;
-  // Each entry the larger: the variances either way (the covariances between parameters follow the same one).
-  m.covariance = clustered(0, 0) + clustered(3, 3) > plain(0, 0) + plain(3, 3) ? clustered : plain;
-  if (!distortion) {
-    for (int q = 0; q < kParameters; ++q) m.covariance(6, q) = m.covariance(q, 6) = 0;
-  }
+  m.clustered = groups / std::max(1.0, groups - parameters) * inverse * meat * inverse;
   return m;
 }
 
@@ -138,9 +136,6 @@ CameraScaleFit fitCameraScale(const std::vector<CameraPoint>& points, cv::Size i
 
   const Model affine = solveModel(points, centre, r2, false), full = solveModel(points, centre, r2, true);
   const cv::Vec<double, kParameters>& p = affine.p;
-  const auto sigma = [](const Model& m, const cv::Vec<double, kParameters>& gradient) {
-    return std::sqrt(std::max(0.0, (gradient.t() * m.covariance * gradient)(0)));
-  };
   CameraScaleFit fit;
   fit.points = static_cast<int>(points.size());
   fit.map = {cv::Matx22d(p[0], p[1], p[2], p[3]), {p[4], p[5]}};
@@ -157,16 +152,16 @@ CameraScaleFit fitCameraScale(const std::vector<CameraPoint>& points, cv::Size i
   dScale[1] = -sign * p[2] / (2 * fit.objectPixel_mm);
   dScale[2] = -sign * p[1] / (2 * fit.objectPixel_mm);
   dScale[3] = sign * p[0] / (2 * fit.objectPixel_mm);
-  fit.objectPixelSigma_mm = std::hypot(sigma(affine, dScale), display.scale * fit.objectPixel_mm);
+  fit.objectPixelSigma_mm = std::hypot(affine.sigma(dScale), display.scale * fit.objectPixel_mm);
   cv::Vec<double, kParameters> unit = cv::Vec<double, kParameters>::all(0);
   unit[6] = r;
-  fit.distortionSigma_px = sigma(full, unit);
+  fit.distortionSigma_px = full.sigma(unit);
   unit = cv::Vec<double, kParameters>::all(0);
   unit[4] = 1;
-  fit.centreSigma_mm.x = std::hypot(sigma(affine, unit), display.shift_mm.x);
+  fit.centreSigma_mm.x = std::hypot(affine.sigma(unit), display.shift_mm.x);
   unit[4] = 0;
   unit[5] = 1;
-  fit.centreSigma_mm.y = std::hypot(sigma(affine, unit), display.shift_mm.y);
+  fit.centreSigma_mm.y = std::hypot(affine.sigma(unit), display.shift_mm.y);
   fit.residualRms_mm = std::sqrt(affine.rss / (2 * static_cast<double>(points.size())));
   return fit;
 }
