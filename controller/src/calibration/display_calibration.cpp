@@ -34,12 +34,6 @@ void checkSettings(const DisplayCalibrationSettings& s) {
 
 using LensIndex = std::array<int, 2>;
 
-double median(std::vector<double> v) {
-  const auto mid = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
-  std::nth_element(v.begin(), mid, v.end());
-  return *mid;
-}
-
 // What a fit throws, with the display named.
 template <typename Fit>
 auto named(const std::string& display, Fit&& fit) {
@@ -66,7 +60,7 @@ std::vector<calib::WeightedPoint> lensCentres(const calib::PanelLinks& links, co
   std::vector<calib::WeightedPoint> centres = calib::clusterPoints(points, 0.25 * info.optics.arrayPitch_mm);
   std::vector<double> weights;
   for (const calib::WeightedPoint& c : centres) weights.push_back(c.weight);
-  const double floor = 0.1 * median(weights);
+  const double floor = 0.1 * detail::median(weights);
   std::erase_if(centres, [&](const calib::WeightedPoint& c) { return c.weight < floor; });
   return centres;
 }
@@ -159,7 +153,6 @@ DisplayCalibration calibrateDisplay(BenchProbe& bench, const DisplayCalibrationS
   calib::PanelLinks links(out.image, panel);
   links.add(c, {}, 0);
   const std::vector<calib::WeightedPoint> centres = lensCentres(links, light, info);
-  out.lensesFound = static_cast<int>(centres.size());
   out.lattice = named(name, [&] {
     return calib::fitLensLattice(centres, info.optics.packing, info.optics.arrayPitch_mm, info.optics.rotation_rad,
                                  info.pixelPitch_mm);
@@ -193,7 +186,7 @@ DisplayCalibration calibrateDisplay(BenchProbe& bench, const DisplayCalibrationS
   if (!spots.empty()) {
     std::vector<double> lights;
     for (const auto& spot : spots) lights.push_back(spot.second);
-    const double least = 0.5 * median(lights);
+    const double least = 0.5 * detail::median(lights);
     for (const auto& [point, spotLight] : spots)
       if (spotLight >= least) spotPoints.push_back(point);
   }

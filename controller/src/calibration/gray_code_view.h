@@ -1,8 +1,8 @@
 #pragma once
-// What the calibrations through the bench share: all white, all black and the
-// Gray code patterns shown and taken, decoded per camera pixel, with the
-// refusals every one of them makes (the display not in view, too few pixels
-// decoded).
+// What the calibrations through the bench share: frames taken and counted,
+// all white, all black and the Gray code patterns shown and decoded per camera
+// pixel with the refusals every one of them makes (the display not in view,
+// too few pixels decoded), and small helpers.
 
 #include "lfi/calib/coded_patterns.h"
 #include "lfi/drivers/display.h"
@@ -10,8 +10,10 @@
 
 #include <opencv2/core.hpp>
 
+#include <algorithm>
 #include <functional>
 #include <string>
+#include <vector>
 
 namespace lfi::detail {
 
@@ -49,6 +51,13 @@ struct GrayCodeView {
 // decoded (`why` says what to look at then).
 GrayCodeView takeGrayCode(FrameTaker& take, const DisplayInfo& info, double fullScale_dn, double secondShare,
                           double minDecoded, const char* who, const char* why);
+
+// The median of `values` (the upper one of an even count); `values` not empty.
+inline double median(std::vector<double> values) {
+  const auto mid = values.begin() + static_cast<std::ptrdiff_t>(values.size() / 2);
+  std::nth_element(values.begin(), mid, values.end());
+  return *mid;
+}
 
 // A panel pixel's centre in the display frame (display.h), mm.
 inline Vec2 panelPixelCentre(const DisplayInfo& d, double col, double row) {

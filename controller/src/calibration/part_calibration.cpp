@@ -43,12 +43,6 @@ void checkSettings(const PartCalibrationSettings& s) {
   check(s.coverageFactor > 0 && s.coverageFactor <= 10, "coverage_factor", s.coverageFactor, "(0, 10]");
 }
 
-double median(std::vector<double> v) {
-  const auto mid = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
-  std::nth_element(v.begin(), mid, v.end());
-  return *mid;
-}
-
 // The exit rays of every pixel's camera ray with the part's reference point at L.
 std::vector<std::optional<PartRay>> traceAll(const PartModel& part, const std::vector<Pixel>& pixels, const Vec2& L) {
   std::vector<std::optional<PartRay>> out(pixels.size());
@@ -62,11 +56,34 @@ Vec2 slope(const PartRay& ray) {
   return {ray.direction.x / ray.direction.z, ray.direction.y / ray.direction.z};
 }
 
+// The exit rays at L and a small step from it along x and y: the offsets' derivatives in L.
+struct Traces {
+  std::vector<std::optional<PartRay>> at, x, y;
+};
+
+Traces traceAround(const PartModel& part, const std::vector<Pixel>& pixels, const Vec2& L) {
+  return {traceAll(part, pixels, L), traceAll(part, pixels, L + Vec2(kLateralStep_mm, 0)),
+          traceAll(part, pixels, L + Vec2(0, kLateralStep_mm))};
+}
+
+// Pixel i's offset residual r = o + g m and its Jacobian rows in θ = (g, L_x, L_y); empty where a ray misses.
+struct Row {
+  Vec2 r;
+  cv::Vec3d jx, jy;
+};
+
+std::optional<Row> row(const Pixel& pixel, double gap, const Traces& t, size_t i) {
+  if (!t.at[i] || !t.x[i] || !t.y[i]) return std::nullopt;
+  const Vec2 m = slope(*t.at[i]);
+  const Vec2 dmx = (slope(*t.x[i]) - m) / kLateralStep_mm, dmy = (slope(*t.y[i]) - m) / kLateralStep_mm;
+  return Row{pixel.offset + gap * m, {m.x, gap * dmx.x, gap * dmy.x}, {m.y, gap * dmx.y, gap * dmy.y}};
+}
+
 // The offsets' fit: θ = (g, L_x, L_y).
 struct OffsetFit {
   double gap = 0;
   Vec2 lateral{0, 0};
-  cv::Matx33d covariance = cv::Matx33d::zeros();
+  cv::Vec3d sigma{0, 0, 0};  // of θ
   double rms = 0;
   std::vector<size_t> kept;
   std::vector<std::optional<PartRay>> rays;  // at `lateral`
@@ -81,22 +98,15 @@ OffsetFit fitOffsets(const PartModel& part, const std::vector<Pixel>& pixels, co
     if (pixels[i].confident) fit.kept.push_back(i);
   for (int round = 0; round < 3; ++round) {
     bool converged = false;
-    cv::Matx33d jtj;
     for (int step = 0; step < kMostSteps && !converged; ++step) {
-      fit.rays = traceAll(part, pixels, fit.lateral);
-      const auto rx = traceAll(part, pixels, fit.lateral + Vec2(kLateralStep_mm, 0));
-      const auto ry = traceAll(part, pixels, fit.lateral + Vec2(0, kLateralStep_mm));
-      jtj = cv::Matx33d::zeros();
+      const Traces t = traceAround(part, pixels, fit.lateral);
+      cv::Matx33d jtj = cv::Matx33d::zeros();
       cv::Vec3d jtr(0, 0, 0);
-      for (size_t i : fit.kept) {
-        if (!fit.rays[i] || !rx[i] || !ry[i]) continue;
-        const Vec2 m = slope(*fit.rays[i]);
-        const Vec2 dmx = (slope(*rx[i]) - m) / kLateralStep_mm, dmy = (slope(*ry[i]) - m) / kLateralStep_mm;
-        const Vec2 r = pixels[i].offset + fit.gap * m;
-        const cv::Vec3d jx(m.x, fit.gap * dmx.x, fit.gap * dmy.x), jy(m.y, fit.gap * dmx.y, fit.gap * dmy.y);
-        jtj += jx * jx.t() + jy * jy.t();
-        jtr += jx * r.x + jy * r.y;
-      }
+      for (size_t i : fit.kept)
+        if (const auto w = row(pixels[i], fit.gap, t, i)) {
+          jtj += w->jx * w->jx.t() + w->jy * w->jy.t();
+          jtr += w->jx * w->r.x + w->jy * w->r.y;
+        }
       const cv::Vec3d delta = -(jtj.inv(cv::DECOMP_SVD) * jtr);
       fit.gap += delta[0];
       fit.lateral += Vec2(delta[1], delta[2]);
@@ -120,7 +130,7 @@ OffsetFit fitOffsets(const PartModel& part, const std::vector<Pixel>& pixels, co
         components.push_back(std::abs(r.x));
         components.push_back(std::abs(r.y));
       }
-    const double limit = std::max(5 * 1.4826 * median(components), 0.5 * pixelPitch_mm);
+    const double limit = std::max(5 * 1.4826 * detail::median(components), 0.5 * pixelPitch_mm);
     std::vector<size_t> kept;
     for (size_t i = 0; i < pixels.size(); ++i)
       if (fit.rays[i] && pixels[i].confident && (pixels[i].offset + fit.gap * slope(*fit.rays[i])).length() <= limit)
@@ -132,47 +142,36 @@ OffsetFit fitOffsets(const PartModel& part, const std::vector<Pixel>& pixels, co
            display, fit.kept.size(), kMinPixels);
     if (same) break;
   }
-  // Covariances: plain, and clustered by decoded lens; each parameter's the larger.
-  const auto rx = traceAll(part, pixels, fit.lateral + Vec2(kLateralStep_mm, 0));
-  const auto ry = traceAll(part, pixels, fit.lateral + Vec2(0, kLateralStep_mm));
-  cv::Matx33d jtj = cv::Matx33d::zeros();
+  // Uncertainties: for each parameter the largest of the plain covariance, the one clustered by decoded lens,
+  // and that of a panel pixel's quantisation (/ √12) shared by the pixels of a lens, per axis.
+  const Traces t = traceAround(part, pixels, fit.lateral);
+  cv::Matx33d jtj = cv::Matx33d::zeros(), meat = cv::Matx33d::zeros(), shared = cv::Matx33d::zeros();
   double rss = 0;
-  std::map<int, std::pair<cv::Vec3d, cv::Vec3d>> groups;  // per decoded lens: Σ Jᵀ r, and Σ J (x and y rows apart)
-  std::map<int, cv::Vec3d> groupsY;
+  struct Lens {
+    cv::Vec3d score, jx, jy;  // Σ Jᵀ r, and the sums of its pixels' x and y rows
+  };
+  std::map<int, Lens> lenses;
   size_t n = 0;
-  for (size_t i : fit.kept) {
-    if (!rx[i] || !ry[i]) continue;
-    const Vec2 m = slope(*fit.rays[i]);
-    const Vec2 dmx = (slope(*rx[i]) - m) / kLateralStep_mm, dmy = (slope(*ry[i]) - m) / kLateralStep_mm;
-    const Vec2 r = pixels[i].offset + fit.gap * m;
-    const cv::Vec3d jx(m.x, fit.gap * dmx.x, fit.gap * dmy.x), jy(m.y, fit.gap * dmx.y, fit.gap * dmy.y);
-    jtj += jx * jx.t() + jy * jy.t();
-    rss += r.length2();
-    auto& g = groups[pixels[i].lensId];
-    g.first += jx * r.x + jy * r.y;
-    g.second += jx;
-    groupsY[pixels[i].lensId] += jy;
-    ++n;
+  for (size_t i : fit.kept)
+    if (const auto w = row(pixels[i], fit.gap, t, i)) {
+      jtj += w->jx * w->jx.t() + w->jy * w->jy.t();
+      rss += w->r.length2();
+      Lens& lens = lenses[pixels[i].lensId];
+      lens.score += w->jx * w->r.x + w->jy * w->r.y;
+      lens.jx += w->jx;
+      lens.jy += w->jy;
+      ++n;
+    }
+  for (const auto& [id, lens] : lenses) {
+    meat += lens.score * lens.score.t();
+    shared += lens.jx * lens.jx.t() + lens.jy * lens.jy.t();
   }
   const cv::Matx33d inverse = jtj.inv(cv::DECOMP_SVD);
+  const double groups = static_cast<double>(lenses.size());
   const cv::Matx33d plain = rss / std::max(1.0, 2.0 * static_cast<double>(n) - 3) * inverse;
-  cv::Matx33d meat = cv::Matx33d::zeros(), shared = cv::Matx33d::zeros();
-  for (const auto& [lens, sums] : groups) {
-    meat += sums.first * sums.first.t();
-    shared += sums.second * sums.second.t();
-    const cv::Vec3d& y = groupsY[lens];
-    shared += y * y.t();
-  }
-  const double count = static_cast<double>(groups.size());
-  const cv::Matx33d clustered = count / std::max(1.0, count - 3) * inverse * meat * inverse;
-  // The pixels of one lens see about the same panel pixel: an error of a pixel / √12 they share, per axis.
+  const cv::Matx33d clustered = groups / std::max(1.0, groups - 3) * inverse * meat * inverse;
   const cv::Matx33d quantisation = pixelPitch_mm * pixelPitch_mm / 12 * inverse * shared * inverse;
-  for (int a = 0; a < 3; ++a) {
-    const cv::Matx33d* largest = &plain;
-    if (clustered(a, a) > largest->operator()(a, a)) largest = &clustered;
-    if (quantisation(a, a) > largest->operator()(a, a)) largest = &quantisation;
-    for (int b = 0; b < 3; ++b) fit.covariance(a, b) = (*largest)(a, b);
-  }
+  for (int a = 0; a < 3; ++a) fit.sigma[a] = std::sqrt(std::max({plain(a, a), clustered(a, a), quantisation(a, a)}));
   fit.rms = std::sqrt(rss / (2.0 * static_cast<double>(std::max<size_t>(n, 1))));
   return fit;
 }
@@ -309,8 +308,8 @@ PartCalibration calibratePart(BenchProbe& bench, const PartModel& part, const ca
   const OffsetFit fit = fitOffsets(part, pixels, stated, info.optics.gap_mm, info.pixelPitch_mm, name);
   out.gap_mm = fit.gap;
   out.lateral_mm = fit.lateral;
-  out.gapSigma_mm = std::sqrt(fit.covariance(0, 0));
-  out.lateralSigma_mm = {std::sqrt(fit.covariance(1, 1)), std::sqrt(fit.covariance(2, 2))};
+  out.gapSigma_mm = fit.sigma[0];
+  out.lateralSigma_mm = {fit.sigma[1], fit.sigma[2]};
   out.offsetRms_mm = fit.rms;
   out.pixels = static_cast<int>(fit.kept.size());
   out.outliers = static_cast<int>(

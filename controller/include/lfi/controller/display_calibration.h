@@ -69,7 +69,6 @@ struct DisplayCalibration {
   double coverageFactor = 2;
   int frames = 0;
   int lit = 0, decoded = 0;   // camera pixels
-  int lensesFound = 0;        // clusters of decoded panel pixels
   int spots = 0;              // spots in the camera fit
   double seconds = 0;         // the whole calibration
   double computeSeconds = 0;  // of it, decoding and fitting
