@@ -3,6 +3,7 @@
 #include "lfi/controller/bench_file.h"
 #include "lfi/core/atomic_file.h"
 #include "lfi/core/error.h"
+#include "lfi/core/input_file.h"
 
 #include <fmt/format.h>
 #include <toml++/toml.h>
@@ -85,6 +86,16 @@ size_t afterLastKey(const std::string& text, const toml::table& table) {
   return end == text.size() ? end : end + 1;
 }
 
+// The whole file, checked first as every reader of a user's file does (input_file.h).
+std::string readText(const fs::path& file) {
+  requireInputFile(file, "bench file");
+  std::ifstream in(file, std::ios::binary);
+  std::ostringstream text;
+  text << in.rdbuf();
+  if (!in) fail(Errc::Io, "bench file '{}' cannot be read", file.string());
+  return text.str();
+}
+
 std::string withComment(const std::string& value, const std::string& comment) {
   return comment.empty() ? value : value + "  # " + comment;
 }
@@ -92,11 +103,7 @@ std::string withComment(const std::string& value, const std::string& comment) {
 }  // namespace
 
 BenchFileEdit::BenchFileEdit(fs::path file) : file_(std::move(file)) {
-  std::ifstream in(file_, std::ios::binary);
-  if (!in) fail(Errc::NotFound, "bench file '{}' cannot be read", file_.string());
-  std::ostringstream text;
-  text << in.rdbuf();
-  original_ = text_ = text.str();
+  original_ = text_ = readText(file_);
   parseText(text_, file_);
 }
 
@@ -192,10 +199,7 @@ PublishedCalibration publishCalibration(const BenchFileEdit& edit, const std::st
   const fs::path folder = file.parent_path() / (file.stem().string() + ".calibrations");
   PublishedCalibration out{folder / (stamp + "-" + what + ".before.toml"), folder / (stamp + "-" + what + ".json")};
   {
-    std::ifstream in(file, std::ios::binary);
-    std::ostringstream now;
-    now << in.rdbuf();
-    if (!in || now.str() != edit.original())
+    if (readText(file) != edit.original())
       fail(Errc::Exists,
            "bench file '{}' changed since the calibration read it: not replaced (run the "
            "calibration again)",
