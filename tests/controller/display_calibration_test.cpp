@@ -149,6 +149,12 @@ TEST_F(DisplayCalibrationTest, RecoversTheArrayAndTheCameraScaleOverTheirRanges)
     const double k = c.coverageFactor;
     const calib::LatticeFit& lattice = c.lattice;
     EXPECT_EQ(lattice.packing, truth.packing == "square" ? LensPacking::Square : LensPacking::Hexagonal);
+    // The camera sees the whole panel: the fit holds at least 80 % of the lenses whose cells lie on it (a
+    // cell's area is P² square, P² √3 / 2 hexagonal), and few centres off the lattice.
+    const double cell = truth.pitch_mm * truth.pitch_mm * (truth.packing == "square" ? 1 : std::sqrt(3.0) / 2);
+    const double onPanel = (2 * kEdge_mm - truth.pitch_mm) * (2 * kEdge_mm - truth.pitch_mm) / cell;
+    EXPECT_GE(lattice.centres, 0.8 * onPanel);
+    EXPECT_LE(lattice.outliers, 0.2 * lattice.centres);
     const double pitchError = lattice.pitch_mm - truth.pitch_mm;
     EXPECT_LE(std::abs(pitchError), kPitchTolerance_mm * truth.pitch_mm);
     const double rotationError = lattice.rotation_rad - truth.rotation_rad;
