@@ -8,12 +8,31 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
-#include <regex>
+#include <algorithm>
+#include <optional>
 
 namespace lfi {
 
 using detail::measured;
 using detail::tomlNumber;
+
+namespace {
+
+// `uri` with the value of its query key `key` replaced by `value`; nullopt
+// when the query has no such key.
+std::optional<std::string> withQueryValue(const std::string& uri, const std::string& key, const std::string& value) {
+  const std::size_t query = uri.find('?');
+  if (query == std::string::npos) return std::nullopt;
+  for (std::size_t start = query + 1; start <= uri.size();) {
+    const std::size_t end = std::min(uri.find('&', start), uri.size());
+    if (uri.compare(start, key.size() + 1, key + "=") == 0)
+      return uri.substr(0, start + key.size() + 1) + value + uri.substr(end);
+    start = end + 1;
+  }
+  return std::nullopt;
+}
+
+}  // namespace
 
 void setPartCalibration(BenchFileEdit& edit, const BenchFile& bench, const PartCalibration& c,
                         const std::string& stampUtc) {
@@ -28,11 +47,10 @@ void setPartCalibration(BenchFileEdit& edit, const BenchFile& bench, const PartC
            fmt::format("lfi calibrate part {}: U = [{:.2g}, {:.2g}] px (k = {:g})", stampUtc,
                        k * c.lateralSigma_mm.x / perPixel, k * c.lateralSigma_mm.y / perPixel, k));
   // A capture that records at a distance records at this one.
-  if (const auto uri = edit.string("capture", "uri"); uri && std::regex_search(*uri, std::regex("[?&]distance_mm=")))
-    edit.set(
-        "capture", "uri",
-        tomlString(std::regex_replace(*uri, std::regex("([?&]distance_mm=)[^&]*"), "$01" + tomlNumber(c.distance_mm))),
-        fmt::format("lfi calibrate part {}: at the calibrated Δ", stampUtc));
+  if (const auto uri = edit.string("capture", "uri"))
+    if (const auto atDistance = withQueryValue(*uri, "distance_mm", tomlNumber(c.distance_mm)))
+      edit.set("capture", "uri", tomlString(*atDistance),
+               fmt::format("lfi calibrate part {}: at the calibrated Δ", stampUtc));
   if (!bench.displayOptics) detail::setOpticsTable(edit, c.nominal.optics, "as the display states it (not measured)");
   edit.set("display.optics", "gap_mm", tomlNumber(c.gap_mm), within(c.gapSigma_mm, "mm"));
   if (c.nominal.optics.type == OpticsType::LensletArray)
