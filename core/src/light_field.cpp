@@ -133,4 +133,17 @@ double LightField::radianceAt(double sx, double sy, const Vec2& disc, LightField
          ly.t * ((1 - lx.t) * element(lx.i0, ly.i1) + lx.t * element(lx.i1, ly.i1));
 }
 
+LightField binaryDrive(const LightField& captured, double threshold) {
+  if (!(threshold > 0 && threshold <= 1))
+    fail(Errc::InvalidArgument, "binary drive threshold {} is outside (0, 1]", threshold);
+  double brightest = 0;
+  cv::minMaxLoc(captured.lensletImage(), nullptr, &brightest);
+  if (!(brightest > 0)) fail(Errc::InvalidArgument, "binary drive: the captured light field holds no light");
+  cv::Mat lit;
+  cv::compare(captured.lensletImage(), threshold * brightest, lit, cv::CMP_GE);
+  cv::Mat drive;
+  lit.convertTo(drive, CV_32FC1, 1.0 / 255);
+  return LightField(captured.geometry(), std::move(drive));
+}
+
 }  // namespace lfi

@@ -399,3 +399,31 @@ TEST(LightFieldGeometry, ValidateNamesTheBadField) {
 }
 
 }  // namespace
+
+TEST(BinaryDrive, LightsEveryPixelAtOrAboveTheThresholdOfTheBrightest) {
+  const LightFieldGeometry g = smallGeometry();
+  LightField captured(g);
+  captured.at(0, 0, 3, 3) = 2.f;      // the brightest
+  captured.at(1, 2, 0, 6) = 0.5f;     // exactly a quarter of it: lit
+  captured.at(2, 1, 5, 1) = 0.4999f;  // just below: dark
+  captured.at(3, 0, 2, 2) = 1.f;
+  const LightField drive = lfi::binaryDrive(captured, 0.25);
+  EXPECT_EQ(drive.geometry(), g);
+  EXPECT_EQ(drive.lensletImage().type(), CV_32FC1);
+  EXPECT_EQ(drive.at(0, 0, 3, 3), 1.f);
+  EXPECT_EQ(drive.at(1, 2, 0, 6), 1.f);
+  EXPECT_EQ(drive.at(2, 1, 5, 1), 0.f);
+  EXPECT_EQ(drive.at(3, 0, 2, 2), 1.f);
+  EXPECT_EQ(cv::countNonZero(drive.lensletImage()), 3);
+  EXPECT_EQ(cv::sum(drive.lensletImage())[0], 3.0);  // every lit pixel exactly 1
+  // Threshold 1: the brightest alone.
+  EXPECT_EQ(cv::countNonZero(lfi::binaryDrive(captured, 1).lensletImage()), 1);
+}
+
+TEST(BinaryDrive, RefusesAThresholdOutOfRangeAndALightFieldWithoutLight) {
+  LightField captured(smallGeometry());
+  EXPECT_TRUE(throwsError([&] { (void)lfi::binaryDrive(captured, 0.01); }, Errc::InvalidArgument, {"no light"}));
+  captured.at(0, 0, 0, 0) = 1;
+  for (const double bad : {0.0, -0.1, 1.5, std::numeric_limits<double>::quiet_NaN()})
+    EXPECT_TRUE(throwsError([&] { (void)lfi::binaryDrive(captured, bad); }, Errc::InvalidArgument, {"(0, 1]"})) << bad;
+}

@@ -107,4 +107,14 @@ private:
   cv::Mat lenslet_;
 };
 
+// The light field a display shows lit or dark for a captured reference
+// (docs/study.md, "The reference's drive"): 1 in every angular pixel whose
+// radiance is at least `threshold` times the brightest pixel's, 0 elsewhere;
+// the geometry is the captured one's. A captured angular pixel holds the flux
+// that fell into it spread over the whole pixel, so its value says how much
+// of the pixel the light met, not the light's radiance; a display that shows
+// that value shows the pixel's edges. Throws Errc::InvalidArgument for a
+// threshold outside (0, 1] or a light field without light.
+LightField binaryDrive(const LightField& captured, double threshold);
+
 }  // namespace lfi
