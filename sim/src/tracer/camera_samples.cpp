@@ -25,8 +25,8 @@ inline void walkAndRotate(int lanes, std::uint32_t n, std::uint32_t mask, const 
 
 }  // namespace
 
-LFI_SIMD_CLONES void makeCameraSamples(const TelecentricCamera::RayMap& camera, std::uint64_t seed, int side, int n,
-                                       CameraSampleBatch& b) {
+LFI_SIMD_CLONES std::uint64_t makeCameraSamples(const TelecentricCamera::RayMap& camera, std::uint64_t seed, int side,
+                                                int n, CameraSampleBatch& b) {
   constexpr std::uint64_t kGolden = 0x9e3779b97f4a7c15ull;  // Sampler's increment
   const std::uint64_t seedHash = splitMix64(seed);
   const double invSide = 1.0 / side;
@@ -37,6 +37,7 @@ LFI_SIMD_CLONES void makeCameraSamples(const TelecentricCamera::RayMap& camera, 
   for (int k = 0; k < n; ++k)  // (unstratified samples permute 0, for a walk that ends)
     stop[k] = permutationRound(b.sample[k] < strata ? b.sample[k] : 0, mask, b.stopKey[k]);
   walkAndRotate(n, strata, mask, b.stopKey, stop);
+  std::uint32_t passed[CameraSampleBatch::kSize];
   for (int k = 0; k < n; ++k) {
     // Sampler(seed, stream) and its first two draws, as pairs (Sampler::nextPair).
     const std::uint64_t state = splitMix64(b.stream[k] ^ seedHash);
@@ -58,8 +59,12 @@ LFI_SIMD_CLONES void makeCameraSamples(const TelecentricCamera::RayMap& camera, 
     stratify(stratified ? b.sample[k] : -1.0, u0, u1, jx, jy);
     stratify(stratified ? stop[k] : -1.0, u2, u3, su, sv);
     concentricDisc(su, sv, ax, ay);
+    passed[k] = ax <= camera.edge ? 1u : 0u;
     camera.trace(b.pixelX[k] + jx, b.pixelY[k] + jy, ax, ay, b.ox[k], b.oy[k], b.oz[k], b.dx[k], b.dy[k], b.dz[k]);
   }
+  std::uint64_t withRay = 0;
+  for (int k = 0; k < n; ++k) withRay |= std::uint64_t{passed[k]} << k;
+  return withRay;
 }
 
 LFI_SIMD_CLONES std::uint64_t makeLightFieldSamples(const LightFieldSensor& sensor, std::uint64_t seed, int side, int n,

@@ -59,9 +59,10 @@ struct CameraSampleBatch {
   std::uint64_t state[kSize];
 };
 
-// Samples 0..n-1 of `batch`; `side` strata per axis.
-void makeCameraSamples(const TelecentricCamera::RayMap& camera, std::uint64_t seed, int side, int n,
-                       CameraSampleBatch& batch);
+// Samples 0..n-1 of `batch`; `side` strata per axis. Returns the mask of
+// samples (bit k) that pass the stop (all but those a knife edge blocks).
+std::uint64_t makeCameraSamples(const TelecentricCamera::RayMap& camera, std::uint64_t seed, int side, int n,
+                                CameraSampleBatch& batch);
 
 // The same for a light field sensor (stopKey unused; pixelX, pixelY the
 // lenslet image's column and row), to the bit as one sample at a time:

@@ -4,6 +4,7 @@
 #include "lfi/core/exr_io.h"
 
 #include <cmath>
+#include <limits>
 #include <numbers>
 
 namespace lfi::sim {
@@ -23,10 +24,16 @@ void TelecentricCamera::validate() const {
       static_cast<long>(width) * height > kMaxExrPixels)
     fail(Errc::InvalidArgument, "telecentric camera: size {}x{} is out of range (1..65536 a side, at most 2^30 "
          "pixels: what a radiance EXR holds)", width, height);
+  if (knifeEdge && !(*knifeEdge >= -1 && *knifeEdge <= 1))
+    fail(Errc::InvalidArgument, "telecentric camera: knifeEdge = {} is outside [-1, 1] (units of the stop's radius)",
+         *knifeEdge);
 }
 
 TelecentricCamera::RayMap::RayMap(const TelecentricCamera& cam)
-    : world(cam.worldFromCamera), halfW(0.5 * cam.width), halfH(0.5 * cam.height) {
+    : world(cam.worldFromCamera),
+      halfW(0.5 * cam.width),
+      halfH(0.5 * cam.height),
+      edge(cam.knifeEdge ? *cam.knifeEdge : std::numeric_limits<double>::infinity()) {
   // Thin lens: the plane in focus is at wz = b f / (b - f) = focusDistance_mm().
   const double b = cam.imageDistance_mm, f = cam.focalLength_mm, k = 1 / (b - f), wz = b * f * k;
   pixel = f * k * cam.pixelPitch_mm;

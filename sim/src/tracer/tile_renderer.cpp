@@ -421,10 +421,10 @@ private:
       batch_.sample[k] = s;
       batch_.stopKey[k] = px.stopKey;
     }
-    // Every sample has a ray but a light field sensor's outside its disc.
-    hasRay_ = m == 64 ? ~std::uint64_t{0} : (std::uint64_t{1} << m) - 1;
+    // Every sample has a ray but a light field sensor's outside its disc and
+    // a camera's that a knife edge blocks.
     if (cameraRays_)
-      detail::makeCameraSamples(*cameraRays_, options_.seed, side_, static_cast<int>(m), batch_);
+      hasRay_ = detail::makeCameraSamples(*cameraRays_, options_.seed, side_, static_cast<int>(m), batch_);
     else
       hasRay_ = detail::makeLightFieldSamples(std::get<LightFieldSensor>(sensor_), options_.seed, side_,
                                               static_cast<int>(m), batch_);
@@ -440,7 +440,7 @@ private:
       const size_t k = nextPrepared_++;
       const Start& start = starts_[k];
       PixelWork& px = pixels_[static_cast<size_t>(start.slot)];
-      if (!(hasRay_ >> k & 1)) {  // no ray (outside a light field sensor's disc): the sample is 0
+      if (!(hasRay_ >> k & 1)) {  // no ray (outside a light field sensor's disc, blocked by a knife edge): 0
         px.values[static_cast<size_t>(start.sample)] = 0;
         --px.inFlight;
         if (start.slot != issuing_) finishIfDone(start.slot);

@@ -18,6 +18,10 @@
 // inversion, so images come out upright (row 0 = camera -y).
 // A stop sample a (uniform on the disc of diameter D) gives
 //   w = (-(wz/b) sx, -(wz/b) sy, wz), o = line(s, a) ∩ {z = 0}, ray o + α (w - o).
+// A knife edge in the stop plane (conventional schlieren) blocks the stop
+// where a.x > knifeEdge (camera frame, in units of the stop's radius): the
+// object-side rays tilted towards camera -x by more than knifeEdge times the
+// acceptance half-angle; a blocked sample is 0.
 //
 // LightFieldSensor (lensless): see lfi/core/light_field.h for the
 // parametrisation; worldFromSensor places the plane frame. A pixel sample p
@@ -43,6 +47,7 @@ struct TelecentricCamera {
   int width = 256;
   int height = 256;
   Rigid3 worldFromCamera;
+  std::optional<double> knifeEdge;  // in [-1, 1]; none: the whole circular stop
 
   double focusDistance_mm() const { return 1.0 / (1.0 / focalLength_mm - 1.0 / imageDistance_mm); }
   double magnification() const { return imageDistance_mm / focusDistance_mm(); }
@@ -52,6 +57,8 @@ struct TelecentricCamera {
 
   // pixel + offset in [0,1)^2, stop sample in the unit disc.
   Ray ray(int i, int j, const Vec2& pixelOffset, const Vec2& unitDiscSample) const;
+  // Whether the stop passes the sample (the knife edge's side of it).
+  bool passes(const Vec2& unitDiscSample) const { return !knifeEdge || unitDiscSample.x <= *knifeEdge; }
 
   // ray() with the camera's constants worked out once, for the renderer's inner loop.
   // With k = 1/(b - f) the formulas above reduce to: o = (P (i + ju - W/2) + Q ax,
@@ -81,6 +88,7 @@ struct TelecentricCamera {
     }
     Rigid3 world;  // worldFromCamera
     double pixel, stop, slope, halfW, halfH;  // P, Q, Q / wz, W/2, H/2
+    double edge;  // the knife edge (+infinity without one): stop samples with ax > edge are blocked
   };
   // Where the world point projects on the image (continuous pixel coordinates;
   // exact on the focal plane, the chief ray elsewhere).
