@@ -80,7 +80,8 @@ void checkGeometry(const Bench& b, const ConfigTable& cameraTable, const ConfigT
 
 Bench Bench::load(const std::filesystem::path& path) {
   ConfigTable root = ConfigTable::parseFile(path);
-  root.requireKnownKeys({"format", "version", "lens", "camera", "parallel", "area", "inverse_schlieren", "defects"});
+  root.requireKnownKeys(
+      {"format", "version", "lens", "camera", "parallel", "area", "schlieren", "inverse_schlieren", "defects"});
   root.string("format", std::nullopt, {"lfi-bench"});
   root.integer("version", std::nullopt, 1, 1);
   Bench b;
@@ -127,6 +128,11 @@ Bench Bench::load(const std::filesystem::path& path) {
   b.parallel = backlight(parallelTable, true);
   b.area = backlight(areaTable, false);
   {
+    ConfigTable t = root.table("schlieren");
+    b.schlieren.knifeEdge = t.number("knife_edge", std::nullopt, -1, 1);
+    t.finish();
+  }
+  {
     ConfigTable& t = schlierenTable;
     auto& s = b.inverseSchlieren;
     s.distance_mm = t.number("distance_mm", std::nullopt, 0.01, 1e4);
@@ -137,6 +143,14 @@ Bench Bench::load(const std::filesystem::path& path) {
                                                                                        : LightFieldLookup::Interpolated;
     s.captureHalfAngle_rad = t.number("capture_half_angle_rad", std::nullopt, 1e-6, 1.5);
     s.captureDistance_mm = t.number("capture_distance_mm", std::nullopt, 0.01, 1e4);
+    s.drive = t.string("drive", "captured", {"captured", "binary"}) == "binary"
+                  ? Bench::InverseSchlieren::Drive::Binary
+                  : Bench::InverseSchlieren::Drive::Captured;
+    s.binaryThreshold = 0;
+    if (s.drive == Bench::InverseSchlieren::Drive::Binary)
+      s.binaryThreshold = t.number("binary_threshold", std::nullopt, 1e-9, 1);
+    else if (t.has("binary_threshold"))
+      fail(Errc::Config, "{}: a threshold for the binary drive, but drive = \"captured\"", t.where("binary_threshold"));
     try {
       b.lightFieldGeometry().validate();
     } catch (const Error& e) {
@@ -202,6 +216,11 @@ LightFieldGeometry Bench::lightFieldGeometry() const {
   g.pixelPitch_mm = inverseSchlieren.pixelPitch_mm;
   g.distance_mm = inverseSchlieren.distance_mm;
   return g;
+}
+
+LightField Bench::displayed(const LightField& captured) const {
+  if (inverseSchlieren.drive == InverseSchlieren::Drive::Captured) return captured;
+  return binaryDrive(captured, inverseSchlieren.binaryThreshold);
 }
 
 }  // namespace lfi::study

@@ -4,6 +4,7 @@
 
 #include "study_internal.h"
 
+#include "lfi/core/error.h"
 #include "lfi/sim/render.h"
 
 #include <opencv2/imgproc.hpp>
@@ -176,6 +177,24 @@ cv::Mat toFloat(const cv::Mat& frame) {
 
 }  // namespace
 
+Uniformity uniformityOf(const cv::Mat& intact, const Bench& bench, const sim::TelecentricCamera& camera) {
+  const double inner_px = 0.9 * 0.5 * bench.lens.diameter_mm / camera.objectPixel_mm();
+  const Vec2 axis = camera.project({0, 0, 0});  // (pixel centres at + 0.5)
+  std::vector<float> values;
+  for (int r = 0; r < intact.rows; ++r)
+    for (int c = 0; c < intact.cols; ++c)
+      if (std::hypot(c + 0.5 - axis.x, r + 0.5 - axis.y) < inner_px) values.push_back(intact.at<float>(r, c));
+  if (values.empty()) fail(Errc::Config, "{}: the camera sees none of the lens", bench.source);
+  const double brightest = *std::max_element(values.begin(), values.end());
+  double mean = 0, lit = 0;
+  for (const float v : values) mean += v, lit += v > 0.25 * brightest ? 1 : 0;
+  mean /= static_cast<double>(values.size());
+  double var = 0;
+  for (const float v : values) var += (v - mean) * (v - mean);
+  var /= static_cast<double>(values.size());
+  return {lit / static_cast<double>(values.size()), mean > 0 ? std::sqrt(var) / mean : 0};
+}
+
 Evaluation evaluate(const Bench& bench, const Illumination& light, const std::vector<SceneSpec>& specs,
                     const GroundTruth& truth, const sim::TelecentricCamera& camera, sim::CameraSensorModel sensor,
                     sim::RenderOptions ro, std::uint64_t seed, Progress& progress, double renderUnits,
@@ -227,6 +246,7 @@ Evaluation evaluate(const Bench& bench, const Illumination& light, const std::ve
     out.intactLitFraction =
         static_cast<double>(cv::countNonZero(bright & truth.lens)) / std::max(1, cv::countNonZero(truth.lens));
   }
+  out.intactUniformity = uniformityOf(intact, bench, camera);
   if (imagesDir) {
     // How large the Monte Carlo noise of one rendering is against the camera's
     // noise, both in DN, where the intact lens is lit: from a second,

@@ -158,6 +158,14 @@ difference with the intact lens (grey = 0, &plusmn;8&sigma; full scale).</p><tab
     }
     h += "</tr>";
   }
+  if (study.contains("intact_uniformity")) {
+    h += "<tr><th>intact lens, r &lt; 0.9 R</th>";
+    for (const auto& s : study["setups"]) {
+      const auto& u = study["intact_uniformity"][s.get<std::string>()];
+      h += fmt::format("<td>lit {:.0f} %, CV {:.2f}</td>", 100 * u["lit_share"].get<double>(), u["cv"].get<double>());
+    }
+    h += "</tr>";
+  }
   h += "</table>";
   if (study.contains("blind_detector")) h += blindHtml(study);
   if (study.contains("sweep")) h += sweepHtml(study["sweep"]);

@@ -69,7 +69,7 @@ std::vector<Object> partObjects(const Bench& bench, const SceneSpec& spec) {
 }
 
 Object backlight(const Bench& bench, const Illumination& light) {
-  if (light.setup == "parallel")
+  if (light.setup == "parallel" || light.setup == "schlieren")
     return {"parallel backlight", sim::Rectangle{bench.parallel.size_mm, bench.parallel.size_mm},
             Rigid3::translation({0, 0, -bench.parallel.distance_mm}), sim::Absorber{},
             sim::ParallelEmission{1.0, bench.parallel.halfAngle_rad}};

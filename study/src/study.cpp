@@ -12,8 +12,10 @@
 #include "study_internal.h"
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cstring>
 
@@ -24,7 +26,7 @@ using namespace detail;
 
 namespace {
 
-const std::vector<std::string> kSetups = {"parallel", "area", "inverse_schlieren"};
+const std::vector<std::string> kSetups = {"parallel", "area", "schlieren", "inverse_schlieren"};
 
 struct QualitySettings {
   int binning;           // extra binning of the bench camera (fewer, larger pixels)
@@ -41,6 +43,26 @@ QualitySettings settingsFor(Quality q) {
   return {2, 32, 64};
 }
 
+// The bench's camera binned a further `binning` times (fewer, larger pixels).
+sim::TelecentricCamera binnedCamera(const Bench& bench, int binning) {
+  sim::TelecentricCamera c = bench.telecentricCamera();
+  c.width = std::max(8, c.width / binning);
+  c.height = std::max(8, c.height / binning);
+  c.pixelPitch_mm *= binning;
+  return c;
+}
+
+// The camera of one setup: conventional schlieren's has the knife edge in its stop.
+sim::TelecentricCamera setupCamera(const Bench& bench, sim::TelecentricCamera camera, const std::string& setup) {
+  if (setup == "schlieren") camera.knifeEdge = bench.schlieren.knifeEdge;
+  return camera;
+}
+
+nlohmann::ordered_json driveJson(const Bench& bench) {
+  if (bench.inverseSchlieren.drive == Bench::InverseSchlieren::Drive::Captured) return {{"kind", "captured"}};
+  return {{"kind", "binary"}, {"threshold", bench.inverseSchlieren.binaryThreshold}};
+}
+
 }  // namespace
 
 Quality parseQuality(const std::string& name) {
@@ -48,6 +70,25 @@ Quality parseQuality(const std::string& name) {
   if (name == "default") return Quality::Default;
   if (name == "high") return Quality::High;
   fail(Errc::InvalidArgument, "unknown quality '{}' (quick, default, high)", name);
+}
+
+Uniformity intactUniformity(const Bench& bench, const std::string& setup, Quality quality, std::uint64_t seed,
+                            int threads) {
+  if (std::find(kSetups.begin(), kSetups.end(), setup) == kSetups.end())
+    fail(Errc::InvalidArgument, "unknown setup '{}' ({})", setup, fmt::join(kSetups, ", "));
+  const QualitySettings q = settingsFor(quality);
+  Illumination light{setup, nullptr, bench.inverseSchlieren.lookup, 0};
+  if (setup == "inverse_schlieren")
+    light.lightField = std::make_shared<const LightField>(
+        bench.displayed(captureLightField(bench, bench.lightFieldGeometry(), q.captureSamples, seed, threads, {})));
+  std::vector<sim::Object> objects = partObjects(bench, sceneSpecs(bench).front());
+  objects.push_back(backlight(bench, light));
+  const sim::TelecentricCamera camera = setupCamera(bench, binnedCamera(bench, q.binning), setup);
+  sim::RenderOptions ro;
+  ro.samplesPerPixel = q.samplesPerPixel;
+  ro.threads = threads;
+  ro.seed = seed;
+  return uniformityOf(sim::render(sim::Scene(std::move(objects)), camera, ro), bench, camera);
 }
 
 // Runs one step of the study; an lfi::Error from it says which step (a setup,
@@ -93,14 +134,7 @@ nlohmann::ordered_json runStudy(const Bench& bench, const fs::path& outDir, cons
         fail(Errc::Io, "cannot remove the earlier study's '{}': {}", file.string(), ec.message());
 
   const QualitySettings q = settingsFor(options.quality);
-  auto binned = [&](int binning) {
-    sim::TelecentricCamera c = bench.telecentricCamera();
-    c.width = std::max(8, c.width / binning);
-    c.height = std::max(8, c.height / binning);
-    c.pixelPitch_mm *= binning;
-    return c;
-  };
-  const sim::TelecentricCamera camera = binned(q.binning);
+  const sim::TelecentricCamera camera = binnedCamera(bench, q.binning);
   const auto specs = sceneSpecs(bench);
 
   // The sweep runs the inverse schlieren setup only, at the quick camera
@@ -119,10 +153,10 @@ nlohmann::ordered_json runStudy(const Bench& bench, const fs::path& outDir, cons
   Progress progress(options, 4 + kSetups.size() * (rendersPerSetup + 1) +
                                  static_cast<double>(sweep.size()) * (0.25 + 2 * rendersPerSetup * kSweepRender));
 
-  auto lightField = std::make_shared<LightField>(captureLightField(
-      bench, bench.lightFieldGeometry(), q.captureSamples, options.seed, options.threads,
-      progress.step("light field capture", 4)));
-  writeLightFieldExr(outDir / "lightfield.exr", *lightField, overwrite);
+  const LightField captured = captureLightField(bench, bench.lightFieldGeometry(), q.captureSamples, options.seed,
+                                                options.threads, progress.step("light field capture", 4));
+  writeLightFieldExr(outDir / "lightfield.exr", captured, overwrite);
+  const auto lightField = std::make_shared<const LightField>(bench.displayed(captured));
 
   nlohmann::ordered_json study;
   study["format"] = "lfi-study";
@@ -136,10 +170,13 @@ nlohmann::ordered_json runStudy(const Bench& bench, const fs::path& outDir, cons
   study["camera"] = {{"width", camera.width}, {"height", camera.height}, {"object_pixel_mm", camera.objectPixel_mm()},
                      {"acceptance_half_angle_rad", camera.acceptanceHalfAngle_rad()},
                      {"samples_per_pixel", q.samplesPerPixel}, {"bit_depth", bench.sensorModel().bitDepth}};
-  study["light_field"] = {{"spatial", lightField->geometry().spatialX}, {"angular", lightField->geometry().angular},
+  study["light_field"] = {{"spatial", lightField->geometry().spatialX},
+                          {"angular", lightField->geometry().angular},
                           {"pixel_pitch_mm", lightField->geometry().pixelPitch_mm},
                           {"distance_mm", lightField->geometry().distance_mm},
-                          {"capture_samples_per_pixel", q.captureSamples}};
+                          {"capture_samples_per_pixel", q.captureSamples},
+                          {"capture_half_angle_rad", bench.inverseSchlieren.captureHalfAngle_rad},
+                          {"drive", driveJson(bench)}};
   study["criterion"] = criterionJson();
   const DetectionSettings blind = blindSettings(bench, camera);
   study["blind_detector"] = blindDetectorJson(blind, camera);
@@ -152,10 +189,12 @@ nlohmann::ordered_json runStudy(const Bench& bench, const fs::path& outDir, cons
   for (size_t si = 0; si < kSetups.size(); ++si) {
     const Illumination light{kSetups[si], lightField, bench.inverseSchlieren.lookup, 0};
     const Evaluation e = namingTheStep(fmt::format("setup '{}' of '{}'", kSetups[si], bench.source), [&] {
-      return evaluate(bench, light, specs, truth, camera, bench.sensorModel(), ro, options.seed * 1000 + si * 100,
-                      progress, 1.0, &imagesDir, overwrite, &blind);
+      return evaluate(bench, light, specs, truth, setupCamera(bench, camera, kSetups[si]), bench.sensorModel(), ro,
+                      options.seed * 1000 + si * 100, progress, 1.0, &imagesDir, overwrite, &blind);
     });
     study["noise"][kSetups[si]] = e.noise;
+    study["intact_uniformity"][kSetups[si]] = {{"lit_share", e.intactUniformity.litShare},
+                                               {"cv", e.intactUniformity.cv}};
     for (const auto& [scene, result] : e.scenes.items()) {
       auto& out = study["scenes"][scene];
       if (!out.contains("defects")) out["defects"] = nlohmann::ordered_json::object();
@@ -176,7 +215,7 @@ nlohmann::ordered_json runStudy(const Bench& bench, const fs::path& outDir, cons
     // How good must the display be? Each variant captures its own light field
     // (only as large as the lens's footprint on the display plane needs) and
     // renders the inverse schlieren setup with both lookups.
-    const sim::TelecentricCamera sweepCamera = binned(sweepQuality.binning);
+    const sim::TelecentricCamera sweepCamera = binnedCamera(bench, sweepQuality.binning);
     // The quick quality's camera is the sweep's: its ground truth is traced already.
     const GroundTruth sweepTruth =
         sweepQuality.binning == q.binning ? truth : traceGroundTruth(bench, specs, sweepCamera);
@@ -193,9 +232,9 @@ nlohmann::ordered_json runStudy(const Bench& bench, const fs::path& outDir, cons
                         {"distance_mm", reference.distance_mm}};
     for (const auto& [point, g, displayError] : sweep) {
       const std::string label = fmt::format("sweep {}={}", point.series, point.value);
-      auto lf = std::make_shared<LightField>(
-          captureLightField(bench, g, sweepQuality.captureSamples, options.seed, options.threads,
-                            progress.step(label + ": capture", 0.25)));
+      const auto lf = std::make_shared<const LightField>(
+          bench.displayed(captureLightField(bench, g, sweepQuality.captureSamples, options.seed, options.threads,
+                                            progress.step(label + ": capture", 0.25))));
       nlohmann::ordered_json entry = {{"series", point.series}, {"value", point.value},
                                       {"angular", g.angular}, {"element_mm", g.elementPitch_mm()},
                                       {"spatial", g.spatialX}, {"display_error_mm", displayError}};

@@ -109,7 +109,11 @@ struct Evaluation {
   nlohmann::ordered_json scenes;
   nlohmann::ordered_json noise;
   double intactLitFraction = 0;   // lens pixels of the intact frame above a quarter of the brightest
+  Uniformity intactUniformity;    // of the intact lens's rendering
 };
+
+// The uniformity of an intact lens's rendering (study.h, Uniformity).
+Uniformity uniformityOf(const cv::Mat& intact, const Bench& bench, const sim::TelecentricCamera& camera);
 
 // Renders every scene under one illumination, passes each through the camera,
 // and judges it against the intact lens by the declared criterion. Writes the

@@ -33,11 +33,21 @@ struct Bench {
   struct Backlight {
     double distance_mm, size_mm, halfAngle_rad;
   } parallel, area;
+  // Conventional schlieren: the parallel back light, and a knife edge in the
+  // camera's stop at knifeEdge (units of the stop's radius; TelecentricCamera).
+  struct Schlieren {
+    double knifeEdge;
+  } schlieren;
   struct InverseSchlieren {
     double distance_mm, pixelPitch_mm;
     int angular, spatial;
     LightFieldLookup lookup;
     double captureHalfAngle_rad, captureDistance_mm;
+    // What the display shows for the captured light field: its radiance
+    // (Captured), or every angular pixel lit or dark (Binary: binaryDrive()
+    // at binaryThreshold of the brightest).
+    enum class Drive { Captured, Binary } drive;
+    double binaryThreshold;
   } inverseSchlieren;
   struct Defects {
     double inclusionRadius_mm, rimRadial_mm, cutLargeRadius_mm, cutLargeRadial_mm, cutSubpixelRadius_mm,
@@ -59,6 +69,8 @@ struct Bench {
   sim::TelecentricCamera telecentricCamera() const;
   sim::CameraSensorModel sensorModel() const;
   LightFieldGeometry lightFieldGeometry() const;
+  // What the display shows for a light field captured on this bench (drive).
+  LightField displayed(const LightField& captured) const;
 };
 
 enum class Quality { Quick, Default, High };
@@ -84,6 +96,20 @@ struct StudyOptions {
   // Progress: a label for the current step and the overall fraction done.
   std::function<void(const std::string&, double)> progress;
 };
+
+// How evenly a setup lights the intact lens: over its inner part (object
+// points within 0.9 R of the axis), the share of camera pixels above a quarter
+// of the brightest and the coefficient of variation (standard deviation over
+// mean) of the rendered radiance.
+struct Uniformity {
+  double litShare = 0;
+  double cv = 0;
+};
+// The intact lens under `setup` ("parallel", "area", "schlieren",
+// "inverse_schlieren") as the study renders it at `quality` (its camera,
+// samples and, for inverse schlieren, its light field capture).
+Uniformity intactUniformity(const Bench& bench, const std::string& setup, Quality quality, std::uint64_t seed = 1,
+                            int threads = 0);
 
 // Runs the study, writes DIR/study.json, DIR/images/*, DIR/report.html and
 // returns the JSON document.
