@@ -1,9 +1,12 @@
 #include "lfi/core/config.h"
 #include "lfi/core/error.h"
+#include "lfi/drivers/display_calibration_file.h"
+#include "lfi/drivers/display_optics.h"
 #include "lfi/sim/scene_file.h"
 #include "lfi/sim/solid.h"
 #include "lfi/study/study.h"
 
+#include <algorithm>
 #include <cmath>
 #include <tuple>
 
@@ -80,8 +83,8 @@ void checkGeometry(const Bench& b, const ConfigTable& cameraTable, const ConfigT
 
 Bench Bench::load(const std::filesystem::path& path) {
   ConfigTable root = ConfigTable::parseFile(path);
-  root.requireKnownKeys(
-      {"format", "version", "lens", "camera", "parallel", "area", "schlieren", "inverse_schlieren", "defects"});
+  root.requireKnownKeys({"format", "version", "lens", "camera", "parallel", "area", "schlieren", "inverse_schlieren",
+                         "display", "defects"});
   root.string("format", std::nullopt, {"lfi-bench"});
   root.integer("version", std::nullopt, 1, 1);
   Bench b;
@@ -159,6 +162,16 @@ Bench Bench::load(const std::filesystem::path& path) {
     t.finish();
   }
   {
+    ConfigTable t = root.table("display");
+    b.display.optics = readDisplayOpticsTable(t, DisplayOpticsParams{});
+    t.finish();
+    try {
+      DisplayOptics(b.displayInfo(b.display.optics));
+    } catch (const Error& e) {
+      fail(Errc::Config, "{} (over the panel of [inverse_schlieren]): {}", t.where("optics"), e.what());
+    }
+  }
+  {
     ConfigTable& t = defectsTable;
     auto& d = b.defects;
     d.inclusionRadius_mm = t.number("inclusion_radius_mm", std::nullopt, 1e-4, 100);
@@ -216,6 +229,21 @@ LightFieldGeometry Bench::lightFieldGeometry() const {
   g.pixelPitch_mm = inverseSchlieren.pixelPitch_mm;
   g.distance_mm = inverseSchlieren.distance_mm;
   return g;
+}
+
+DisplayInfo Bench::displayInfo(const DisplayOpticsParams& optics) const {
+  DisplayInfo info;
+  info.vendor = "lfi";
+  info.model = "study bench display";
+  info.panelWidth_px = info.panelHeight_px = inverseSchlieren.spatial * inverseSchlieren.angular;
+  info.pixelPitch_mm = inverseSchlieren.pixelPitch_mm;
+  info.subpixels = SubpixelLayout::Mono;
+  info.optics = optics;
+  // Panel pixels under a lens (pinhole, slit): the directions it can give.
+  const double across = fullParallax(optics.type) ? optics.arrayPitch_mm / info.pixelPitch_mm : optics.lensPitch_px;
+  info.viewCount = std::max(1, static_cast<int>(std::lround(fullParallax(optics.type) ? across * across : across)));
+  info.brightnessMax = 255;
+  return info;
 }
 
 LightField Bench::displayed(const LightField& captured) const {

@@ -278,7 +278,7 @@ Evaluation evaluate(const Bench& bench, const Illumination& light, const std::ve
     for (size_t k = 0; k < spec.defects.size(); ++k) {
       const double meanSq = cv::mean(diff.mul(diff), masks[k])[0];
       const double cnr = std::sqrt(std::max(0.0, meanSq - sigma * sigma)) / sigma;
-      const char* verdict = cnr >= kDetectedCnr ? "detected" : cnr >= kWeakCnr ? "weak" : "missed";
+      const char* verdict = verdictOf(cnr);
       sceneOut["defects"][spec.defects[k].name] = {
           {"verdict", verdict}, {"cnr", cnr}, {"pixels", cv::countNonZero(masks[k])}};
     }

@@ -94,6 +94,31 @@ std::string sweepHtml(const nlohmann::ordered_json& sweep) {
   return h + "</table>";
 }
 
+// The display classes at the bench's panel: per class, the intact lens's
+// coverage and evenness and each defect's CNR.
+std::string displayClassesHtml(const nlohmann::ordered_json& classes) {
+  const auto& list = classes["classes"];
+  if (list.empty()) return {};
+  std::string h = fmt::format(
+      "<h2>Display classes</h2><p>The bench's light field shown through each class of display over the bench's "
+      "panel (same pitch, gap and lens positions), inverse schlieren at the sweep's camera ({} &times; {}); a "
+      "class that passes a share s of the display plane gets 1/s of the samples. CNR per defect.</p><table><tr>"
+      "<th>class</th><th>samples</th><th>intact: lit, CV (r &lt; 0.9 R)</th>",
+      classes["camera"]["width"].get<int>(), classes["camera"]["height"].get<int>());
+  for (const auto& [defect, unused] : list[0]["cnr"].items()) h += "<th>" + defect + "</th>";
+  h += "</tr>";
+  for (const auto& c : list) {
+    h += fmt::format("<tr><th>{}</th><td>{}</td><td>{:.0f} %, {:.2f}</td>", c["class"].get<std::string>(),
+                     c["samples_per_pixel"].get<int>(), 100 * c["intact_uniformity"]["lit_share"].get<double>(),
+                     c["intact_uniformity"]["cv"].get<double>());
+    for (const auto& [defect, cnr] : c["cnr"].items()) {
+      h += fmt::format("<td class=\"{}\">{:.1f}</td>", verdictOf(cnr.get<double>()), cnr.get<double>());
+    }
+    h += "</tr>";
+  }
+  return h + "</table>";
+}
+
 // The blind detector's scores: per scene and setup, hits of the scene's
 // defects, false alarms, and each found defect's position error.
 std::string blindHtml(const nlohmann::ordered_json& study) {
@@ -169,6 +194,7 @@ difference with the intact lens (grey = 0, &plusmn;8&sigma; full scale).</p><tab
   h += "</table>";
   if (study.contains("blind_detector")) h += blindHtml(study);
   if (study.contains("sweep")) h += sweepHtml(study["sweep"]);
+  if (study.contains("display_classes")) h += displayClassesHtml(study["display_classes"]);
   h += "<h2>Noise</h2><pre>" + study["noise"].dump(2) + "</pre></body></html>\n";
   return h;
 }

@@ -4,6 +4,7 @@
 
 #include "study_internal.h"
 
+#include "lfi/drivers/display_optics.h"
 #include "lfi/sim/render.h"
 
 #include <fmt/format.h>
@@ -77,9 +78,20 @@ Object backlight(const Bench& bench, const Illumination& light) {
     return {"area backlight", sim::Rectangle{bench.area.size_mm, bench.area.size_mm},
             Rigid3::translation({0, 0, -bench.area.distance_mm}), sim::Absorber{}, sim::LambertianEmission{1.0}};
   const LightFieldGeometry& g = light.lightField->geometry();
-  return {"light field display", sim::Rectangle{g.extentX_mm(), g.extentY_mm()},
-          Rigid3::translation({0, 0, -g.distance_mm - light.displayError_mm}), sim::Absorber{},
+  const Rigid3 at = Rigid3::translation({0, 0, -g.distance_mm - light.displayError_mm});
+  if (light.setup == "display")
+    return {"light field display (panel and optics)", sim::Rectangle{g.extentX_mm(), g.extentY_mm()}, at,
+            sim::Absorber{}, *light.panel};
+  return {"light field display", sim::Rectangle{g.extentX_mm(), g.extentY_mm()}, at, sim::Absorber{},
           sim::LightFieldEmission{light.lightField, light.lookup}};
+}
+
+std::shared_ptr<const sim::PanelEmission> displayPanel(const Bench& bench, const DisplayOpticsParams& optics,
+                                                       const LightField& shown) {
+  const DisplayInfo info = bench.displayInfo(optics);
+  const cv::Mat panel = encodeLightField(shown, DisplayOptics(info), 1.0, bench.inverseSchlieren.lookup);
+  return std::make_shared<const sim::PanelEmission>(
+      sim::makePanelEmission(std::make_shared<const sim::PanelOptics>(info), panel, 1.0));
 }
 
 // The first step of inverse schlieren (docs/study.md): the collimated beam

@@ -17,6 +17,7 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <cmath>
 #include <cstring>
 
 namespace lfi::study {
@@ -26,7 +27,7 @@ using namespace detail;
 
 namespace {
 
-const std::vector<std::string> kSetups = {"parallel", "area", "schlieren", "inverse_schlieren"};
+const std::vector<std::string> kSetups = {"parallel", "area", "schlieren", "inverse_schlieren", "display"};
 
 struct QualitySettings {
   int binning;           // extra binning of the bench camera (fewer, larger pixels)
@@ -58,6 +59,17 @@ sim::TelecentricCamera setupCamera(const Bench& bench, sim::TelecentricCamera ca
   return camera;
 }
 
+// The light of one setup; the light field setups show `shown` (the bench's drive).
+Illumination setupLight(const Bench& bench, const std::string& setup, std::shared_ptr<const LightField> shown) {
+  Illumination light{setup, std::move(shown), bench.inverseSchlieren.lookup, 0, nullptr};
+  if (setup == "display") light.panel = displayPanel(bench, bench.display.optics, *light.lightField);
+  return light;
+}
+
+nlohmann::ordered_json uniformityJson(const Uniformity& u) {
+  return {{"lit_share", u.litShare}, {"cv", u.cv}};
+}
+
 nlohmann::ordered_json driveJson(const Bench& bench) {
   if (bench.inverseSchlieren.drive == Bench::InverseSchlieren::Drive::Captured) return {{"kind", "captured"}};
   return {{"kind", "binary"}, {"threshold", bench.inverseSchlieren.binaryThreshold}};
@@ -77,10 +89,11 @@ Uniformity intactUniformity(const Bench& bench, const std::string& setup, Qualit
   if (std::find(kSetups.begin(), kSetups.end(), setup) == kSetups.end())
     fail(Errc::InvalidArgument, "unknown setup '{}' ({})", setup, fmt::join(kSetups, ", "));
   const QualitySettings q = settingsFor(quality);
-  Illumination light{setup, nullptr, bench.inverseSchlieren.lookup, 0};
-  if (setup == "inverse_schlieren")
-    light.lightField = std::make_shared<const LightField>(
+  std::shared_ptr<const LightField> shown;
+  if (setup == "inverse_schlieren" || setup == "display")
+    shown = std::make_shared<const LightField>(
         bench.displayed(captureLightField(bench, bench.lightFieldGeometry(), q.captureSamples, seed, threads, {})));
+  const Illumination light = setupLight(bench, setup, shown);
   std::vector<sim::Object> objects = partObjects(bench, sceneSpecs(bench).front());
   objects.push_back(backlight(bench, light));
   const sim::TelecentricCamera camera = setupCamera(bench, binnedCamera(bench, q.binning), setup);
@@ -147,11 +160,21 @@ nlohmann::ordered_json runStudy(const Bench& bench, const fs::path& outDir, cons
     return s;
   }();
   const double rendersPerSetup = static_cast<double>(specs.size());
+  // The display classes run with the sweep, at its camera.
+  const std::vector<DisplayClass> classCases = sweep.empty() ? std::vector<DisplayClass>{} : displayClasses(bench);
+  constexpr int kMostClassSamples = 1024;
+  auto classSamples = [&](const DisplayClass& c) {
+    return std::min(kMostClassSamples, static_cast<int>(std::ceil(sweepQuality.samplesPerPixel / c.openShare)));
+  };
   // Progress units: one full-quality render each; the sweep's renders are
-  // smaller (quick camera) and count a tenth.
+  // smaller (quick camera) and count a tenth, in proportion to their samples.
   constexpr double kSweepRender = 0.1;
+  double classUnits = 0;
+  for (const DisplayClass& c : classCases)
+    classUnits += rendersPerSetup * kSweepRender * classSamples(c) / sweepQuality.samplesPerPixel;
   Progress progress(options, 4 + kSetups.size() * (rendersPerSetup + 1) +
-                                 static_cast<double>(sweep.size()) * (0.25 + 2 * rendersPerSetup * kSweepRender));
+                                 static_cast<double>(sweep.size()) * (0.25 + 2 * rendersPerSetup * kSweepRender) +
+                                 classUnits);
 
   const LightField captured = captureLightField(bench, bench.lightFieldGeometry(), q.captureSamples, options.seed,
                                                 options.threads, progress.step("light field capture", 4));
@@ -187,14 +210,13 @@ nlohmann::ordered_json runStudy(const Bench& bench, const fs::path& outDir, cons
   const fs::path imagesDir = outDir / "images";
   const GroundTruth truth = traceGroundTruth(bench, specs, camera);
   for (size_t si = 0; si < kSetups.size(); ++si) {
-    const Illumination light{kSetups[si], lightField, bench.inverseSchlieren.lookup, 0};
+    const Illumination light = setupLight(bench, kSetups[si], lightField);
     const Evaluation e = namingTheStep(fmt::format("setup '{}' of '{}'", kSetups[si], bench.source), [&] {
       return evaluate(bench, light, specs, truth, setupCamera(bench, camera, kSetups[si]), bench.sensorModel(), ro,
                       options.seed * 1000 + si * 100, progress, 1.0, &imagesDir, overwrite, &blind);
     });
     study["noise"][kSetups[si]] = e.noise;
-    study["intact_uniformity"][kSetups[si]] = {{"lit_share", e.intactUniformity.litShare},
-                                               {"cv", e.intactUniformity.cv}};
+    study["intact_uniformity"][kSetups[si]] = uniformityJson(e.intactUniformity);
     for (const auto& [scene, result] : e.scenes.items()) {
       auto& out = study["scenes"][scene];
       if (!out.contains("defects")) out["defects"] = nlohmann::ordered_json::object();
@@ -255,6 +277,32 @@ nlohmann::ordered_json runStudy(const Bench& bench, const fs::path& outDir, cons
       out["points"].push_back(entry);
     }
     study["sweep"]["answers"] = sweepAnswers(study["sweep"]);
+
+    // The display classes at the bench's panel, each showing the bench's light
+    // field, at the sweep's camera; a class that passes a share s of the
+    // display plane gets 1/s of the samples, so that as many reach the panel.
+    auto& classes = study["display_classes"];
+    classes["camera"] = out["camera"];
+    for (const DisplayClass& c : classCases) {
+      sim::RenderOptions cro = sro;
+      cro.samplesPerPixel = classSamples(c);
+      const Illumination light{"display", lightField, bench.inverseSchlieren.lookup, 0,
+                               displayPanel(bench, c.optics, *lightField)};
+      const Evaluation e = namingTheStep(fmt::format("display class {}", c.name), [&] {
+        return evaluate(bench, light, specs, sweepTruth, sweepCamera, bench.sensorModel(), cro,
+                        options.seed * 1000 + 888, progress, kSweepRender * cro.samplesPerPixel / sro.samplesPerPixel,
+                        nullptr, overwrite);
+      });
+      nlohmann::ordered_json entry = {{"class", c.name},
+                                      {"open_share", c.openShare},
+                                      {"samples_per_pixel", cro.samplesPerPixel},
+                                      {"intact_lit_fraction", e.intactLitFraction},
+                                      {"intact_uniformity", uniformityJson(e.intactUniformity)},
+                                      {"false_positives", e.scenes["intact"]["false_positives"]}};
+      for (const auto& [scene, result] : e.scenes.items())
+        for (const auto& [defect, cell] : result["defects"].items()) entry["cnr"][scene + "/" + defect] = cell["cnr"];
+      classes["classes"].push_back(entry);
+    }
     writeResults(Overwrite::Allow, true);  // (this run's own, written above)
   }
   return study;

@@ -29,6 +29,9 @@ namespace lfi::study::detail {
 inline constexpr double kDetectedCnr = 3.0;  // RMS excess signal per defect pixel >= 3 sigma
 inline constexpr double kWeakCnr = 1.5;
 inline constexpr double kFlagSigma = 5.0;    // false-positive flag: |3x3 mean of the difference| > 5 sigma_mean
+inline const char* verdictOf(double cnr) {
+  return cnr >= kDetectedCnr ? "detected" : cnr >= kWeakCnr ? "weak" : "missed";
+}
 
 // Overall progress of a study made of weighted steps.
 class Progress {
@@ -77,7 +80,14 @@ struct Illumination {
   std::shared_ptr<const LightField> lightField;
   LightFieldLookup lookup = LightFieldLookup::Nearest;
   double displayError_mm = 0;  // display plane moved away from the lens (Δ error)
+  // The "display" setup: the panel and optics that show the light field.
+  std::shared_ptr<const sim::PanelEmission> panel;
 };
+
+// The bench's display with `optics` showing `shown` (drive levels from each
+// panel pixel's chief ray into the light field, the bench's lookup).
+std::shared_ptr<const sim::PanelEmission> displayPanel(const Bench& bench, const DisplayOpticsParams& optics,
+                                                       const LightField& shown);
 
 sim::Object backlight(const Bench& bench, const Illumination& light);
 
@@ -171,6 +181,17 @@ struct SweepVariant {
 // the study starts: a known series, a light field that can be made, a display
 // that stays below the lens.
 std::vector<SweepVariant> sweepVariants(const Bench& bench, const std::vector<SweepPoint>& sweep);
+
+// The display classes the study compares at the bench's panel (docs/study.md):
+// the bench's display, a pinhole array and a lenticular sheet, each with the
+// bench's pitch, gap and lens positions, and the share of the display plane
+// that lets light through (the camera's samples needed grow with its inverse).
+struct DisplayClass {
+  std::string name;
+  DisplayOpticsParams optics;
+  double openShare;
+};
+std::vector<DisplayClass> displayClasses(const Bench& bench);
 
 // ---- The report (report.cpp) ----------------------------------------------
 

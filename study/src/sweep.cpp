@@ -11,6 +11,7 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <numbers>
 
 namespace lfi::study {
 
@@ -29,6 +30,38 @@ double lensFocalLength(const Bench::Lens& lens) {
 }  // namespace
 
 namespace detail {
+
+std::vector<DisplayClass> displayClasses(const Bench& bench) {
+  const DisplayOpticsParams& own = bench.display.optics;
+  const double pixel = bench.inverseSchlieren.pixelPitch_mm;
+  // The bench's lattice, or a lenticular sheet's lens pitch as the array's.
+  const double pitch = fullParallax(own.type) ? own.arrayPitch_mm : own.lensPitch_px * pixel;
+  const double offset = fullParallax(own.type) ? own.arrayOffsetX_mm : own.offset_px * pixel;
+  const double focal = own.focalLength_mm > 0 ? own.focalLength_mm : own.gap_mm;
+  DisplayOpticsParams lenslet;
+  lenslet.type = OpticsType::LensletArray;
+  lenslet.packing = LensPacking::Square;
+  lenslet.arrayPitch_mm = pitch;
+  lenslet.arrayOffsetX_mm = lenslet.arrayOffsetY_mm = offset;
+  lenslet.gap_mm = own.gap_mm;
+  lenslet.focalLength_mm = focal;
+  DisplayOpticsParams pinhole = lenslet;
+  pinhole.type = OpticsType::PinholeArray;
+  pinhole.focalLength_mm = 0;
+  // Four panel pixels: 4.9 % of the plane passes at the bench's 16-pixel pitch
+  // (one pixel's hole would pass 0.3 %), each beam 4 pixels wide in angle.
+  pinhole.pinholeDiameter_mm = 4 * pixel;
+  DisplayOpticsParams lenticular;
+  lenticular.type = OpticsType::Lenticular;
+  lenticular.lensPitch_px = pitch / pixel;
+  lenticular.offset_px = offset / pixel;
+  lenticular.gap_mm = own.gap_mm;
+  lenticular.focalLength_mm = focal;
+  const double hole = std::numbers::pi / 4 * pinhole.pinholeDiameter_mm * pinhole.pinholeDiameter_mm;
+  return {{toString(OpticsType::LensletArray), lenslet, 1.0},
+          {toString(OpticsType::PinholeArray), pinhole, hole / (pitch * pitch)},
+          {toString(OpticsType::Lenticular), lenticular, 1.0}};
+}
 
 std::vector<SweepVariant> sweepVariants(const Bench& bench, const std::vector<SweepPoint>& sweep) {
   const LightFieldGeometry reference = bench.lightFieldGeometry();

@@ -53,7 +53,7 @@ std::string readText(const fs::path& p) {
 // One study run serves every check below: ctest runs each TEST in its own
 // process, and the study is the slow part.
 void checkOutputs(const nlohmann::ordered_json& r, const fs::path& dir) {
-  const std::vector<std::string> setups = {"parallel", "area", "schlieren", "inverse_schlieren"};
+  const std::vector<std::string> setups = {"parallel", "area", "schlieren", "inverse_schlieren", "display"};
   ASSERT_EQ(r["setups"].get<std::vector<std::string>>(), setups);
   const std::map<std::string, std::vector<std::string>> defects = {
       {"intact", {}},          {"absorbing", {"center", "rim"}}, {"scattering", {"center", "rim"}},
@@ -124,12 +124,12 @@ TEST(QuickStudy, EndToEnd) {
   // whole intact lens (Imaging.InverseSchlierenLightsTheWholeIntactLens); an
   // opaque sphere blocks that light over several pixels: a contrast of the
   // whole signal against shot noise, far above any threshold.
-  for (const char* setup : {"parallel", "area", "schlieren", "inverse_schlieren"})
+  for (const char* setup : {"parallel", "area", "schlieren", "inverse_schlieren", "display"})
     EXPECT_EQ(r["scenes"]["absorbing"]["defects"]["center"][setup]["verdict"], "detected") << setup;
   // Intact against intact differs by the camera's noise only (common random
   // numbers): a 5 sigma excursion of a 3x3 mean has probability 6e-7 per pixel,
   // about 0.01 expected regions in a 128x128 frame.
-  for (const char* setup : {"parallel", "area", "schlieren", "inverse_schlieren"})
+  for (const char* setup : {"parallel", "area", "schlieren", "inverse_schlieren", "display"})
     EXPECT_EQ(r["scenes"]["intact"]["false_positives"][setup], 0) << setup;
   // The light field was made for the intact lens at its place: a lens with a
   // 10 % higher index, or moved by 3 mm, bends every emitted ray off the axis
@@ -146,7 +146,7 @@ TEST(QuickStudy, EndToEnd) {
   // difference has probability 6e-7 per pixel (1.2e-6 with the noise of a
   // 16-frame golden image), about 0.01 expected regions over the lens's 1e4
   // pixels: the intact lens raises no alarm under any illumination.
-  for (const char* setup : {"parallel", "area", "schlieren", "inverse_schlieren"})
+  for (const char* setup : {"parallel", "area", "schlieren", "inverse_schlieren", "display"})
     EXPECT_EQ(r["scenes"]["intact"]["blind"][setup]["false_alarms"], 0) << setup;
   // Under inverse schlieren both opaque particles block the whole signal over
   // more than ten pixels, and none of their light lands elsewhere; the one on
@@ -175,6 +175,18 @@ TEST(QuickStudy, EndToEnd) {
   for (const char* lookup : {"nearest", "interpolated"})
     EXPECT_GE(r["sweep"]["points"][0]["intact_lit_fraction"][lookup].get<double>(), 0.95) << lookup;
   EXPECT_GE(r["sweep"]["points"][0]["cnr"]["nearest"]["absorbing/center"].get<double>(), 3.0);
+  // The display classes run with the sweep: the bench's lens array, a pinhole
+  // array and a lenticular sheet over the same panel. A lenticular sheet
+  // steers light across its lenses only: it cannot undo the round lens's
+  // vertical deflection, so it lights less of the lens than the full-parallax
+  // array does.
+  const auto& classes = r["display_classes"]["classes"];
+  ASSERT_EQ(classes.size(), 3u);
+  for (const auto& c : classes) EXPECT_EQ(c["cnr"].size(), 8u) << c["class"];
+  EXPECT_EQ(classes[0]["class"], "lenslet_array");
+  EXPECT_EQ(classes[2]["class"], "lenticular");
+  EXPECT_LT(classes[2]["intact_uniformity"]["lit_share"].get<double>(),
+            classes[0]["intact_uniformity"]["lit_share"].get<double>());
   EXPECT_TRUE(r["sweep"]["answers"].contains("absorbing/center"));
   EXPECT_NE(readText(dir / "report.html").find("How good must the display be?"), std::string::npos);
   EXPECT_EQ(r["provenance"]["bench"], kBench.string());
@@ -328,6 +340,12 @@ TEST(IntactUniformity, InverseSchlierenLightsTheInnerLensEvenlyAtDefaultQuality)
   const auto bench = lfi::study::Bench::load(kBench);
   const auto u = lfi::study::intactUniformity(bench, "inverse_schlieren", lfi::study::Quality::Default);
   std::printf("inverse schlieren, default quality: lit %.3f, cv %.3f\n", u.litShare, u.cv);
+  // Through the bench's lens array (a panel pixel per 0.038 rad, finer than
+  // the light field's angular pixels): the same target.
+  const auto d = lfi::study::intactUniformity(bench, "display", lfi::study::Quality::Default);
+  std::printf("through the display, default quality: lit %.3f, cv %.3f\n", d.litShare, d.cv);
+  EXPECT_GE(d.litShare, 0.95);
+  EXPECT_LE(d.cv, 0.10);
   EXPECT_GE(u.litShare, 0.95);
   EXPECT_LE(u.cv, 0.10);
   // Under the collimated back light only rays the lens barely deflects reach
@@ -388,6 +406,8 @@ TEST(Bench, OutOfRangeAndMalformedValuesAreErrors) {
       {"drive = \"binary\"", "drive = \"grey\"", {"inverse_schlieren.drive", "binary"}},
       {"drive = \"binary\"", "drive = \"captured\"", {"inverse_schlieren.binary_threshold", "drive = \"captured\""}},
       {"binary_threshold = 1e-3", "binary_threshold = 0", {"inverse_schlieren.binary_threshold"}},
+      // A display whose lenses are smaller than the panel's pixels.
+      {"array_pitch_mm = 0.8", "array_pitch_mm = 0.01", {"display.optics", "arrayPitch_mm"}},
   };
   for (const Case& c : cases) {
     std::ofstream(bad) << replaceLine(readText(kBench), c.from, c.to);

@@ -1,10 +1,12 @@
 #pragma once
 // The reference study (docs/study.md): the bi-convex lens with six kinds of defect,
-// seen by the telecentric camera under three illuminations (parallel, area,
-// inverse schlieren), each image compared with the intact lens under the same
-// illumination by one declared criterion (docs/study.md).
+// seen by the telecentric camera in five setups (parallel and area back light,
+// conventional schlieren, inverse schlieren with the ideal light field emitter
+// and through the bench's display), each image compared with the intact lens
+// in the same setup by one declared criterion (docs/study.md).
 
 #include "lfi/core/light_field.h"
+#include "lfi/drivers/display.h"
 #include "lfi/sim/devices/camera_sensor_model.h"
 #include "lfi/sim/scene.h"
 #include "lfi/sim/sensors.h"
@@ -49,6 +51,13 @@ struct Bench {
     enum class Drive { Captured, Binary } drive;
     double binaryThreshold;
   } inverseSchlieren;
+  // The bench's light field display, for the "display" setup (inverse
+  // schlieren through a panel and its optics rather than the ideal emitter):
+  // its panel is the light field's pixel grid (pixelPitch_mm, spatial x
+  // angular pixels a side, one mono subpixel) at Δ + gap below the lens.
+  struct Display {
+    DisplayOpticsParams optics;
+  } display;
   struct Defects {
     double inclusionRadius_mm, rimRadial_mm, cutLargeRadius_mm, cutLargeRadial_mm, cutSubpixelRadius_mm,
         cutSubpixelRadial_mm, indexFactor, misalignment_mm;
@@ -71,6 +80,8 @@ struct Bench {
   LightFieldGeometry lightFieldGeometry() const;
   // What the display shows for a light field captured on this bench (drive).
   LightField displayed(const LightField& captured) const;
+  // The display with `optics` over the bench's panel (Display above).
+  DisplayInfo displayInfo(const DisplayOpticsParams& optics) const;
 };
 
 enum class Quality { Quick, Default, High };
