@@ -172,7 +172,7 @@ nlohmann::ordered_json runStudy(const Bench& bench, const fs::path& outDir, cons
   double classUnits = 0;
   for (const DisplayClass& c : classCases)
     classUnits += rendersPerSetup * kSweepRender * classSamples(c) / sweepQuality.samplesPerPixel;
-  Progress progress(options, 4 + kSetups.size() * (rendersPerSetup + 1) +
+  Progress progress(options, 4 + kSetups.size() * 2 * rendersPerSetup +
                                  static_cast<double>(sweep.size()) * (0.25 + 2 * rendersPerSetup * kSweepRender) +
                                  classUnits);
 

@@ -126,9 +126,12 @@ struct Evaluation {
 Uniformity uniformityOf(const cv::Mat& intact, const Bench& bench, const sim::TelecentricCamera& camera);
 
 // Renders every scene under one illumination, passes each through the camera,
-// and judges it against the intact lens by the declared criterion. Writes the
-// frames and difference images to imagesDir when it is given. With `blind`,
-// also runs the blind detector on every frame (scenes -> scene -> "blind").
+// and judges it against the intact lens by the declared criterion. With
+// imagesDir (the study's main table), renders every scene a second time with
+// independent random numbers, takes the Monte Carlo noise of each difference
+// out of its CNR (docs/study.md, "Monte Carlo noise"), and writes the frames
+// and difference images there. With `blind`, also runs the blind detector on
+// every frame (scenes -> scene -> "blind").
 Evaluation evaluate(const Bench& bench, const Illumination& light, const std::vector<SceneSpec>& specs,
                     const GroundTruth& truth, const sim::TelecentricCamera& camera, sim::CameraSensorModel sensor,
                     sim::RenderOptions ro, std::uint64_t seed, Progress& progress, double renderUnits,

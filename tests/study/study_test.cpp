@@ -77,6 +77,8 @@ void checkOutputs(const nlohmann::ordered_json& r, const fs::path& dir) {
         EXPECT_EQ(cell["verdict"].get<std::string>(), expected) << scene << "/" << d << "/" << setup << ": cnr " << cnr;
         // The ground-truth mask is never empty: sub-pixel defects get their pixel.
         EXPECT_GT(cell["pixels"].get<int>(), 0) << scene << "/" << d;
+        // The main table renders twice (the CNR without Monte Carlo noise) and keeps the one-rendering value.
+        EXPECT_TRUE(cell.contains("cnr_one_rendering")) << scene << "/" << d << "/" << setup;
       }
     for (const auto& setup : setups) {
       // The blind detector's score adds up: every defect is a hit or a miss,
