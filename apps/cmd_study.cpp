@@ -55,8 +55,9 @@ int runStudyCommand(const StudyArgs& a, const GlobalOptions& global) {
   lfi::setExrThreads(a.threads);  // (the light fields and images it writes)
   options.seed = a.seed;
   options.overwrite = a.force;
-  if (a.sweepOn) options.sweep = lfi::study::defaultSweep();
-  if (a.sweepOff) options.sweep = std::vector<lfi::study::SweepPoint>{};
+  if (a.sweepOn) options.sweep = lfi::study::defaultSweep(), options.limits = lfi::study::defaultLimits();
+  if (a.sweepOff)
+    options.sweep = std::vector<lfi::study::SweepPoint>{}, options.limits = std::vector<lfi::study::LimitPoint>{};
   ProgressBar bar;
   if (!global.quiet) options.progress = [&bar](const std::string& label, double f) { bar(label, f); };
   const auto start = std::chrono::steady_clock::now();
@@ -85,8 +86,10 @@ Command addStudyCommand(CLI::App& app) {
       ->capture_default_str();
   study->add_flag("--force", a->force, "Replace the results of an earlier study in --out");
   auto* sweepFlag = study->add_flag("--sweep", a->sweepOn,
-                                    "Run the display-quality sweep (default: on, except with --quality quick)");
-  study->add_flag("--no-sweep", a->sweepOff, "Skip the display-quality sweep")->excludes(sweepFlag);
+                                    "Run the display-quality sweep, the display classes and the detection limits "
+                                    "(default: on, except with --quality quick)");
+  study->add_flag("--no-sweep", a->sweepOff, "Skip the sweep, the display classes and the detection limits")
+      ->excludes(sweepFlag);
   return {study, [a](const GlobalOptions& global) { return runStudyCommand(*a, global); }};
 }
 

@@ -198,7 +198,8 @@ Uniformity uniformityOf(const cv::Mat& intact, const Bench& bench, const sim::Te
 Evaluation evaluate(const Bench& bench, const Illumination& light, const std::vector<SceneSpec>& specs,
                     const GroundTruth& truth, const sim::TelecentricCamera& camera, sim::CameraSensorModel sensor,
                     sim::RenderOptions ro, std::uint64_t seed, Progress& progress, double renderUnits,
-                    const fs::path* imagesDir, Overwrite overwrite, const DetectionSettings* blind) {
+                    bool secondRendering, const fs::path* imagesDir, Overwrite overwrite,
+                    const DetectionSettings* blind) {
   auto renderScene = [&](const SceneSpec& spec, std::uint64_t mcSeed, const std::string& label) {
     std::vector<Object> objects = partObjects(bench, spec);
     objects.push_back(backlight(bench, light));
@@ -253,11 +254,10 @@ Evaluation evaluate(const Bench& bench, const Illumination& light, const std::ve
   }
   out.intactUniformity = uniformityOf(intact, bench, camera);
   // The second rendering of every scene with independent random numbers and
-  // its own camera noise (the main table only): a second, independent
-  // estimate of every difference.
+  // its own camera noise: a second, independent estimate of every difference.
   const std::uint64_t independentSeed = seed + 99;
   cv::Mat independent, independentFrame;
-  if (imagesDir) {
+  if (secondRendering) {
     independent = renderScene(specs[0], independentSeed, "intact (independent)");
     independentFrame = toFloat(sensor.capture(independent, seed * 7919 + 3, ro.threads));
     // How large the Monte Carlo noise of one rendering is against the camera's

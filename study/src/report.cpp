@@ -19,9 +19,56 @@ using namespace detail;
 
 namespace {
 
-// A CNR-versus-parameter line chart as inline SVG: one colour per defect,
-// solid for nearest lookup, dashed for interpolated; log CNR axis with the
-// detection threshold marked.
+const char* const kColours[] = {"#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd",
+                                "#8c564b", "#e377c2", "#7f7f7f", "#bcbd22", "#17becf"};
+
+struct ChartLine {
+  std::string label;  // in the legend; empty: none (a second line of a colour)
+  const char* colour;
+  bool dashed;
+  std::vector<double> cnr;  // one per x
+};
+
+// A CNR-versus-x line chart as inline SVG: log CNR axis (0.1 .. 1000) with the
+// detection threshold marked, x linear or logarithmic, xs ascending.
+std::string svgCnrChart(const std::vector<double>& xs, const std::vector<ChartLine>& lines, const std::string& xLabel,
+                        bool logX, double w) {
+  const double h = 260, left = 50, right = 140, top = 20, bottom = 40;
+  const double x0 = xs.front(), x1 = xs.back();
+  auto fx = [&](double x) {
+    const double t = logX ? std::log(x / x0) / std::log(x1 / x0) : (x - x0) / (x1 - x0);
+    return left + (x1 == x0 ? 0.5 : t) * (w - left - right);
+  };
+  auto fy = [&](double cnr) {
+    const double t = (std::log10(std::clamp(cnr, 0.1, 1000.0)) + 1) / 4;  // 0.1 .. 1000
+    return h - bottom - t * (h - top - bottom);
+  };
+  std::string svg = fmt::format("<svg width=\"{}\" height=\"{}\" style=\"border:1px solid #ccc;margin:4px\">", w, h);
+  svg += fmt::format("<line x1=\"{0}\" x2=\"{1}\" y1=\"{2}\" y2=\"{2}\" stroke=\"#999\" stroke-dasharray=\"2,2\"/>"
+                     "<text x=\"{3}\" y=\"{4}\" font-size=\"10\" fill=\"#666\">detected (CNR {5})</text>",
+                     left, w - right, fy(kDetectedCnr), w - right - 100, fy(kDetectedCnr) - 3, kDetectedCnr);
+  for (double c : {0.1, 1.0, 10.0, 100.0, 1000.0})
+    svg += fmt::format("<text x=\"4\" y=\"{}\" font-size=\"10\">{}</text>", fy(c) + 3, c);
+  for (const double x : xs)
+    svg += fmt::format("<text x=\"{}\" y=\"{}\" font-size=\"10\" text-anchor=\"middle\">{:g}</text>", fx(x),
+                       h - bottom + 14, x);
+  svg += fmt::format("<text x=\"{}\" y=\"{}\" font-size=\"11\" text-anchor=\"middle\">{}</text>",
+                     (left + w - right) / 2, h - 6, xLabel);
+  int legend = 0;
+  for (const ChartLine& line : lines) {
+    std::string pts;
+    for (size_t i = 0; i < xs.size(); ++i) pts += fmt::format("{:.1f},{:.1f} ", fx(xs[i]), fy(line.cnr[i]));
+    svg += fmt::format("<polyline fill=\"none\" stroke=\"{}\" stroke-width=\"1.5\" {} points=\"{}\"/>", line.colour,
+                       line.dashed ? "stroke-dasharray=\"5,3\"" : "", pts);
+    if (!line.label.empty())
+      svg += fmt::format("<text x=\"{}\" y=\"{}\" font-size=\"10\" fill=\"{}\">{}</text>", w - right + 6,
+                         top + 10 + 12 * legend++, line.colour, line.label);
+  }
+  return svg + "</svg>";
+}
+
+// The sweep's CNR against one parameter: one colour per defect, solid for
+// nearest lookup, dashed for interpolated.
 std::string svgPlot(const nlohmann::ordered_json& sweep, const std::string& series, const std::string& xLabel,
                     bool logX) {
   std::vector<const nlohmann::ordered_json*> points;
@@ -31,45 +78,17 @@ std::string svgPlot(const nlohmann::ordered_json& sweep, const std::string& seri
   std::sort(points.begin(), points.end(), [](auto* a, auto* b) {
     return (*a)["value"].template get<double>() < (*b)["value"].template get<double>();
   });
-  const double w = 560, h = 260, left = 50, right = 140, top = 20, bottom = 40;
-  const double x0 = points.front()->at("value").get<double>(), x1 = points.back()->at("value").get<double>();
-  auto fx = [&](double x) {
-    const double t = logX ? std::log(x / x0) / std::log(x1 / x0) : (x - x0) / (x1 - x0);
-    return left + (x1 == x0 ? 0.5 : t) * (w - left - right);
-  };
-  auto fy = [&](double cnr) {
-    const double t = (std::log10(std::clamp(cnr, 0.1, 1000.0)) + 1) / 4;  // 0.1 .. 1000
-    return h - bottom - t * (h - top - bottom);
-  };
-  static const char* colours[] = {"#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd",
-                                  "#8c564b", "#e377c2", "#7f7f7f", "#bcbd22", "#17becf"};
-  std::string svg = fmt::format("<svg width=\"{}\" height=\"{}\" style=\"border:1px solid #ccc;margin:4px\">", w, h);
-  svg += fmt::format("<line x1=\"{0}\" x2=\"{1}\" y1=\"{2}\" y2=\"{2}\" stroke=\"#999\" stroke-dasharray=\"2,2\"/>"
-                     "<text x=\"{3}\" y=\"{4}\" font-size=\"10\" fill=\"#666\">detected (CNR {5})</text>",
-                     left, w - right, fy(kDetectedCnr), w - right - 100, fy(kDetectedCnr) - 3, kDetectedCnr);
-  for (double c : {0.1, 1.0, 10.0, 100.0, 1000.0})
-    svg += fmt::format("<text x=\"4\" y=\"{}\" font-size=\"10\">{}</text>", fy(c) + 3, c);
-  for (const auto* p : points)
-    svg += fmt::format("<text x=\"{}\" y=\"{}\" font-size=\"10\" text-anchor=\"middle\">{}</text>",
-                       fx(p->at("value").get<double>()), h - bottom + 14, p->at("value").get<double>());
-  svg += fmt::format("<text x=\"{}\" y=\"{}\" font-size=\"11\" text-anchor=\"middle\">{}</text>", (left + w) / 2,
-                     h - 6, xLabel);
-  int k = 0;
-  for (const auto& [defect, unused] : points.front()->at("cnr").at("nearest").items()) {
-    const char* colour = colours[k % 10];
+  std::vector<double> xs;
+  for (const auto* p : points) xs.push_back(p->at("value").get<double>());
+  std::vector<ChartLine> lines;
+  for (const auto& [defect, unused] : points.front()->at("cnr").at("nearest").items())
     for (const char* lookup : {"nearest", "interpolated"}) {
-      std::string pts;
-      for (const auto* p : points)
-        pts += fmt::format("{:.1f},{:.1f} ", fx(p->at("value").get<double>()),
-                           fy(p->at("cnr").at(lookup).at(defect).get<double>()));
-      svg += fmt::format("<polyline fill=\"none\" stroke=\"{}\" stroke-width=\"1.5\" {} points=\"{}\"/>", colour,
-                         std::string(lookup) == "nearest" ? "" : "stroke-dasharray=\"5,3\"", pts);
+      const bool nearest = std::string(lookup) == "nearest";
+      ChartLine line{nearest ? defect : "", kColours[(lines.size() / 2) % 10], !nearest, {}};
+      for (const auto* p : points) line.cnr.push_back(p->at("cnr").at(lookup).at(defect).get<double>());
+      lines.push_back(std::move(line));
     }
-    svg += fmt::format("<text x=\"{}\" y=\"{}\" font-size=\"10\" fill=\"{}\">{}</text>", w - right + 6,
-                       top + 10 + 12 * k, colour, defect);
-    ++k;
-  }
-  return svg + "</svg>";
+  return svgCnrChart(xs, lines, xLabel, logX, 560);
 }
 
 std::string sweepHtml(const nlohmann::ordered_json& sweep) {
@@ -91,6 +110,44 @@ std::string sweepHtml(const nlohmann::ordered_json& sweep) {
     for (const auto& [lookup, a] : byLookup.items())
       h += "<tr><td>" + defect + "</td><td>" + lookup + "</td><td>" + cell(a["coarsest_element_mm"]) + "</td><td>" +
            cell(a["fewest_angular"]) + "</td><td>" + cell(a["delta_tolerance_mm"]) + "</td></tr>";
+  return h + "</table>";
+}
+
+// CNR against defect size, one line per setup (log-log).
+std::string svgLimitPlot(const std::string& kind, const nlohmann::ordered_json& curves) {
+  const auto sizes = curves["sizes"].get<std::vector<double>>();
+  if (sizes.size() < 2) return "";
+  std::vector<ChartLine> lines;
+  for (const auto& [setup, curve] : curves["setups"].items())
+    lines.push_back({setup, kColours[lines.size() % 10], false, curve["cnr"].get<std::vector<double>>()});
+  return svgCnrChart(sizes, lines, kind + ": " + curves["unit"].get<std::string>(), true, 460);
+}
+
+std::string limitsHtml(const nlohmann::ordered_json& limits) {
+  const auto& cam = limits["camera"];
+  const auto& noise = limits["camera_noise"];
+  std::string h = fmt::format(
+      "<h2>Detection limits</h2><p>One defect at a ladder of sizes, every setup, the declared criterion; camera "
+      "{} &times; {} ({:.3f} mm object pixels), {} samples per pixel, each scene rendered twice (Monte Carlo noise "
+      "out of the CNR); camera noise: {:g} e<sup>-</sup> full well, {:g} e<sup>-</sup> read noise, {}-bit, exposure "
+      "{:g} of the well, {} frame(s) averaged. Dashed: detected (CNR {}).</p><div>",
+      cam["width"].get<int>(), cam["height"].get<int>(), cam["object_pixel_mm"].get<double>(),
+      cam["samples_per_pixel"].get<int>(), noise["full_well_e"].get<double>(), noise["read_noise_e"].get<double>(),
+      noise["bit_depth"].get<int>(), noise["exposure_fill"].get<double>(), noise["frames_averaged"].get<int>(),
+      kDetectedCnr);
+  for (const auto& [kind, curves] : limits["kinds"].items()) h += svgLimitPlot(kind, curves);
+  h += "</div><table><tr><th>smallest detected</th>";
+  const auto& kinds = limits["kinds"];
+  if (kinds.empty()) return h + "</tr></table>";
+  for (const auto& [setup, unused] : kinds.begin().value()["setups"].items()) h += "<th>" + setup + "</th>";
+  h += "</tr>";
+  for (const auto& [kind, curves] : kinds.items()) {
+    h += "<tr><th>" + kind + " (" + curves["unit"].get<std::string>() + ")</th>";
+    for (const auto& [setup, curve] : curves["setups"].items())
+      h += curve["limit"].is_null() ? std::string("<td class=\"missed\">none</td>")
+                                    : fmt::format("<td>{:g}</td>", curve["limit"].get<double>());
+    h += "</tr>";
+  }
   return h + "</table>";
 }
 
@@ -193,6 +250,7 @@ difference with the intact lens (grey = 0, &plusmn;8&sigma; full scale).</p><tab
   }
   h += "</table>";
   if (study.contains("blind_detector")) h += blindHtml(study);
+  if (study.contains("detection_limits")) h += limitsHtml(study["detection_limits"]);
   if (study.contains("sweep")) h += sweepHtml(study["sweep"]);
   if (study.contains("display_classes")) h += displayClassesHtml(study["display_classes"]);
   h += "<h2>Noise</h2><pre>" + study["noise"].dump(2) + "</pre></body></html>\n";

@@ -120,6 +120,10 @@ nlohmann::ordered_json runStudy(const Bench& bench, const fs::path& outDir, cons
   const std::vector<SweepVariant> sweep = sweepVariants(
       bench,
       options.sweep ? *options.sweep : (options.quality == Quality::Quick ? std::vector<SweepPoint>{} : defaultSweep()));
+  const std::vector<LimitPoint> limits =
+      options.limits ? *options.limits
+                     : (options.quality == Quality::Quick ? std::vector<LimitPoint>{} : defaultLimits());
+  const std::vector<SceneSpec> limitSpecs = limitScenes(bench, limits);  // (checked before the work)
   // Any of the study's files (an interrupted run leaves some without study.json) stops it before the work.
   if (!options.overwrite)
     for (const fs::path& file : {outDir / "study.json", outDir / "report.html", outDir / "lightfield.exr"}) {
@@ -169,10 +173,12 @@ nlohmann::ordered_json runStudy(const Bench& bench, const fs::path& outDir, cons
   // Progress units: one full-quality render each; the sweep's renders are
   // smaller (quick camera) and count a tenth, in proportion to their samples.
   constexpr double kSweepRender = 0.1;
+  const double limitRender = kSweepRender * q.samplesPerPixel / sweepQuality.samplesPerPixel;
   double classUnits = 0;
   for (const DisplayClass& c : classCases)
     classUnits += rendersPerSetup * kSweepRender * classSamples(c) / sweepQuality.samplesPerPixel;
   Progress progress(options, 4 + kSetups.size() * 2 * rendersPerSetup +
+                                 kSetups.size() * 2 * static_cast<double>(limitSpecs.size()) * limitRender +
                                  static_cast<double>(sweep.size()) * (0.25 + 2 * rendersPerSetup * kSweepRender) +
                                  classUnits);
 
@@ -213,7 +219,7 @@ nlohmann::ordered_json runStudy(const Bench& bench, const fs::path& outDir, cons
     const Illumination light = setupLight(bench, kSetups[si], lightField);
     const Evaluation e = namingTheStep(fmt::format("setup '{}' of '{}'", kSetups[si], bench.source), [&] {
       return evaluate(bench, light, specs, truth, setupCamera(bench, camera, kSetups[si]), bench.sensorModel(), ro,
-                      options.seed * 1000 + si * 100, progress, 1.0, &imagesDir, overwrite, &blind);
+                      options.seed * 1000 + si * 100, progress, 1.0, true, &imagesDir, overwrite, &blind);
     });
     study["noise"][kSetups[si]] = e.noise;
     study["intact_uniformity"][kSetups[si]] = uniformityJson(e.intactUniformity);
@@ -232,7 +238,41 @@ nlohmann::ordered_json runStudy(const Bench& bench, const fs::path& outDir, cons
     study["complete"] = complete;
     writeReport(outDir, mode, study);
   };
-  writeResults(overwrite, sweep.empty());
+  writeResults(overwrite, sweep.empty() && limits.empty());
+  if (!limits.empty()) {
+    // The detection limits: each kind of defect at a ladder of sizes in every
+    // setup, at the sweep's camera with the study's samples, every scene
+    // rendered twice (the Monte Carlo noise out of the CNR).
+    const sim::TelecentricCamera limitCamera = binnedCamera(bench, sweepQuality.binning);
+    const GroundTruth limitTruth = traceGroundTruth(bench, limitSpecs, limitCamera);
+    sim::RenderOptions lro;
+    lro.samplesPerPixel = q.samplesPerPixel;
+    lro.threads = options.threads;
+    std::vector<std::vector<double>> cnr(limits.size(), std::vector<double>(kSetups.size()));
+    for (size_t si = 0; si < kSetups.size(); ++si) {
+      const Illumination light = setupLight(bench, kSetups[si], lightField);
+      const Evaluation e = namingTheStep(fmt::format("detection limits, setup '{}'", kSetups[si]), [&] {
+        return evaluate(bench, light, limitSpecs, limitTruth, setupCamera(bench, limitCamera, kSetups[si]),
+                        bench.sensorModel(), lro, options.seed * 1000 + 500 + si, progress, limitRender, true, nullptr,
+                        overwrite);
+      });
+      for (size_t i = 0; i < limits.size(); ++i)
+        cnr[i][si] = e.scenes[limitSpecs[i + 1].name]["defects"].begin().value()["cnr"].get<double>();
+    }
+    auto& out = study["detection_limits"];
+    out["camera"] = {{"width", limitCamera.width},
+                     {"height", limitCamera.height},
+                     {"object_pixel_mm", limitCamera.objectPixel_mm()},
+                     {"samples_per_pixel", lro.samplesPerPixel},
+                     {"renderings", 2}};
+    out["camera_noise"] = {{"full_well_e", bench.camera.fullWell_e},
+                           {"read_noise_e", bench.camera.readNoise_e},
+                           {"bit_depth", bench.camera.bitDepth},
+                           {"exposure_fill", bench.camera.exposureFill},
+                           {"frames_averaged", 1}};
+    out["kinds"] = limitCurves(limits, kSetups, cnr);
+    writeResults(Overwrite::Allow, sweep.empty());  // (this run's own, written above)
+  }
   if (!sweep.empty()) {
     // How good must the display be? Each variant captures its own light field
     // (only as large as the lens's footprint on the display plane needs) and
@@ -266,7 +306,7 @@ nlohmann::ordered_json runStudy(const Bench& bench, const fs::path& outDir, cons
         const Evaluation e = namingTheStep(fmt::format("{}, {} lookup", label, name), [&] {
           return evaluate(bench, Illumination{"inverse_schlieren", lf, lookup, displayError}, specs, sweepTruth,
                           sweepCamera, bench.sensorModel(), sro, options.seed * 1000 + 777, progress, kSweepRender,
-                          nullptr, overwrite);
+                          false, nullptr, overwrite);
         });
         for (const auto& [scene, result] : e.scenes.items())
           for (const auto& [defect, cell] : result["defects"].items())
@@ -281,8 +321,9 @@ nlohmann::ordered_json runStudy(const Bench& bench, const fs::path& outDir, cons
     // The display classes at the bench's panel, each showing the bench's light
     // field, at the sweep's camera; a class that passes a share s of the
     // display plane gets 1/s of the samples, so that as many reach the panel.
+    // (A new member may move the others: no reference into study is kept across it.)
     auto& classes = study["display_classes"];
-    classes["camera"] = out["camera"];
+    classes["camera"] = {{"width", sweepCamera.width}, {"height", sweepCamera.height}};
     for (const DisplayClass& c : classCases) {
       sim::RenderOptions cro = sro;
       cro.samplesPerPixel = classSamples(c);
@@ -291,7 +332,7 @@ nlohmann::ordered_json runStudy(const Bench& bench, const fs::path& outDir, cons
       const Evaluation e = namingTheStep(fmt::format("display class {}", c.name), [&] {
         return evaluate(bench, light, specs, sweepTruth, sweepCamera, bench.sensorModel(), cro,
                         options.seed * 1000 + 888, progress, kSweepRender * cro.samplesPerPixel / sro.samplesPerPixel,
-                        nullptr, overwrite);
+                        false, nullptr, overwrite);
       });
       nlohmann::ordered_json entry = {{"class", c.name},
                                       {"open_share", c.openShare},

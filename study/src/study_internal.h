@@ -127,15 +127,15 @@ Uniformity uniformityOf(const cv::Mat& intact, const Bench& bench, const sim::Te
 
 // Renders every scene under one illumination, passes each through the camera,
 // and judges it against the intact lens by the declared criterion. With
-// imagesDir (the study's main table), renders every scene a second time with
-// independent random numbers, takes the Monte Carlo noise of each difference
-// out of its CNR (docs/study.md, "Monte Carlo noise"), and writes the frames
-// and difference images there. With `blind`, also runs the blind detector on
-// every frame (scenes -> scene -> "blind").
+// `secondRendering`, renders every scene a second time with independent
+// random numbers and takes the Monte Carlo noise of each difference out of
+// its CNR (docs/study.md, "Monte Carlo noise"). Writes the frames and
+// difference images to imagesDir when it is given. With `blind`, also runs
+// the blind detector on every frame (scenes -> scene -> "blind").
 Evaluation evaluate(const Bench& bench, const Illumination& light, const std::vector<SceneSpec>& specs,
                     const GroundTruth& truth, const sim::TelecentricCamera& camera, sim::CameraSensorModel sensor,
                     sim::RenderOptions ro, std::uint64_t seed, Progress& progress, double renderUnits,
-                    const std::filesystem::path* imagesDir, Overwrite overwrite,
+                    bool secondRendering, const std::filesystem::path* imagesDir, Overwrite overwrite,
                     const DetectionSettings* blind = nullptr);
 
 // The declared criterion as study.json states it.
@@ -195,6 +195,22 @@ struct DisplayClass {
   double openShare;
 };
 std::vector<DisplayClass> displayClasses(const Bench& bench);
+
+// ---- The detection limits (limits.cpp) ------------------------------------
+
+// The scene of one limit point (its one defect named after its kind). Throws
+// Errc::InvalidArgument naming the point for an unknown kind or a size the
+// bench cannot make (a sphere that leaves the glass, a cut past the lens, an
+// index outside [1, 5], a shift that meets a back light's plane).
+SceneSpec limitScene(const Bench& bench, const LimitPoint& point);
+// The intact lens, then every point's scene (none without points); also
+// refuses a kind whose sizes are not ascending.
+std::vector<SceneSpec> limitScenes(const Bench& bench, const std::vector<LimitPoint>& points);
+// Per kind: its sizes, its unit, and per setup the CNRs and the limit (the
+// smallest size from which every larger size is detected; null if the
+// largest is not).
+nlohmann::ordered_json limitCurves(const std::vector<LimitPoint>& points, const std::vector<std::string>& setups,
+                                   const std::vector<std::vector<double>>& cnr);
 
 // ---- The report (report.cpp) ----------------------------------------------
 

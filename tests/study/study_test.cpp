@@ -115,6 +115,9 @@ TEST(QuickStudy, EndToEnd) {
   options.quality = lfi::study::Quality::Quick;
   // A two-point sweep: the bench's own light field, and the display 1 mm off.
   options.sweep = std::vector<lfi::study::SweepPoint>{{"angular", 16}, {"delta_error", 1.0}};
+  // Two sizes each of two kinds of defect for the detection limits.
+  options.limits =
+      std::vector<lfi::study::LimitPoint>{{"particle", 0.1}, {"particle", 0.5}, {"index", 0.01}, {"index", 0.1}};
   const auto bench = lfi::study::Bench::load(kBench);
   const auto r = lfi::study::runStudy(bench, dir, options);
   {
@@ -191,6 +194,33 @@ TEST(QuickStudy, EndToEnd) {
             classes[0]["intact_uniformity"]["lit_share"].get<double>());
   EXPECT_TRUE(r["sweep"]["answers"].contains("absorbing/center"));
   EXPECT_NE(readText(dir / "report.html").find("How good must the display be?"), std::string::npos);
+  // The detection limits: under inverse schlieren, through the ideal emitter
+  // or the display, a larger opaque sphere blocks more of every pixel it
+  // covers, and a larger index change bends every ray farther from the
+  // direction the display sends: the contrast grows with the size. Each
+  // limit is the smallest size from which every larger one is detected.
+  const auto& kinds = r["detection_limits"]["kinds"];
+  ASSERT_EQ(kinds.size(), 2u);
+  for (const char* kind : {"particle", "index"}) {
+    ASSERT_TRUE(kinds.contains(kind)) << kind;
+    const auto& k = kinds[kind];
+    const auto sizes = k["sizes"].get<std::vector<double>>();
+    for (const auto& [setup, curve] : k["setups"].items()) {
+      const auto cnr = curve["cnr"].get<std::vector<double>>();
+      ASSERT_EQ(cnr.size(), 2u) << kind << setup;
+      const auto& limit = curve["limit"];
+      if (cnr[1] < 3)
+        EXPECT_TRUE(limit.is_null()) << kind << setup;
+      else
+        EXPECT_EQ(limit.get<double>(), cnr[0] >= 3 ? sizes[0] : sizes[1]) << kind << setup;
+    }
+    for (const char* setup : {"inverse_schlieren", "display"}) {
+      const auto cnr = k["setups"][setup]["cnr"].get<std::vector<double>>();
+      EXPECT_GT(cnr[1], cnr[0]) << kind << " " << setup;
+      EXPECT_GE(cnr[1], 3.0) << kind << " " << setup;
+    }
+  }
+  EXPECT_NE(readText(dir / "report.html").find("Detection limits"), std::string::npos);
   EXPECT_EQ(r["provenance"]["bench"], kBench.string());
   EXPECT_EQ(r["provenance"]["seed"], options.seed);
   EXPECT_EQ(r["complete"], true);
@@ -510,6 +540,33 @@ TEST(Bench, SweepPointsAreCheckedBeforeTheStudyStarts) {
     EXPECT_TRUE(throwsError([&] { lfi::study::runStudy(bench, dir, options); }, Errc::InvalidArgument,
                             {"sweep point " + point.series, says}));
     EXPECT_FALSE(fs::exists(dir)) << point.series << " = " << point.value;
+  }
+  fs::remove_all(dir.parent_path());
+}
+
+TEST(Bench, DetectionLimitPointsAreCheckedBeforeTheStudyStarts) {
+  const fs::path dir = freshDir("limits") / "out";
+  const auto bench = lfi::study::Bench::load(kBench);
+  lfi::study::StudyOptions options;
+  options.quality = lfi::study::Quality::Quick;
+  const std::pair<std::vector<lfi::study::LimitPoint>, std::vector<std::string>> refused[] = {
+      // The lens is 5 mm thick at its centre: a 3 mm sphere there leaves the glass.
+      {{{"particle", 3}}, {"particle = 3", "inside the glass"}},
+      {{{"cut", 13}}, {"cut = 13", "as wide as the lens"}},
+      {{{"index", 3}}, {"index = 3", "above 5"}},
+      // The back lights are 30 mm (display) and 50 mm below; the lens reaches 2.5 mm down.
+      {{{"shift", 28}}, {"shift = 28", "30 mm below"}},
+      {{{"bubble", 0}}, {"bubble = 0", "> 0"}},
+      {{{"scratch", 1}}, {"scratch = 1", "unknown kind"}},
+      {{{"particle", 0.5}, {"particle", 0.2}}, {"particle = 0.2", "ascending"}},
+  };
+  for (const auto& [points, says] : refused) {
+    options.limits = points;
+    std::vector<std::string> fragments = says;
+    fragments.insert(fragments.begin(), "detection limit");
+    EXPECT_TRUE(throwsError([&] { lfi::study::runStudy(bench, dir, options); }, Errc::InvalidArgument, fragments))
+        << says[0];
+    EXPECT_FALSE(fs::exists(dir)) << says[0];
   }
   fs::remove_all(dir.parent_path());
 }

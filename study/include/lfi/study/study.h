@@ -97,10 +97,24 @@ struct SweepPoint {
 };
 std::vector<SweepPoint> defaultSweep();
 
+// One defect of the detection limits (docs/study.md): `kind` is "particle"
+// (an opaque sphere of radius `size` mm at the lens's centre), "bubble" (an
+// air sphere, the same), "cut" (a sphere of radius `size` mm cut out of the
+// camera-side surface where the large cut is), "index" (the lens's index
+// higher by the fraction `size`) or "shift" (the lens moved `size` mm along
+// the axis, away from the camera).
+struct LimitPoint {
+  std::string kind;
+  double size;
+};
+std::vector<LimitPoint> defaultLimits();
+
 struct StudyOptions {
   Quality quality = Quality::Default;
   // Display-quality sweep; unset: defaultSweep() except in quick quality.
   std::optional<std::vector<SweepPoint>> sweep;
+  // Detection limits; unset: defaultLimits() except in quick quality.
+  std::optional<std::vector<LimitPoint>> limits;
   std::uint64_t seed = 1;
   int threads = 0;
   bool overwrite = false;
