@@ -1,6 +1,7 @@
 // The study's scenes and illuminations, built from the bench: the intact lens
-// and its six defect scenes, the three back lights, and the light field the
-// inverse schlieren display shows, captured through the intact lens.
+// and its six defect scenes, the back lights, the light field the inverse
+// schlieren display shows (captured through the intact lens), and the
+// bench's display that shows it through its optics.
 
 #include "study_internal.h"
 

@@ -1,6 +1,6 @@
-// The study driver: the three setups over the seven scenes, then the
-// display-quality sweep, each step's results gathered into study.json and
-// the report as it goes.
+// The study driver: the five setups over the seven scenes, then the
+// detection limits, the display-quality sweep and the display classes, each
+// step's results gathered into study.json and the report as it goes.
 
 #include "lfi/study/study.h"
 

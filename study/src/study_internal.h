@@ -1,8 +1,8 @@
 #pragma once
 // Internal to lfi_study: what its parts share — the declared detection
 // criterion, the scenes and illuminations, one evaluation of them, the blind
-// detector's settings, the sweep's variants, the report's writers and the
-// study's progress.
+// detector's settings, the sweep's variants, the display classes, the
+// detection limits' scenes, the report's writers and the study's progress.
 
 #include "lfi/core/atomic_file.h"
 #include "lfi/core/light_field.h"
