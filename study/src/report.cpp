@@ -142,7 +142,7 @@ std::string limitsHtml(const nlohmann::ordered_json& limits) {
   for (const auto& [setup, unused] : kinds.begin().value()["setups"].items()) h += "<th>" + setup + "</th>";
   h += "</tr>";
   for (const auto& [kind, curves] : kinds.items()) {
-    h += "<tr><th>" + kind + " (" + curves["unit"].get<std::string>() + ")</th>";
+    h += "<tr><th>" + kind + ", " + curves["unit"].get<std::string>() + "</th>";
     for (const auto& [setup, curve] : curves["setups"].items())
       h += curve["limit"].is_null() ? std::string("<td class=\"missed\">none</td>")
                                     : fmt::format("<td>{:g}</td>", curve["limit"].get<double>());
@@ -356,7 +356,21 @@ std::string verdictTable(const nlohmann::ordered_json& study) {
     }
     out += "\n";
   }
-  return out + blindText(study) + sweepText;
+  std::string limitsText;
+  if (study.contains("detection_limits")) {
+    limitsText = fmt::format("\nsmallest defect detected\n{:<32}", "defect");
+    for (const auto& s : study["setups"]) limitsText += fmt::format(" {:>18}", s.get<std::string>());
+    limitsText += "\n";
+    for (const auto& [kind, curves] : study["detection_limits"]["kinds"].items()) {
+      limitsText += fmt::format("{:<32}", kind + ", " + curves["unit"].get<std::string>());
+      for (const auto& [setup, curve] : curves["setups"].items())
+        limitsText +=
+            fmt::format(" {:>18}", curve["limit"].is_null() ? std::string("none")
+                                                            : fmt::format("{:g}", curve["limit"].get<double>()));
+      limitsText += "\n";
+    }
+  }
+  return out + blindText(study) + limitsText + sweepText;
 }
 
 }  // namespace lfi::study
