@@ -38,10 +38,12 @@ struct QualitySettings {
 QualitySettings settingsFor(Quality q) {
   switch (q) {
     case Quality::Quick: return {4, 8, 16};
-    case Quality::Default: return {2, 32, 64};
-    case Quality::High: return {1, 128, 256};
+    case Quality::Default:
+      return {2, 32, 256};
+    case Quality::High:
+      return {1, 128, 1024};
   }
-  return {2, 32, 64};
+  return {2, 32, 256};
 }
 
 // The bench's camera binned a further `binning` times (fewer, larger pixels).
@@ -156,11 +158,12 @@ nlohmann::ordered_json runStudy(const Bench& bench, const fs::path& outDir, cons
 
   // The sweep runs the inverse schlieren setup only, at the quick camera
   // resolution, so that its many variants fit the time budget; its light
-  // fields are captured at the study's own quality (noise in a captured light
-  // field decides which lens regions its display lights).
+  // fields are captured with a quarter of the study's samples (which angular
+  // pixels a capture finds lit decides which lens regions its display
+  // lights: docs/study.md, "The reference's drive").
   const QualitySettings sweepQuality = [&] {
     QualitySettings s = settingsFor(Quality::Quick);
-    s.captureSamples = q.captureSamples;
+    s.captureSamples = std::max(s.captureSamples, q.captureSamples / 4);
     return s;
   }();
   const double rendersPerSetup = static_cast<double>(specs.size());
