@@ -236,7 +236,7 @@ nlohmann::ordered_json runStudy(const Bench& bench, const fs::path& outDir, cons
     }
   }
 
-  // The setups' results are kept before the sweep's long run (written again with it); "complete" says which.
+  // The setups' results are kept before the longer runs (written again after each); "complete" says which.
   auto writeResults = [&](Overwrite mode, bool complete) {
     study["complete"] = complete;
     writeReport(outDir, mode, study);
