@@ -189,6 +189,8 @@ nlohmann::ordered_json runStudy(const Bench& bench, const fs::path& outDir, cons
                                                 options.threads, progress.step("light field capture", 4));
   writeLightFieldExr(outDir / "lightfield.exr", captured, overwrite);
   const auto lightField = std::make_shared<const LightField>(bench.displayed(captured));
+  std::vector<Illumination> lights;  // per setup (the display's panel encoded once)
+  for (const std::string& setup : kSetups) lights.push_back(setupLight(bench, setup, lightField));
 
   nlohmann::ordered_json study;
   study["format"] = "lfi-study";
@@ -219,9 +221,8 @@ nlohmann::ordered_json runStudy(const Bench& bench, const fs::path& outDir, cons
   const fs::path imagesDir = outDir / "images";
   const GroundTruth truth = traceGroundTruth(bench, specs, camera);
   for (size_t si = 0; si < kSetups.size(); ++si) {
-    const Illumination light = setupLight(bench, kSetups[si], lightField);
     const Evaluation e = namingTheStep(fmt::format("setup '{}' of '{}'", kSetups[si], bench.source), [&] {
-      return evaluate(bench, light, specs, truth, setupCamera(bench, camera, kSetups[si]), bench.sensorModel(), ro,
+      return evaluate(bench, lights[si], specs, truth, setupCamera(bench, camera, kSetups[si]), bench.sensorModel(), ro,
                       options.seed * 1000 + si * 100, progress, 1.0, true, &imagesDir, overwrite, &blind);
     });
     study["noise"][kSetups[si]] = e.noise;
@@ -242,20 +243,19 @@ nlohmann::ordered_json runStudy(const Bench& bench, const fs::path& outDir, cons
     writeReport(outDir, mode, study);
   };
   writeResults(overwrite, sweep.empty() && limits.empty());
+  const sim::TelecentricCamera sweepCamera = binnedCamera(bench, sweepQuality.binning);  // (and the limits')
   if (!limits.empty()) {
     // The detection limits: each kind of defect at a ladder of sizes in every
     // setup, at the sweep's camera with the study's samples, every scene
     // rendered twice (the Monte Carlo noise out of the CNR).
-    const sim::TelecentricCamera limitCamera = binnedCamera(bench, sweepQuality.binning);
-    const GroundTruth limitTruth = traceGroundTruth(bench, limitSpecs, limitCamera);
+    const GroundTruth limitTruth = traceGroundTruth(bench, limitSpecs, sweepCamera);
     sim::RenderOptions lro;
     lro.samplesPerPixel = q.samplesPerPixel;
     lro.threads = options.threads;
     std::vector<std::vector<double>> cnr(limits.size(), std::vector<double>(kSetups.size()));
     for (size_t si = 0; si < kSetups.size(); ++si) {
-      const Illumination light = setupLight(bench, kSetups[si], lightField);
       const Evaluation e = namingTheStep(fmt::format("detection limits, setup '{}'", kSetups[si]), [&] {
-        return evaluate(bench, light, limitSpecs, limitTruth, setupCamera(bench, limitCamera, kSetups[si]),
+        return evaluate(bench, lights[si], limitSpecs, limitTruth, setupCamera(bench, sweepCamera, kSetups[si]),
                         bench.sensorModel(), lro, options.seed * 1000 + 500 + si, progress, limitRender, true, nullptr,
                         overwrite);
       });
@@ -263,9 +263,9 @@ nlohmann::ordered_json runStudy(const Bench& bench, const fs::path& outDir, cons
         cnr[i][si] = e.scenes[limitSpecs[i + 1].name]["defects"].begin().value()["cnr"].get<double>();
     }
     auto& out = study["detection_limits"];
-    out["camera"] = {{"width", limitCamera.width},
-                     {"height", limitCamera.height},
-                     {"object_pixel_mm", limitCamera.objectPixel_mm()},
+    out["camera"] = {{"width", sweepCamera.width},
+                     {"height", sweepCamera.height},
+                     {"object_pixel_mm", sweepCamera.objectPixel_mm()},
                      {"samples_per_pixel", lro.samplesPerPixel},
                      {"renderings", 2}};
     out["camera_noise"] = {{"full_well_e", bench.camera.fullWell_e},
@@ -280,7 +280,6 @@ nlohmann::ordered_json runStudy(const Bench& bench, const fs::path& outDir, cons
     // How good must the display be? Each variant captures its own light field
     // (only as large as the lens's footprint on the display plane needs) and
     // renders the inverse schlieren setup with both lookups.
-    const sim::TelecentricCamera sweepCamera = binnedCamera(bench, sweepQuality.binning);
     // The quick quality's camera is the sweep's: its ground truth is traced already.
     const GroundTruth sweepTruth =
         sweepQuality.binning == q.binning ? truth : traceGroundTruth(bench, specs, sweepCamera);
