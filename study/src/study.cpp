@@ -72,6 +72,14 @@ nlohmann::ordered_json uniformityJson(const Uniformity& u) {
   return {{"lit_share", u.litShare}, {"cv", u.cv}};
 }
 
+// Every defect's CNR in one evaluation, keyed "scene/defect".
+nlohmann::ordered_json cnrByDefect(const Evaluation& e) {
+  nlohmann::ordered_json out = nlohmann::ordered_json::object();
+  for (const auto& [scene, result] : e.scenes.items())
+    for (const auto& [defect, cell] : result["defects"].items()) out[scene + "/" + defect] = cell["cnr"];
+  return out;
+}
+
 nlohmann::ordered_json driveJson(const Bench& bench) {
   if (bench.inverseSchlieren.drive == Bench::InverseSchlieren::Drive::Captured) return {{"kind", "captured"}};
   return {{"kind", "binary"}, {"threshold", bench.inverseSchlieren.binaryThreshold}};
@@ -310,9 +318,7 @@ nlohmann::ordered_json runStudy(const Bench& bench, const fs::path& outDir, cons
                           sweepCamera, bench.sensorModel(), sro, options.seed * 1000 + 777, progress, kSweepRender,
                           false, nullptr, overwrite);
         });
-        for (const auto& [scene, result] : e.scenes.items())
-          for (const auto& [defect, cell] : result["defects"].items())
-            entry["cnr"][name][scene + "/" + defect] = cell["cnr"];
+        entry["cnr"][name] = cnrByDefect(e);
         entry["false_positives"][name] = e.scenes["intact"]["false_positives"];
         entry["intact_lit_fraction"][name] = e.intactLitFraction;
       }
@@ -342,8 +348,7 @@ nlohmann::ordered_json runStudy(const Bench& bench, const fs::path& outDir, cons
                                       {"intact_lit_fraction", e.intactLitFraction},
                                       {"intact_uniformity", uniformityJson(e.intactUniformity)},
                                       {"false_positives", e.scenes["intact"]["false_positives"]}};
-      for (const auto& [scene, result] : e.scenes.items())
-        for (const auto& [defect, cell] : result["defects"].items()) entry["cnr"][scene + "/" + defect] = cell["cnr"];
+      entry["cnr"] = cnrByDefect(e);
       classes["classes"].push_back(entry);
     }
     writeResults(Overwrite::Allow, true);  // (this run's own, written above)
