@@ -38,17 +38,18 @@ Prediction predict(const cv::Vec<double, kParameters>& p, const Vec2& d, double 
 
 struct Model {
   cv::Vec<double, kParameters> p = cv::Vec<double, kParameters>::all(0);
-  cv::Matx<double, kParameters, kParameters> plain, clustered;  // the covariances (camera_scale.h)
+  cv::Matx<double, kParameters, kParameters> plain, clustered, shared;  // the covariances (camera_scale.h)
   double rss = 0;
-  // A quantity's standard uncertainty from its gradient in the parameters: the larger of the two.
+  // A quantity's standard uncertainty from its gradient in the parameters: the largest of the three.
   double sigma(const cv::Vec<double, kParameters>& g) const {
-    return std::sqrt(std::max({0.0, (g.t() * plain * g)(0), (g.t() * clustered * g)(0)}));
+    return std::sqrt(std::max({0.0, (g.t() * plain * g)(0), (g.t() * clustered * g)(0), (g.t() * shared * g)(0)}));
   }
 };
 
 // Gauss-Newton from A = 0, t = 0, κ = 0 (the first step is the affine least squares); κ stays 0 without
 // `distortion`.
-Model solveModel(const std::vector<CameraPoint>& points, const Vec2& centre, double r2, bool distortion) {
+Model solveModel(const std::vector<CameraPoint>& points, const Vec2& centre, double r2, bool distortion,
+                 double sharedSigma_px) {
   Model m;
   cv::Matx<double, kParameters, kParameters> inverse;
   for (int iteration = 0; iteration < 8; ++iteration) {
@@ -74,6 +75,9 @@ Model solveModel(const std::vector<CameraPoint>& points, const Vec2& centre, dou
   }
   using Vec = cv::Vec<double, kParameters>;
   std::map<std::pair<int, int>, Vec> scores;  // Σ Jᵀ r of the x residuals per lens column, the y per row
+  // Σ Jᵀ ∂r/∂u per column and Σ Jᵀ ∂r/∂v per row: what an error shared by a column's u (a row's v) moves.
+  std::map<std::pair<int, int>, Vec> sensitivities;
+  const cv::Vec2d du(m.p[0], m.p[2]), dv(m.p[1], m.p[3]);  // ∂(display point)/∂(u, v), the affine part
   for (const CameraPoint& point : points) {
     const Prediction f = predict(m.p, point.camera_px - centre, r2);
     const Vec2 r = point.display_mm - f.point;
@@ -85,6 +89,8 @@ Model solveModel(const std::vector<CameraPoint>& points, const Vec2& centre, dou
     }
     scores.try_emplace({0, point.lens[0]}, Vec::all(0)).first->second += jx * r.x;
     scores.try_emplace({1, point.lens[1]}, Vec::all(0)).first->second += jy * r.y;
+    sensitivities.try_emplace({0, point.lens[0]}, Vec::all(0)).first->second += f.jacobian.t() * du;
+    sensitivities.try_emplace({1, point.lens[1]}, Vec::all(0)).first->second += f.jacobian.t() * dv;
   }
   const int parameters = distortion ? kParameters : kParameters - 1;
   const double dof = 2 * static_cast<double>(points.size()) - parameters;
@@ -93,6 +99,9 @@ Model solveModel(const std::vector<CameraPoint>& points, const Vec2& centre, dou
   for (const auto& [group, score] : scores) meat += score * score.t();
   const double groups = static_cast<double>(scores.size());
   m.clustered = groups / std::max(1.0, groups - parameters) * inverse * meat * inverse;
+  cv::Matx<double, kParameters, kParameters> spread = cv::Matx<double, kParameters, kParameters>::zeros();
+  for (const auto& [group, sensitivity] : sensitivities) spread += sensitivity * sensitivity.t();
+  m.shared = sharedSigma_px * sharedSigma_px * inverse * spread * inverse;
   return m;
 }
 
@@ -109,8 +118,10 @@ Vec2 CameraMap::cameraPoint(const Vec2& q, cv::Size image) const {
   return imageCentre(image) + Vec2(d[0], d[1]);
 }
 
-CameraScaleFit fitCameraScale(const std::vector<CameraPoint>& points, cv::Size image,
-                              const DisplayFrameSigma& display) {
+CameraScaleFit fitCameraScale(const std::vector<CameraPoint>& points, cv::Size image, const DisplayFrameSigma& display,
+                              double sharedSigma_px) {
+  if (!(sharedSigma_px >= 0 && sharedSigma_px < 1e3))
+    fail(Errc::InvalidArgument, "camera scale fit: a shared point uncertainty of {} px", sharedSigma_px);
   if (image.width <= 0 || image.height <= 0)
     fail(Errc::InvalidArgument, "camera scale fit: an empty image size {} x {}", image.width, image.height);
   if (points.size() < 6)
@@ -134,7 +145,8 @@ CameraScaleFit fitCameraScale(const std::vector<CameraPoint>& points, cv::Size i
   if (!(half - spread > 1e-6 * (half + spread)))
     fail(Errc::Device, "camera scale fit: the {} spots found lie on one line of the image", points.size());
 
-  const Model affine = solveModel(points, centre, r2, false), full = solveModel(points, centre, r2, true);
+  const Model affine = solveModel(points, centre, r2, false, sharedSigma_px),
+              full = solveModel(points, centre, r2, true, sharedSigma_px);
   const cv::Vec<double, kParameters>& p = affine.p;
   CameraScaleFit fit;
   fit.points = static_cast<int>(points.size());

@@ -21,9 +21,11 @@
 //
 // Uncertainty: the spots of one lattice column sit at about the same phase on
 // the camera's pixel grid and share the centroid's sampling error, and so on
-// along a row; the covariance is the larger of the least-squares one
-// (σ² (JᵀJ)⁻¹) and the one clustered by lattice column (x residuals) and row
-// (y residuals), as in lattice_fit.h. centreSigma_mm leaves out an error all
+// along a row; the covariance is the largest of the least-squares one
+// (σ² (JᵀJ)⁻¹), the one clustered by lattice column (x residuals) and row
+// (y residuals), as in lattice_fit.h, and the one of a stated error shared by
+// the points of a column (in u) and of a row (in v): a point detector's bias,
+// which depends on that phase, where the residuals are too few to show it. centreSigma_mm leaves out an error all
 // the spots' centroids share (their sampling phase on the pixel grid moves
 // them alike): a hundredth of a pixel on the simulated bench.
 //
@@ -78,15 +80,17 @@ struct CameraScaleFit {
 // frame they were measured in: `display.scale` the relative standard
 // uncertainty of their scale (a lens array pitch's σ / pitch), which goes into
 // objectPixelSigma_mm, and `display.shift_mm` that of their origin (the lens
-// array's offset), which goes into centreSigma_mm.
-// Errc::InvalidArgument for an empty image size; Errc::Device for fewer than
+// array's offset), which goes into centreSigma_mm. `sharedSigma_px` is the
+// standard uncertainty of the error shared by a column's (row's) points above.
+// Errc::InvalidArgument for an empty image size or a negative
+// `sharedSigma_px`; Errc::Device for fewer than
 // 6 points or points that do not span the image in two directions.
 struct DisplayFrameSigma {
   double scale = 0;
   Vec2 shift_mm{0, 0};
 };
 CameraScaleFit fitCameraScale(const std::vector<CameraPoint>& points, cv::Size image,
-                              const DisplayFrameSigma& display = {});
+                              const DisplayFrameSigma& display = {}, double sharedSigma_px = 0);
 
 // The centroid of `image` (CV_32FC1, the background already subtracted) in
 // the square window of half-side `radius_px` about `guess`, moved to the
