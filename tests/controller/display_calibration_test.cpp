@@ -7,16 +7,12 @@
 // every refusal against a bench that gives it.
 
 #include "lfi/controller/display_calibration.h"
-#include "lfi/controller/bench_devices.h"
-#include "lfi/controller/controller.h"
 #include "lfi/core/error.h"
-#include "lfi/drivers/camera_registry.h"
-#include "lfi/drivers/display_registry.h"
 #include "lfi/drivers/optics/lens_lattice.h"
 #include "lfi/sim/devices/sim_camera.h"
 
+#include "calibration_bench.h"
 #include "lfi_test_support.h"
-#include "scene_text.h"
 #include "test_folder.h"
 
 #include <gtest/gtest.h>
@@ -29,14 +25,15 @@ namespace {
 
 using namespace lfi;
 using lfi::testing_support::cameraSceneText;
+using lfi::testing_support::inspectionBenchCamera;
+using lfi::testing_support::kBenchSensorPixel_mm;
 using lfi::testing_support::lensObject;
 using lfi::testing_support::TestFolder;
+using lfi::testing_support::throughSimBench;
 using lfi::testing_support::throwsError;
 
-// The bench of data/scenes/inspection_bench.toml without its lens: a 56 x 56 Mono12 camera (0.1215 mm pixels at
-// magnification 0.2435) over an 800 x 800 panel of 0.0315 mm pixels behind a 1 mm lens array, 30 mm below the
-// camera's focus.
-constexpr double kFocal_mm = 20.03, kImageDistance_mm = 24.9075, kSensorPixel_mm = 0.1215;
+// The bench of data/scenes/inspection_bench.toml without its lens: its camera (calibration_bench.h) over an
+// 800 x 800 panel of 0.0315 mm pixels behind a 1 mm lens array, 30 mm below the camera's focus.
 constexpr int kPanel_px = 800;
 constexpr double kPanelPixel_mm = 0.0315;
 
@@ -46,34 +43,18 @@ struct Truth {
   double pitch_mm = 1.0;
   double rotation_rad = 0;
   Vec2 offset_mm{0, 0};
-  double sensorPixel_mm = kSensorPixel_mm;
+  double sensorPixel_mm = kBenchSensorPixel_mm;
   Vec2 cameraAxis_mm{0, 0};
   int seed = 1;
   bool part = false;
 
-  // One camera pixel on the part: the sensor pixel over the magnification b / w (docs/camera.md).
-  double objectPixel_mm() const {
-    const double w = 1 / (1 / kFocal_mm - 1 / kImageDistance_mm);
-    return sensorPixel_mm * w / kImageDistance_mm;
-  }
+  double objectPixel_mm() const { return testing_support::objectPixel_mm(sensorPixel_mm); }
 };
 
 std::string sceneText(const Truth& t) {
   std::string text =
-      cameraSceneText({.samplesPerPixel = t.optics == "pinhole_array" ? 256 : 8,
-                       .seed = t.seed,
-                       .focalLength_mm = kFocal_mm,
-                       .imageDistance_mm = kImageDistance_mm,
-                       .stopDiameter_mm = 0.609,
-                       .pixelPitch_mm = t.sensorPixel_mm,
-                       .width_px = 56,
-                       .height_px = 56,
-                       .positionX_mm = t.cameraAxis_mm.x,
-                       .positionY_mm = t.cameraAxis_mm.y,
-                       .positionZ_mm = 102.5,
-                       .fullWell_e = 10500,
-                       .readNoise_e = 2.4,
-                       .bitDepth = 12}) +
+      cameraSceneText(inspectionBenchCamera(t.optics == "pinhole_array" ? 256 : 8, t.seed, t.sensorPixel_mm,
+                                            t.cameraAxis_mm.x, t.cameraAxis_mm.y)) +
       fmt::format("[display]\nposition_mm = [0, 0, -30]\noptics = \"{}\"\npanel_width_px = {}\npanel_height_px = {}\n",
                   t.optics, kPanel_px, kPanel_px);
   if (t.optics != "lenticular")
@@ -94,16 +75,7 @@ class DisplayCalibrationTest : public testing::Test {
 
   DisplayCalibration calibrate(const Truth& truth, const DisplayCalibrationSettings& settings = {}) {
     const std::string uri = "sim:" + dir_.write("scene.toml", sceneText(truth)).string();
-    auto display = openDisplay(uri);
-    auto camera = openCamera(uri);
-    CameraSettings cameraSettings;
-    cameraSettings.exposure_us = 10000;
-    cameraSettings.pixelFormat = PixelFormat::Mono12;
-    cameraSettings.trigger = TriggerMode::Software;
-    camera->configure(cameraSettings);
-    NoCapture nothing;
-    Controller controller(nothing, *display, *camera);
-    return calibrateDisplay(controller.probe(), settings);
+    return throughSimBench(uri, [&](BenchProbe& probe) { return calibrateDisplay(probe, settings); });
   }
 
   TestFolder dir_{"display_calibration"};
@@ -138,7 +110,7 @@ TEST_F(DisplayCalibrationTest, RecoversTheArrayAndTheCameraScaleOverTheirRanges)
     truth.pitch_mm = 1.0 * (1 + 0.01 * unit(random));
     truth.rotation_rad = unit(random) * M_PI / 180;
     truth.offset_mm = {0.5 * truth.pitch_mm * unit(random), 0.5 * truth.pitch_mm * unit(random)};
-    truth.sensorPixel_mm = kSensorPixel_mm * (1 + 0.02 * unit(random));
+    truth.sensorPixel_mm = kBenchSensorPixel_mm * (1 + 0.02 * unit(random));
     truth.cameraAxis_mm = {unit(random), unit(random)};
     SCOPED_TRACE(
         fmt::format("trial {}: {} {} pitch {} mm, rotation {} rad, offset ({}, {}) mm, object pixel {} mm, "

@@ -7,17 +7,13 @@
 // draw; the refusals.
 
 #include "lfi/controller/part_calibration.h"
-#include "lfi/controller/bench_devices.h"
-#include "lfi/controller/controller.h"
 #include "lfi/controller/display_calibration.h"
 #include "lfi/core/error.h"
-#include "lfi/drivers/camera_registry.h"
-#include "lfi/drivers/display_registry.h"
 #include "lfi/sim/devices/sim_camera.h"
 #include "lfi/sim/scene_part_model.h"
 
+#include "calibration_bench.h"
 #include "lfi_test_support.h"
-#include "scene_text.h"
 #include "test_folder.h"
 
 #include <gtest/gtest.h>
@@ -31,8 +27,10 @@ namespace {
 
 using namespace lfi;
 using lfi::testing_support::cameraSceneText;
+using lfi::testing_support::inspectionBenchCamera;
 using lfi::testing_support::lensObject;
 using lfi::testing_support::TestFolder;
+using lfi::testing_support::throughSimBench;
 using lfi::testing_support::throwsError;
 
 constexpr double kStatedDistance_mm = 30, kStatedGap_mm = 1.37;
@@ -50,18 +48,7 @@ struct Truth {
 // data/scenes/inspection_bench.toml's bench: the lens (its reference point, the centre, at the origin when in
 // place) over the 800 x 800 lenslet display, 56 x 56 camera of 0.5 mm object pixels.
 std::string sceneText(const Truth& t) {
-  std::string text = cameraSceneText({.samplesPerPixel = 8,
-                                      .seed = t.seed,
-                                      .focalLength_mm = 20.03,
-                                      .imageDistance_mm = 24.9075,
-                                      .stopDiameter_mm = 0.609,
-                                      .pixelPitch_mm = 0.1215,
-                                      .width_px = 56,
-                                      .height_px = 56,
-                                      .positionZ_mm = 102.5,
-                                      .fullWell_e = 10500,
-                                      .readNoise_e = 2.4,
-                                      .bitDepth = 12}) +
+  std::string text = cameraSceneText(inspectionBenchCamera(8, t.seed)) +
                      fmt::format(
                          "[display]\nposition_mm = [0, 0, {:.17g}]\noptics = \"lenslet_array\"\npanel_width_px = 800\n"
                          "panel_height_px = 800\ngap_mm = {:.17g}\n",
@@ -83,15 +70,9 @@ class PartCalibrationTest : public testing::Test {
 
   template <typename Measure>
   auto measure(const Truth& truth, Measure&& f) {
-    const std::string uri = "sim:" + dir_.write("scene.toml", sceneText(truth)).string();
-    auto display = openDisplay(uri);
-    auto camera = openCamera(uri);
-    CameraSettings settings;
+    CameraSettings settings;  // 8 bits, free-running
     settings.exposure_us = 10000;
-    camera->configure(settings);
-    NoCapture none;
-    Controller controller(none, *display, *camera);
-    return f(controller.probe());
+    return throughSimBench("sim:" + dir_.write("scene.toml", sceneText(truth)).string(), f, settings);
   }
 
   // The camera's map on the display, measured with the lens taken away (as `lfi calibrate display` does).
