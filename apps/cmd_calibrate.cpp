@@ -1,14 +1,16 @@
-// lfi calibrate display|part BENCH: the display's lens array and the camera's
-// scale (nothing in view), or Δ, the part's place and the display's gap
-// (through the intact part, against its model), measured with the bench's own
-// devices (docs/calibration.md) and written into the bench file with a backup
-// and a record, or printed with --dry-run.
+// lfi calibrate display|part|camera BENCH: the display's lens array and the
+// camera's scale (nothing in view), Δ, the part's place and the display's gap
+// (through the intact part, against its model), or the camera's scale on a
+// chessboard target, measured with the bench's own devices
+// (docs/calibration.md) and written into the bench file with a backup and a
+// record, or printed with --dry-run.
 
 #include "bench_cli.h"
 #include "cli_util.h"
 #include "commands.h"
 
 #include "lfi/controller/bench_devices.h"
+#include "lfi/controller/camera_calibration.h"
 #include "lfi/controller/display_calibration.h"
 #include "lfi/controller/inspection_record.h"
 #include "lfi/controller/part_calibration.h"
@@ -18,7 +20,9 @@
 
 #include <fmt/format.h>
 
+#include <cmath>
 #include <memory>
+#include <optional>
 
 namespace fs = std::filesystem;
 
@@ -33,8 +37,11 @@ struct CalibrateArgs {
   fs::path model;  // the part's model (part)
   bool dryRun = false;
   int frames = 0;  // 0: the bench's [inspection] frames
+  std::string corners;   // camera: the chessboard's inner corners, COLSxROWS
+  double square_mm = 0;  // camera: its squares' side
   lfi::DisplayCalibrationSettings settings;
   lfi::PartCalibrationSettings partSettings;
+  lfi::CameraCalibrationSettings cameraSettings;
 };
 
 void printDisplayCalibration(const lfi::DisplayCalibration& c) {
@@ -78,6 +85,26 @@ void printPartCalibration(const lfi::PartCalibration& c) {
              c.frames, c.seconds, 1000 * c.computeSeconds);
 }
 
+void printCameraCalibration(const lfi::CameraCalibration& c, const lfi::BenchFile& bench) {
+  const double k = c.coverageFactor;
+  const calib::CameraScaleFit& m = c.camera;
+  fmt::print("camera on a chessboard of {}: {} corners, residual {:.2g} mm\n", c.target.describe(), m.points,
+             m.residualRms_mm);
+  fmt::print("  object pixel  {:.6f} mm  U {:.2g} mm  (stated {:.6f})\n", m.objectPixel_mm, k * m.objectPixelSigma_mm,
+             bench.objectPixel_mm);
+  fmt::print("  along a row {:.6f} mm, down a column {:.6f} mm\n", m.pixelX_mm, m.pixelY_mm);
+  if (bench.cameraOnDisplay) {
+    const double onDisplay = std::sqrt(std::abs(cv::determinant(bench.cameraOnDisplay->perPixel_mm)));
+    fmt::print("  the display calibration's scale in the bench: {:.6f} mm ({:+.3f} % against the target's)\n",
+               onDisplay, 100 * (onDisplay / m.objectPixel_mm - 1));
+  }
+  fmt::print("  distortion at the corner {:+.3f} px  U {:.2g} px (reported, not applied)\n", m.distortion_px,
+             k * m.distortionSigma_px);
+  fmt::print(
+      "U: expanded uncertainty, k = {:g}; {} frame in {:.2f} s ({:.0f} ms of it finding the corners and fitting)\n", k,
+      c.frames, c.seconds, 1000 * c.computeSeconds);
+}
+
 int runCalibrate(const CalibrateArgs& a, const GlobalOptions& global) {
   const lfi::BenchFile bench = lfi::readBenchFile(a.bench);
   lfi::BenchFileEdit edit(a.bench);  // the text as it is now: a file edited meanwhile is not replaced
@@ -90,6 +117,13 @@ int runCalibrate(const CalibrateArgs& a, const GlobalOptions& global) {
                 a.bench.string());
     if (a.model.empty()) lfi::fail(lfi::Errc::Config, "calibrate part: --model names the part's model (a scene file)");
     model = std::make_unique<lfi::sim::ScenePartModel>(a.model);
+  }
+  std::optional<calib::ChessboardTarget> target;
+  if (a.what == "camera") {
+    if (a.corners.empty() || !(a.square_mm > 0))
+      lfi::fail(lfi::Errc::Config,
+                "calibrate camera: --corners COLSxROWS and --square-mm name the chessboard target (inner corners)");
+    target = calib::ChessboardTarget::parse(a.corners, a.square_mm);
   }
   const lfi::BenchFile devices = a.part.empty() ? bench : withSimulatedPart(bench, a.part);
   auto display = lfi::openBenchDisplay(devices);
@@ -109,6 +143,13 @@ int runCalibrate(const CalibrateArgs& a, const GlobalOptions& global) {
     printDisplayCalibration(c);
     lfi::setDisplayCalibration(edit, c, stamp);
     record = lfi::displayCalibrationRecord(c, bench, stamp, lfi::describeCamera(*camera, bench.cameraUri));
+  } else if (a.what == "camera") {
+    const lfi::CameraCalibration c =
+        lfi::calibrateCamera(controller.probe(), *target, bench.cameraUri, a.cameraSettings, progress);
+    bar.finish();
+    printCameraCalibration(c, bench);
+    lfi::setCameraCalibration(edit, c, stamp);
+    record = lfi::cameraCalibrationRecord(c, bench, stamp, lfi::describeCamera(*camera, bench.cameraUri));
   } else {
     const lfi::PartCalibration c = lfi::calibratePart(controller.probe(), *model, *bench.cameraOnDisplay,
                                                       bench.distance_mm, bench.partCentre_px, a.partSettings, progress);
@@ -137,24 +178,35 @@ Command addCalibrateCommand(CLI::App& app) {
       "calibrate",
       "Calibrate a bench with its own devices and write the result into its bench file (display: the "
       "display's lens array and the camera's scale, nothing in view; part: Δ, the part's place and the "
-      "display's gap, through the intact part)");
+      "display's gap, through the intact part; camera: the camera's scale on a chessboard target in the "
+      "part's place)");
   auto a = std::make_shared<CalibrateArgs>();
-  command->add_option("what", a->what, "What to calibrate: display, then part")
+  command->add_option("what", a->what, "What to calibrate: display, then part; camera where a target is used")
       ->required()
-      ->check(CLI::IsMember({"display", "part"}));
+      ->check(CLI::IsMember({"display", "part", "camera"}));
   addBenchArgument(*command, a->bench);
   command->add_flag("--dry-run", a->dryRun, "Measure and print what would change, write nothing");
   command
       ->add_option("--part", a->part,
                    "A simulated bench: the scene under its camera during the calibration (display: one without the "
-                   "part, data/scenes/inspection_bench_empty.toml); a physical bench: take the part away (display) "
-                   "or put the intact part in place (part)")
+                   "part, data/scenes/inspection_bench_empty.toml; camera: one with the target, "
+                   "data/scenes/inspection_bench_target.toml); a physical bench: take the part away (display), put "
+                   "the intact part in place (part) or the target (camera)")
       ->check(CLI::ExistingFile);
   command
       ->add_option("--model", a->model,
                    "part: the part's model, a scene file whose objects other than the display and emitters are "
                    "the part, its origin the part's reference point (data/scenes/inspection_bench.toml)")
       ->check(CLI::ExistingFile);
+  command->add_option("--corners", a->corners, "camera: the chessboard's inner corners, COLSxROWS (5x5)");
+  command->add_option("--square-mm", a->square_mm, "camera: the chessboard's squares' side, mm")
+      ->check(CLI::Range(0.001, 1000.0));
+  command
+      ->add_option("--target-tolerance", a->cameraSettings.targetTolerance,
+                   "camera: the board's relative scale uncertainty (standard; a printed board's, a glass one's "
+                   "pitch error)")
+      ->check(CLI::Range(0.0, 0.1))
+      ->capture_default_str();
   command->add_option("--frames", a->frames, "Frames averaged per image (default: the bench's [inspection] frames)")
       ->check(CLI::Range(1, 10000));
   command

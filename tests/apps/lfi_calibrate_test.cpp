@@ -1,4 +1,4 @@
-// `lfi calibrate display|part BENCH` as a user runs them, on the simulated
+// `lfi calibrate display|part|camera BENCH` as a user runs them, on the simulated
 // inspection bench whose display's lens array is not where the bench file
 // says (the bench states the nominal 1 mm square array at no rotation and no
 // offset; the scene's has another pitch, rotation and offset): the bench file
@@ -6,7 +6,8 @@
 // and a backup and a record lie beside it; a dry run writes nothing; a part in
 // view is refused and nothing is written; the calibrated bench captures its
 // reference and passes the intact part. Then the display is knocked further
-// from the part: the part calibration finds where it went.
+// from the part: the part calibration finds where it went. The camera's scale
+// on the shipped chessboard target.
 
 #include "lfi_process.h"
 #include "text_edit.h"
@@ -208,6 +209,40 @@ TEST_F(LfiCalibrate, PartFindsWhereTheDisplayWentAndTheNewReferencePassesTheInta
   // Within a camera pixel (0.5 mm) of (10, 0) on the part.
   EXPECT_NEAR(found["defects"][0]["centroid_mm"][0].get<double>(), 10, 0.5);
   EXPECT_NEAR(found["defects"][0]["centroid_mm"][1].get<double>(), 0, 0.5);
+}
+
+// The shipped chessboard target (data/scenes/inspection_bench_target.toml) under the bench's camera.
+TEST_F(LfiCalibrate, CameraOnAChessboardWritesTheScaleWithABackupAndARecord) {
+  const fs::path target = fs::path(LFI_SOURCE_DIR) / "data/scenes/inspection_bench_target.toml";
+  const std::string board = " --corners 5x5 --square-mm 3";
+  const Result noBoard =
+      lfi("-q calibrate camera " + quoted(bench_) + board + " --part " + quoted(dir_ / "empty.toml"));
+  EXPECT_EQ(noBoard.status, 1) << noBoard.output;
+  EXPECT_NE(noBoard.output.find("no chessboard of 5 x 5 inner corners, 3 mm squares"), std::string::npos)
+      << noBoard.output;
+  const Result unnamed = lfi("-q calibrate camera " + quoted(bench_) + " --part " + quoted(target));
+  EXPECT_EQ(unnamed.status, 1) << unnamed.output;
+  EXPECT_NE(unnamed.output.find("--corners COLSxROWS and --square-mm"), std::string::npos) << unnamed.output;
+  EXPECT_EQ(readText(bench_), original_);
+  EXPECT_FALSE(fs::exists(dir_ / "bench.calibrations"));
+
+  const Result run = lfi("-q calibrate camera " + quoted(bench_) + board + " --part " + quoted(target));
+  ASSERT_EQ(run.status, 0) << run.output;
+  fs::path record, backup;
+  for (const auto& entry : fs::directory_iterator(dir_ / "bench.calibrations"))
+    (entry.path().extension() == ".json" ? record : backup) = entry.path();
+  ASSERT_FALSE(record.empty());
+  EXPECT_EQ(readText(backup), original_);
+  const auto r = nlohmann::json::parse(readText(record));
+  EXPECT_EQ(r["what"], "camera");
+  EXPECT_EQ(r["frames"], 1);
+  EXPECT_EQ(r["camera_scale"]["corners"], 25);
+  // A point at the field's edge (28 px) within a tenth of a camera pixel, as the display calibration's scale.
+  const double scale = r["camera_scale"]["object_pixel"]["value"].get<double>();
+  EXPECT_NEAR(scale, kObjectPixel_mm, kObjectPixel_mm * 0.1 / 28);
+  const std::string text = readText(bench_);
+  EXPECT_NE(text.find(fmt::format("object_pixel_mm = {:.9g}  # lfi calibrate camera", scale)), std::string::npos)
+      << text;
 }
 
 TEST_F(LfiCalibrate, PartWithoutTheCamerasMapOrAModelIsRefusedBeforeAnyFrame) {
