@@ -296,19 +296,13 @@ std::vector<std::uint8_t> UsbDisplay::controlIn(proto::Request request, std::uin
 // The device's last error; with `rejected`, the frame it should be about (a
 // device that gives none, or one about another frame, is said to).
 std::string UsbDisplay::lastErrorText(std::optional<std::uint32_t> rejected) {
-  const std::vector<std::uint8_t> reply =
-      controlIn(proto::Request::GetLastError, 0, 8 + proto::kMaxErrorText);
-  if (reply.size() < 8)
-    fail(Errc::Device, "{}: GET_LAST_ERROR returned {} bytes, expected at least 8", name_, reply.size());
-  const auto code = static_cast<proto::DeviceError>(proto::getU32(reply.data()));
-  const std::uint32_t frame = proto::getU32(reply.data() + 4);
-  std::string text;
-  for (std::size_t i = 8; i < reply.size(); ++i)
-    text.push_back(reply[i] >= 0x20 && reply[i] <= 0x7e ? static_cast<char>(reply[i]) : '?');
-  if (rejected && code == proto::DeviceError::None) return "the device gives no reason for it";
-  const std::string reason = fmt::format("{} (code {}, frame {}){}{}", proto::toString(code),
-                                         static_cast<unsigned>(code), frame, text.empty() ? "" : ": ", text);
-  if (rejected && (frame & 0xffff) != (*rejected & 0xffff))
+  const proto::LastError last =
+      proto::decodeLastError(controlIn(proto::Request::GetLastError, 0, 8 + proto::kMaxErrorText), name_);
+  if (rejected && last.code == proto::DeviceError::None) return "the device gives no reason for it";
+  const std::string reason =
+      fmt::format("{} (code {}, frame {}){}{}", proto::toString(last.code), static_cast<unsigned>(last.code),
+                  last.sequence, last.message.empty() ? "" : ": ", last.message);
+  if (rejected && (last.sequence & 0xffff) != (*rejected & 0xffff))
     return fmt::format("its last error concerns another frame: {}", reason);
   return reason;
 }

@@ -400,4 +400,15 @@ std::vector<std::uint8_t> encodeLastError(DeviceError code, std::uint32_t sequen
   return out;
 }
 
+LastError decodeLastError(std::span<const std::uint8_t> bytes, const std::string& device) {
+  if (bytes.size() < 8)
+    fail(Errc::Device, "{}: GET_LAST_ERROR returned {} bytes, expected at least 8", device, bytes.size());
+  LastError out;
+  out.code = static_cast<DeviceError>(getU32(bytes.data()));
+  out.sequence = getU32(bytes.data() + 4);
+  for (std::size_t i = 8; i < bytes.size() && i < 8 + kMaxErrorText; ++i)
+    out.message.push_back(bytes[i] >= 0x20 && bytes[i] <= 0x7e ? static_cast<char>(bytes[i]) : '?');
+  return out;
+}
+
 }  // namespace lfi::usbdisplay

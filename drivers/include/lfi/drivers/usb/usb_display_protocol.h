@@ -173,6 +173,16 @@ CalibrationBlock toCalibrationBlock(double pixelPitch_mm, const DisplayOpticsPar
 
 // GetLastError reply: u32 code, u32 sequence, then the message (no NUL), at most kMaxErrorText bytes.
 std::vector<std::uint8_t> encodeLastError(DeviceError code, std::uint32_t sequence, const std::string& message);
+// The reply as the host reads it: a code the protocol does not name stays as
+// it is (toString says so), the message's bytes outside printable ASCII are
+// '?' and the message ends at kMaxErrorText bytes. Throws Errc::Device naming
+// the device for a reply shorter than 8 bytes.
+struct LastError {
+  DeviceError code = DeviceError::None;
+  std::uint32_t sequence = 0;
+  std::string message;
+};
+LastError decodeLastError(std::span<const std::uint8_t> bytes, const std::string& device);
 
 // Little-endian helpers.
 void putU16(std::vector<std::uint8_t>& out, std::uint16_t v);
