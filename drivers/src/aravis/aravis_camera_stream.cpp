@@ -3,12 +3,11 @@
 // and telling a device that is gone from one that is slow.
 
 #include "aravis_camera_impl.h"
+#include "image_payload.h"
 
 #include "lfi/drivers/driver_trace.h"
-#include "lfi/drivers/pixel_unpack.h"
 
 #include <arpa/inet.h>
-#include <fmt/ranges.h>
 #include <netinet/in.h>
 #include <poll.h>
 #include <spdlog/spdlog.h>
@@ -237,54 +236,21 @@ bool AravisCamera::deviceAnswers() {
   return ok;
 }
 
-// Copies (or unpacks) the buffer's image into `out`, reusing its memory when
-// the size and type fit and nobody else holds it. Returns why the payload is
-// not the image the camera was configured for, or nothing.
+// The buffer's image into `out` (imageFromPayload), or why the payload is not
+// the image the camera was configured for.
 std::optional<std::string> AravisCamera::copyImage(ArvBuffer* buffer, cv::Mat& out) const {
   if (arv_buffer_get_payload_type(buffer) != ARV_BUFFER_PAYLOAD_TYPE_IMAGE) return "its payload is not an image";
   // A frame whose leader was lost has no image part (Aravis then asserts in the getters below).
   if (arv_buffer_get_n_parts(buffer) < 1 ||
       arv_buffer_get_part_data_type(buffer, 0) != ARV_BUFFER_PART_DATA_TYPE_2D_IMAGE)
     return "its payload has no 2D image part";
-  size_t size = 0;
-  const auto* data = static_cast<const std::uint8_t*>(arv_buffer_get_image_data(buffer, &size));
-  const int width = arv_buffer_get_image_width(buffer);
-  const int height = arv_buffer_get_image_height(buffer);
-  if (data == nullptr || width <= 0 || height <= 0)
-    return fmt::format("its image is empty ({} x {} px, {} bytes)", width, height, size);
-  const ArvPixelFormat format = arv_buffer_get_image_pixel_format(buffer);
-  const auto wire = wireFormats(settings_.pixelFormat);
-  if (std::none_of(wire.begin(), wire.end(), [&](const WireFormat& w) { return w.code == format; }))
-    return fmt::format("its pixel format is 0x{:08x}, not one of {} (configured {})", static_cast<unsigned>(format),
-                       fmt::join(wireFormatNames(settings_.pixelFormat), ", "), toString(settings_.pixelFormat));
-  if (width != frameWidth_ || height != frameHeight_)  // (the buffers were sized for the region)
-    return fmt::format("its image is {} x {} px, not the {} x {} px region the stream started with", width, height,
-                       frameWidth_, frameHeight_);
-  int xPadding = 0;  // bytes after each line
-  arv_buffer_get_image_padding(buffer, &xPadding, nullptr);
-  if (!out.empty() && (out.u == nullptr || out.u->refcount > 1 || !out.isContinuous() || out.isSubmatrix()))
-    out.release();  // a caller still holds the previous image: do not overwrite it
-  const auto rows = static_cast<std::size_t>(height);
-  if (format == ARV_PIXEL_FORMAT_MONO_12_PACKED || format == kPixelFormatMono12p) {
-    if (xPadding != 0) return fmt::format("its packed lines carry {} bytes of padding", xPadding);
-    if (size < mono12PackedSize(width, height))
-      return fmt::format("its {} x {} px packed image needs {} bytes, the payload has {}", width, height,
-                         mono12PackedSize(width, height), size);
-    unpackMono12(data, size, width, height,
-                 format == kPixelFormatMono12p ? Mono12Packing::Pfnc : Mono12Packing::GigEVisionPacked, out);
-    return std::nullopt;
-  }
-  const int type = format == ARV_PIXEL_FORMAT_MONO_8 ? CV_8UC1 : CV_16UC1;
-  const std::size_t rowBytes = static_cast<std::size_t>(width) * (type == CV_8UC1 ? 1 : 2);
-  const std::size_t stride = rowBytes + static_cast<std::size_t>(xPadding);
-  if (type == CV_16UC1 && stride % 2 != 0)  // (OpenCV takes no 16-bit rows at an odd byte step)
-    return fmt::format("its 16-bit lines are padded by an odd {} bytes", xPadding);
-  if (size < stride * (rows - 1) + rowBytes)
-    return fmt::format("its {} x {} px image ({} bytes per line) needs {} bytes, the payload has {}", width, height,
-                       stride, stride * (rows - 1) + rowBytes, size);
-  // GigE/USB3 Vision: little endian; padded lines are copied one by one.
-  cv::Mat(height, width, type, const_cast<std::uint8_t*>(data), stride).copyTo(out);
-  return std::nullopt;
+  ImagePayload payload;
+  payload.data = static_cast<const std::uint8_t*>(arv_buffer_get_image_data(buffer, &payload.size));
+  payload.width = arv_buffer_get_image_width(buffer);
+  payload.height = arv_buffer_get_image_height(buffer);
+  payload.pixelFormat = arv_buffer_get_image_pixel_format(buffer);
+  arv_buffer_get_image_padding(buffer, &payload.xPadding, nullptr);
+  return imageFromPayload(payload, settings_.pixelFormat, frameWidth_, frameHeight_, out);
 }
 
 StreamStatistics AravisCamera::readStatistics() const {
