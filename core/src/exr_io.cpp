@@ -22,6 +22,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <fstream>
+#include <map>
 #include <string_view>
 #include <thread>
 
@@ -187,12 +188,39 @@ void requireConvention(const fs::path& path, const Imf::Header& header, const ch
          "parametrisation, which lfi does not read", path.string(), name, shown(value), text);
 }
 
+// The OpenEXR attribute types of a fixed size, and their sizes in bytes.
+const std::map<std::string, std::uint32_t, std::less<>> kFixedAttributeSizes = {{"box2i", 16},
+                                                                                {"box2f", 16},
+                                                                                {"compression", 1},
+                                                                                {"double", 8},
+                                                                                {"envmap", 1},
+                                                                                {"float", 4},
+                                                                                {"int", 4},
+                                                                                {"keycode", 28},
+                                                                                {"lineOrder", 1},
+                                                                                {"m33f", 36},
+                                                                                {"m33d", 72},
+                                                                                {"m44f", 64},
+                                                                                {"m44d", 128},
+                                                                                {"rational", 8},
+                                                                                {"tiledesc", 9},
+                                                                                {"timecode", 8},
+                                                                                {"v2i", 8},
+                                                                                {"v2f", 8},
+                                                                                {"v2d", 16},
+                                                                                {"v3i", 12},
+                                                                                {"v3f", 12},
+                                                                                {"v3d", 24},
+                                                                                {"chromaticities", 32},
+                                                                                {"deepImageState", 1}};
+
 // Walks the (first) header of an OpenEXR file as the file format lays it out:
 // magic number, version field, then attributes (name, type name, int32 size,
 // value) up to an empty name. A size past the end of the file is an error
 // here: OpenEXR would first allocate it (a 2 KB file declaring a 1.9 GB
-// attribute took it seconds and that memory). Files that are not OpenEXR are
-// left to OpenEXR's own error.
+// attribute took it seconds and that memory); so is a size other than what the
+// value of its type takes (kFixedAttributeSizes, a channel list's entries).
+// Files that are not OpenEXR are left to OpenEXR's own error.
 void checkHeaderSizes(const fs::path& path) {
   std::error_code error;
   const auto fileSize = static_cast<std::uint64_t>(fs::file_size(path, error));
@@ -213,14 +241,38 @@ void checkHeaderSizes(const fs::path& path) {
       if (s.size() < 256) s += c;
     return static_cast<bool>(in);
   };
+  auto u32 = [](const unsigned char* b) {
+    return b[0] | b[1] << 8 | b[2] << 16 | static_cast<std::uint32_t>(b[3]) << 24;
+  };
   for (std::string name, type; cString(name) && !name.empty();) {
     unsigned char size[4];
     if (!cString(type) || !in.read(reinterpret_cast<char*>(size), 4)) return;  // truncated: OpenEXR says so
-    const std::uint32_t n = size[0] | size[1] << 8 | size[2] << 16 | static_cast<std::uint32_t>(size[3]) << 24;
+    const std::uint32_t n = u32(size);
     const auto at = static_cast<std::uint64_t>(in.tellg());
     if (n > fileSize - std::min(at, fileSize))
       fail(Errc::InvalidFile, "'{}': attribute '{}' declares {} bytes, more than the file's remaining {} "
            "(truncated or corrupt)", path.string(), shown(name), n, fileSize - std::min(at, fileSize));
+    // OpenEXR reads a value of a fixed-size type, and a channel list, by its own length, not the declared one,
+    // and goes on parsing where its read ended: a declared size that differs would have the rest of the header
+    // read from inside this value (a 700-byte file then declared a 1.9 GB string there, found by fuzzing).
+    std::uint32_t expected = n;
+    if (const auto fixed = kFixedAttributeSizes.find(type); fixed != kFixedAttributeSizes.end()) {
+      expected = fixed->second;
+    } else if (type == "chlist") {  // channels: name, 16 bytes; then an empty name
+      std::uint32_t used = 0;
+      std::string channel;
+      while (used < n && cString(channel)) {
+        used += static_cast<std::uint32_t>(channel.size()) + 1;
+        if (channel.empty()) break;
+        used += 16;
+        in.seekg(16, std::ios::cur);
+      }
+      expected = used;
+      in.seekg(static_cast<std::streamoff>(at), std::ios::beg);
+    }
+    if (expected != n)
+      fail(Errc::InvalidFile, "'{}': attribute '{}' of type '{}' declares {} bytes, its value takes {} (corrupt)",
+           path.string(), shown(name), shown(type), n, expected);
     in.seekg(static_cast<std::streamoff>(n), std::ios::cur);
   }
 }
@@ -250,6 +302,13 @@ LoadedExr loadExr(const fs::path& path, const char* expectedKind) {
     const long width = static_cast<long>(dw.max.x) - dw.min.x + 1, height = static_cast<long>(dw.max.y) - dw.min.y + 1;
     if (width < 1 || height < 1 || width > kMaxExrSide || height > kMaxExrSide || width * height > kMaxExrPixels)
       fail(Errc::InvalidFile, "'{}': data window {}x{} is out of range (at most 2^17 a side and 2^30 pixels)",
+           path.string(), width, height);
+    // Every scan line's chunk listed before the image is allocated: a file cut short (or a few bytes that claim
+    // a large data window) would otherwise have its whole image allocated and read before it fails.
+    if (!file.isComplete())
+      fail(Errc::InvalidFile,
+           "'{}': the file holds fewer scan lines than its {}x{} data window (truncated or "
+           "corrupt)",
            path.string(), width, height);
     out.pixels.create(static_cast<int>(height), static_cast<int>(width), CV_32FC1);
     Imf::FrameBuffer frame;

@@ -79,6 +79,25 @@ TEST_F(ExrIo, AttributeSizePastTheEndOfTheFileIsNamed) {
                           {file("huge.exr").string(), "'lfi.description'", "declares 1879048192 bytes"}));
 }
 
+TEST_F(ExrIo, AttributeSizeOtherThanItsValueTakesIsNamed) {
+  // OpenEXR reads a compression or a channel list by its own length and parses the header's rest from where
+  // it stopped: a larger declared size had it read a 1.9 GB string from inside the value (found by fuzzing).
+  lfi::writeRadianceExr(file("r.exr"), randomFloats(8, 8, 22), {0.01, "sizes"});
+  const std::string valid = readBytes(file("r.exr"));
+  const auto withSize = [&](const char* name, const char* type, std::uint32_t declared) {
+    std::string bytes = valid;
+    const size_t at = attributeSizeAt(bytes, name, type);
+    EXPECT_NE(at, std::string::npos) << name;
+    for (int i = 0; i < 4; ++i) bytes[at + i] = static_cast<char>(declared >> (8 * i) & 0xff);
+    std::ofstream(file("sized.exr"), std::ios::binary | std::ios::trunc) << bytes;
+    return file("sized.exr");
+  };
+  EXPECT_TRUE(throwsError([&] { lfi::readRadianceExr(withSize("compression", "compression", 2)); }, Errc::InvalidFile,
+                          {"'compression' of type 'compression' declares 2 bytes, its value takes 1"}));
+  EXPECT_TRUE(throwsError([&] { lfi::readRadianceExr(withSize("channels", "chlist", 20)); }, Errc::InvalidFile,
+                          {"'channels' of type 'chlist' declares 20 bytes, its value takes 19"}));
+}
+
 TEST_F(ExrIo, HugeDataWindowIsRefusedBeforeOpenExrSizesItsTables) {
   // A 2^28-row data window in a 1 KB file, with line-based and with DWAB
   // compression: refused by OpenEXR's own sanity check (the reader sets its
