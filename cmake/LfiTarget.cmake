@@ -4,7 +4,9 @@ add_library(lfi_options INTERFACE)
 target_compile_options(lfi_options INTERFACE -Wall -Wextra -Wpedantic -Wshadow -Wnon-virtual-dtor
                        -Wconversion-null -Wno-unused-parameter
                        # GCC 12 false positives inside libstdc++ at -O3 (GCC bug 105651)
-                       -Wno-restrict
+                       $<$<CXX_COMPILER_ID:GNU>:-Wno-restrict>
+                       # clang (the fuzz build): the tracer's lane masks combine comparisons with & on purpose
+                       $<$<CXX_COMPILER_ID:Clang>:-Wno-bitwise-instead-of-logical>
                        # designated initializers leave defaulted members out on purpose
                        -Wno-missing-field-initializers
                        # No contraction into fused multiply-adds (GCC's default for C++ even in ISO mode, on
@@ -18,6 +20,13 @@ endif()
 if(LFI_SANITIZE)
   target_compile_options(lfi_options INTERFACE -fsanitize=address,undefined -fno-omit-frame-pointer
                          -fno-sanitize-recover=undefined)
+  target_link_options(lfi_options INTERFACE -fsanitize=address,undefined)
+endif()
+if(LFI_FUZZ)
+  # Every library instrumented for libFuzzer's coverage and the sanitizers; the fuzz targets (fuzz/) add
+  # libFuzzer's main.
+  target_compile_options(lfi_options INTERFACE -fsanitize=fuzzer-no-link,address,undefined
+                         -fno-omit-frame-pointer -fno-sanitize-recover=undefined)
   target_link_options(lfi_options INTERFACE -fsanitize=address,undefined)
 endif()
 
