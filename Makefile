@@ -2,13 +2,15 @@
 #   make study       install dependencies if missing, build (Release), run the reference study
 #   make check       same set-up, then build and run every test
 #   make check-asan  the tests under AddressSanitizer + UndefinedBehaviorSanitizer
+#   make fuzz        the libFuzzer targets (clang), each for FUZZ_SECONDS on its corpus (docs/reliability.md)
 JOBS ?= 2
 STUDY_OUT ?= out/study
 STUDY_QUALITY ?= default
+FUZZ_SECONDS ?= 30
 CMAKE_WERROR := $(if $(CI),-DLFI_WERROR=ON,)
 LFI := build/release/apps/lfi
 
-.PHONY: deps configure build study check check-asan clean
+.PHONY: deps configure build study check check-asan fuzz clean
 
 deps:
 	@scripts/install-deps.sh
@@ -29,6 +31,11 @@ check-asan: deps
 	@cmake --preset asan $(CMAKE_WERROR) >/dev/null
 	@cmake --build --preset asan -j $(JOBS)
 	ctest --preset asan -j $(JOBS)
+
+fuzz: deps
+	@cmake --preset fuzz $(CMAKE_WERROR) >/dev/null
+	@cmake --build --preset fuzz -j $(JOBS)
+	scripts/run-fuzzers.sh $(FUZZ_SECONDS)
 
 clean:
 	rm -rf build

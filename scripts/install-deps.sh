@@ -25,6 +25,8 @@ PACKAGES=(
   libboost-dev
   # tests, and the emulated USB display (emulation/: umockdev)
   libgtest-dev libgmock-dev umockdev libumockdev-dev udev
+  # the fuzz targets (make fuzz: clang's libFuzzer)
+  clang libclang-rt-14-dev
 )
 
 if [[ ! -r /etc/os-release ]] || ! grep -qE '^ID=debian' /etc/os-release \

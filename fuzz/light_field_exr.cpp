@@ -1,0 +1,10 @@
+// The light field EXR reader (core/exr_io.h) on any bytes.
+#include "fuzz_input.h"
+
+#include "lfi/core/exr_io.h"
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+  const auto path = lfi::fuzz::writeInput("input.exr", data, size);
+  lfi::fuzz::expectCleanRefusal([&] { lfi::readLightFieldExr(path); });
+  return 0;
+}

@@ -1,0 +1,42 @@
+#!/usr/bin/env bash
+# Runs each libFuzzer target of build/fuzz (cmake --preset fuzz) for SECONDS on
+# its seed corpus (fuzz/corpus/<target>/, read only) and its working corpus
+# (build/fuzz/corpus/<target>/, where new inputs go), then prints a table of
+# the executions and the result. A crash, sanitizer report, leak, timeout (10 s
+# an input) or out-of-memory input leaves build/fuzz/findings/<target>-<kind>-...
+# and fails the run.
+#   scripts/run-fuzzers.sh SECONDS [TARGET ...]   (default: every target)
+set -uo pipefail
+cd "$(dirname "$0")/.."
+seconds=${1:?usage: run-fuzzers.sh SECONDS [TARGET ...]}
+shift
+targets=("$@")
+if [[ ${#targets[@]} -eq 0 ]]; then
+  for f in build/fuzz/fuzz/fuzz_*; do targets+=("${f##*/fuzz_}"); done
+fi
+# The targets write each input to a file: a memory file system when there is one.
+if [[ -d /dev/shm && -w /dev/shm ]]; then export TMPDIR=/dev/shm; fi
+mkdir -p build/fuzz/findings build/fuzz/logs
+status=0
+rows=()
+for t in "${targets[@]}"; do
+  exe=build/fuzz/fuzz/fuzz_$t
+  if [[ ! -x $exe ]]; then echo "run-fuzzers: no target $exe (make fuzz builds them)" >&2; exit 2; fi
+  mkdir -p "build/fuzz/corpus/$t"
+  log=build/fuzz/logs/$t.log
+  "$exe" -max_total_time="$seconds" -timeout=10 -rss_limit_mb=4096 -print_final_stats=1 \
+    -artifact_prefix="build/fuzz/findings/$t-" "build/fuzz/corpus/$t" "fuzz/corpus/$t" >"$log" 2>&1
+  rc=$?
+  runs=$(sed -n 's/^stat::number_of_executed_units: *//p' "$log" | tail -1)
+  corpus=$(find "build/fuzz/corpus/$t" -type f | wc -l)
+  if [[ $rc -eq 0 ]]; then result=clean; else
+    result="FAILED (exit $rc; $(grep -m1 -oE 'ERROR: [A-Za-z]+: [^ ]+( [^ ]+)?|libFuzzer: [a-z-]+' "$log" || echo see log), $log"
+    status=1
+  fi
+  rows+=("$(printf '%-26s %12s %8s  %s' "$t" "${runs:-?}" "$corpus" "$result")")
+  echo "${rows[-1]}"
+done
+echo
+printf '%-26s %12s %8s  %s\n' target executions corpus result
+printf '%s\n' "${rows[@]}"
+exit $status
