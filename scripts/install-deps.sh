@@ -25,6 +25,8 @@ PACKAGES=(
   libboost-dev
   # tests, and the emulated USB display (emulation/: umockdev)
   libgtest-dev libgmock-dev umockdev libumockdev-dev udev
+  # network namespaces for the tests that need an address outside 127/8 (ip, unshare)
+  iproute2 util-linux
   # the fuzz targets (make fuzz: clang's libFuzzer)
   clang libclang-rt-14-dev
 )

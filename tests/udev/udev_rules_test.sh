@@ -7,15 +7,17 @@
 # /etc/udev/rules.d and private tmpfs mounts on /dev and /run (udevadm test
 # creates the symlinks it computes and writes its database there; a stale
 # database would report tags our rules did not set).
-# Usage: udev_rules_test.sh <source-dir>. Exit 77 (skipped) where this is not possible; a missing
-# tool is a failure (exit 1) where LFI_NO_SKIPS is set, as .ci/run sets it.
+# Usage: udev_rules_test.sh <source-dir>. Exit 77 (skipped) where this is not possible (a tool missing,
+# not root, no mount namespace); a failure (exit 1) instead where LFI_NO_SKIPS is set, as .ci/run sets it.
 set -euo pipefail
 SRC=${1:?usage: udev_rules_test.sh <source-dir>}
 for tool in udevadm umockdev-run unshare; do
   command -v "$tool" >/dev/null || { echo "SKIP: $tool not installed"; [[ -n ${LFI_NO_SKIPS:-} ]] && exit 1; exit 77; }
 done
 if [[ $(id -u) -ne 0 ]] || ! unshare -m true 2>/dev/null; then
-  echo "SKIP: needs root and a private mount namespace (unshare -m) to run udevadm test"; exit 77
+  echo "SKIP: needs root and a private mount namespace (unshare -m) to run udevadm test"
+  [[ -n ${LFI_NO_SKIPS:-} ]] && exit 1
+  exit 77
 fi
 
 run() {  # run <devpath>: udevadm test output for that device
