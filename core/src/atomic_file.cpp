@@ -4,8 +4,9 @@
 
 #include <fcntl.h>
 #include <signal.h>
-#include <sys/stat.h>
 #include <stdio.h>
+#include <sys/file.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <array>
@@ -132,6 +133,52 @@ private:
   TemporarySlot* slot_ = nullptr;
 };
 
+// An open descriptor with an exclusive flock on it: a temporary's writer holds
+// one for as long as it writes, and the kernel drops it when the writer ends,
+// however it ends (SIGKILL included).
+class LockedFd {
+ public:
+  // Opens `path` and takes its lock if nobody holds it; locked() says whether.
+  LockedFd(const char* path, int flags) : fd_(::open(path, flags | O_CLOEXEC)) {
+    if (fd_ >= 0 && ::flock(fd_, LOCK_EX | LOCK_NB) != 0) {
+      ::close(fd_);
+      fd_ = -1;
+    }
+  }
+  // Locks `fd`, a temporary of a name of our own that nobody else holds.
+  explicit LockedFd(int fd) : fd_(fd) {
+    if (fd_ >= 0) ::flock(fd_, LOCK_EX);
+  }
+  ~LockedFd() {
+    if (fd_ >= 0) ::close(fd_);
+  }
+  LockedFd(const LockedFd&) = delete;
+  LockedFd& operator=(const LockedFd&) = delete;
+  bool locked() const { return fd_ >= 0; }
+
+ private:
+  int fd_ = -1;
+};
+
+// Removes the temporaries of `target` in `dir` (".<name>.tmp-XXXXXX") whose
+// writer is gone: their lock can be taken. They are what a writer killed by
+// SIGKILL left, which nothing could remove then; a live writer's is left alone.
+void removeStaleTemporaries(const fs::path& dir, const fs::path& target) {
+  const std::string prefix = "." + target.filename().string() + ".tmp-";
+  std::error_code ec;
+  for (fs::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
+    const std::string name = it->path().filename().string();
+    if (name.size() != prefix.size() + 6 || !name.starts_with(prefix)) continue;
+    std::error_code typeError;
+    const fs::file_type type = it->symlink_status(typeError).type();
+    if (type != fs::file_type::directory && type != fs::file_type::regular) continue;
+    const LockedFd lock(it->path().c_str(), type == fs::file_type::directory ? O_RDONLY | O_DIRECTORY : O_RDONLY);
+    if (!lock.locked()) continue;  // being written, or not ours to open
+    std::error_code ignored;
+    fs::remove_all(it->path(), ignored);
+  }
+}
+
 }  // namespace
 
 fs::path resolvedTarget(const fs::path& path) {
@@ -162,10 +209,13 @@ void writeFileAtomically(const fs::path& requested, Overwrite overwrite,
   const fs::path dir = target.has_parent_path() ? target.parent_path() : fs::path(".");
 
   // mkstemp gives a unique name that nothing else writes to; the writer may
-  // then reopen it by path (OpenEXR does).
+  // then reopen it by path (OpenEXR does: the same file, truncated). Its lock
+  // is held until the temporary is published or removed.
+  removeStaleTemporaries(dir, target);
   std::string pattern = (dir / ("." + target.filename().string() + ".tmp-XXXXXX")).string();
   const int fd = ::mkstemp(pattern.data());
   if (fd < 0) fail(Errc::Io, "cannot create a temporary file next to '{}': {}", target.string(), std::strerror(errno));
+  const LockedFd writing(fd);
   const TemporaryGuard guard(pattern);  // (a signal in the microseconds since mkstemp still leaves it)
   // mkstemp creates 0600, which the writer keeps while it writes; published
   // files get the mode a plain create would give them, or keep the mode of
@@ -173,7 +223,6 @@ void writeFileAtomically(const fs::path& requested, Overwrite overwrite,
   struct stat old {};
   const mode_t mode = ::stat(target.c_str(), &old) == 0 ? (old.st_mode & 07777) : (0666 & ~currentUmask());
   ::fchmod(fd, 0600);  // (mkstemp's 0600 less the umask: 0400 under umask 0222)
-  ::close(fd);
   const fs::path temporary = pattern;
   try {
     writeTo(temporary);
@@ -243,9 +292,11 @@ void writeFolderAtomically(const fs::path& requested, Overwrite overwrite,
   if (existing != fs::file_type::not_found && existing != fs::file_type::directory)
     fail(Errc::Io, "cannot write the folder '{}': a file of that name is in the way", requested.string());
   const fs::path dir = target.has_parent_path() ? target.parent_path() : fs::path(".");
+  removeStaleTemporaries(dir, target);
   std::string pattern = (dir / ("." + target.filename().string() + ".tmp-XXXXXX")).string();
   if (::mkdtemp(pattern.data()) == nullptr)
     fail(Errc::Io, "cannot create a temporary folder next to '{}': {}", target.string(), std::strerror(errno));
+  const LockedFd writing(::open(pattern.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC));
   const fs::path temporary = pattern;
   ::chmod(temporary.c_str(), 0777 & ~currentUmask());  // (mkdtemp's 0700: the folder gets a plain mkdir's mode)
   try {

@@ -7,7 +7,10 @@
 // (checked atomically by the rename itself, not by a racy stat). A target that
 // is a symbolic link is written where the link points; the link stays. A
 // SIGINT, SIGTERM or SIGHUP that would end the process while a temporary is
-// being written (its default action) removes the temporary first.
+// being written (its default action) removes the temporary first. A writer
+// holds a lock on its temporary while it writes; what a writer that could not
+// clean up (SIGKILL, a power cut) left is removed by the next write of the same
+// target, once its lock shows the writer is gone.
 
 #include <filesystem>
 #include <functional>
@@ -35,7 +38,8 @@ std::filesystem::path resolvedTarget(const std::filesystem::path& path);
 // one, never a mix. Throws Errc::Exists (Refuse and target exists) or
 // Errc::Io; on any failure the temporary folder is removed and `target` is
 // untouched. (A signal that ends the process mid-write leaves the hidden
-// temporary folder ".<name>.tmp-XXXXXX" behind.)
+// temporary folder ".<name>.tmp-XXXXXX" behind, until the next write of
+// `target` removes it.)
 void writeFolderAtomically(const std::filesystem::path& target, Overwrite overwrite,
                            const std::function<void(const std::filesystem::path& temporaryFolder)>& writeTo);
 
