@@ -16,6 +16,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <functional>
+#include <random>
 #include <string>
 #include <vector>
 
@@ -259,6 +260,43 @@ TEST_F(UsbDisplayTest, UnplugMidTransferThenReplug) {
   const PresentResult result = display->show(panel);
   ASSERT_EQ(result.status, PresentStatus::Presented) << result.message;
   EXPECT_TRUE(sameBytes(device.presented(), panel));
+}
+
+// 100 uploads, each cut by the device vanishing at a random point of it (at any of the frame's bulk URBs, or at
+// its PRESENT): each is a Device error naming the display that leaves it closed, and once the device is plugged
+// in again the next upload is presented whole. (A hang would be the test's timeout.)
+TEST_F(UsbDisplayTest, AnUploadCutAtARandomPointIsAnErrorAHundredTimesAndTheNextOneArrives) {
+  EmulatedUsbDisplay device;
+  device.plug();
+  UsbDisplayOptions options;
+  options.transferSize_bytes = 64 * 1024;
+  const UsbDisplaySelector selector{usbdisplay::kDefaultVendorId, usbdisplay::kDefaultProductId, ""};
+  auto display = openUsbDisplay(selector, options);
+  const cv::Mat panel = randomPanel(display->info(), 13);
+  const std::size_t frameBytes = usbdisplay::kFrameHeaderSize + panel.total() * panel.elemSize();
+  const int urbs = static_cast<int>((frameBytes + options.transferSize_bytes - 1) / options.transferSize_bytes);
+  std::mt19937 random(20261128);
+  std::uniform_int_distribution<int> point(0, urbs);  // urbs: at PRESENT
+  int atPresent = 0;
+  for (int upload = 0; upload < 100; ++upload) {
+    SCOPED_TRACE(upload);
+    const int at = point(random);
+    if (at < urbs) {
+      device.unplugAfterBulkUrbs(at);
+    } else {
+      device.unplugAtRequest(usbdisplay::Request::Present);
+      ++atPresent;
+    }
+    EXPECT_TRUE(throwsError([&] { display->show(panel); }, Errc::Device, {"usb:1209:4c46", "vanished"}));
+    EXPECT_EQ(display->state(), Display::State::Closed);
+    device.unplug();
+    device.plug();
+    display->open();
+    const PresentResult result = display->show(panel);
+    ASSERT_EQ(result.status, PresentStatus::Presented) << result.message;
+    EXPECT_TRUE(sameBytes(device.presented(), panel));
+  }
+  std::printf("[ info     ] 100 uploads of %d bulk URBs cut, %d of them at PRESENT\n", urbs, atPresent);
 }
 
 TEST_F(UsbDisplayTest, UnplugWhileIdle) {

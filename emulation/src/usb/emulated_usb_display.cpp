@@ -152,6 +152,10 @@ void EmulatedUsbDisplay::silentAfterBulkUrbs(int urbs) {
   std::lock_guard lock(impl_->mutex);
   impl_->silentAfterUrbs = urbs;
 }
+void EmulatedUsbDisplay::unplugAfterBulkUrbs(int urbs) {
+  std::lock_guard lock(impl_->mutex);
+  impl_->unplugAfterUrbs = urbs;
+}
 void EmulatedUsbDisplay::silentAtNextPresent() {
   std::lock_guard lock(impl_->mutex);
   impl_->silentAtPresent = true;

@@ -72,6 +72,7 @@ struct EmulatedUsbDisplay::Impl {
   std::int64_t statusPresentedSequence = -1;  // and its presented sequence
   std::size_t truncateNext = 0;
   int silentAfterUrbs = -1;  // bulk URBs to take before turning silent; -1: never
+  int unplugAfterUrbs = -1;  // bulk URBs to take before vanishing at the next; -1: never
   bool silentAtPresent = false;
   int clearHaltErrno = 0;  // CLEAR_HALT fails with this errno (0: it succeeds)
   // frame assembly

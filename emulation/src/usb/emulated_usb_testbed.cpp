@@ -325,7 +325,12 @@ gboolean EmulatedUsbDisplay::Impl::submit(UMockdevIoctlClient* client, UMockdevI
     ++state.bulkUrbs;
     ++inFlight;
     state.maxUrbsInFlight = std::max(state.maxUrbsInFlight, inFlight);
-    if (silent) {
+    if (unplugAfterUrbs >= 0 && unplugAfterUrbs-- == 0) {  // this URB and everything pending fail as it goes
+      u.status = -ESHUTDOWN;
+      done.push_back(u);
+      failAll();
+      state.plugged = state.claimed = false;
+    } else if (silent) {
       held.push_back(u);
     } else {
       bulkOut(bytes, length, u);

@@ -85,6 +85,7 @@ public:
   void corruptNextFrame();                // a payload byte flips on arrival → payload CRC mismatch
   void truncateNextFrame(std::size_t bytes);  // the device loses the last `bytes` of the next frame
   void unplugDuringNextFrame();           // the device vanishes after the first bulk URB of the next frame
+  void unplugAfterBulkUrbs(int urbs);     // take `urbs` more bulk URBs, then vanish at the next (as unplugAtRequest)
   void setSilent(bool on);                // accept URBs but never complete them (a hung device)
   void silentAfterBulkUrbs(int urbs);     // take `urbs` more bulk URBs, then be silent (hangs mid-frame)
   void silentAtNextPresent();             // be silent from the next PRESENT request on (the frame stays held)
