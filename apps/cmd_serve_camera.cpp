@@ -31,7 +31,8 @@ namespace {
 // implementation until SIGINT or SIGTERM. The radiance of every binning is
 // rendered before the device appears (a render inside a frame would stall the
 // device's only thread, which also answers control requests).
-void serveCamera(const fs::path& sceneFile, lfi::GvCameraServerOptions options, int threads, bool quiet) {
+void serveCamera(const fs::path& sceneFile, lfi::GvCameraServerOptions options, int threads, double packetLoss,
+                 bool quiet) {
   // Blocked before any thread starts (the renders' workers, Aravis's device
   // thread inherit the mask), so that SIGINT and SIGTERM reach sigwait() below
   // and not a worker's default action. One that comes during the first
@@ -58,6 +59,7 @@ void serveCamera(const fs::path& sceneFile, lfi::GvCameraServerOptions options, 
     imager.capture(imager.resolve(request.settings(), device), request.frameId, frame);
     lfi::writeServedFrame(frame, image);
   });
+  server.setPacketLoss(packetLoss);
   fmt::print("{}\n", server.deviceId());
   std::fflush(stdout);
   spdlog::info("serving '{}' as GigE Vision device '{}' on {} ({} x {} px); SIGINT/SIGTERM stops", sceneFile.string(),
@@ -71,6 +73,7 @@ struct ServeArgs {
   fs::path scene;
   lfi::GvCameraServerOptions options;
   int threads = 0;
+  double packetLoss = 0;
 };
 
 }  // namespace
@@ -87,9 +90,14 @@ Command addServeCameraCommand(CLI::App& app) {
   serve->add_option("--serial", a->options.serial, "Serial number (device id: lfi-SimCamera-<serial>)")
       ->capture_default_str();
   serve->add_option("--threads", a->threads, "Render threads (0 = all cores)")->transform(threadCount());
+  serve
+      ->add_option("--packet-loss", a->packetLoss,
+                   "Drop each GVSP packet with this probability: a lossy network for the client's tests")
+      ->check(CLI::Range(0.0, 1.0))
+      ->capture_default_str();
   return {serve, [a](const GlobalOptions& global) {
             lfi::setExrThreads(a->threads);
-            serveCamera(a->scene, a->options, a->threads, global.quiet);
+            serveCamera(a->scene, a->options, a->threads, a->packetLoss, global.quiet);
             return 0;
           }};
 }
