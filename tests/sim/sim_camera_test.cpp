@@ -296,25 +296,29 @@ TEST_F(SimCameraTest, SoftwareTriggerDeliversExactlyOneFrame) {
 }
 
 TEST_F(SimCameraTest, FreeRunKeepsTheFrameRateAndCountsUnderruns) {
-  // 64 buffers hold 0.32 s of frames: a host that stalls this test less than that loses none.
+  // 64 buffers hold 0.32 s of frames. A host that stalls this test longer loses frames to underruns: each lost
+  // one is a skipped id and an underrun counted, so the test holds whatever the host's load.
   auto camera = freeRunning(1000, 200, 64);
   const auto t0 = std::chrono::steady_clock::now();
   Frame frame;
-  std::uint64_t previous = 0, previousTime = 0;
+  std::uint64_t previous = 0, previousTime = 0, skipped = 0;
   for (int i = 0; i < 20; ++i) {
     camera->grabInto(frame, 1s);
     ASSERT_EQ(frame.status, FrameStatus::Complete);
     if (i > 0) {
-      EXPECT_EQ(frame.frameId, previous + 1);
+      ASSERT_GT(frame.frameId, previous);
+      skipped += frame.frameId - previous - 1;
       // The device's clock: frames 1/200 s apart (to its tick), however the host scheduled the grabs.
-      EXPECT_NEAR(static_cast<double>(frame.timestamp_ns - previousTime), 5e6, 1.0);
+      EXPECT_NEAR(static_cast<double>(frame.timestamp_ns - previousTime),
+                  5e6 * static_cast<double>(frame.frameId - previous), 1.0);
     }
     previous = frame.frameId;
     previousTime = frame.timestamp_ns;
   }
   // And the grabs waited for them: 20 frames take at least 19 periods (a lower bound, which no host load breaks).
   EXPECT_GE(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), 19 / 200.0 - 1e-3);
-  EXPECT_EQ(camera->statistics().underruns, 0u);
+  // (More may have been dropped since the last grab, should the host stall now.)
+  EXPECT_GE(camera->statistics().underruns, skipped) << "every skipped id is an underrun";
   // A consumer that falls behind: 3 buffers.
   camera = freeRunning(1000, 200, 3);
   camera->grabInto(frame, 1s);
