@@ -52,7 +52,11 @@ std::string recordText(const InspectionRecord& record, int indent) {
 RecordSummary readRecordSummary(const nlohmann::json& j, const std::string& where) {
   RecordSummary s;
   try {
-    s.part = j.at("part");
+    // (A number that is not a non-negative integer would convert with undefined behaviour: 1e50, -1, 2.5.)
+    if (!j.at("part").is_number_unsigned())
+      fail(Errc::InvalidFile, "{}: not an inspection record: its part is {}, not a part number", where,
+           j.at("part").dump());
+    s.part = j.at("part").get<std::uint64_t>();
     s.time_utc = j.at("time_utc");
     s.status = j.at("status");
     if (!j.at("verdict").is_null()) s.verdict = j.at("verdict");
