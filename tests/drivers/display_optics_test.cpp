@@ -317,6 +317,20 @@ TEST(UsbDisplayProtocol, RepliesThatAreNonsenseNameTheFieldAndTheDevice) {
   status.resize(20);
   EXPECT_TRUE(throwsError([&] { usbdisplay::decodeStatus(status, "usb:1209:4c46"); }, Errc::Device,
                           {"usb:1209:4c46", "GET_STATUS returned 20 bytes"}));
+
+  // GET_LAST_ERROR: the code and frame as sent, the message shown in printable ASCII and held to its bound.
+  std::vector<std::uint8_t> last =
+      usbdisplay::encodeLastError(usbdisplay::DeviceError::PayloadCrc, 0x12345, "payload CRC mismatch");
+  last.push_back(0x07);
+  last.insert(last.end(), usbdisplay::kMaxErrorText, 'x');
+  const usbdisplay::LastError decoded = usbdisplay::decodeLastError(last, "dev");
+  EXPECT_EQ(decoded.code, usbdisplay::DeviceError::PayloadCrc);
+  EXPECT_EQ(decoded.sequence, 0x12345u);
+  EXPECT_EQ(decoded.message.size(), usbdisplay::kMaxErrorText);
+  EXPECT_TRUE(decoded.message.starts_with("payload CRC mismatch?x"));
+  last.resize(7);
+  EXPECT_TRUE(throwsError([&] { usbdisplay::decodeLastError(last, "usb:1209:4c46"); }, Errc::Device,
+                          {"usb:1209:4c46", "GET_LAST_ERROR returned 7 bytes"}));
 }
 
 // A frame header as docs/usb-display-protocol.md lays it out, byte by byte
