@@ -2,6 +2,7 @@
 #   make study       install dependencies if missing, build (Release), run the reference study
 #   make check       same set-up, then build and run every test
 #   make check-asan  the tests under AddressSanitizer + UndefinedBehaviorSanitizer
+#   make check-tsan  the threaded parts' tests under ThreadSanitizer
 #   make fuzz        the libFuzzer targets (clang), each for FUZZ_SECONDS on its corpus (docs/reliability.md)
 JOBS ?= 2
 STUDY_OUT ?= out/study
@@ -10,7 +11,7 @@ FUZZ_SECONDS ?= 30
 CMAKE_WERROR := $(if $(CI),-DLFI_WERROR=ON,)
 LFI := build/release/apps/lfi
 
-.PHONY: deps configure build study check check-asan fuzz clean
+.PHONY: deps configure build study check check-asan check-tsan fuzz clean
 
 deps:
 	@scripts/install-deps.sh
@@ -31,6 +32,11 @@ check-asan: deps
 	@cmake --preset asan $(CMAKE_WERROR) >/dev/null
 	@cmake --build --preset asan -j $(JOBS)
 	ctest --preset asan -j $(JOBS)
+
+check-tsan: deps
+	@cmake --preset tsan $(CMAKE_WERROR) >/dev/null
+	@cmake --build --preset tsan -j $(JOBS)
+	scripts/check-tsan.sh
 
 fuzz: deps
 	@cmake --preset fuzz $(CMAKE_WERROR) >/dev/null

@@ -22,6 +22,10 @@ if(LFI_SANITIZE)
                          -fno-sanitize-recover=undefined)
   target_link_options(lfi_options INTERFACE -fsanitize=address,undefined)
 endif()
+if(LFI_SANITIZE_THREAD)
+  target_compile_options(lfi_options INTERFACE -fsanitize=thread -fno-omit-frame-pointer)
+  target_link_options(lfi_options INTERFACE -fsanitize=thread)
+endif()
 if(LFI_FUZZ)
   # Every library instrumented for libFuzzer's coverage and the sanitizers; the fuzz targets (fuzz/) add
   # libFuzzer's main.

@@ -19,7 +19,8 @@
 // says why the guards): they do the same float operations in every lane, and
 // without fused multiply-adds (-ffp-contract=off) every build gives the same bits.
 // (Not with clang, the fuzz build's compiler: it takes no target_clones on templates.)
-#if defined(__x86_64__) && !defined(__SANITIZE_ADDRESS__) && !defined(__AVX2__) && !defined(__clang__)
+#if defined(__x86_64__) && !defined(__SANITIZE_ADDRESS__) && !defined(__SANITIZE_THREAD__) && !defined(__AVX2__) \
+    && !defined(__clang__)
 #define LFI_ROW_CLONES __attribute__((target_clones("arch=x86-64-v4", "avx2", "default")))
 #else
 #define LFI_ROW_CLONES
