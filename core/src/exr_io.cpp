@@ -259,15 +259,20 @@ void checkHeaderSizes(const fs::path& path) {
     if (const auto fixed = kFixedAttributeSizes.find(type); fixed != kFixedAttributeSizes.end()) {
       expected = fixed->second;
     } else if (type == "chlist") {  // channels: name, 16 bytes; then an empty name
-      std::uint32_t used = 0;
+      // (OpenEXR reads channels up to the empty name, past the declared size if need be: a list without its
+      // empty name inside the declared bytes takes more than they hold.)
+      std::uint64_t used = 0;
       std::string channel;
+      bool ended = false;
       while (used < n && cString(channel)) {
-        used += static_cast<std::uint32_t>(channel.size()) + 1;
-        if (channel.empty()) break;
+        used += channel.size() + 1;
+        if ((ended = channel.empty())) break;
         used += 16;
         in.seekg(16, std::ios::cur);
       }
-      expected = used;
+      if (!ended) ++used;  // (the empty name, at least)
+      expected = static_cast<std::uint32_t>(std::min<std::uint64_t>(used, 0xffffffffu));
+      in.clear();
       in.seekg(static_cast<std::streamoff>(at), std::ios::beg);
     }
     if (expected != n)

@@ -96,6 +96,9 @@ TEST_F(ExrIo, AttributeSizeOtherThanItsValueTakesIsNamed) {
                           {"'compression' of type 'compression' declares 2 bytes, its value takes 1"}));
   EXPECT_TRUE(throwsError([&] { lfi::readRadianceExr(withSize("channels", "chlist", 20)); }, Errc::InvalidFile,
                           {"'channels' of type 'chlist' declares 20 bytes, its value takes 19"}));
+  // A channel list whose declared bytes end before its empty name: OpenEXR reads on into the header.
+  EXPECT_TRUE(throwsError([&] { lfi::readRadianceExr(withSize("channels", "chlist", 18)); }, Errc::InvalidFile,
+                          {"'channels' of type 'chlist' declares 18 bytes"}));
 }
 
 TEST_F(ExrIo, HugeDataWindowIsRefusedBeforeOpenExrSizesItsTables) {
