@@ -8,7 +8,10 @@
 #include <opencv2/imgproc.hpp>
 
 #include <algorithm>
+#include <cstdint>
 #include <fstream>
+#include <limits>
+#include <type_traits>
 #include <vector>
 
 namespace lfi {
@@ -43,8 +46,29 @@ fs::path packageFile(const fs::path& folder, const char* name) {
   return file;
 }
 
+// An integer field of reference.json: a JSON integer within T's range. (A float, or an integer out of range,
+// would convert with undefined behaviour: 1e21 as a width did, found by fuzzing.)
+template <typename T>
+T integerField(const fs::path& folder, const ordered_json& value, const char* field) {
+  if (value.is_number_unsigned() &&
+      value.get<std::uint64_t>() <= static_cast<std::uint64_t>(std::numeric_limits<T>::max()))
+    return static_cast<T>(value.get<std::uint64_t>());
+  if constexpr (std::is_signed_v<T>)
+    if (value.is_number_integer() && value.get<std::int64_t>() >= std::numeric_limits<T>::min() &&
+        value.get<std::int64_t>() <= std::numeric_limits<T>::max())
+      return static_cast<T>(value.get<std::int64_t>());
+  fail(Errc::InvalidFile, "reference package '{}': reference.json's {} is {}, not an integer in range", folder.string(),
+       field, value.dump());
+}
+
 void checkPixels(const fs::path& folder, const char* name, const ordered_json& files, const cv::Mat& pixels) {
-  const auto recorded = files.at(name).at("pixel_crc32").get<unsigned long>();
+  std::uint32_t recorded = 0;
+  try {
+    recorded = integerField<std::uint32_t>(folder, files.at(name).at("pixel_crc32"), "pixel_crc32");
+  } catch (const nlohmann::json::exception& e) {
+    fail(Errc::InvalidFile, "reference package '{}': reference.json has no pixel CRC-32 for {}: {}", folder.string(),
+         name, e.what());
+  }
   if (pixelChecksum(pixels) != recorded)
     fail(Errc::Checksum, "reference package '{}': {} is not the image the package recorded (pixel CRC-32 {:08x}, "
          "recorded {:08x}): a file from another package?", folder.string(), name, pixelChecksum(pixels), recorded);
@@ -165,12 +189,12 @@ ReferencePackage readReferencePackage(const fs::path& folder, const BenchFile* b
     i.gain = j.at("camera_settings").at("gain");
     i.pixelFormat = j.at("camera_settings").at("pixel_format");
     i.white = j.at("white");
-    width = j.at("image").at("width_px");
-    height = j.at("image").at("height_px");
+    width = integerField<int>(folder, j.at("image").at("width_px"), "width_px");
+    height = integerField<int>(folder, j.at("image").at("height_px"), "height_px");
     type = typeFromName(j.at("image").at("type"));
-    images = j.at("image").at("images_trained");
+    images = integerField<int>(folder, j.at("image").at("images_trained"), "images_trained");
     for (const char* name : {"lightfield.exr", "ideal.exr", "spread.exr", "mask.exr"})
-      j.at("files").at(name).at("pixel_crc32").get<unsigned long>();  // (its type too: checked when read)
+      integerField<std::uint32_t>(folder, j.at("files").at(name).at("pixel_crc32"), "pixel_crc32");
   } catch (const nlohmann::json::exception& e) {
     fail(Errc::InvalidFile, "reference package '{}': reference.json lacks a field or has one of the wrong type: {}",
          folder.string(), e.what());

@@ -407,9 +407,15 @@ TEST_F(ReferencePackageTest, ReferenceJsonWithAWrongValueIsInvalidFile) {
   for (const Case& c : std::vector<Case>{
            {"/format", "lfi-inspection-bench", "not format 'lfi-reference' version 1"},
            {"/version", 2, "not format 'lfi-reference' version 1"},
-           {"/image/width_px", "24", "wrong type"},
+           {"/image/width_px", "24", "width_px is \"24\", not an integer in range"},
            {"/white", nullptr, "wrong type"},
-           {"/files/ideal.exr/pixel_crc32", "12345678", "wrong type"},
+           {"/files/ideal.exr/pixel_crc32", "12345678", "not an integer in range"},
+           // Numbers that would convert with undefined behaviour (1e21 as a width found by fuzzing).
+           {"/image/width_px", 1e21, "width_px is 1e+21, not an integer in range"},
+           {"/image/height_px", 2.5, "height_px is 2.5, not an integer in range"},
+           {"/image/images_trained", 4294967296LL, "not an integer in range"},
+           {"/files/ideal.exr/pixel_crc32", -1, "not an integer in range"},
+           {"/files/mask.exr/pixel_crc32", 8589934592LL, "not an integer in range"},
            {"/image/width_px", 0, "is not valid"},
            {"/image/height_px", -16, "is not valid"},
            {"/image/images_trained", 0, "is not valid"},
