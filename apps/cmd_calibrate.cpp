@@ -94,7 +94,7 @@ void printCameraCalibration(const lfi::CameraCalibration& c, const lfi::BenchFil
              bench.objectPixel_mm);
   fmt::print("  along a row {:.6f} mm, down a column {:.6f} mm\n", m.pixelX_mm, m.pixelY_mm);
   if (bench.cameraOnDisplay) {
-    const double onDisplay = std::sqrt(std::abs(cv::determinant(bench.cameraOnDisplay->perPixel_mm)));
+    const double onDisplay = bench.cameraOnDisplay->objectPixel_mm();
     fmt::print("  the display calibration's scale in the bench: {:.6f} mm ({:+.3f} % against the target's)\n",
                onDisplay, 100 * (onDisplay / m.objectPixel_mm - 1));
   }

@@ -154,7 +154,7 @@ CameraScaleFit fitCameraScale(const std::vector<CameraPoint>& points, cv::Size i
   fit.distortion_px = full.p[6] * r;
   const double det = p[0] * p[3] - p[1] * p[2];
   fit.mirrored = det < 0;
-  fit.objectPixel_mm = std::sqrt(std::abs(det));
+  fit.objectPixel_mm = fit.map.objectPixel_mm();
   fit.pixelX_mm = std::hypot(p[0], p[2]);
   fit.pixelY_mm = std::hypot(p[1], p[3]);
   fit.rotation_rad = std::atan2(p[2], p[0]);

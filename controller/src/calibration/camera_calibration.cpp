@@ -14,15 +14,8 @@
 
 namespace lfi {
 
-namespace {
-
-using Clock = std::chrono::steady_clock;
-
-double seconds(Clock::duration d) {
-  return std::chrono::duration<double>(d).count();
-}
-
-}  // namespace
+using detail::Clock;
+using detail::seconds;
 
 CameraCalibration calibrateCamera(BenchProbe& bench, const calib::ChessboardTarget& target, const std::string& camera,
                                   const CameraCalibrationSettings& settings,
@@ -68,9 +61,7 @@ std::string cameraCalibrationRecord(const CameraCalibration& c, const BenchFile&
   const double k = c.coverageFactor;
   const calib::CameraScaleFit& m = c.camera;
   nlohmann::json previous = {{"object_pixel_mm", bench.objectPixel_mm}};
-  if (bench.cameraOnDisplay)
-    previous["display_calibration_object_pixel_mm"] =
-        std::sqrt(std::abs(cv::determinant(bench.cameraOnDisplay->perPixel_mm)));
+  if (bench.cameraOnDisplay) previous["display_calibration_object_pixel_mm"] = bench.cameraOnDisplay->objectPixel_mm();
   nlohmann::json record = {
       {"format", "lfi-calibration-record"},
       {"version", 1},

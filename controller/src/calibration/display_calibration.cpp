@@ -15,11 +15,8 @@ namespace lfi {
 
 namespace {
 
-using Clock = std::chrono::steady_clock;
-
-double seconds(Clock::duration d) {
-  return std::chrono::duration<double>(d).count();
-}
+using detail::Clock;
+using detail::seconds;
 
 void checkSettings(const DisplayCalibrationSettings& s) {
   const auto check = [](bool ok, const char* key, double value, const char* range) {

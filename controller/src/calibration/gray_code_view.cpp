@@ -47,9 +47,9 @@ GrayCodeView takeGrayCode(FrameTaker& take, const DisplayInfo& info, double full
   std::vector<cv::Mat> frames;
   for (size_t k = 0; k < set.patterns.size(); ++k)
     frames.push_back(decodable(take(set.patterns[k], k % 2 == 0 ? "pattern" : "inverse pattern")));
-  const auto start = std::chrono::steady_clock::now();
+  const auto start = Clock::now();
   view.correspondence = calib::decodeGrayCode(frames, decodable(view.white), decodable(view.black), set.layout, decode);
-  view.decodeSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  view.decodeSeconds = seconds(Clock::now() - start);
   const calib::PanelCorrespondence& c = view.correspondence;
   if (c.lit == 0)
     fail(Errc::Device,

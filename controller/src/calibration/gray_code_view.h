@@ -11,6 +11,7 @@
 #include <opencv2/core.hpp>
 
 #include <algorithm>
+#include <chrono>
 #include <functional>
 #include <string>
 #include <vector>
@@ -51,6 +52,11 @@ struct GrayCodeView {
 // decoded (`why` says what to look at then).
 GrayCodeView takeGrayCode(FrameTaker& take, const DisplayInfo& info, double fullScale_dn, double secondShare,
                           double minDecoded, const char* who, const char* why);
+
+using Clock = std::chrono::steady_clock;
+inline double seconds(Clock::duration d) {
+  return std::chrono::duration<double>(d).count();
+}
 
 // The median of `values` (the upper one of an even count); `values` not empty.
 inline double median(std::vector<double> values) {

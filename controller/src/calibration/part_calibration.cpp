@@ -17,7 +17,8 @@ namespace lfi {
 
 namespace {
 
-using Clock = std::chrono::steady_clock;
+using detail::Clock;
+using detail::seconds;
 
 constexpr int kMinPixels = 50;
 constexpr int kMostSteps = 30;
@@ -371,8 +372,8 @@ PartCalibration calibratePart(BenchProbe& bench, const PartModel& part, const ca
   out.partCentre_px = camera.cameraPoint(out.lateral_mm, image);
   out.frames = take.frames();
   if (progress) progress(1);
-  out.computeSeconds = std::chrono::duration<double>(Clock::now() - computeStart).count() + view.decodeSeconds;
-  out.seconds = std::chrono::duration<double>(Clock::now() - start).count();
+  out.computeSeconds = seconds(Clock::now() - computeStart) + view.decodeSeconds;
+  out.seconds = seconds(Clock::now() - start);
   return out;
 }
 

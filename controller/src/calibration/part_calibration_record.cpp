@@ -41,7 +41,7 @@ void setPartCalibration(BenchFileEdit& edit, const BenchFile& bench, const PartC
     return fmt::format("lfi calibrate part {}: U = {:.2g} {} (k = {:g})", stampUtc, k * sigma, unit, k);
   };
   edit.set("geometry", "distance_mm", tomlNumber(c.distance_mm), within(c.distanceSigma_mm, "mm"));
-  const double perPixel = std::sqrt(std::abs(cv::determinant(bench.cameraOnDisplay->perPixel_mm)));
+  const double perPixel = bench.cameraOnDisplay->objectPixel_mm();
   edit.set("geometry", "part_centre_px",
            fmt::format("[{}, {}]", tomlNumber(c.partCentre_px.x), tomlNumber(c.partCentre_px.y)),
            fmt::format("lfi calibrate part {}: U = [{:.2g}, {:.2g}] px (k = {:g})", stampUtc,

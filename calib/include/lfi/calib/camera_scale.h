@@ -25,9 +25,10 @@
 // (σ² (JᵀJ)⁻¹), the one clustered by lattice column (x residuals) and row
 // (y residuals), as in lattice_fit.h, and the one of a stated error shared by
 // the points of a column (in u) and of a row (in v): a point detector's bias,
-// which depends on that phase, where the residuals are too few to show it. centreSigma_mm leaves out an error all
-// the spots' centroids share (their sampling phase on the pixel grid moves
-// them alike): a hundredth of a pixel on the simulated bench.
+// which depends on that phase, where the residuals are too few to show it.
+// centreSigma_mm leaves out an error all the spots' centroids share (their
+// sampling phase on the pixel grid moves them alike): a hundredth of a pixel
+// on the simulated bench.
 //
 // Units: camera pixels (OpenCV's: the top-left pixel's centre at (0, 0)),
 // display millimetres and radians.
@@ -37,6 +38,7 @@
 #include <opencv2/core.hpp>
 
 #include <array>
+#include <cmath>
 #include <optional>
 #include <vector>
 
@@ -49,6 +51,8 @@ namespace lfi::calib {
 struct CameraMap {
   cv::Matx22d perPixel_mm = cv::Matx22d::zeros();  // A: the display's (x, y) per camera pixel (u, v)
   Vec2 atImageCentre_mm{0, 0};                     // t: the display point the image's centre sees
+  // One camera pixel's side on the display's (and the part's) plane: √|det A|.
+  double objectPixel_mm() const { return std::sqrt(std::abs(cv::determinant(perPixel_mm))); }
   // The display point camera pixel `px` sees, and the camera pixel that sees display point `q`, on an image of
   // `image` pixels.
   Vec2 displayPoint(const Vec2& px, cv::Size image) const;
