@@ -189,30 +189,13 @@ void requireConvention(const fs::path& path, const Imf::Header& header, const ch
 }
 
 // The OpenEXR attribute types of a fixed size, and their sizes in bytes.
-const std::map<std::string, std::uint32_t, std::less<>> kFixedAttributeSizes = {{"box2i", 16},
-                                                                                {"box2f", 16},
-                                                                                {"compression", 1},
-                                                                                {"double", 8},
-                                                                                {"envmap", 1},
-                                                                                {"float", 4},
-                                                                                {"int", 4},
-                                                                                {"keycode", 28},
-                                                                                {"lineOrder", 1},
-                                                                                {"m33f", 36},
-                                                                                {"m33d", 72},
-                                                                                {"m44f", 64},
-                                                                                {"m44d", 128},
-                                                                                {"rational", 8},
-                                                                                {"tiledesc", 9},
-                                                                                {"timecode", 8},
-                                                                                {"v2i", 8},
-                                                                                {"v2f", 8},
-                                                                                {"v2d", 16},
-                                                                                {"v3i", 12},
-                                                                                {"v3f", 12},
-                                                                                {"v3d", 24},
-                                                                                {"chromaticities", 32},
-                                                                                {"deepImageState", 1}};
+// clang-format off
+const std::map<std::string, std::uint32_t, std::less<>> kFixedAttributeSizes = {
+    {"box2i", 16},  {"box2f", 16},   {"compression", 1}, {"double", 8},     {"envmap", 1},          {"float", 4},
+    {"int", 4},     {"keycode", 28}, {"lineOrder", 1},   {"m33f", 36},      {"m33d", 72},           {"m44f", 64},
+    {"m44d", 128},  {"rational", 8}, {"tiledesc", 9},    {"timecode", 8},   {"v2i", 8},             {"v2f", 8},
+    {"v2d", 16},    {"v3i", 12},     {"v3f", 12},        {"v3d", 24},       {"chromaticities", 32}, {"deepImageState", 1}};
+// clang-format on
 
 // Walks the (first) header of an OpenEXR file as the file format lays it out:
 // magic number, version field, then attributes (name, type name, int32 size,
