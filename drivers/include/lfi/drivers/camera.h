@@ -85,7 +85,9 @@ struct Frame {
 struct StreamStatistics {
   std::uint64_t completed = 0;      // frames delivered complete
   std::uint64_t failed = 0;         // frames delivered incomplete or dropped by the transport
-  std::uint64_t underruns = 0;      // frames lost because no buffer was free (the caller grabbed too slowly)
+  // Lost because no buffer was free (the caller grabbed too slowly, or buffers held frames waiting for
+  // resends): frames for sim:, packets for aravis: (Aravis counts each packet of a frame it had no buffer for).
+  std::uint64_t underruns = 0;
   std::uint64_t resentPackets = 0;  // packets recovered by resend requests (GigE Vision)
   std::uint64_t missingPackets = 0; // packets never recovered (GigE Vision)
 };
