@@ -5,11 +5,18 @@
 # the executions and the result. A crash, sanitizer report, leak, timeout (10 s
 # an input) or out-of-memory input leaves build/fuzz/findings/<target>-<kind>-...
 # and fails the run.
-#   scripts/run-fuzzers.sh SECONDS [TARGET ...]   (default: every target)
+#   scripts/run-fuzzers.sh SECONDS [TARGET ...]      (default: every target)
+#   scripts/run-fuzzers.sh --runs N [TARGET ...]     each target until N executions
 set -uo pipefail
 cd "$(dirname "$0")/.."
-seconds=${1:?usage: run-fuzzers.sh SECONDS [TARGET ...]}
-shift
+usage="usage: run-fuzzers.sh SECONDS|--runs N [TARGET ...]"
+if [[ ${1:-} == --runs ]]; then
+  limit=-runs=${2:?$usage}
+  shift 2
+else
+  limit=-max_total_time=${1:?$usage}
+  shift
+fi
 targets=("$@")
 if [[ ${#targets[@]} -eq 0 ]]; then
   for f in build/fuzz/fuzz/fuzz_*; do targets+=("${f##*/fuzz_}"); done
@@ -24,19 +31,20 @@ for t in "${targets[@]}"; do
   if [[ ! -x $exe ]]; then echo "run-fuzzers: no target $exe (make fuzz builds them)" >&2; exit 2; fi
   mkdir -p "build/fuzz/corpus/$t"
   log=build/fuzz/logs/$t.log
-  "$exe" -max_total_time="$seconds" -timeout=10 -rss_limit_mb=4096 -print_final_stats=1 \
+  "$exe" "$limit" -timeout=10 -rss_limit_mb=4096 -print_final_stats=1 \
     -artifact_prefix="build/fuzz/findings/$t-" "build/fuzz/corpus/$t" "fuzz/corpus/$t" >"$log" 2>&1
   rc=$?
   runs=$(sed -n 's/^stat::number_of_executed_units: *//p' "$log" | tail -1)
+  time=$(sed -n 's/^Done [0-9]* runs in \([0-9]*\) second.*/\1 s/p' "$log" | tail -1)
   corpus=$(find "build/fuzz/corpus/$t" -type f | wc -l)
   if [[ $rc -eq 0 ]]; then result=clean; else
     result="FAILED (exit $rc; $(grep -m1 -oE 'ERROR: [A-Za-z]+: [^ ]+( [^ ]+)?|libFuzzer: [a-z-]+' "$log" || echo see log), $log"
     status=1
   fi
-  rows+=("$(printf '%-26s %12s %8s  %s' "$t" "${runs:-?}" "$corpus" "$result")")
+  rows+=("$(printf '%-26s %12s %8s %8s  %s' "$t" "${runs:-?}" "${time:-?}" "$corpus" "$result")")
   echo "${rows[-1]}"
 done
 echo
-printf '%-26s %12s %8s  %s\n' target executions corpus result
+printf '%-26s %12s %8s %8s  %s\n' target executions time corpus result
 printf '%s\n' "${rows[@]}"
 exit $status
