@@ -2,12 +2,13 @@
 // A GigE Vision stream's frames over loopback, tallied so that a test does
 // not depend on the host's load. Loopback loses packets only when this host
 // leaves the stream's receive buffer full (its stream thread stalled on a
-// loaded machine); a frame then arrives incomplete, or not at all. What a
-// test holds without margin: every loss is one the backend reports (an
-// incomplete frame counted as failed, a frame id skipped with an underrun or
-// with packets reported missing). What it allows: at most as many frames lost
-// as delivered complete (a buffer pool waiting for resends on a lossy link
-// also runs dry); a stream losing more is broken, loaded or not.
+// loaded machine); a frame then arrives incomplete, or not at all. A slow
+// client (a loaded host, a sanitizer) also lets the buffer pool run dry, and
+// frames are skipped as underruns. What a test holds without margin: every
+// loss is one the backend reports (an incomplete frame counted as failed, a
+// frame id skipped with an underrun or with packets reported missing). What
+// it allows: at most as many frames incomplete as complete; a stream losing
+// more is broken, loaded or not.
 
 #include "gige_device_process.h"
 #include "lfi/drivers/camera.h"
@@ -43,15 +44,13 @@ struct StreamTally {
 
   std::uint64_t lost() const { return std::max(lostIds, static_cast<std::uint64_t>(incomplete)); }
 
-  // Whether to grab on for `wanted` complete frames: fewer so far, and fewer lost than wanted.
-  bool wantsMore(int wanted) const { return complete < wanted && lost() < static_cast<std::uint64_t>(wanted); }
+  // Whether to grab on for `wanted` complete frames: fewer so far, and fewer incomplete than wanted.
+  bool wantsMore(int wanted) const { return complete < wanted && incomplete < wanted; }
 };
 
 // Every loss in `tally` is reported by `stats`, and the loss stays within the margin.
 inline void expectLossesReported(const StreamTally& tally, const StreamStatistics& stats) {
-  EXPECT_LE(tally.lost(), static_cast<std::uint64_t>(tally.complete))
-      << tally.lost() << " frames lost (" << tally.incomplete << " delivered incomplete) for " << tally.complete
-      << " complete";
+  EXPECT_LE(tally.incomplete, tally.complete) << tally.incomplete << " frames incomplete for " << tally.complete;
   EXPECT_GE(stats.failed, static_cast<std::uint64_t>(tally.incomplete)) << "an incomplete frame not counted as failed";
   if (stats.missingPackets == 0) {
     EXPECT_LE(tally.lostIds, stats.underruns) << "frame ids skipped with neither an underrun nor a packet missing";
