@@ -25,6 +25,8 @@ endif()
 if(LFI_SANITIZE_THREAD)
   target_compile_options(lfi_options INTERFACE -fsanitize=thread -fno-omit-frame-pointer)
   target_link_options(lfi_options INTERFACE -fsanitize=thread)
+  # (sim/src/parallel_for.h runs the simulator's parallel loops on std::threads, which ThreadSanitizer sees.)
+  target_compile_definitions(lfi_options INTERFACE LFI_SANITIZE_THREAD)
 endif()
 if(LFI_FUZZ)
   # Every library instrumented for libFuzzer's coverage and the sanitizers; the fuzz targets (fuzz/) add

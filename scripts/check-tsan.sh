@@ -1,13 +1,12 @@
 #!/usr/bin/env bash
 # The threaded parts' tests under ThreadSanitizer (build/tsan, cmake --preset
-# tsan): the sim: camera's stream thread, the Aravis backend's stream against
-# Aravis's fake GigE Vision camera, and the USB backend's asynchronous
-# transfers against the emulated display's handler thread (under umockdev).
-# A race, a lock-order inversion or a thread leak reported fails the run;
-# tests/tsan.supp names what uninstrumented libraries hide, each with its
-# reason. (The tile renderer is TBB's parallel_for, whose scheduler is not
-# instrumented: every access in its body would be reported. Its race check is
-# Render.BitIdenticalForAnyThreadCountAndTileSize.)
+# tsan): the tile renderer's and the camera sensor model's parallel loops
+# (on std::threads in this build: sim/src/parallel_for.h), the sim: camera's
+# stream thread, the Aravis backend's stream against Aravis's fake GigE Vision
+# camera, and the USB backend's asynchronous transfers against the emulated
+# display's handler thread (under umockdev). A race, a lock-order inversion
+# or a thread leak reported fails the run; tests/tsan.supp names what
+# uninstrumented libraries hide, each with its reason.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 export TSAN_OPTIONS="${TSAN_OPTIONS:+$TSAN_OPTIONS:}halt_on_error=1:second_deadlock_stack=1:suppressions=$PWD/tests/tsan.supp"
@@ -25,6 +24,7 @@ run() {  # run NAME COMMAND...: one line of the summary
   fi
 }
 status=0
+run tile_renderer "$tests/test_sim" --gtest_filter='Render.*:CameraSensorModel.*' || status=1
 run sim_camera "$tests/test_sim_camera" || status=1
 run aravis "$tests/test_drivers" || status=1
 run usb_display tests/drivers/run_with_umockdev.sh "$tests/test_display" || status=1

@@ -3,10 +3,10 @@
 #include "lfi/core/error.h"
 #include "lfi/core/image.h"
 
+#include "../parallel_for.h"
+
 #include <boost/random/normal_distribution.hpp>
 #include <boost/random/poisson_distribution.hpp>
-#include <tbb/parallel_for.h>
-#include <tbb/task_arena.h>
 
 #include <algorithm>
 #include <cmath>
@@ -66,8 +66,7 @@ cv::Mat CameraSensorModel::capture(const cv::Mat& radiance, std::uint64_t seed, 
       o[c] = static_cast<std::uint16_t>(std::clamp(std::round(electrons * scale), 0.0, maxDn));
     }
   };
-  tbb::task_arena arena(threads > 0 ? threads : tbb::task_arena::automatic);
-  arena.execute([&] { tbb::parallel_for(0, radiance.rows, row); });
+  detail::parallelFor(radiance.rows, threads, row);
   return out;
 }
 

@@ -5,11 +5,8 @@
 
 #include "lfi/core/error.h"
 
+#include "../parallel_for.h"
 #include "tile_renderer.h"
-
-#include <tbb/blocked_range.h>
-#include <tbb/parallel_for.h>
-#include <tbb/task_arena.h>
 
 #include <algorithm>
 #include <atomic>
@@ -50,12 +47,7 @@ cv::Mat render(const Scene& scene, const Sensor& sensor, const RenderOptions& op
     if (options.progress) options.progress(static_cast<double>(done) / tiles);
   };
 
-  tbb::task_arena arena(options.threads > 0 ? options.threads : tbb::task_arena::automatic);
-  arena.execute([&] {
-    tbb::parallel_for(tbb::blocked_range<int>(0, tiles, 1), [&](const tbb::blocked_range<int>& range) {
-      for (int tile = range.begin(); tile != range.end(); ++tile) renderTile(tile);
-    });
-  });
+  detail::parallelFor(tiles, options.threads, renderTile);
   if (stopped) fail(Errc::Cancelled, "render cancelled");
   return image;
 }
