@@ -127,7 +127,7 @@ int runCalibrate(const CalibrateArgs& a, const GlobalOptions& global) {
   }
   const lfi::BenchFile devices = a.part.empty() ? bench : withSimulatedPart(bench, a.part);
   auto display = lfi::openBenchDisplay(devices);
-  auto camera = lfi::openBenchCamera(devices);
+  auto camera = lfi::openBenchCamera(devices, lfi::BenchExposures::OnRequest);
   lfi::NoCapture noCapture;  // (the reference is not needed: the calibrations show their own panels)
   lfi::Controller controller(noCapture, *display, *camera,
                              lfi::controllerOptions(bench, a.frames > 0 ? a.frames : bench.inspectionFrames));

@@ -32,7 +32,7 @@ int runCapture(const CaptureArgs& a, const GlobalOptions& global) {
   refuseExisting({bench.referenceFolder}, a.force, "capture");
   auto capture = lfi::openBenchCapture(bench);
   auto display = lfi::openBenchDisplay(bench);
-  auto camera = lfi::openBenchCamera(bench);
+  auto camera = lfi::openBenchCamera(bench, lfi::BenchExposures::OnRequest);
   requireOutputFolder(bench.referenceFolder.parent_path(), "capture", "[reference] folder");
   ProgressBar bar;
   const auto progress = [&](const char* step, double f) {

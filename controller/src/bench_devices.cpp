@@ -14,9 +14,12 @@ LightField NoCapture::capture(const std::function<void(double)>&) {
   fail(Errc::InvalidArgument, "this controller has no reference capture: it only shows panels and takes images");
 }
 
-std::unique_ptr<Camera> openBenchCamera(const BenchFile& bench) {
+std::unique_ptr<Camera> openBenchCamera(const BenchFile& bench, BenchExposures exposures) {
   auto camera = openCamera(bench.cameraUri);
-  camera->configure(bench.camera);
+  CameraSettings settings = bench.camera;
+  if (exposures == BenchExposures::OnRequest && settings.trigger == TriggerMode::Line)
+    settings.trigger = TriggerMode::Software;
+  camera->configure(settings);
   return camera;
 }
 

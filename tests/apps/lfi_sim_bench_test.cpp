@@ -155,9 +155,9 @@ wait $run
 
 // A line: each part put under the camera fires its input line Line0, and a run whose camera is triggered
 // by that line inspects the part, one image each. The records follow the parts in the order the line
-// brought them, with each part's verdict. The reference is taken with software triggers (the trigger is
-// not part of what a reference depends on); a part is put only once the camera takes the edge (it
-// acquires once the run has shown the reference) and the record of the one before is written.
+// brought them, with each part's verdict. The same bench file takes its reference: lfi triggers those
+// exposures itself (no part passes the sensor then). A part is put only once the camera takes the edge
+// (it acquires once the run has shown the reference) and the record of the one before is written.
 TEST_F(LfiSimBench, ALineTriggeredRunInspectsEachPartTheLineBringsInItsOrder) {
   std::string text = readText(hil_);
   replaceOnce(text, "grab_timeout_ms", "trigger = \"line\"\ntrigger_line = \"Line0\"\ngrab_timeout_ms");
@@ -167,16 +167,15 @@ TEST_F(LfiSimBench, ALineTriggeredRunInspectsEachPartTheLineBringsInItsOrder) {
   const std::string sceneText = readText(source_ / "data" / "scenes" / "inspection_bench.toml");
   const std::string lfi = shellQuoted(LFI_EXECUTABLE);
   const fs::path run = folder_ / "run", records = run / "records.jsonl";
-  std::string script =
-      fmt::format(R"sh(set -u
+  std::string script = fmt::format(R"sh(set -u
 {0} -q capture {1} || exit 10
-{0} -q run {2} --parts {3} --out {4} & run=$!
-count() {{ if [ -f {5} ]; then wc -l < {5}; else echo 0; fi; }}
+{0} -q run {1} --parts {2} --out {3} & run=$!
+count() {{ if [ -f {4} ]; then wc -l < {4}; else echo 0; fi; }}
 bring() {{ i=0; until {0} -q bench-control part "$1" | grep -q "triggered a frame"; do i=$((i+1)); [ $i -gt 600 ] && exit 12; sleep 0.1; done; }}
 until_records() {{ i=0; while [ "$(count)" -lt "$1" ]; do i=$((i+1)); [ $i -gt 1200 ] && exit 13; sleep 0.05; done; }}
 )sh",
-                  lfi, shellQuoted(hil_.string()), shellQuoted(line.string()),
-                  lfi::testing_support::studyParts().size(), shellQuoted(run.string()), shellQuoted(records.string()));
+                                   lfi, shellQuoted(line.string()), lfi::testing_support::studyParts().size(),
+                                   shellQuoted(run.string()), shellQuoted(records.string()));
   int k = 0;
   for (const auto& part : lfi::testing_support::studyParts()) {
     const fs::path scene = folder_.write(part.name + ".toml", lfi::testing_support::studyPartScene(sceneText, part));

@@ -2,9 +2,11 @@
 // the same sim: URIs a user would give, and the errors it reports.
 
 #include "lfi/controller/controller.h"
+#include "lfi/controller/bench_devices.h"
+#include "lfi/controller/bench_file.h"
+#include "lfi/drivers/camera_registry.h"
 #include "lfi/drivers/capture_registry.h"
 #include "lfi/drivers/display_registry.h"
-#include "lfi/drivers/camera_registry.h"
 #include "lfi/sim/devices/sim_camera.h"
 
 #include "lfi_test_support.h"
@@ -388,6 +390,18 @@ TEST_F(ControllerTest, ErrorsNameTheProblem) {
                           {uri("intact.toml") + "?spp=2000000", "spp = 2000000", "2^20"}));
   EXPECT_TRUE(throwsError([&] { openLightFieldCapture(uri("intact.toml") + "?beam_half_angle_rad=0"); },
                           Errc::Config, {uri("intact.toml") + "?beam_half_angle_rad=0", "[1e-6, 1.5)"}));
+}
+
+// No part passes a line-triggered bench's sensor while it calibrates or takes its reference: lfi triggers
+// those exposures itself. (The sim: camera has no trigger lines: configured as the bench says, it refuses.)
+TEST_F(ControllerTest, ALineTriggeredBenchIsSoftwareTriggeredWhenLfiAsksForTheExposures) {
+  BenchFile b = readBenchFile(std::filesystem::path(LFI_SOURCE_DIR) / "data" / "benches" / "inspection_sim.toml");
+  b.camera.trigger = TriggerMode::Line;
+  b.camera.triggerLine = "Line0";
+  EXPECT_TRUE(throwsError([&] { openBenchCamera(b); }, Errc::InvalidArgument, {"TriggerMode::Line"}));
+  EXPECT_EQ(openBenchCamera(b, BenchExposures::OnRequest)->settings().trigger, TriggerMode::Software);
+  b.camera.trigger = TriggerMode::FreeRun;  // (a camera without a software trigger runs free: it stays so)
+  EXPECT_EQ(openBenchCamera(b, BenchExposures::OnRequest)->settings().trigger, TriggerMode::FreeRun);
 }
 
 }  // namespace

@@ -39,8 +39,15 @@ class NoCapture final : public LightFieldCapture {
   std::string description() const override { return "none (a controller that only shows panels and takes images)"; }
 };
 
-// The camera, opened and configured with the bench's settings.
-std::unique_ptr<Camera> openBenchCamera(const BenchFile& bench);
+// Who says when the bench's camera exposes.
+enum class BenchExposures {
+  AsBench,    // its [camera] trigger: a line-triggered camera exposes when a part sensor fires (inspect, train, run)
+  OnRequest,  // lfi, whatever the bench's trigger: a line-triggered camera is software-triggered, since no part
+              // passes the sensor while the bench calibrates or takes its reference (calibrate, capture)
+};
+
+// The camera, opened and configured with the bench's settings (its trigger as `exposures` says).
+std::unique_ptr<Camera> openBenchCamera(const BenchFile& bench, BenchExposures exposures = BenchExposures::AsBench);
 // The display, with the optics of [display.optics] in place of the device's own when the bench states them
 // (Errc::Config naming the bench file when they are of another class than the device's, or out of range).
 std::unique_ptr<Display> openBenchDisplay(const BenchFile& bench);
