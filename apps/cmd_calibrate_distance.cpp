@@ -1,11 +1,13 @@
-// lfi calibrate-distance: the display-to-part distance scan
-// (docs/calibration.md), its table on stdout and its result file (JSON).
+// lfi calibrate-distance BENCH: the display-to-part distance scan with the
+// bench's devices (docs/calibration.md), its table on stdout and its result
+// file (JSON).
 
-#include "device_options.h"
+#include "bench_cli.h"
 #include "cli_util.h"
 #include "commands.h"
 
 #include "lfi/calib/display_distance.h"
+#include "lfi/controller/bench_devices.h"
 #include "lfi/controller/controller.h"
 #include "lfi/core/atomic_file.h"
 #include "lfi/core/error.h"
@@ -40,23 +42,45 @@ std::vector<double> scanCandidates(double from, double to, double step) {
   return candidates;
 }
 
+struct DistanceArgs {
+  fs::path bench;
+  fs::path part;        // a simulated bench's scene during the scan
+  fs::path lightField;  // the reference light field, in place of the bench's [capture]
+  int frames = 0;       // 0: the bench's [inspection] frames
+  double scanFrom = -6, scanTo = 6, scanStep = 1;
+  std::vector<int> roiBox;
+  fs::path out;
+  bool force = false;
+};
+
 // lfi calibrate-distance: the display-to-part distance scan (docs/calibration.md).
-void calibrateDistance(const DeviceOptions& o, const std::vector<double>& candidates, const std::vector<int>& roiBox,
-                       const fs::path& out, bool force, bool quiet) {
-  const auto overwrite = force ? lfi::Overwrite::Allow : lfi::Overwrite::Refuse;
+void calibrateDistance(const DistanceArgs& a, const std::vector<double>& candidates, bool quiet) {
+  const fs::path& out = a.out;
+  const auto overwrite = a.force ? lfi::Overwrite::Allow : lfi::Overwrite::Refuse;
   if (std::error_code ec; out.filename().empty() || fs::is_directory(out, ec))
     lfi::fail(lfi::Errc::InvalidArgument, "calibrate-distance: --out '{}' must name a file, not a folder",
               out.string());
-  // A captured reference is kept beside the scan (scan.json: scan.lightfield.exr), as `inspect` keeps its own.
-  const fs::path referenceFile = fs::path(out).replace_extension(".lightfield.exr");
+  const lfi::BenchFile bench = lfi::readBenchFile(a.bench);
+  const lfi::BenchFile devices = a.part.empty() ? bench : withSimulatedPart(bench, a.part);
+  // A reference captured for the scan is kept beside it (scan.json: scan.lightfield.exr), as `inspect` keeps its
+  // own; a stored one (--light-field, or the bench's [capture] light_field) is named.
+  const bool captures = a.lightField.empty() && !bench.captureUri.empty();
+  const fs::path referenceFile = captures               ? fs::path(out).replace_extension(".lightfield.exr")
+                                 : a.lightField.empty() ? bench.lightFieldFile
+                                                        : a.lightField;
   std::vector<fs::path> outputs{out};
-  if (!o.capture.empty()) outputs.push_back(referenceFile);
-  refuseExisting(outputs, force, "calibrate-distance");
-  OpenDevices bench = openDevices(o, "calibrate-distance");
+  if (captures) outputs.push_back(referenceFile);
+  refuseExisting(outputs, a.force, "calibrate-distance");
+  auto capture = a.lightField.empty() ? lfi::openBenchCapture(devices)
+                                      : std::make_unique<lfi::StoredLightField>(lfi::readLightFieldExr(a.lightField),
+                                                                                "file " + a.lightField.string());
+  auto display = lfi::openBenchDisplay(devices);
+  auto camera = lfi::openBenchCamera(devices, lfi::BenchExposures::OnRequest);
   // Where the result goes must take it before the scan, not after (and a bad device leaves no folder behind).
   requireOutputFolder(out.parent_path(), "calibrate-distance");
-  const lfi::CameraSettings settings = bench.camera->settings();
+  const lfi::CameraSettings settings = camera->settings();
   cv::Mat roi;
+  const std::vector<int>& roiBox = a.roiBox;
   if (!roiBox.empty()) {
     const cv::Rect box(roiBox[0], roiBox[1], roiBox[2], roiBox[3]);
     if (box.x < 0 || box.y < 0 || box.width < 1 || box.height < 1 || box.width > settings.roiWidth_px - box.x ||
@@ -66,17 +90,16 @@ void calibrateDistance(const DeviceOptions& o, const std::vector<double>& candid
     roi = cv::Mat::zeros(settings.roiHeight_px, settings.roiWidth_px, CV_8UC1);
     roi(box).setTo(255);
   }
-  lfi::ControllerOptions options;
-  options.frames = o.frames;
-  options.settle = std::chrono::milliseconds(o.settle_ms);
+  const lfi::ControllerOptions options =
+      lfi::controllerOptions(bench, a.frames > 0 ? a.frames : bench.inspectionFrames);
   // The candidates against the reference's distance before a capture, not after it.
-  lfi::calib::checkDisplayDistanceCandidates(bench.capture->geometry(), candidates);
-  lfi::Controller controller(*bench.capture, *bench.display, *bench.camera, options);
+  lfi::calib::checkDisplayDistanceCandidates(capture->geometry(), candidates);
+  lfi::Controller controller(*capture, *display, *camera, options);
   ProgressBar bar;
   const lfi::LightField reference = controller.captureReference([&](const char* step, double f) {
     if (!quiet) bar(step, f);
   });
-  if (bench.captured) lfi::writeLightFieldExr(referenceFile, reference, overwrite);
+  if (captures) lfi::writeLightFieldExr(referenceFile, reference, overwrite);
   // One drive scale for every candidate: the brightness compares the display's position, not the fields' peaks.
   const double white = lfi::Controller::defaultWhite(reference);
   size_t done = 0;
@@ -93,7 +116,7 @@ void calibrateDistance(const DeviceOptions& o, const std::vector<double>& candid
         },
         candidates, roi, 1 / std::sqrt(12.0));  // a digital number's quantisation (alike frames keep it)
   } catch (const lfi::Error& e) {
-    if (!bench.captured) throw;
+    if (!captures) throw;
     throw lfi::Error(e.code(), fmt::format("{} (the captured reference is kept: --light-field {} scans again "
                                            "without capturing)", e.what(), referenceFile.string()));
   }
@@ -106,7 +129,7 @@ void calibrateDistance(const DeviceOptions& o, const std::vector<double>& candid
   fmt::print("estimate {:+.3f} mm (the display {:.3f} mm {} the part than the reference's {} mm)\n",
              scan.estimate_mm, std::abs(scan.estimate_mm), scan.estimate_mm >= 0 ? "further from" : "nearer to",
              reference.geometry().distance_mm);
-  const lfi::CameraInfo camera = bench.camera->info();
+  const lfi::CameraInfo info = camera->info();
   nlohmann::ordered_json result;
   result["format"] = "lfi-display-distance-scan";
   result["version"] = 1;
@@ -115,20 +138,21 @@ void calibrateDistance(const DeviceOptions& o, const std::vector<double>& candid
       "epsilon > 0: the display is further from the part than the reference light field's distance_mm; the "
       "estimate is the centre of the brightness peak, half-way between where it falls below `level` on either "
       "side (docs/calibration.md)";
-  result["reference"] = {{"source", bench.capture->description()},
-                         {"file", fs::absolute(bench.captured ? referenceFile : o.lightField).string()},
+  result["bench"] = fs::absolute(a.bench).lexically_normal().string();
+  result["reference"] = {{"source", capture->description()},
+                         {"file", fs::absolute(referenceFile).string()},
                          {"distance_mm", reference.geometry().distance_mm}};
-  result["camera"] = {{"uri", o.camera},
-                      {"vendor", camera.vendor},
-                      {"model", camera.model},
-                      {"serial", camera.serial},
+  result["camera"] = {{"uri", devices.cameraUri},
+                      {"vendor", info.vendor},
+                      {"model", info.model},
+                      {"serial", info.serial},
                       {"exposure_us", settings.exposure_us},
                       {"gain", settings.gain},
-                      {"pixel_format", o.pixelFormat},
+                      {"pixel_format", lfi::toString(settings.pixelFormat)},
                       {"binning", settings.binning},
-                      {"frames", o.frames},
-                      {"settle_ms", o.settle_ms}};
-  result["display"] = {{"uri", o.display}, {"white", white}};
+                      {"frames", options.frames},
+                      {"settle_ms", bench.settle_ms}};
+  result["display"] = {{"uri", devices.displayUri}, {"white", white}};
   result["roi_px"] = roiBox.empty() ? nlohmann::ordered_json(nullptr) : nlohmann::ordered_json(roiBox);
   result["dark"] = scan.dark;
   result["noise"] = scan.noise;
@@ -144,35 +168,37 @@ void calibrateDistance(const DeviceOptions& o, const std::vector<double>& candid
   fmt::print("{}\n", out.string());
 }
 
-struct CalibrateArgs {
-  DeviceOptions bench;
-  double scanFrom = -6, scanTo = 6, scanStep = 1;
-  std::vector<int> roiBox;
-  fs::path out;
-  bool force = false;
-};
-
 }  // namespace
 
 Command addCalibrateDistanceCommand(CLI::App& app) {
-  auto* calibrate = app.add_subcommand(
-      "calibrate-distance", "Scan the display-to-part distance error by showing the reference light field "
-      "propagated to candidate distances (docs/calibration.md)");
-  auto a = std::make_shared<CalibrateArgs>();
-  addDeviceOptions(*calibrate, a->bench);
-  calibrate->add_option("--from", a->scanFrom, "First candidate error (mm)")->capture_default_str();
-  calibrate->add_option("--to", a->scanTo, "Last candidate error (mm)")->capture_default_str();
-  calibrate->add_option("--step", a->scanStep, "Candidate spacing (mm)")->capture_default_str();
-  calibrate->add_option("--roi", a->roiBox, "The part's pixels in the camera image: x,y,width,height (default: all)")
+  auto* command = app.add_subcommand("calibrate-distance",
+                                     "Scan the display-to-part distance error with the bench's devices by showing the "
+                                     "reference light field propagated to candidate distances (docs/calibration.md)");
+  auto a = std::make_shared<DistanceArgs>();
+  addBenchArgument(*command, a->bench);
+  command
+      ->add_option("--part", a->part,
+                   "A simulated bench: the scene under its camera during the scan (a physical bench scans the "
+                   "intact part in its place)")
+      ->check(CLI::ExistingFile);
+  command
+      ->add_option("--light-field", a->lightField,
+                   "Scan with this reference light field (EXR) instead of the bench's [capture]")
+      ->check(CLI::ExistingFile);
+  command->add_option("--frames", a->frames, "Frames averaged per image (default: the bench's [inspection] frames)")
+      ->check(CLI::Range(1, 100000));
+  command->add_option("--from", a->scanFrom, "First candidate error (mm)")->capture_default_str();
+  command->add_option("--to", a->scanTo, "Last candidate error (mm)")->capture_default_str();
+  command->add_option("--step", a->scanStep, "Candidate spacing (mm)")->capture_default_str();
+  command->add_option("--roi", a->roiBox, "The part's pixels in the camera image: x,y,width,height (default: all)")
       ->delimiter(',')
       ->expected(4);
-  calibrate->add_option("--out", a->out, "Result file (JSON)")->required();
-  calibrate->add_flag("--force", a->force,
-                      "Replace an existing result file, and the captured reference kept beside it (scan.json: "
-                      "scan.lightfield.exr)");
-  return {calibrate, [a](const GlobalOptions& global) {
-            calibrateDistance(a->bench, scanCandidates(a->scanFrom, a->scanTo, a->scanStep), a->roiBox, a->out,
-                              a->force, global.quiet);
+  command->add_option("--out", a->out, "Result file (JSON)")->required();
+  command->add_flag("--force", a->force,
+                    "Replace an existing result file, and the captured reference kept beside it (scan.json: "
+                    "scan.lightfield.exr)");
+  return {command, [a](const GlobalOptions& global) {
+            calibrateDistance(*a, scanCandidates(a->scanFrom, a->scanTo, a->scanStep), global.quiet);
             return 0;
           }};
 }

@@ -201,6 +201,27 @@ fs::path inspectionBench(const fs::path& dir, double error) {
   return scene;
 }
 
+// A bench file (data/benches/inspection_sim.toml) whose sim: devices are `scene`'s, with a quick reference
+// capture (`spp` samples) and a 2 ms exposure.
+fs::path scanBench(const fs::path& dir, const fs::path& scene, int spp) {
+  std::string text = readBytes(fs::path(LFI_SOURCE_DIR) / "data" / "benches" / "inspection_sim.toml");
+  const auto replace = [&](const std::string& from, const std::string& to) {
+    const size_t at = text.find(from);
+    EXPECT_NE(at, std::string::npos) << from;
+    if (at != std::string::npos) text.replace(at, from.size(), to);
+  };
+  const std::string uri = "sim:" + scene.string();
+  replace("uri = \"sim:../scenes/inspection_bench.toml?distance_mm=30\"",
+          fmt::format("uri = \"{}?distance_mm=30&spatial=16&angular=16&spp={}\"", uri, spp));
+  for (int i = 0; i < 2; ++i) replace("uri = \"sim:../scenes/inspection_bench.toml\"", "uri = \"" + uri + "\"");
+  replace("exposure_us = 10000", "exposure_us = 2000");
+  replace("\"../../out/bench/reference\"", "\"reference\"");
+  replace("\"../../out/bench/inspections\"", "\"inspections\"");
+  const fs::path bench = fs::path(scene).replace_extension(".bench.toml");
+  std::ofstream(bench) << text;
+  return bench;
+}
+
 // The whole calibration through the sim: devices a user would name: the
 // reference captured with the display where it belongs (30 mm), then shown
 // with the display moved. The estimate must find the move: the physical
@@ -209,13 +230,14 @@ fs::path inspectionBench(const fs::path& dir, double error) {
 TEST_F(LfiCli, CalibrateDistanceFindsHowFarTheDisplayMoved) {
   for (const double error : {0.0, 2.5, -1.0}) {
     const fs::path scene = inspectionBench(dir_, error), out = dir_ / fmt::format("scan{:+}.json", error);
-    const std::string uri = quoted("sim:" + scene.string());
-    const Result run = lfi("-q calibrate-distance --camera " + uri + " --display " + uri + " --capture " +
-                           quoted("sim:" + scene.string() + "?spatial=16&angular=16&spp=32") +
-                           " --exposure-us 2000 --from -6 --to 6 --out " + quoted(out));
+    const fs::path bench = scanBench(dir_, scene, 32);
+    const Result run = lfi("-q calibrate-distance " + quoted(bench) + " --from -6 --to 6 --out " + quoted(out));
     ASSERT_EQ(run.status, 0) << run.output;
     const auto result = nlohmann::json::parse(readBytes(out));
     EXPECT_EQ(result["format"], "lfi-display-distance-scan");
+    EXPECT_EQ(result["bench"], bench.string());
+    EXPECT_EQ(result["camera"]["exposure_us"], 2000.0);
+    EXPECT_EQ(result["camera"]["pixel_format"], "Mono12");
     EXPECT_EQ(result["reference"]["distance_mm"], 30.0);
     EXPECT_EQ(result["reference"]["file"], fs::path(out).replace_extension(".lightfield.exr").string());
     EXPECT_TRUE(fs::exists(result["reference"]["file"].get<std::string>()));
@@ -236,9 +258,7 @@ TEST_F(LfiCli, CalibrateDistanceFindsHowFarTheDisplayMoved) {
 
 TEST_F(LfiCli, CalibrateDistanceRefusesBadScansAndKeepsResults) {
   const fs::path scene = inspectionBench(dir_, 0), out = dir_ / "scan.json";
-  const std::string devices = "--camera " + quoted("sim:" + scene.string()) + " --display " +
-                              quoted("sim:" + scene.string()) + " --capture " +
-                              quoted("sim:" + scene.string() + "?spatial=16&angular=16&spp=8") + " --exposure-us 2000";
+  const std::string devices = quoted(scanBench(dir_, scene, 8));
   std::ofstream(out) << "an earlier result";
   Result run = lfi("calibrate-distance " + devices + " --out " + quoted(out));
   EXPECT_NE(run.status, 0);
@@ -283,8 +303,13 @@ TEST_F(LfiCli, CalibrateDistanceRefusesBadScansAndKeepsResults) {
   EXPECT_NE(run.status, 0);
   EXPECT_NE(run.output.find("'/proc/lfi' for --out"), std::string::npos) << run.output;
   EXPECT_EQ(run.output.find("image 1 of"), std::string::npos) << run.output;
-  run = lfi("calibrate-distance --camera sim:x --display sim:x --out " + quoted(dir_ / "new.json"));
-  EXPECT_NE(run.output.find("give --capture <uri> or --light-field <file>"), std::string::npos) << run.output;
+  // A scan again on the kept reference: no capture, the reference named in the result.
+  run = lfi("-q calibrate-distance " + devices + " --light-field " + quoted(dir_ / "new.lightfield.exr") + " --out " +
+            quoted(dir_ / "again.json"));
+  ASSERT_EQ(run.status, 0) << run.output;
+  EXPECT_EQ(nlohmann::json::parse(readBytes(dir_ / "again.json"))["reference"]["file"],
+            (dir_ / "new.lightfield.exr").string());
+  EXPECT_FALSE(fs::exists(dir_ / "again.lightfield.exr"));
 }
 
 }  // namespace
