@@ -16,6 +16,7 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <climits>
 
 namespace lfi::detail {
 namespace {
@@ -124,6 +125,12 @@ void AravisCamera::startStream(int bufferCount) {
     fail(Errc::Device, "camera '{}': the device's PayloadSize of {} bytes does not fit its {} x {} px {} image "
          "({} to {} bytes)", name(), payload, width, height, toString(settings_.pixelFormat), image, most);
   }
+  // Without CAP_NET_RAW (a user of the udev group, not root) Aravis reads the stream from a UDP socket whose
+  // receive buffer is the system's default, 208 KiB: a stall of 2 ms at 1 Gb/s overflows it and the packets
+  // after are lost. It holds as many frames as the buffers instead (the kernel caps it at net.core.rmem_max).
+  if (ARV_IS_GV_STREAM(stream_))
+    g_object_set(stream_, "socket-buffer", ARV_GV_STREAM_SOCKET_BUFFER_FIXED, "socket-buffer-size",
+                 static_cast<gint>(std::min<std::uint64_t>(std::uint64_t{payload} * bufferCount, INT_MAX)), nullptr);
   for (int i = 0; i < bufferCount; ++i) arv_stream_push_buffer(stream_, arv_buffer_new_allocate(payload));
   arv_camera_set_acquisition_mode(camera_, ARV_ACQUISITION_MODE_CONTINUOUS, &error);
   const char* call = "arv_camera_set_acquisition_mode";
