@@ -35,23 +35,32 @@ bool checkBench(const fs::path& file) {
   const auto check = [&](const char* role, const std::string& uri, const std::function<std::string()>& open) {
     try {
       fmt::print("  {:<9} {}  present: {}\n", role, uri, open());
+      return true;
     } catch (const lfi::Error& e) {
       fmt::print("  {:<9} {}  NOT AVAILABLE: {}\n", role, uri, e.what());
       all = false;
+      return false;
     }
   };
-  check("camera", bench.cameraUri, [&] {
+  const bool cameraPresent = check("camera", bench.cameraUri, [&] {
     auto camera = lfi::openBenchCamera(bench);  // (configured: the bench's settings are accepted)
     return fmt::format("{}, {}", lfi::describeCamera(*camera, bench.cameraUri), lfi::toString(camera->state()));
   });
-  check("display", bench.displayUri, [&] {
+  const bool displayPresent = check("display", bench.displayUri, [&] {
     auto display = lfi::openBenchDisplay(bench);
     const lfi::DisplayInfo info = display->info();
     return fmt::format("{}, {} x {} panel, {}", info.deviceId, info.panelWidth_px, info.panelHeight_px,
                        lfi::toString(display->state()));
   });
-  check("capture", bench.captureUri.empty() ? bench.lightFieldFile.string() : bench.captureUri,
-        [&] { return lfi::openBenchCapture(bench)->description(); });
+  check("capture", bench.captureUri.empty() ? bench.lightFieldFile.string() : bench.captureUri, [&] {
+    auto capture = lfi::openBenchCapture(bench);
+    if (capture->measuresThroughBench() && !(cameraPresent && displayPresent))
+      lfi::fail(lfi::Errc::NotFound, "it measures through the bench's display and camera, {}",
+                cameraPresent    ? "and the display is not available"
+                : displayPresent ? "and the camera is not available"
+                                 : "neither of which is available");
+    return capture->description();
+  });
   check("reference", bench.referenceFolder.string(), [&] {
     const lfi::ReferencePackage p = lfi::readReferencePackage(bench.referenceFolder, &bench);
     return fmt::format("taken {}, {} images trained", p.info.created_utc, p.trainer.count());

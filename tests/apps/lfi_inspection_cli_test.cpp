@@ -314,6 +314,11 @@ TEST_F(LfiInspectionCli, DevicesChecksWhatABenchNames) {
   EXPECT_EQ(physical.status, 1) << physical.output;
   EXPECT_NE(physical.output.find("camera    aravis:Basler"), std::string::npos) << physical.output;
   EXPECT_NE(physical.output.find("display   usb:1209:4c46  NOT AVAILABLE"), std::string::npos) << physical.output;
+  // Its coded capture measures through those two: not there without them.
+  EXPECT_NE(physical.output.find("capture   coded:?distance_mm=30  NOT AVAILABLE: it measures through the bench's "
+                                 "display and camera, neither of which is available"),
+            std::string::npos)
+      << physical.output;
 }
 
 // A bench file named bare in its own folder, with bare folder names in it: their parent is the working folder.
