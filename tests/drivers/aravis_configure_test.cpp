@@ -197,12 +197,12 @@ TEST_F(AravisCameraTest, StateMachine) {
   EXPECT_TRUE(throwsError([&] { camera->start(4); }, Errc::InvalidArgument, {"start()", "state Streaming"}));
   EXPECT_TRUE(
       throwsError([&] { camera->softwareTrigger(); }, Errc::InvalidArgument, {"TriggerMode::Software", "FreeRun"}));
-  EXPECT_EQ(camera->grab(2s).status, FrameStatus::Complete);
+  EXPECT_EQ(grabComplete(*camera).status, FrameStatus::Complete);
 
   camera->stop();
   EXPECT_EQ(camera->state(), S::Configured);
   camera->start(2);  // and again
-  EXPECT_EQ(camera->grab(2s).status, FrameStatus::Complete);
+  EXPECT_EQ(grabComplete(*camera).status, FrameStatus::Complete);
 
   camera->close();
   EXPECT_EQ(camera->state(), S::Closed);
@@ -244,7 +244,7 @@ TEST_F(AravisCameraTest, ConfigureAppliesAndReadsBackSettings) {
   EXPECT_EQ(camera->getIntegerFeature("Width"), 320);
 
   camera->start(3);
-  Frame frame = camera->grab(2s);
+  Frame frame = grabComplete(*camera);
   ASSERT_EQ(frame.status, FrameStatus::Complete);
   EXPECT_EQ(frame.image.type(), CV_8UC1);
   EXPECT_EQ(frame.image.cols, 320);
@@ -262,7 +262,7 @@ TEST_F(AravisCameraTest, ConfigureAppliesAndReadsBackSettings) {
   EXPECT_EQ(camera->settings().binning, 2);
   EXPECT_EQ(camera->getFeature("PixelFormat"), "Mono16");
   camera->start(2);
-  frame = camera->grab(2s);
+  frame = grabComplete(*camera);
   ASSERT_EQ(frame.status, FrameStatus::Complete);
   EXPECT_EQ(frame.image.type(), CV_16UC1);
   EXPECT_EQ(frame.image.cols, 512);

@@ -98,7 +98,7 @@ TEST_F(AravisCameraTest, ADeviceAtAnotherOwnAddressStreams) {
   camera->configure(smallSettings());
   camera->start(8);
   for (int i = 0; i < 5; ++i) {
-    const Frame frame = camera->grab(2s);
+    const Frame frame = grabComplete(*camera);
     const StreamStatistics st = camera->statistics();
     ASSERT_EQ(frame.status, FrameStatus::Complete)
         << "device at " << address << ", frame " << i << ": " << toString(frame.status) << "; stream: "
