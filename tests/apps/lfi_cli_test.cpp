@@ -4,6 +4,7 @@
 
 #include "lfi/core/exr_io.h"
 #include "lfi_process.h"
+#include "text_edit.h"
 
 #include <fmt/format.h>
 #include <gtest/gtest.h>
@@ -15,7 +16,6 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
-#include <sstream>
 #include <string>
 
 namespace {
@@ -27,12 +27,9 @@ const auto quoted = [](const auto& s) { return lfi::testing_support::shellQuoted
 
 Result lfi(const std::string& arguments) { return lfi::testing_support::runLfi(arguments); }
 
-std::string readBytes(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
+using lfi::testing_support::readText;
+using lfi::testing_support::replaceAll;
+using lfi::testing_support::replaceOnce;
 
 class LfiCli : public testing::Test {
 protected:
@@ -46,7 +43,7 @@ protected:
 
   // The reference scene at 64 x 64 pixels over the same 60 mm field.
   fs::path smallScene() const {
-    std::string text = readBytes(fs::path(LFI_SOURCE_DIR) / "data" / "scenes" / "reference.toml");
+    std::string text = readText(fs::path(LFI_SOURCE_DIR) / "data" / "scenes" / "reference.toml");
     using Edit = std::pair<std::string, std::string>;
     for (const auto& [from, to] : {Edit{"pixel_pitch_mm = 0.1171875", "pixel_pitch_mm = 0.9375"},
                                    Edit{"width = 512", "width = 64"}, Edit{"height = 512", "height = 64"}}) {
@@ -78,16 +75,16 @@ TEST_F(LfiCli, RenderWritesTheImagesAndKeepsThemUnlessForced) {
   EXPECT_EQ(image.at<float>(0, 0), 1.0f);
   EXPECT_EQ(image.at<float>(63, 63), 1.0f);
 
-  const std::string before = readBytes(exr);
+  const std::string before = readText(exr);
   const Result again = lfi("render " + quoted(scene) + " --out " + quoted(out) + " --spp 1");
   EXPECT_NE(again.status, 0);
   EXPECT_NE(again.output.find(exr.string()), std::string::npos) << again.output;
   EXPECT_NE(again.output.find("--force"), std::string::npos) << again.output;
-  EXPECT_EQ(readBytes(exr), before) << "an existing image was replaced without --force";
+  EXPECT_EQ(readText(exr), before) << "an existing image was replaced without --force";
 
   const Result forced = lfi("render " + quoted(scene) + " --out " + quoted(out) + " --spp 1 --force");
   EXPECT_EQ(forced.status, 0) << forced.output;
-  EXPECT_NE(readBytes(exr), before) << "--force did not replace the image (1 spp against 4)";
+  EXPECT_NE(readText(exr), before) << "--force did not replace the image (1 spp against 4)";
 }
 
 TEST_F(LfiCli, RenderGivesTheSameImageForAnyThreadCount) {
@@ -132,7 +129,7 @@ TEST_F(LfiCli, BadArgumentsNameTheOptionAndTheValue) {
   const Result plain = lfi("render " + quoted(scene) + " --out " + quoted(dir_ / "plain") + " --spp 10 --seed 3");
   ASSERT_EQ(ten.status, 0) << ten.output;
   ASSERT_EQ(plain.status, 0) << plain.output;
-  EXPECT_EQ(readBytes(dir_ / "ten" / "small.exr"), readBytes(dir_ / "plain" / "small.exr"));
+  EXPECT_EQ(readText(dir_ / "ten" / "small.exr"), readText(dir_ / "plain" / "small.exr"));
   // An image in the way is found before the render, and nothing is written.
   fs::create_directories(out);
   std::ofstream(out / "small.png") << "an earlier image";
@@ -168,7 +165,7 @@ TEST_F(LfiCli, BadSceneFilesAreNamedWithTheLineOrKey) {
   EXPECT_NE(run.output.find("malformed.toml:2"), std::string::npos) << run.output;
 
   const fs::path unknownKey = dir_ / "unknown.toml";
-  std::string text = readBytes(smallScene());
+  std::string text = readText(smallScene());
   text.replace(text.find("ior = 1.5"), 9, "ior = 1.5\nrefractive_index = 1.5");
   std::ofstream(unknownKey) << text;
   run = lfi("render " + quoted(unknownKey) + " --out " + quoted(out));
@@ -187,36 +184,26 @@ TEST_F(LfiCli, BadSceneFilesAreNamedWithTheLineOrKey) {
 // the default class: the distance scan's criterion and tolerances
 // (docs/calibration.md) are those of that display.
 fs::path inspectionBench(const fs::path& dir, double error) {
-  std::string text = readBytes(fs::path(LFI_SOURCE_DIR) / "data" / "scenes" / "inspection_bench.toml");
-  const auto replace = [&](const std::string& from, const std::string& to) {
-    const size_t at = text.find(from);
-    EXPECT_NE(at, std::string::npos) << from;
-    if (at != std::string::npos) text.replace(at, from.size(), to);
-  };
-  replace("position_mm = [0, 0, -30]", fmt::format("position_mm = [0, 0, {}]", -30 - error));
-  replace("optics = \"lenslet_array\"\npanel_width_px = 800\npanel_height_px = 800",
-          "optics = \"lenticular\"\npanel_width_px = 640\npanel_height_px = 400");
+  std::string text = readText(fs::path(LFI_SOURCE_DIR) / "data" / "scenes" / "inspection_bench.toml");
+  replaceOnce(text, "position_mm = [0, 0, -30]", fmt::format("position_mm = [0, 0, {}]", -30 - error));
+  replaceOnce(text, "optics = \"lenslet_array\"\npanel_width_px = 800\npanel_height_px = 800",
+              "optics = \"lenticular\"\npanel_width_px = 640\npanel_height_px = 400");
   const fs::path scene = dir / fmt::format("bench{:+}.toml", error);
   std::ofstream(scene) << text;
   return scene;
 }
 
-// A bench file (data/benches/inspection_sim.toml) whose sim: devices are `scene`'s, with a quick reference
-// capture (`spp` samples) and a 2 ms exposure.
-fs::path scanBench(const fs::path& dir, const fs::path& scene, int spp) {
-  std::string text = readBytes(fs::path(LFI_SOURCE_DIR) / "data" / "benches" / "inspection_sim.toml");
-  const auto replace = [&](const std::string& from, const std::string& to) {
-    const size_t at = text.find(from);
-    EXPECT_NE(at, std::string::npos) << from;
-    if (at != std::string::npos) text.replace(at, from.size(), to);
-  };
+// A bench file beside `scene` (data/benches/inspection_sim.toml with `scene`'s sim: devices), with a quick
+// reference capture (`spp` samples) and a 2 ms exposure.
+fs::path scanBench(const fs::path& scene, int spp) {
+  std::string text = readText(fs::path(LFI_SOURCE_DIR) / "data" / "benches" / "inspection_sim.toml");
   const std::string uri = "sim:" + scene.string();
-  replace("uri = \"sim:../scenes/inspection_bench.toml?distance_mm=30\"",
-          fmt::format("uri = \"{}?distance_mm=30&spatial=16&angular=16&spp={}\"", uri, spp));
-  for (int i = 0; i < 2; ++i) replace("uri = \"sim:../scenes/inspection_bench.toml\"", "uri = \"" + uri + "\"");
-  replace("exposure_us = 10000", "exposure_us = 2000");
-  replace("\"../../out/bench/reference\"", "\"reference\"");
-  replace("\"../../out/bench/inspections\"", "\"inspections\"");
+  replaceOnce(text, "uri = \"sim:../scenes/inspection_bench.toml?distance_mm=30\"",
+              fmt::format("uri = \"{}?distance_mm=30&spatial=16&angular=16&spp={}\"", uri, spp));
+  replaceAll(text, "uri = \"sim:../scenes/inspection_bench.toml\"", "uri = \"" + uri + "\"");  // camera, display
+  replaceOnce(text, "exposure_us = 10000", "exposure_us = 2000");
+  replaceOnce(text, "\"../../out/bench/reference\"", "\"reference\"");
+  replaceOnce(text, "\"../../out/bench/inspections\"", "\"inspections\"");
   const fs::path bench = fs::path(scene).replace_extension(".bench.toml");
   std::ofstream(bench) << text;
   return bench;
@@ -230,10 +217,10 @@ fs::path scanBench(const fs::path& dir, const fs::path& scene, int spp) {
 TEST_F(LfiCli, CalibrateDistanceFindsHowFarTheDisplayMoved) {
   for (const double error : {0.0, 2.5, -1.0}) {
     const fs::path scene = inspectionBench(dir_, error), out = dir_ / fmt::format("scan{:+}.json", error);
-    const fs::path bench = scanBench(dir_, scene, 32);
+    const fs::path bench = scanBench(scene, 32);
     const Result run = lfi("-q calibrate-distance " + quoted(bench) + " --from -6 --to 6 --out " + quoted(out));
     ASSERT_EQ(run.status, 0) << run.output;
-    const auto result = nlohmann::json::parse(readBytes(out));
+    const auto result = nlohmann::json::parse(readText(out));
     EXPECT_EQ(result["format"], "lfi-display-distance-scan");
     EXPECT_EQ(result["bench"], bench.string());
     EXPECT_EQ(result["camera"]["exposure_us"], 2000.0);
@@ -258,12 +245,12 @@ TEST_F(LfiCli, CalibrateDistanceFindsHowFarTheDisplayMoved) {
 
 TEST_F(LfiCli, CalibrateDistanceRefusesBadScansAndKeepsResults) {
   const fs::path scene = inspectionBench(dir_, 0), out = dir_ / "scan.json";
-  const std::string devices = quoted(scanBench(dir_, scene, 8));
+  const std::string devices = quoted(scanBench(scene, 8));
   std::ofstream(out) << "an earlier result";
   Result run = lfi("calibrate-distance " + devices + " --out " + quoted(out));
   EXPECT_NE(run.status, 0);
   EXPECT_NE(run.output.find("--force"), std::string::npos) << run.output;
-  EXPECT_EQ(readBytes(out), "an earlier result");
+  EXPECT_EQ(readText(out), "an earlier result");
   for (const auto& [arguments, message] :
        {std::pair<std::string, std::string>{"--step 0.7", "a whole number of steps"},
         {"--from 1 --to 2", "3 to 1001 candidates"},
@@ -307,7 +294,7 @@ TEST_F(LfiCli, CalibrateDistanceRefusesBadScansAndKeepsResults) {
   run = lfi("-q calibrate-distance " + devices + " --light-field " + quoted(dir_ / "new.lightfield.exr") + " --out " +
             quoted(dir_ / "again.json"));
   ASSERT_EQ(run.status, 0) << run.output;
-  EXPECT_EQ(nlohmann::json::parse(readBytes(dir_ / "again.json"))["reference"]["file"],
+  EXPECT_EQ(nlohmann::json::parse(readText(dir_ / "again.json"))["reference"]["file"],
             (dir_ / "new.lightfield.exr").string());
   EXPECT_FALSE(fs::exists(dir_ / "again.lightfield.exr"));
 }
