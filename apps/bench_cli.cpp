@@ -14,7 +14,8 @@ namespace lfi::cli {
 namespace {
 
 std::atomic<int> signalsSeen{0};
-struct sigaction previousInt {}, previousTerm {};
+struct sigaction previousInt {
+}, previousTerm{};
 
 void onSignal(int signal) {
   if (signalsSeen.fetch_add(1) > 0) {  // the second: end now, as the default action would
@@ -26,8 +27,10 @@ void onSignal(int signal) {
 std::string replaceScene(const std::string& uriText, const char* kind, const fs::path& scene) {
   const DeviceUri uri = parseDeviceUri(uriText, kind, "sim:scene.toml");
   if (uri.scheme != "sim")
-    fail(Errc::Config, "--part replaces the part of a simulated bench; the {} '{}' is not sim: (a physical bench "
-         "inspects the part that is under its camera)", kind, uriText);
+    fail(Errc::Config,
+         "--part replaces the part of a simulated bench; the {} '{}' is not sim: (a physical bench "
+         "inspects the part that is under its camera)",
+         kind, uriText);
   const auto query = uriText.find('?');
   return "sim:" + percentEncodeUriPart(fs::absolute(scene).lexically_normal().string()) +
          (query == std::string::npos ? "" : uriText.substr(query));
@@ -67,6 +70,8 @@ StopOnSignal::~StopOnSignal() {
   ::sigaction(SIGTERM, &previousTerm, nullptr);
 }
 
-bool StopOnSignal::stopRequested() { return signalsSeen.load() > 0; }
+bool StopOnSignal::stopRequested() {
+  return signalsSeen.load() > 0;
+}
 
 }  // namespace lfi::cli

@@ -33,7 +33,7 @@ BenchFile withSimulatedPart(BenchFile bench, const std::filesystem::path& scene)
 // that a loop ends after the part in hand; a second signal ends the process.
 // The handlers stay until the guard is destroyed.
 class StopOnSignal {
-public:
+ public:
   StopOnSignal();
   ~StopOnSignal();
   StopOnSignal(const StopOnSignal&) = delete;

@@ -42,7 +42,7 @@ void ProgressBar::operator()(const std::string& label, double fraction) {
   }
 }
 
-ProgressBar::~ProgressBar() {  // (an error unwinding past a bar prints on a line of its own)
+ProgressBar::~ProgressBar() {           // (an error unwinding past a bar prints on a line of its own)
   if (open_) std::fputs("\n", stderr);  // (no fmt::print: it may throw, and a destructor must not)
 }
 
@@ -52,8 +52,12 @@ void ProgressBar::finish() {
   open_ = false;
 }
 
-CLI::Validator threadCount() { return wholeNumberIn(0LL, kMostThreads); }
-CLI::Validator seedValue() { return wholeNumberIn<std::uint64_t>(0, lfi::sim::kLargestSeed); }
+CLI::Validator threadCount() {
+  return wholeNumberIn(0LL, kMostThreads);
+}
+CLI::Validator seedValue() {
+  return wholeNumberIn<std::uint64_t>(0, lfi::sim::kLargestSeed);
+}
 
 void requireOutputFolder(const fs::path& given, const char* command, const char* source) {
   const fs::path folder = given.empty() ? fs::path(".") : given;  // (the parent of a bare file name)

@@ -2,8 +2,8 @@
 // Helpers shared by several lfi subcommands: the progress display, whole-number
 // option checks, and the checks on output paths made before any work.
 
-#include <CLI/CLI.hpp>
 #include <fmt/format.h>
+#include <CLI/CLI.hpp>
 
 #include <charconv>
 #include <cstdint>
@@ -17,7 +17,7 @@ namespace lfi::cli {
 // A one-line progress bar on stderr when it is a terminal, otherwise a log
 // line every 10 %.
 class ProgressBar {
-public:
+ public:
   void operator()(const std::string& label, double fraction);
   ProgressBar() = default;
   ProgressBar(const ProgressBar&) = delete;
@@ -26,7 +26,7 @@ public:
   // Ends a bar left short of 100 % (work stopped early) on its own line.
   void finish();
 
-private:
+ private:
   std::mutex mutex_;
   int lastDecile_ = -1;
   bool open_ = false;  // a terminal's bar line printed without its newline

@@ -32,8 +32,10 @@ int runBenchControl(const BenchControlArgs& a) {
   if (socket.empty()) {
     const char* fromEnvironment = std::getenv(kControlSocketVariable);
     if (!fromEnvironment || !*fromEnvironment)
-      fail(Errc::InvalidArgument, "bench-control: no --socket, and {} is not set (`lfi sim-bench` sets it for the "
-           "program it runs, and prints it)", kControlSocketVariable);
+      fail(Errc::InvalidArgument,
+           "bench-control: no --socket, and {} is not set (`lfi sim-bench` sets it for the "
+           "program it runs, and prints it)",
+           kControlSocketVariable);
     socket = fromEnvironment;
   }
   std::vector<std::string> words = a.request;
@@ -52,9 +54,10 @@ int runBenchControl(const BenchControlArgs& a) {
 }  // namespace
 
 Command addBenchControlCommand(CLI::App& app) {
-  auto* command = app.add_subcommand(
-      "bench-control", "Send a request to a running `lfi sim-bench`: part [SCENE], trigger, camera off|on, display "
-                       "unplug|plug|stall|corrupt|short|hang|answer, packet-loss R, status");
+  auto* command =
+      app.add_subcommand("bench-control",
+                         "Send a request to a running `lfi sim-bench`: part [SCENE], trigger, camera off|on, display "
+                         "unplug|plug|stall|corrupt|short|hang|answer, packet-loss R, status");
   auto a = std::make_shared<BenchControlArgs>();
   command->add_option("request", a->request, "The request's words")->required();
   command->add_option("--socket", a->socket, fmt::format("Control socket (default: ${})", kControlSocketVariable));

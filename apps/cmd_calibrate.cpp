@@ -36,7 +36,7 @@ struct CalibrateArgs {
   fs::path part;   // a simulated bench's scene during the calibration
   fs::path model;  // the part's model (part)
   bool dryRun = false;
-  int frames = 0;  // 0: the bench's [inspection] frames
+  int frames = 0;        // 0: the bench's [inspection] frames
   std::string corners;   // camera: the chessboard's inner corners, COLSxROWS
   double square_mm = 0;  // camera: its squares' side
   lfi::DisplayCalibrationSettings settings;

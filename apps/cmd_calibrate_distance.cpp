@@ -36,7 +36,8 @@ std::vector<double> scanCandidates(double from, double to, double step) {
   if (!(std::round(count) >= 2 && std::round(count) <= 1000) || !(std::abs(count - std::round(count)) <= 1e-6))
     lfi::fail(lfi::Errc::Config,
               "calibrate-distance: --from {} --to {} --step {} must give 3 to 1001 candidates, the range a whole "
-              "number of steps", from, to, step);
+              "number of steps",
+              from, to, step);
   std::vector<double> candidates;
   for (int i = 0; i <= static_cast<int>(std::round(count)); ++i) candidates.push_back(from + i * step);
   return candidates;
@@ -118,7 +119,8 @@ void calibrateDistance(const DistanceArgs& a, const std::vector<double>& candida
   } catch (const lfi::Error& e) {
     if (!captures) throw;
     throw lfi::Error(e.code(), fmt::format("{} (the captured reference is kept: --light-field {} scans again "
-                                           "without capturing)", e.what(), referenceFile.string()));
+                                           "without capturing)",
+                                           e.what(), referenceFile.string()));
   }
   if (!quiet) bar("scan", 1);
   bar.finish();
@@ -126,8 +128,8 @@ void calibrateDistance(const DistanceArgs& a, const std::vector<double>& candida
   fmt::print("with the display dark: {:.6g} (noise of a mean {:.2g})\n", scan.dark, scan.noise);
   for (size_t i = 0; i < scan.candidates_mm.size(); ++i)
     fmt::print("{:+8.3f} mm  {:.6g}\n", scan.candidates_mm[i], scan.brightness[i]);
-  fmt::print("estimate {:+.3f} mm (the display {:.3f} mm {} the part than the reference's {} mm)\n",
-             scan.estimate_mm, std::abs(scan.estimate_mm), scan.estimate_mm >= 0 ? "further from" : "nearer to",
+  fmt::print("estimate {:+.3f} mm (the display {:.3f} mm {} the part than the reference's {} mm)\n", scan.estimate_mm,
+             std::abs(scan.estimate_mm), scan.estimate_mm >= 0 ? "further from" : "nearer to",
              reference.geometry().distance_mm);
   const lfi::CameraInfo info = camera->info();
   nlohmann::ordered_json result;

@@ -42,11 +42,12 @@ int runCapture(const CaptureArgs& a, const GlobalOptions& global) {
   const lfi::ReferencePackage package = lfi::takeReference(bench, *capture, *display, *camera, progress, &coverage);
   bar.finish();
   spdlog::info("capture: {}", capture->description());
-  spdlog::info("capture: the reference lights {} of the part's {} pixels ({:.1f} %) to at least {} of its 99th "
-               "percentile: defects are looked for there; the intact part's image there: mean {:.1f} DN, cv {:.3f}",
-               coverage.inspectedPixels, coverage.partPixels,
-               100.0 * coverage.inspectedPixels / std::max(coverage.partPixels, 1), bench.maskLitFraction,
-               coverage.mean_dn, coverage.cv);
+  spdlog::info(
+      "capture: the reference lights {} of the part's {} pixels ({:.1f} %) to at least {} of its 99th "
+      "percentile: defects are looked for there; the intact part's image there: mean {:.1f} DN, cv {:.3f}",
+      coverage.inspectedPixels, coverage.partPixels,
+      100.0 * coverage.inspectedPixels / std::max(coverage.partPixels, 1), bench.maskLitFraction, coverage.mean_dn,
+      coverage.cv);
   lfi::writeReferencePackage(bench.referenceFolder, package, a.force ? lfi::Overwrite::Allow : lfi::Overwrite::Refuse);
   fmt::print("{}\n", bench.referenceFolder.string());
   return 0;

@@ -44,8 +44,8 @@ int runEmit(const EmitArgs& a, const GlobalOptions&) {
   }
   if (!(white > 0)) white = lfi::Controller::defaultWhite(lightField);
   auto display = lfi::openBenchDisplay(bench);
-  const lfi::PresentResult r = panel.empty() ? display->show(lightField, white)
-                                             : display->show(lfi::panelFromLevels(panel, display->info()));
+  const lfi::PresentResult r =
+      panel.empty() ? display->show(lightField, white) : display->show(lfi::panelFromLevels(panel, display->info()));
   if (r.status != lfi::PresentStatus::Presented)
     lfi::fail(lfi::Errc::Device, "emit: display '{}' did not show the {} ({}{}{})", bench.displayUri,
               panel.empty() ? "light field" : "reference's panel image", lfi::toString(r.status),
@@ -69,7 +69,8 @@ Command addEmitCommand(CLI::App& app) {
   addBenchArgument(*command, a->bench);
   command->add_option("--light-field", a->lightField, "Show this light field (EXR) instead of the reference's")
       ->check(CLI::ExistingFile);
-  command->add_option("--seconds", a->seconds, "Show for this long (default: until Ctrl-C)")->check(CLI::PositiveNumber);
+  command->add_option("--seconds", a->seconds, "Show for this long (default: until Ctrl-C)")
+      ->check(CLI::PositiveNumber);
   return {command, [a](const GlobalOptions& global) { return runEmit(*a, global); }};
 }
 

@@ -20,10 +20,11 @@ Command addLfInfoCommand(CLI::App& app) {
   return {lfInfo, [lfFile](const GlobalOptions&) {
             const lfi::LightField lf = lfi::readLightFieldExr(*lfFile);
             const auto& g = lf.geometry();
-            fmt::print("{}: valid light field\n  spatial {} x {} elements of {} x {} angular elements\n"
-                       "  pixel pitch {} mm, element pitch {} mm, extent {} x {} mm, distance {} mm\n",
-                       lfFile->string(), g.spatialX, g.spatialY, g.angular, g.angular, g.pixelPitch_mm,
-                       g.elementPitch_mm(), g.extentX_mm(), g.extentY_mm(), g.distance_mm);
+            fmt::print(
+                "{}: valid light field\n  spatial {} x {} elements of {} x {} angular elements\n"
+                "  pixel pitch {} mm, element pitch {} mm, extent {} x {} mm, distance {} mm\n",
+                lfFile->string(), g.spatialX, g.spatialY, g.angular, g.angular, g.pixelPitch_mm, g.elementPitch_mm(),
+                g.extentX_mm(), g.extentY_mm(), g.distance_mm);
             return 0;
           }};
 }

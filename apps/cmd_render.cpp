@@ -34,7 +34,9 @@ constexpr long long kMostSpp = lfi::sim::kMostSamplesPerPixel;
 
 // Ctrl-C asks long work to stop cleanly (renders check it between tiles).
 std::atomic<bool> gCancel{false};
-extern "C" void onInterrupt(int) { gCancel = true; }
+extern "C" void onInterrupt(int) {
+  gCancel = true;
+}
 
 struct RenderArgs {
   fs::path sceneFile, out;
@@ -84,8 +86,7 @@ int runRenderCommand(const RenderArgs& a, const GlobalOptions& global) {
     fmt::print("{}\n", outputs[0].string());
   } else {
     const auto& cam = std::get<lfi::sim::TelecentricCamera>(d.sensor);
-    lfi::writeRadianceExr(outputs[0], image, {cam.objectPixel_mm(), "rendered radiance of scene " + d.name},
-                          overwrite);
+    lfi::writeRadianceExr(outputs[0], image, {cam.objectPixel_mm(), "rendered radiance of scene " + d.name}, overwrite);
     lfi::writePngAtomically(outputs[1], lfi::toneMapForDisplay(image), overwrite);
     fmt::print("{}\n{}\n", outputs[0].string(), outputs[1].string());
   }

@@ -37,14 +37,14 @@ namespace {
 
 struct RunArgs {
   fs::path bench, part, out;
-  long parts = 0;       // 0: no limit
-  double seconds = 0;   // 0: no limit
+  long parts = 0;      // 0: no limit
+  double seconds = 0;  // 0: no limit
 };
 
 // The records file, appended to one whole line at a time and flushed to the
 // disk after each (a crash loses at most the line being written).
 class RecordLog {
-public:
+ public:
   explicit RecordLog(fs::path file) : file_(std::move(file)) {
     fd_ = ::open(file_.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_APPEND | O_CLOEXEC, 0666);
     if (fd_ < 0) fail(Errc::Io, "run: cannot create '{}': {}", file_.string(), std::strerror(errno));
@@ -69,7 +69,7 @@ public:
   }
   const fs::path& file() const { return file_; }
 
-private:
+ private:
   fs::path file_;
   int fd_ = -1;
 };
@@ -113,7 +113,8 @@ Station reopenStation(const BenchFile& bench, const ReferencePackage& package, c
     pause = std::min(pause * 2, std::chrono::milliseconds(8000));
   }
   if (StopOnSignal::stopRequested()) fail(Errc::Cancelled, "run: stopped while waiting for the devices ({})", last);
-  fail(Errc::Device, "run: the devices did not come back within {} s ([run] wait_limit_s): {}", bench.waitLimit_s, last);
+  fail(Errc::Device, "run: the devices did not come back within {} s ([run] wait_limit_s): {}", bench.waitLimit_s,
+       last);
 }
 
 int runRun(const RunArgs& a, const GlobalOptions& global) {
@@ -204,7 +205,8 @@ int runRun(const RunArgs& a, const GlobalOptions& global) {
 }  // namespace
 
 Command addRunCommand(CLI::App& app) {
-  auto* command = app.add_subcommand("run", "Inspect parts one after another until stopped, with records and a summary");
+  auto* command =
+      app.add_subcommand("run", "Inspect parts one after another until stopped, with records and a summary");
   auto a = std::make_shared<RunArgs>();
   addBenchArgument(*command, a->bench);
   command->add_option("--parts", a->parts, "Stop after this many parts (default: no limit)")

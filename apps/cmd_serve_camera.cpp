@@ -12,13 +12,13 @@
 
 #include <fmt/format.h>
 
+#include <pthread.h>
 #include <algorithm>
 #include <csignal>
 #include <cstdio>
 #include <filesystem>
 #include <functional>
 #include <memory>
-#include <pthread.h>
 #include <string>
 
 namespace fs = std::filesystem;
@@ -45,9 +45,10 @@ void serveCamera(const fs::path& sceneFile, lfi::GvCameraServerOptions options, 
   lfi::GvCameraServer::validate(options);  // (before the renders: the serial's length, the interface)
   lfi::sim::SimImager imager(sceneFile);
   ProgressBar bar;
-  imager.setRenderOptions(threads, quiet ? std::function<void(double)>() : [&bar](double f) { bar("rendering", f); });
-  const int binnings = std::min({lfi::sim::SimImager::limits().maxBinning, imager.camera().width,
-                                 imager.camera().height});
+  imager.setRenderOptions(
+      threads, quiet ? std::function<void(double)>() : [&bar](double f) { bar("rendering", f); });
+  const int binnings =
+      std::min({lfi::sim::SimImager::limits().maxBinning, imager.camera().width, imager.camera().height});
   for (int b = 1; b <= binnings; ++b) imager.radiance(b);
   bar.finish();
   imager.setRenderOptions(threads, {});

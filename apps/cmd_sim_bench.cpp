@@ -51,9 +51,10 @@ fs::path benchScene(const BenchFile& bench) {
   const DeviceUri display = parseDeviceUri(bench.displayUri, "display", "sim:scene.toml");
   std::error_code ec;
   if (camera.scheme != "sim" || display.scheme != "sim" || !fs::equivalent(camera.path, display.path, ec))
-    fail(Errc::Config, "sim-bench: '{}' is not a simulated bench: its camera ('{}') and display ('{}') must be sim: "
-         "on one scene file (data/benches/inspection_sim.toml is one)", bench.file.string(), bench.cameraUri,
-         bench.displayUri);
+    fail(Errc::Config,
+         "sim-bench: '{}' is not a simulated bench: its camera ('{}') and display ('{}') must be sim: "
+         "on one scene file (data/benches/inspection_sim.toml is one)",
+         bench.file.string(), bench.cameraUri, bench.displayUri);
   return camera.path;
 }
 
@@ -71,12 +72,13 @@ double parseRatio(const std::string& text) {
 
 std::string status(lfi::emulation::ServedBench& bench) {
   const auto c = bench.counters();
-  return fmt::format("part {}; camera {}; display {}; {} frames served ({:.1f} ms each); {} panels presented; {} part "
-                     "changes, {} camera restarts, {} display re-plugs",
-                     bench.part().string(), bench.cameraServing() ? "serving" : "off",
-                     bench.displayPlugged() ? "plugged" : "unplugged", c.framesServed,
-                     c.framesServed ? 1e3 * c.frameSeconds / static_cast<double>(c.framesServed) : 0.0,
-                     c.panelsPresented, c.partChanges, c.cameraRestarts, c.displayReplugs);
+  return fmt::format(
+      "part {}; camera {}; display {}; {} frames served ({:.1f} ms each); {} panels presented; {} part "
+      "changes, {} camera restarts, {} display re-plugs",
+      bench.part().string(), bench.cameraServing() ? "serving" : "off",
+      bench.displayPlugged() ? "plugged" : "unplugged", c.framesServed,
+      c.framesServed ? 1e3 * c.frameSeconds / static_cast<double>(c.framesServed) : 0.0, c.panelsPresented,
+      c.partChanges, c.cameraRestarts, c.displayReplugs);
 }
 
 // One control request (docs/hardware-in-the-loop.md lists them).
@@ -97,15 +99,19 @@ std::string control(lfi::emulation::ServedBench& bench, const fs::path& intact, 
   } else if (verb == "trigger" && what.empty()) {
     done = std::string("trigger") + line(bench.fireLine());
   } else if (verb == "camera" && (what == "off" || what == "on")) {
-    if (what == "off") bench.stopCamera();
-    else bench.startCamera();
+    if (what == "off")
+      bench.stopCamera();
+    else
+      bench.startCamera();
     done = "camera " + what;
   } else if (verb == "packet-loss") {
     bench.setPacketLoss(parseRatio(what));
     done = "packet loss " + what;
   } else if (verb == "display" && (what == "unplug" || what == "plug")) {
-    if (what == "unplug") bench.unplugDisplay();
-    else bench.plugDisplay();
+    if (what == "unplug")
+      bench.unplugDisplay();
+    else
+      bench.plugDisplay();
     done = "display " + what + "ged";
   } else if (verb == "display" && what == "stall") {
     bench.display().stallNextFrame();
@@ -122,8 +128,10 @@ std::string control(lfi::emulation::ServedBench& bench, const fs::path& intact, 
   } else if (verb == "status" && what.empty()) {
     return "ok " + status(bench);
   } else {
-    return fmt::format("error unknown request '{}' (part [SCENE] | trigger | camera off|on | packet-loss R | display "
-                       "unplug|plug|stall|corrupt|short|hang|answer | status)", request);
+    return fmt::format(
+        "error unknown request '{}' (part [SCENE] | trigger | camera off|on | packet-loss R | display "
+        "unplug|plug|stall|corrupt|short|hang|answer | status)",
+        request);
   }
   spdlog::info("sim-bench: {}", done);
   return "ok " + done;
@@ -208,13 +216,14 @@ int runSimBench(SimBenchArgs a) {
     posix_spawnattr_destroy(&attr);
     if (rc != 0) fail(Errc::NotFound, "sim-bench: cannot run '{}': {}", a.command[0], std::strerror(rc));
   } else {
-    fmt::print("camera   {}\ndisplay  {}\ncontrol  {}\n"
-               "Run a program against this bench with its devices in the environment:\n"
-               "  UMOCKDEV_DIR={} LD_PRELOAD={} {}={} lfi run BENCH\n"
-               "(BENCH names the camera and display by the URIs above: data/benches/inspection_hil.toml.)\n"
-               "SIGINT or SIGTERM stops.\n",
-               bench.cameraUri(), bench.displayUri(), socket.string(), std::getenv("UMOCKDEV_DIR"),
-               std::getenv("LD_PRELOAD"), kControlSocketVariable, socket.string());
+    fmt::print(
+        "camera   {}\ndisplay  {}\ncontrol  {}\n"
+        "Run a program against this bench with its devices in the environment:\n"
+        "  UMOCKDEV_DIR={} LD_PRELOAD={} {}={} lfi run BENCH\n"
+        "(BENCH names the camera and display by the URIs above: data/benches/inspection_hil.toml.)\n"
+        "SIGINT or SIGTERM stops.\n",
+        bench.cameraUri(), bench.displayUri(), socket.string(), std::getenv("UMOCKDEV_DIR"), std::getenv("LD_PRELOAD"),
+        kControlSocketVariable, socket.string());
     std::fflush(stdout);
   }
   for (;;) {
@@ -232,8 +241,7 @@ int runSimBench(SimBenchArgs a) {
       ::kill(child, info.si_signo);  // (COMMAND decides; its end ends the bench)
       continue;
     }
-    spdlog::info("sim-bench: {} received, stopping; {}", info.si_signo == SIGINT ? "SIGINT" : "SIGTERM",
-                 status(bench));
+    spdlog::info("sim-bench: {} received, stopping; {}", info.si_signo == SIGINT ? "SIGINT" : "SIGTERM", status(bench));
     return 0;
   }
 }

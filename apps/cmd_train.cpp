@@ -6,8 +6,8 @@
 #include "commands.h"
 
 #include "lfi/controller/bench_devices.h"
-#include "lfi/controller/inspector.h"
 #include "lfi/controller/inspection_record.h"
+#include "lfi/controller/inspector.h"
 #include "lfi/controller/reference_package.h"
 #include "lfi/core/error.h"
 
@@ -45,7 +45,8 @@ int runTrain(const TrainArgs& a, const GlobalOptions& global) {
     if (a.prompt) {
       fmt::print(stderr, "Put good part {} of {} in place and press Enter (end of input stops): ", i + 1, a.images);
       std::string line;
-      if (!std::getline(std::cin, line)) lfi::fail(lfi::Errc::Cancelled, "train: stopped at part {}; nothing written", i + 1);
+      if (!std::getline(std::cin, line))
+        lfi::fail(lfi::Errc::Cancelled, "train: stopped at part {}; nothing written", i + 1);
     } else if (!global.quiet) {
       bar("golden model", static_cast<double>(i) / a.images);
     }

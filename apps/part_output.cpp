@@ -29,12 +29,14 @@ InspectionRecord partRecord(const BenchFile& bench, const Inspector& inspector, 
   InspectionRecord r = recordStart(bench, number, timeUtc);
   r.verdict = part.verdict;
   r.analysis_ms = part.analysis_ms;
-  const bool keep = bench.saveImages == SaveImages::All || (bench.saveImages == SaveImages::Failed && !part.verdict.pass);
+  const bool keep =
+      bench.saveImages == SaveImages::All || (bench.saveImages == SaveImages::Failed && !part.verdict.pass);
   if (keep) {
     const std::string image = stem + ".exr", overlay = stem + "-overlay.png";
-    writeRadianceExr(folder / image, part.image,
-                     {bench.objectPixel_mm, fmt::format("part {} (DN, mean of {} frames)", number, bench.inspectionFrames),
-                      kCameraDigitalNumbers});
+    writeRadianceExr(
+        folder / image, part.image,
+        {bench.objectPixel_mm, fmt::format("part {} (DN, mean of {} frames)", number, bench.inspectionFrames),
+         kCameraDigitalNumbers});
     writePngAtomically(folder / overlay, overlayImage(part.image, part.verdict, inspector.mask()), Overwrite::Refuse);
     r.images = {{"image", image}, {"overlay", overlay}};
   }

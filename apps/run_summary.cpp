@@ -23,11 +23,16 @@ namespace {
 std::string escape(const std::string& text) {
   std::string out;
   for (const char c : text) {
-    if (c == '<') out += "&lt;";
-    else if (c == '>') out += "&gt;";
-    else if (c == '&') out += "&amp;";
-    else if (c == '"') out += "&quot;";
-    else out += c;
+    if (c == '<')
+      out += "&lt;";
+    else if (c == '>')
+      out += "&gt;";
+    else if (c == '&')
+      out += "&amp;";
+    else if (c == '"')
+      out += "&quot;";
+    else
+      out += c;
   }
   return out;
 }
@@ -50,15 +55,19 @@ std::string heatMap(const std::vector<RecordSummary>& records) {
     ++bins[static_cast<size_t>(j * kBins + i)];
   }
   const int most = std::max(1, *std::max_element(bins.begin(), bins.end()));
-  std::string svg = fmt::format(R"svg(<svg width="{0}" height="{0}" viewBox="0 0 {0} {0}"><rect width="{0}" height="{0}" fill="#eee"/>)svg", kSize);
+  std::string svg = fmt::format(
+      R"svg(<svg width="{0}" height="{0}" viewBox="0 0 {0} {0}"><rect width="{0}" height="{0}" fill="#eee"/>)svg",
+      kSize);
   const double cell = static_cast<double>(kSize) / kBins;
   for (int j = 0; j < kBins; ++j)
     for (int i = 0; i < kBins; ++i)
       if (const int n = bins[static_cast<size_t>(j * kBins + i)])
-        svg += fmt::format(R"svg(<rect x="{:.1f}" y="{:.1f}" width="{:.1f}" height="{:.1f}" fill="rgb(200,0,0)" fill-opacity="{:.2f}"><title>{} defects</title></rect>)svg",
-                           i * cell, j * cell, cell, cell, 0.15 + 0.85 * n / most, n);
-  svg += fmt::format(R"svg(<line x1="{0}" y1="0" x2="{0}" y2="{1}" stroke="#999"/><line x1="0" y1="{0}" x2="{1}" y2="{0}" stroke="#999"/></svg>)svg",
-                     kSize / 2, kSize);
+        svg += fmt::format(
+            R"svg(<rect x="{:.1f}" y="{:.1f}" width="{:.1f}" height="{:.1f}" fill="rgb(200,0,0)" fill-opacity="{:.2f}"><title>{} defects</title></rect>)svg",
+            i * cell, j * cell, cell, cell, 0.15 + 0.85 * n / most, n);
+  svg += fmt::format(
+      R"svg(<line x1="{0}" y1="0" x2="{0}" y2="{1}" stroke="#999"/><line x1="0" y1="{0}" x2="{1}" y2="{0}" stroke="#999"/></svg>)svg",
+      kSize / 2, kSize);
   return svg + fmt::format("<p>{} defects; the square spans ±{} mm around the part's origin (x right, y up).</p>",
                            points.size(), extent);
 }
@@ -82,23 +91,29 @@ RunCounts writeRunSummary(const fs::path& recordsFile, const fs::path& page, boo
     }
     records.push_back(readRecordSummary(j, where));
   }
-  if (torn) spdlog::warn("{}: the last record is cut short (a crash while it was written); left out", recordsFile.string());
+  if (torn)
+    spdlog::warn("{}: the last record is cut short (a crash while it was written); left out", recordsFile.string());
   RunCounts c;
   for (const RecordSummary& r : records) {
     ++c.parts;
-    if (r.status != "inspected") ++c.errors;
-    else if (r.verdict == "pass") ++c.passed;
-    else ++c.failed;
+    if (r.status != "inspected")
+      ++c.errors;
+    else if (r.verdict == "pass")
+      ++c.passed;
+    else
+      ++c.failed;
   }
   const long judged = c.passed + c.failed;
   std::string html = "<!DOCTYPE html><html><head><meta charset=\"utf-8\"><title>lfi run</title>";
   if (live) html += "<meta http-equiv=\"refresh\" content=\"3\">";
-  html += "<style>body{font-family:sans-serif}td,th{padding:2px 8px;text-align:right}.fail{color:#c00}</style></head><body>";
+  html +=
+      "<style>body{font-family:sans-serif}td,th{padding:2px "
+      "8px;text-align:right}.fail{color:#c00}</style></head><body>";
   html += fmt::format("<h1>lfi run{}</h1><p>Records: {}</p>", live ? " (running)" : "", escape(recordsFile.string()));
-  html += fmt::format("<table><tr><th>parts</th><th>passed</th><th>failed</th><th>not inspected</th><th>yield</th></tr>"
-                      "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr></table>",
-                      c.parts, c.passed, c.failed, c.errors,
-                      judged > 0 ? fmt::format("{:.1f} %", 100.0 * c.passed / judged) : "-");
+  html += fmt::format(
+      "<table><tr><th>parts</th><th>passed</th><th>failed</th><th>not inspected</th><th>yield</th></tr>"
+      "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr></table>",
+      c.parts, c.passed, c.failed, c.errors, judged > 0 ? fmt::format("{:.1f} %", 100.0 * c.passed / judged) : "-");
   html += "<h2>Defect positions</h2>" + heatMap(records);
   html += "<h2>Latest parts</h2><table><tr><th>part</th><th>time (UTC)</th><th>verdict</th><th>defects</th></tr>";
   const size_t first = records.size() > 50 ? records.size() - 50 : 0;

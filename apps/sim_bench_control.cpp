@@ -34,7 +34,7 @@ sockaddr_un socketAddress(const fs::path& path) {
 }
 
 class Fd {
-public:
+ public:
   explicit Fd(int fd = -1) : fd_(fd) {}
   ~Fd() {
     if (fd_ >= 0) ::close(fd_);
@@ -43,7 +43,7 @@ public:
   Fd& operator=(const Fd&) = delete;
   int get() const { return fd_; }
 
-private:
+ private:
   int fd_;
 };
 
@@ -53,7 +53,8 @@ bool readLine(int fd, std::string& line, int timeout_ms) {
   line.clear();
   char buffer[512];
   for (;;) {
-    const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(deadline - std::chrono::steady_clock::now());
+    const auto left =
+        std::chrono::duration_cast<std::chrono::milliseconds>(deadline - std::chrono::steady_clock::now());
     pollfd p{fd, POLLIN, 0};
     const int ready = ::poll(&p, 1, static_cast<int>(std::max<long>(0, left.count())));
     if (ready < 0 && errno == EINTR) continue;
@@ -146,7 +147,9 @@ ControlServer::~ControlServer() {
   fs::remove(impl_->path, ec);
 }
 
-const fs::path& ControlServer::path() const { return impl_->path; }
+const fs::path& ControlServer::path() const {
+  return impl_->path;
+}
 
 std::string sendControl(const fs::path& path, const std::string& request, int timeout_ms) {
   const sockaddr_un address = socketAddress(path);

@@ -22,7 +22,7 @@ inline constexpr const char* kControlSocketVariable = "LFI_SIM_BENCH_CONTROL";
 // Errc::Io when the socket cannot be made (the path exists, is too long, or
 // its folder cannot be written).
 class ControlServer {
-public:
+ public:
   using Handler = std::function<std::string(const std::string& request)>;
   ControlServer(std::filesystem::path path, Handler handle);
   ~ControlServer();
@@ -30,7 +30,7 @@ public:
   ControlServer& operator=(const ControlServer&) = delete;
   const std::filesystem::path& path() const;
 
-private:
+ private:
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };

@@ -92,7 +92,7 @@ inline std::vector<double> bestSecondsInTurns(int repeats, const std::vector<std
 // A fresh folder `<parent>/<prefix>-XXXXXX` for a benchmark's files, removed
 // with everything in it at the end.
 class TemporaryFolder {
-public:
+ public:
   TemporaryFolder(const std::filesystem::path& parent, const std::string& prefix) {
     std::string pattern = (parent / (prefix + "-XXXXXX")).string();
     if (!::mkdtemp(pattern.data()))
@@ -107,7 +107,7 @@ public:
   TemporaryFolder& operator=(const TemporaryFolder&) = delete;
   const std::filesystem::path& path() const { return path_; }
 
-private:
+ private:
   std::filesystem::path path_;
 };
 

@@ -12,11 +12,11 @@
 #include "bench_util.h"
 #include "gige_device_process.h"
 
-#include <CLI/CLI.hpp>
 #include <arv.h>
 #include <fmt/format.h>
 #include <signal.h>
 #include <unistd.h>
+#include <CLI/CLI.hpp>
 
 #include <chrono>
 #include <cstring>
@@ -26,7 +26,6 @@
 #include <string>
 #include <thread>
 #include <vector>
-
 
 namespace {
 
@@ -38,12 +37,11 @@ double seconds(Clock::time_point a, Clock::time_point b) {
   return std::chrono::duration<double>(b - a).count();
 }
 
-
 struct Result {
   double fps = 0;
   double megabytesPerSecond = 0;
-  std::uint64_t lost = 0;  // id gaps (dropped frames, underruns and timeouts among them) + incomplete frames
-  double readyGrab_us = 0; // mean cost of one grab when the frame is already waiting
+  std::uint64_t lost = 0;   // id gaps (dropped frames, underruns and timeouts among them) + incomplete frames
+  double readyGrab_us = 0;  // mean cost of one grab when the frame is already waiting
 };
 
 constexpr int kBuffers = 16;
@@ -122,8 +120,8 @@ Result benchPlain(int frames, double rate, int size, lfi::PixelFormat format) {
   check(error, "arv_camera_new_with_device");
   arv_camera_set_region(camera, 0, 0, size, size, &error);
   check(error, "arv_camera_set_region");
-  arv_camera_set_pixel_format(camera, format == lfi::PixelFormat::Mono8 ? ARV_PIXEL_FORMAT_MONO_8
-                                                                        : ARV_PIXEL_FORMAT_MONO_16, &error);
+  arv_camera_set_pixel_format(
+      camera, format == lfi::PixelFormat::Mono8 ? ARV_PIXEL_FORMAT_MONO_8 : ARV_PIXEL_FORMAT_MONO_16, &error);
   check(error, "arv_camera_set_pixel_format");
   arv_camera_set_exposure_time(camera, 2000, &error);
   check(error, "arv_camera_set_exposure_time");
@@ -177,7 +175,6 @@ Result benchPlain(int frames, double rate, int size, lfi::PixelFormat format) {
   r.lost = lost;
   return r;
 }
-
 
 int run(int frames, double rate, int size, lfi::PixelFormat format, int rounds) {
   // The reference lens over its back light, size x size pixels over the same 60 mm field, 4 samples per pixel.
@@ -239,22 +236,24 @@ int run(int frames, double rate, int size, lfi::PixelFormat format, int rounds) 
       if (o.readyGrab_us < 1000 && p.readyGrab_us < 1000) grabExtra_us.push_back(o.readyGrab_us - p.readyGrab_us);
     }
     const auto fps = lfi::bench::spreadOf(fpsRatio);
-    fmt::print("frames/s ours / plain: {:.3f} (median of {} rounds; {:.3f}-{:.3f}); lost frames over all rounds {} "
-               "(ours), {} (plain) (target >= 0.95, 0 lost; both clients stream at the device's rate, so this "
-               "shows frames lost or late, not the grab's cost)\n",
-               fps.median, rounds, fps.low, fps.high, lostOurs, lostPlain);
+    fmt::print(
+        "frames/s ours / plain: {:.3f} (median of {} rounds; {:.3f}-{:.3f}); lost frames over all rounds {} "
+        "(ours), {} (plain) (target >= 0.95, 0 lost; both clients stream at the device's rate, so this "
+        "shows frames lost or late, not the grab's cost)\n",
+        fps.median, rounds, fps.low, fps.high, lostOurs, lostPlain);
     if (!grabExtra_us.empty()) {
       // The overhead's floor: the copy of a frame's bytes into the caller's image (measured here).
       const size_t bytes = static_cast<size_t>(megabytes * 1e6);
       std::vector<unsigned char> from(bytes, 1), to(bytes, 2);
       const double copy_us = 1e6 * lfi::bench::bestSeconds(200, [&] {
-        std::memcpy(to.data(), from.data(), bytes);
-        asm volatile("" : : "r"(to.data()) : "memory");
-      });
+                               std::memcpy(to.data(), from.data(), bytes);
+                               asm volatile("" : : "r"(to.data()) : "memory");
+                             });
       const auto extra = lfi::bench::spreadOf(grabExtra_us);
-      fmt::print("per-frame overhead of our grab path over a bare pop/push (copy into the cv::Mat included): "
-                 "{:.1f} us (median of {} rounds; {:.1f}-{:.1f}); memcpy of a frame: {:.1f} us\n", extra.median,
-                 grabExtra_us.size(), extra.low, extra.high, copy_us);
+      fmt::print(
+          "per-frame overhead of our grab path over a bare pop/push (copy into the cv::Mat included): "
+          "{:.1f} us (median of {} rounds; {:.1f}-{:.1f}); memcpy of a frame: {:.1f} us\n",
+          extra.median, grabExtra_us.size(), extra.low, extra.high, copy_us);
     } else {
       fmt::print("per-frame overhead: not measured (the device did not keep up with {} Hz, no frames were waiting)\n",
                  rate);

@@ -28,18 +28,18 @@
 
 #include "lfi/controller/controller.h"
 #include "lfi/drivers/camera.h"
+#include "lfi/drivers/camera_registry.h"
 #include "lfi/drivers/capture_registry.h"
 #include "lfi/drivers/display_registry.h"
 #include "lfi/drivers/light_field_capture.h"
-#include "lfi/drivers/camera_registry.h"
 #include "lfi/sim/devices/sim_bench.h"
 #include "lfi/sim/devices/sim_camera.h"
 
 #include "bench_util.h"
 
-#include <CLI/CLI.hpp>
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
+#include <CLI/CLI.hpp>
 
 #include <opencv2/core.hpp>
 
@@ -111,12 +111,13 @@ int run(int argc, char** argv) {
   };
   for (int turn = 0; turn < turns; ++turn) {
     LightField reference;
-    const auto [c, cb] = inTurn(turn % 2 == 1, [&] { reference = controller.captureReference(); },
-                                [&] { (void)capture->capture({}); });
+    const auto [c, cb] = inTurn(
+        turn % 2 == 1, [&] { reference = controller.captureReference(); }, [&] { (void)capture->capture({}); });
     emitTime.push_back(secondsOf([&] { controller.emit(reference); }));
     // The display's version changed with this emit: the camera and the bound's imager each render it anew.
-    const auto [i, ib] = inTurn(turn % 2 == 1, [&] { image = controller.inspect(); },
-                                [&] { imager.capture(imagerSettings, 1000 + turn, boundFrame); });
+    const auto [i, ib] = inTurn(
+        turn % 2 == 1, [&] { image = controller.inspect(); },
+        [&] { imager.capture(imagerSettings, 1000 + turn, boundFrame); });
     captureTime.push_back(c), captureBound.push_back(cb), inspectTime.push_back(i), inspectBound.push_back(ib);
     captureRatio.push_back(c / cb);
     inspectRatio.push_back(i / ib);
@@ -126,9 +127,10 @@ int run(int argc, char** argv) {
   // draws: the two images' means agree to their noise, and they are lit (a dark panel reads about 0.4 DN).
   const double inspected = cv::mean(image)[0], bound = cv::mean(boundFrame)[0];
   if (image.size() != boundFrame.size() || !(bound > 2) || !(std::abs(inspected - bound) < 0.02 * bound + 0.5))
-    throw std::runtime_error(fmt::format("self-check: the inspection image ({} x {}, mean {:.2f} DN) is not the "
-                                         "bound's frame ({} x {}, mean {:.2f} DN)", image.cols, image.rows, inspected,
-                                         boundFrame.cols, boundFrame.rows, bound));
+    throw std::runtime_error(
+        fmt::format("self-check: the inspection image ({} x {}, mean {:.2f} DN) is not the "
+                    "bound's frame ({} x {}, mean {:.2f} DN)",
+                    image.cols, image.rows, inspected, boundFrame.cols, boundFrame.rows, bound));
 
   auto best = [](const std::vector<double>& v) { return *std::min_element(v.begin(), v.end()); };
   const LightFieldGeometry g = capture->geometry();

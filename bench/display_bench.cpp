@@ -28,8 +28,8 @@
 
 #include "bench_util.h"
 
-#include <CLI/CLI.hpp>
 #include <fmt/format.h>
+#include <CLI/CLI.hpp>
 
 #include <opencv2/core.hpp>
 
@@ -89,9 +89,10 @@ void benchClass(DisplayInfo info, bool mono, int repeats) {
     if (std::abs(panel.ptr<std::uint8_t>(row)[col * sub + k] - level) > 0.5 + 1e-6) ++mismatches;
   }
   if (mismatches > 0)
-    throw std::runtime_error(fmt::format("self-check ({}): {} of 2000 subpixels differ from the chief ray's "
-                                         "radiance by more than the rounding",
-                                         toString(info.optics.type), mismatches));
+    throw std::runtime_error(
+        fmt::format("self-check ({}): {} of 2000 subpixels differ from the chief ray's "
+                    "radiance by more than the rounding",
+                    toString(info.optics.type), mismatches));
 
   const std::size_t bytes = panel.total() * panel.elemSize();
   std::vector<unsigned char> copy(bytes, 1);  // touched: no page faults inside the timing
@@ -114,12 +115,11 @@ void benchClass(DisplayInfo info, bool mono, int repeats) {
 
   const double subpixels = static_cast<double>(info.panelWidth_px) * info.panelHeight_px * info.subpixelsPerPixel();
   fmt::print("{}: panel {} x {} {} ({:.1f} MB), light field {} x {} x {}^2, {} OpenCV threads, best of {}\n",
-             toString(info.optics.type), info.panelWidth_px, info.panelHeight_px, toString(info.subpixels),
-             bytes / 1e6, g.spatialX, g.spatialY, g.angular, threads, repeats);
+             toString(info.optics.type), info.panelWidth_px, info.panelHeight_px, toString(info.subpixels), bytes / 1e6,
+             g.spatialX, g.spatialY, g.angular, threads, repeats);
   fmt::print("  encode ({} threads)  {:8.2f} ms  {:6.1f} M subpixels/s\n", threads, 1e3 * encode,
              subpixels / encode / 1e6);
-  fmt::print("  encode (1 thread)    {:8.2f} ms  {:6.1f} M subpixels/s\n", 1e3 * encode1,
-             subpixels / encode1 / 1e6);
+  fmt::print("  encode (1 thread)    {:8.2f} ms  {:6.1f} M subpixels/s\n", 1e3 * encode1, subpixels / encode1 / 1e6);
   fmt::print("  memcpy same bytes    {:8.3f} ms  {:6.2f} GB/s\n", 1e3 * copyTime, bytes / copyTime / 1e9);
   fmt::print("  ratio encode/memcpy  {:8.0f} x ({} threads), {:.0f} x (1 thread)\n", encode / copyTime, threads,
              encode1 / copyTime);

@@ -30,18 +30,18 @@
 
 #include "bench_util.h"
 
-#include <CLI/CLI.hpp>
 #include <OpenEXR/ImfChannelList.h>
 #include <OpenEXR/ImfFrameBuffer.h>
 #include <OpenEXR/ImfHeader.h>
 #include <OpenEXR/ImfInputFile.h>
 #include <OpenEXR/ImfOutputFile.h>
 #include <OpenEXR/ImfThreading.h>
-#include <boost/random/normal_distribution.hpp>
-#include <boost/random/poisson_distribution.hpp>
 #include <fcntl.h>
 #include <fmt/format.h>
 #include <unistd.h>
+#include <CLI/CLI.hpp>
+#include <boost/random/normal_distribution.hpp>
+#include <boost/random/poisson_distribution.hpp>
 
 #include <opencv2/core.hpp>
 
@@ -67,7 +67,9 @@ using lfi::bench::spreadOf;
 
 namespace {
 
-void keep(const void* p) { asm volatile("" : : "r"(p) : "memory"); }
+void keep(const void* p) {
+  asm volatile("" : : "r"(p) : "memory");
+}
 
 void printRatio(const char* label, const lfi::bench::TurnSeconds& s, size_t a, size_t b) {
   const auto r = spreadOf(ratiosByTurn(s, a, b));
@@ -93,8 +95,7 @@ void sensorModel(int width, int height, int turns) {
   const double meanElectrons = 0.5 * model.electronsPerUnit;
   cv::Mat out;
   const auto s = secondsInTurns(
-      turns, {[&] { out = model.capture(radiance, 2, 1); },
-              [&] { out = model.capture(radiance, 3, threads); },
+      turns, {[&] { out = model.capture(radiance, 2, 1); }, [&] { out = model.capture(radiance, 3, threads); },
               [&] {  // the bound: the draws alone, with no per-pixel set-up
                 std::mt19937_64 engine(4);
                 boost::random::poisson_distribution<long long, double> shot(meanElectrons);
@@ -161,13 +162,20 @@ void mono12(int width, int height, int turns) {
 
   const size_t bytes = pixels.total() * pixels.elemSize();
   cv::Mat copy(pixels.size(), pixels.type(), cv::Scalar(1));  // touched: no page faults inside the timing
-  const auto s = secondsInTurns(turns, {[&] { unpackMono12(gev.data(), gev.size(), width, height,
-                                                           Mono12Packing::GigEVisionPacked, a); keep(a.data); },
-                                        [&] { unpackMono12(pfnc.data(), pfnc.size(), width, height,
-                                                           Mono12Packing::Pfnc, b); keep(b.data); },
-                                        [&] { std::memcpy(copy.data, pixels.data, bytes); keep(copy.data); }});
-  fmt::print("Mono12 unpack, {} x {} ({:.1f} MB packed -> {:.1f} MB)\n", width, height, gev.size() / 1e6,
-             bytes / 1e6);
+  const auto s =
+      secondsInTurns(turns, {[&] {
+                               unpackMono12(gev.data(), gev.size(), width, height, Mono12Packing::GigEVisionPacked, a);
+                               keep(a.data);
+                             },
+                             [&] {
+                               unpackMono12(pfnc.data(), pfnc.size(), width, height, Mono12Packing::Pfnc, b);
+                               keep(b.data);
+                             },
+                             [&] {
+                               std::memcpy(copy.data, pixels.data, bytes);
+                               keep(copy.data);
+                             }});
+  fmt::print("Mono12 unpack, {} x {} ({:.1f} MB packed -> {:.1f} MB)\n", width, height, gev.size() / 1e6, bytes / 1e6);
   fmt::print("  Mono12Packed (GigE Vision)          {:8.3f} ms  {:6.0f} M pixels/s\n", 1e3 * bestOf(s, 0),
              pixels.total() / bestOf(s, 0) / 1e6);
   fmt::print("  Mono12p (PFNC)                      {:8.3f} ms  {:6.0f} M pixels/s\n", 1e3 * bestOf(s, 1),
@@ -205,8 +213,9 @@ cv::Mat readPlainExr(const fs::path& path) {
   const Imath::Box2i window = file.header().dataWindow();
   cv::Mat pixels(window.max.y - window.min.y + 1, window.max.x - window.min.x + 1, CV_32FC1);
   Imf::FrameBuffer frame;
-  char* base = pixels.ptr<char>() - (static_cast<std::ptrdiff_t>(window.min.y) * static_cast<std::ptrdiff_t>(pixels.step) +
-                                     window.min.x * static_cast<std::ptrdiff_t>(sizeof(float)));
+  char* base =
+      pixels.ptr<char>() - (static_cast<std::ptrdiff_t>(window.min.y) * static_cast<std::ptrdiff_t>(pixels.step) +
+                            window.min.x * static_cast<std::ptrdiff_t>(sizeof(float)));
   frame.insert("Y", Imf::Slice(Imf::FLOAT, base, sizeof(float), pixels.step));
   file.setFrameBuffer(frame);
   file.readPixels(window.min.y, window.max.y);
@@ -228,11 +237,16 @@ void exrFiles(const char* what, const cv::Mat& pixels, const std::function<void(
   if (!sameBits(readOurs(ours), pixels) || !sameBits(readPlainExr(plain), pixels))
     throw std::runtime_error(fmt::format("self-check: the {} file's pixels differ from those written", what));
   cv::Mat in;
-  const auto s = secondsInTurns(turns, {[&] { writeOurs(ours); },
-                                        [&] { writePlainExr(plain, pixels, false); },
+  const auto s = secondsInTurns(turns, {[&] { writeOurs(ours); }, [&] { writePlainExr(plain, pixels, false); },
                                         [&] { writePlainExr(plain, pixels, true); },
-                                        [&] { in = readOurs(ours); keep(in.data); },
-                                        [&] { in = readPlainExr(plain); keep(in.data); }});
+                                        [&] {
+                                          in = readOurs(ours);
+                                          keep(in.data);
+                                        },
+                                        [&] {
+                                          in = readPlainExr(plain);
+                                          keep(in.data);
+                                        }});
   const double mb = pixels.total() * pixels.elemSize() / 1e6;
   fmt::print("{} EXR, {} x {} float ({:.1f} MB of pixels, {:.1f} MB file), OpenEXR's pool {} threads, folder {}\n",
              what, pixels.cols, pixels.rows, mb, fs::file_size(ours) / 1e6, Imf::globalThreadCount(), dir.string());
@@ -265,7 +279,8 @@ int run(int argc, char** argv) {
   mono12(width, height, turns);
 
   const lfi::bench::TemporaryFolder dir(parent, "lfi-frame-bench");
-  const LightFieldGeometry g = quick ? LightFieldGeometry{40, 40, 16, 0.05, 30} : LightFieldGeometry{292, 164, 16, 1.0 / 16, 30};
+  const LightFieldGeometry g =
+      quick ? LightFieldGeometry{40, 40, 16, 0.05, 30} : LightFieldGeometry{292, 164, 16, 1.0 / 16, 30};
   LightField lightField(g);
   cv::RNG(11).fill(lightField.lensletImage(), cv::RNG::UNIFORM, 0.0, 1.0);
   exrFiles(

@@ -188,19 +188,18 @@ void benchFormat(const Format& format, cv::Size size, int turns, const Detection
     const cv::Mat& next = clean[static_cast<size_t>((turn + 1) % kPool)].image;
     double tc = 0, td = 0, tcopy = 0, tabs = 0;
     std::vector<Defect> foundClean, foundDefective;
-    const std::function<void()> steps[3] = {
-        [&] { tc = secondsOf([&] { foundClean = finder->find(c.image); }); },
-        [&] { td = secondsOf([&] { foundDefective = finder->find(d.image); }); },
-        [&] {
-          tcopy = secondsOf([&] {
-            std::memcpy(copy.data, c.image.data, bytes);
-            keep(copy.data);
-          });
-          tabs = secondsOf([&] {
-            cv::absdiff(c.image, next, difference);
-            keep(difference.data);
-          });
-        }};
+    const std::function<void()> steps[3] = {[&] { tc = secondsOf([&] { foundClean = finder->find(c.image); }); },
+                                            [&] { td = secondsOf([&] { foundDefective = finder->find(d.image); }); },
+                                            [&] {
+                                              tcopy = secondsOf([&] {
+                                                std::memcpy(copy.data, c.image.data, bytes);
+                                                keep(copy.data);
+                                              });
+                                              tabs = secondsOf([&] {
+                                                cv::absdiff(c.image, next, difference);
+                                                keep(difference.data);
+                                              });
+                                            }};
     for (int k = 0; k < 3; ++k) steps[(turn + k) % 3]();
     check(foundClean, c, "clean frame");
     check(foundDefective, d, "defective frame");

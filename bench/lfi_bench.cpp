@@ -55,11 +55,11 @@
 
 #include "bench_util.h"
 
-#include <CLI/CLI.hpp>
 #include <OpenEXR/ImfRgbaFile.h>
 #include <embree3/rtcore.h>
 #include <fmt/format.h>
 #include <tbb/info.h>
+#include <CLI/CLI.hpp>
 
 #include <chrono>
 #include <cmath>
@@ -75,9 +75,9 @@ using namespace lfi::sim;
 using lfi::bench::bestOf;
 using lfi::bench::bestSeconds;
 using lfi::bench::bestSecondsInTurns;
-using lfi::bench::spreadOf;
 using lfi::bench::ratiosByTurn;
 using lfi::bench::secondsInTurns;
+using lfi::bench::spreadOf;
 
 namespace {
 
@@ -120,8 +120,8 @@ TriangleMesh tessellateLens(double r1, double r2, double tc, double diameter, in
 
 struct RayBatch {
   std::vector<RTCRayHit> rays;
-  std::vector<Ray> exact;                  // the same rays in double precision
-  std::vector<int> startInside, startOn;   // and where they start (Scene::RayPacket)
+  std::vector<Ray> exact;                       // the same rays in double precision
+  std::vector<int> startInside, startOn;        // and where they start (Scene::RayPacket)
   std::vector<std::pair<size_t, int>> packets;  // first ray and count: one segment of a group of samples
   double samples = 0;
 };
@@ -133,7 +133,7 @@ RayBatch recordRays(const Scene& scene, const TelecentricCamera& cam, int spp) {
   RayBatch batch;
   Sampler sampler(7, 0);
   std::vector<std::vector<Vec3>> group;
-  std::vector<int> on;      // per path of the group: the object its current segment leaves from
+  std::vector<int> on;       // per path of the group: the object its current segment leaves from
   std::vector<Vec3> normal;  // and that object's outward normal there
   auto flush = [&] {
     on.assign(group.size(), -1);
@@ -190,8 +190,8 @@ std::vector<double> readLuminance(const char* path, int& width, int& height) {
   Imf::RgbaInputFile file(path);
   const Imath::Box2i dw = file.dataWindow();
   if (dw.min.x != 0 || dw.min.y != 0)
-    throw std::runtime_error(fmt::format("{}: its data window starts at ({}, {}), not (0, 0)", path, dw.min.x,
-                                         dw.min.y));
+    throw std::runtime_error(
+        fmt::format("{}: its data window starts at ({}, {}), not (0, 0)", path, dw.min.x, dw.min.y));
   width = dw.max.x + 1;
   height = dw.max.y + 1;
   std::vector<Imf::Rgba> pixels(static_cast<size_t>(width) * static_cast<size_t>(height));
@@ -270,8 +270,7 @@ static int run(int argc, char** argv) {
     for (auto& copy : copies) copy.join();
   };
   const int turns = quick ? 3 : 7;
-  const auto scalingRuns =
-      secondsInTurns(turns, {renderWith(scene, 1), renderWith(scene, threads), independentCopies});
+  const auto scalingRuns = secondsInTurns(turns, {renderWith(scene, 1), renderWith(scene, threads), independentCopies});
   for (size_t i = 0; i < 2; ++i)
     fmt::print("  tracer   {} thread(s): {:8.3f} M samples/s\n", i ? threads : 1,
                samples / bestOf(scalingRuns, i) / 1e6);
@@ -284,10 +283,12 @@ static int run(int argc, char** argv) {
              share = spreadOf(scalingShare);
   fmt::print("  scaling  1 -> {} threads: {:.2f}x (median of {} turns; {:.2f}-{:.2f}; target >= 1.8)\n", threads,
              scaling.median, turns, scaling.low, scaling.high);
-  fmt::print("  bound    {} independent 1-thread renders at once: {:.2f}x one's throughput (median; {:.2f}-{:.2f}: "
-             "the machine's own scaling)\n", threads, machine.median, machine.low, machine.high);
-  fmt::print("  ratio    tracer's scaling / the machine's: {:.2f} (median of {} turns; {:.2f}-{:.2f})\n",
-             share.median, turns, share.low, share.high);
+  fmt::print(
+      "  bound    {} independent 1-thread renders at once: {:.2f}x one's throughput (median; {:.2f}-{:.2f}: "
+      "the machine's own scaling)\n",
+      threads, machine.median, machine.low, machine.high);
+  fmt::print("  ratio    tracer's scaling / the machine's: {:.2f} (median of {} turns; {:.2f}-{:.2f})\n", share.median,
+             turns, share.low, share.high);
 
   // The study's three illuminations behind the same lens and camera: a
   // collimated back light (0.0087 rad), the Lambertian one above, and a light
@@ -331,8 +332,8 @@ static int run(int argc, char** argv) {
   const double raysPerSample = static_cast<double>(batch.rays.size()) / batch.samples;
   RTCDevice device = rtcNewDevice(nullptr);
   if (device == nullptr)
-    throw std::runtime_error(fmt::format("embree: cannot create a device (error {})",
-                                         static_cast<int>(rtcGetDeviceError(nullptr))));
+    throw std::runtime_error(
+        fmt::format("embree: cannot create a device (error {})", static_cast<int>(rtcGetDeviceError(nullptr))));
   RTCScene raw = rtcNewScene(device);
   const TriangleMesh lens = tessellateLens(100, -100, 7, 50, 256, 512);
   {
@@ -421,10 +422,11 @@ static int run(int argc, char** argv) {
       if (object != exact.object || (exact.valid() && std::abs(rh.ray.tfar - exact.t) > 0.01)) ++differ;
     }
     if (differ > batch.rays.size() / 1000)
-      throw std::runtime_error(fmt::format("self-check: the bounds' lens and back light answer {} of {} rays unlike "
-                                           "the scene of reference.toml (are its lens and back light still R = 100, "
-                                           "Ø50, 7 mm at the origin and 400 x 400 at z = -100?)", differ,
-                                           batch.rays.size()));
+      throw std::runtime_error(
+          fmt::format("self-check: the bounds' lens and back light answer {} of {} rays unlike "
+                      "the scene of reference.toml (are its lens and back light still R = 100, "
+                      "Ø50, 7 mm at the origin and 400 x 400 at z = -100?)",
+                      differ, batch.rays.size()));
     fmt::print("  check    the bounds' triangle lens and quad answer as the scene: {} of {} rays differ (grazing)\n",
                differ, batch.rays.size());
   }
@@ -438,9 +440,9 @@ static int run(int argc, char** argv) {
   std::array<RTCBounds, 2> hullBounds;
   for (size_t i = 0; i < 2; ++i) {
     const Bounds b = worldBounds(d.objects[i]);
-    hullBounds[i] = {static_cast<float>(b.lo.x - 1e-3), static_cast<float>(b.lo.y - 1e-3),
-                     static_cast<float>(b.lo.z - 1e-3), 0, static_cast<float>(b.hi.x + 1e-3),
-                     static_cast<float>(b.hi.y + 1e-3), static_cast<float>(b.hi.z + 1e-3), 0};
+    hullBounds[i] = {
+        static_cast<float>(b.lo.x - 1e-3), static_cast<float>(b.lo.y - 1e-3), static_cast<float>(b.lo.z - 1e-3), 0,
+        static_cast<float>(b.hi.x + 1e-3), static_cast<float>(b.hi.y + 1e-3), static_cast<float>(b.hi.z + 1e-3), 0};
   }
   for (RTCBounds& bounds : hullBounds) {
     RTCGeometry g = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_USER);
@@ -517,8 +519,10 @@ static int run(int argc, char** argv) {
              best(1) / 1e6, lens.triangles.size());
   fmt::print("  bound    1 thread:  {:8.3f} M rays/s  (bare Embree rtcIntersect16, same rays and triangles)\n",
              best(2) / 1e6);
-  fmt::print("  bound    1 thread:  {:8.3f} M rays/s  (bare Embree rtcIntersect16, lens and back light as no-op user "
-             "primitives, coherent)\n", best(3) / 1e6);
+  fmt::print(
+      "  bound    1 thread:  {:8.3f} M rays/s  (bare Embree rtcIntersect16, lens and back light as no-op user "
+      "primitives, coherent)\n",
+      best(3) / 1e6);
   fmt::print("  bound    1 thread:  {:8.3f} M rays/s  (the same, incoherent: the tracer's mode)\n", best(4) / 1e6);
   fmt::print("  tracer   1 thread:  {:8.3f} M rays/s  ({:.2f} rays per sample; timed in turns with the bounds)\n",
              best(0) / 1e6, raysPerSample);
@@ -533,21 +537,28 @@ static int run(int argc, char** argv) {
     embreeRatio.push_back((speed(turn, 6) / embreeRaysPerSample) / (speed(turn, 0) / raysPerSample));
   }
   const auto bound = spreadOf(boundRatio), queries = spreadOf(queryRatio), embree = spreadOf(embreeRatio);
-  fmt::print("  ratio    bound / tracer per ray, 1 thread: {:.2f} (median of {} turns; {:.2f}-{:.2f}; bound: the "
-             "fastest of the above in each turn, Embree with no exact crossings)\n",
-             bound.median, turns, bound.low, bound.high);
-  fmt::print("  bound    1 thread:  {:8.3f} M rays/s  (no-op user primitives, incoherent, only the {:.2f} rays per "
-             "sample the tracer sends to Embree)\n", best(6) / 1e6, embreeRaysPerSample);
+  fmt::print(
+      "  ratio    bound / tracer per ray, 1 thread: {:.2f} (median of {} turns; {:.2f}-{:.2f}; bound: the "
+      "fastest of the above in each turn, Embree with no exact crossings)\n",
+      bound.median, turns, bound.low, bound.high);
+  fmt::print(
+      "  bound    1 thread:  {:8.3f} M rays/s  (no-op user primitives, incoherent, only the {:.2f} rays per "
+      "sample the tracer sends to Embree)\n",
+      best(6) / 1e6, embreeRaysPerSample);
   fmt::print("  ratio    that bound / tracer per sample, 1 thread: {:.2f} (median of {} turns; {:.2f}-{:.2f})\n",
              embree.median, turns, embree.low, embree.high);
-  fmt::print("  queries  1 thread:  {:8.3f} M rays/s  (the tracer's own ray queries, Scene::intersect, same rays and "
-             "packets; {:.0f} % hit)\n", best(5) / 1e6, 100.0 * static_cast<double>(hitCount) / n);
-  fmt::print("  ratio    queries / tracer per ray, 1 thread: {:.2f} (median of {} turns; {:.2f}-{:.2f}; what "
-             "sampling, shading and bookkeeping add; accepted at about 2)\n",
-             queries.median, turns, queries.low, queries.high);
-  fmt::print("  ceiling  {} threads at the fastest bound: {:.1f} M samples/s (Embree alone, zero shading, scaled as the "
-             "machine's independent renders)\n", threads,
-             std::max({best(1), best(2), best(3), best(4)}) * machine.median / raysPerSample / 1e6);
+  fmt::print(
+      "  queries  1 thread:  {:8.3f} M rays/s  (the tracer's own ray queries, Scene::intersect, same rays and "
+      "packets; {:.0f} % hit)\n",
+      best(5) / 1e6, 100.0 * static_cast<double>(hitCount) / n);
+  fmt::print(
+      "  ratio    queries / tracer per ray, 1 thread: {:.2f} (median of {} turns; {:.2f}-{:.2f}; what "
+      "sampling, shading and bookkeeping add; accepted at about 2)\n",
+      queries.median, turns, queries.low, queries.high);
+  fmt::print(
+      "  ceiling  {} threads at the fastest bound: {:.1f} M samples/s (Embree alone, zero shading, scaled as the "
+      "machine's independent renders)\n",
+      threads, std::max({best(1), best(2), best(3), best(4)}) * machine.median / raysPerSample / 1e6);
   rtcReleaseScene(raw);
   rtcReleaseDevice(device);
   return 0;

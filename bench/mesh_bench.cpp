@@ -20,8 +20,8 @@
 
 #include "bench_util.h"
 
-#include <CLI/CLI.hpp>
 #include <fmt/format.h>
+#include <CLI/CLI.hpp>
 
 #include <array>
 #include <cerrno>
@@ -141,19 +141,19 @@ int run(int argc, char** argv) {
   // Self-check: both files give the same mesh, and it bounds a solid.
   const sim::TriangleMesh fromPly = sim::loadMesh(ply), fromObj = sim::loadMesh(obj);
   if (fromPly.triangles.size() != fromObj.triangles.size() || fromPly.vertices.size() != fromObj.vertices.size())
-    throw std::runtime_error(fmt::format("self-check: the PLY loads as {} vertices and {} triangles, the OBJ as {} "
-                                         "and {}", fromPly.vertices.size(), fromPly.triangles.size(),
-                                         fromObj.vertices.size(), fromObj.triangles.size()));
+    throw std::runtime_error(fmt::format(
+        "self-check: the PLY loads as {} vertices and {} triangles, the OBJ as {} "
+        "and {}",
+        fromPly.vertices.size(), fromPly.triangles.size(), fromObj.vertices.size(), fromObj.triangles.size()));
   if (const auto fault = sim::meshClosureFault(fromPly))
     throw std::runtime_error("self-check: the sphere is not closed: " + *fault);
 
   std::vector<char> bytes;
   sim::TriangleMesh mesh;
   std::optional<std::string> fault;
-  const auto s = secondsInTurns(turns, {[&] { bytes = readBytes(ply); },
-                                        [&] { mesh = sim::loadMesh(ply); },
-                                        [&] { mesh = sim::loadMesh(obj); },
-                                        [&] { fault = sim::meshClosureFault(fromPly); }});
+  const auto s =
+      secondsInTurns(turns, {[&] { bytes = readBytes(ply); }, [&] { mesh = sim::loadMesh(ply); },
+                             [&] { mesh = sim::loadMesh(obj); }, [&] { fault = sim::meshClosureFault(fromPly); }});
   const double megabytes = static_cast<double>(fs::file_size(ply)) / 1e6;
   fmt::print("lfi-mesh-bench: UV sphere, {} vertices, {} triangles; binary PLY {:.1f} MB, OBJ {:.1f} MB; {} turns\n",
              sphere.vertices.size(), sphere.triangles.size(), megabytes, fs::file_size(obj) / 1e6, turns);

@@ -15,8 +15,8 @@
 #include "bench_util.h"
 #include "lfi/emulation/emulated_usb_display.h"
 
-#include <CLI/CLI.hpp>
 #include <fmt/format.h>
+#include <CLI/CLI.hpp>
 #include <opencv2/core.hpp>
 
 #include <chrono>
@@ -46,8 +46,8 @@ static int run(int argc, char** argv) {
   const double megabytes = static_cast<double>(panel.total() * panel.elemSize()) / 1e6;
   std::vector<unsigned char> copy(panel.total() * panel.elemSize());
   const double copySeconds = bestSeconds(20, [&] { std::memcpy(copy.data(), panel.data, copy.size()); });
-  fmt::print("lfi-usb-display-bench: {}x{} RGB panel, {:.1f} MB per frame, best of {} frames\n", panel.cols,
-             panel.rows, megabytes, frames);
+  fmt::print("lfi-usb-display-bench: {}x{} RGB panel, {:.1f} MB per frame, best of {} frames\n", panel.cols, panel.rows,
+             megabytes, frames);
   fmt::print("  memcpy of the same bytes:     {:8.2f} ms  ({:.0f} MB/s)\n", copySeconds * 1e3, megabytes / copySeconds);
   for (int inFlight : {1, 4}) {
     lfi::UsbDisplayOptions options;

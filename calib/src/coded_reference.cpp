@@ -16,13 +16,16 @@ void checkMask(const char* what, cv::Size camera, const cv::Mat& mask) {
          mask.cols, mask.rows, cv::typeToString(mask.type()), camera.width, camera.height);
 }
 
-bool inMask(const cv::Mat& mask, int row, int col) { return mask.empty() || mask.at<std::uint8_t>(row, col) != 0; }
+bool inMask(const cv::Mat& mask, int row, int col) {
+  return mask.empty() || mask.at<std::uint8_t>(row, col) != 0;
+}
 
 void checkImage(const char* what, const PanelLinks& links, const cv::Mat& image, const cv::Mat& mask) {
   if (image.size() != links.cameraSize() || image.channels() != 1)
-    fail(Errc::InvalidArgument, "{}: the image ({} x {}, {} channels) is not a single-channel image of the camera's "
-         "{} x {}", what, image.cols, image.rows, image.channels(), links.cameraSize().width,
-         links.cameraSize().height);
+    fail(Errc::InvalidArgument,
+         "{}: the image ({} x {}, {} channels) is not a single-channel image of the camera's "
+         "{} x {}",
+         what, image.cols, image.rows, image.channels(), links.cameraSize().width, links.cameraSize().height);
   checkMask(what, links.cameraSize(), mask);
 }
 
@@ -48,9 +51,7 @@ int PanelLinks::add(const PanelCorrespondence& c, const cv::Mat& mask, double mi
   for (int row = 0; row < camera_.height; ++row)
     for (int col = 0; col < camera_.width; ++col) {
       const cv::Vec2i first = c.panel.at<cv::Vec2i>(row, col);
-      if (first[0] < 0 || !inMask(mask, row, col) ||
-          c.confidence.at<float>(row, col) < minConfidence)
-        continue;
+      if (first[0] < 0 || !inMask(mask, row, col) || c.confidence.at<float>(row, col) < minConfidence) continue;
       const cv::Vec2i second = two ? c.second.at<cv::Vec2i>(row, col) : cv::Vec2i(-1, -1);
       const cv::Vec2f share = two ? c.share.at<cv::Vec2f>(row, col) : cv::Vec2f(1, 1);
       const int xs[2] = {first[0], second[0]}, ys[2] = {first[1], second[1]};
@@ -60,8 +61,10 @@ int PanelLinks::add(const PanelCorrespondence& c, const cv::Mat& mask, double mi
         for (int j = 0; j < 2; ++j) {
           if (xs[i] < 0 || ys[j] < 0) continue;
           if (xs[i] >= panel_.width || ys[j] >= panel_.height)
-            fail(Errc::InvalidArgument, "{}: camera pixel ({}, {}) is decoded to panel pixel ({}, {}), outside the "
-                 "{} x {} panel", what, col, row, xs[i], ys[j], panel_.width, panel_.height);
+            fail(Errc::InvalidArgument,
+                 "{}: camera pixel ({}, {}) is decoded to panel pixel ({}, {}), outside the "
+                 "{} x {} panel",
+                 what, col, row, xs[i], ys[j], panel_.width, panel_.height);
           links_.push_back({camera, ys[j] * panel_.width + xs[i], xShare[i] * yShare[j]});
         }
       unsigned char& linked = linked_[static_cast<size_t>(camera)];
@@ -101,8 +104,8 @@ Uniformity uniformity(const cv::Mat& image, const PanelLinks& links, const cv::M
   return u;
 }
 
-cv::Mat refinePanelWeights(const cv::Mat& weights, const PanelLinks& links, const cv::Mat& image,
-                           const cv::Mat& mask, double target_dn, double gain) {
+cv::Mat refinePanelWeights(const cv::Mat& weights, const PanelLinks& links, const cv::Mat& image, const cv::Mat& mask,
+                           double target_dn, double gain) {
   constexpr const char* what = "refine";
   checkImage(what, links, image, mask);
   if (weights.size() != links.panelSize() || weights.type() != CV_32FC1)

@@ -38,10 +38,10 @@ LightField propagateLightField(const LightField& lightField, double dz, LightFie
 
 namespace {
 
-constexpr double kPeakLevel = 0.25;        // the flanks' level: this fraction of the way down from the peak
-constexpr double kClearAboveNoise = 10.0;  // the scan's rise must exceed this many times the noise of a mean
+constexpr double kPeakLevel = 0.25;            // the flanks' level: this fraction of the way down from the peak
+constexpr double kClearAboveNoise = 10.0;      // the scan's rise must exceed this many times the noise of a mean
 constexpr double kSecondPeakAboveNoise = 3.0;  // a second peak: this many times the noise above the level
-constexpr double kDriftAboveNoise = 5.0;  // the brightest candidate's two means may differ by this many noises
+constexpr double kDriftAboveNoise = 5.0;       // the brightest candidate's two means may differ by this many noises
 
 std::string scanTable(const std::vector<double>& candidates, const std::vector<double>& brightness) {
   std::string table;
@@ -60,8 +60,10 @@ void checkDisplayDistanceCandidates(const LightFieldGeometry& reference, const s
       std::adjacent_find(candidates.begin(), candidates.end(), std::greater_equal<>()) != candidates.end())
     fail(Errc::InvalidArgument, "{}: candidates must be finite and strictly increasing", kWhat);
   if (reference.distance_mm <= 0)
-    fail(Errc::InvalidArgument, "{}: the reference light field does not say how far from the part it was captured "
-         "(its distance_mm, the file's lfi.distance_mm, is 0: not set); the scan moves the display from there", kWhat);
+    fail(Errc::InvalidArgument,
+         "{}: the reference light field does not say how far from the part it was captured "
+         "(its distance_mm, the file's lfi.distance_mm, is 0: not set); the scan moves the display from there",
+         kWhat);
   if (const double distance = reference.distance_mm; distance + candidates.front() <= 0)
     fail(Errc::InvalidArgument, "{}: candidate {:+g} mm would put the display at or past the part ({} mm away)", kWhat,
          candidates.front(), distance);
@@ -102,8 +104,10 @@ DisplayDistanceScan calibrateDisplayDistance(const LightField& captured, const I
     image.convertTo(f, CV_32F);
     if (size.empty()) size = f.size();
     if (f.size() != size)
-      fail(Errc::Device, "{}: the image {} is {}x{}, the first one (with the display dark) {}x{}: did the camera's "
-           "region or binning change during the scan?", kWhat, what, f.cols, f.rows, size.width, size.height);
+      fail(Errc::Device,
+           "{}: the image {} is {}x{}, the first one (with the display dark) {}x{}: did the camera's "
+           "region or binning change during the scan?",
+           kWhat, what, f.cols, f.rows, size.width, size.height);
     if (!roi.empty() && roi.size() != f.size())
       fail(Errc::InvalidArgument, "{}: the ROI is {}x{}, the image {} {}x{}", kWhat, roi.cols, roi.rows, what, f.cols,
            f.rows);
@@ -152,14 +156,16 @@ DisplayDistanceScan calibrateDisplayDistance(const LightField& captured, const I
     cv::meanStdDev(brightestImage - again.image, unused, spread, roi);
     scan.noise = std::max(scan.noise, spread[0] / std::sqrt(2.0) / std::sqrt(pixels));
     // (Noise-free images, a renderer's, may still differ in the last bits of their sums.)
-    if (std::abs(again.mean - *highest) > std::max(kDriftAboveNoise * std::sqrt(2.0) * scan.noise,
-                                                   1e-9 * std::abs(*highest)))
-      fail(Errc::Device, "{}: candidate {:+g} mm gave {:.6g} at first and {:.6g} after the scan, apart by more than {} "
-           "times their noise ({:.2g} each): is the display's or the room's light drifting? ({})", kWhat, epsilon,
-           *highest, again.mean, kDriftAboveNoise, scan.noise, scanTable(candidates, scan.brightness));
+    if (std::abs(again.mean - *highest) >
+        std::max(kDriftAboveNoise * std::sqrt(2.0) * scan.noise, 1e-9 * std::abs(*highest)))
+      fail(Errc::Device,
+           "{}: candidate {:+g} mm gave {:.6g} at first and {:.6g} after the scan, apart by more than {} "
+           "times their noise ({:.2g} each): is the display's or the room's light drifting? ({})",
+           kWhat, epsilon, *highest, again.mean, kDriftAboveNoise, scan.noise, scanTable(candidates, scan.brightness));
   }
   if (*highest - *lowest <= kClearAboveNoise * scan.noise || *highest == *lowest)
-    fail(Errc::Device, "{}: the part's brightness hardly changes across the scan ({}; with the display dark {:.6g}, "
+    fail(Errc::Device,
+         "{}: the part's brightness hardly changes across the scan ({}; with the display dark {:.6g}, "
          "the noise of a mean about {:.2g}): is the display showing, the camera unsaturated, the region on the part?",
          kWhat, scanTable(candidates, scan.brightness), scan.dark, scan.noise);
   // The centre of the peak: half-way between where the brightness falls, on
@@ -175,9 +181,10 @@ DisplayDistanceScan calibrateDisplayDistance(const LightField& captured, const I
       const double yk = scan.brightness[k], yj = scan.brightness[j];
       if (yj < scan.level) return candidates[k] + (candidates[j] - candidates[k]) * (yk - scan.level) / (yk - yj);
     }
-    fail(Errc::InvalidArgument, "{}: the brightness does not fall below {:.6g} on the {} side of the brightest "
-         "candidate within the scan ({}): the display's error may lie beyond it; scan further that way", kWhat,
-         scan.level, step < 0 ? "low" : "high", scanTable(candidates, scan.brightness));
+    fail(Errc::InvalidArgument,
+         "{}: the brightness does not fall below {:.6g} on the {} side of the brightest "
+         "candidate within the scan ({}): the display's error may lie beyond it; scan further that way",
+         kWhat, scan.level, step < 0 ? "low" : "high", scanTable(candidates, scan.brightness));
   };
   const double low = crossing(-1), high = crossing(+1);
   // Outside the peak's flanks the brightness must stay below the level: a
@@ -186,10 +193,11 @@ DisplayDistanceScan calibrateDisplayDistance(const LightField& captured, const I
   for (size_t i = 0; i < candidates.size(); ++i)
     if ((candidates[i] < low || candidates[i] > high) &&
         scan.brightness[i] >= scan.level + kSecondPeakAboveNoise * scan.noise)
-      fail(Errc::InvalidArgument, "{}: two peaks: the brightness rises to {:.6g} again at {:+g} mm, above {:.6g}, "
+      fail(Errc::InvalidArgument,
+           "{}: two peaks: the brightness rises to {:.6g} again at {:+g} mm, above {:.6g}, "
            "apart from the brightest one between {:+.3g} and {:+.3g} mm ({}); narrow the scan or the region to the "
-           "part", kWhat, scan.brightness[i], candidates[i], scan.level, low, high,
-           scanTable(candidates, scan.brightness));
+           "part",
+           kWhat, scan.brightness[i], candidates[i], scan.level, low, high, scanTable(candidates, scan.brightness));
   scan.estimate_mm = 0.5 * (low + high);
   scan.width_mm = high - low;
   return scan;

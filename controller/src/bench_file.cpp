@@ -51,9 +51,13 @@ void readCamera(ConfigTable t, BenchFile& b) {
   c.exposure_us = t.number("exposure_us", std::nullopt, 1e-3, 1e9);
   c.gain = t.number("gain", 0.0, -1e3, 1e3);
   const std::string format = t.string("pixel_format", "Mono12", {"Mono8", "Mono12", "Mono16"});
-  c.pixelFormat = format == "Mono8" ? PixelFormat::Mono8 : format == "Mono16" ? PixelFormat::Mono16 : PixelFormat::Mono12;
+  c.pixelFormat = format == "Mono8"    ? PixelFormat::Mono8
+                  : format == "Mono16" ? PixelFormat::Mono16
+                                       : PixelFormat::Mono12;
   const std::string trigger = t.string("trigger", "software", {"software", "free_run", "line"});
-  c.trigger = trigger == "free_run" ? TriggerMode::FreeRun : trigger == "line" ? TriggerMode::Line : TriggerMode::Software;
+  c.trigger = trigger == "free_run" ? TriggerMode::FreeRun
+              : trigger == "line"   ? TriggerMode::Line
+                                    : TriggerMode::Software;
   if (t.has("trigger_line") && c.trigger != TriggerMode::Line)
     fail(Errc::Config, "{} is only for trigger = \"line\"", t.where("trigger_line"));
   c.triggerLine = t.string("trigger_line", "Line0");
@@ -76,8 +80,10 @@ void readDisplay(ConfigTable t, BenchFile& b) {
   if (t.has("optics")) {
     ConfigTable optics = t.table("optics");
     if (!optics.has("optics"))
-      fail(Errc::Config, "{}: [display.optics] names no class: it needs optics = \"lenslet_array\" (or "
-           "\"pinhole_array\", \"lenticular\", \"line_barrier\") and every value the class takes", t.file());
+      fail(Errc::Config,
+           "{}: [display.optics] names no class: it needs optics = \"lenslet_array\" (or "
+           "\"pinhole_array\", \"lenticular\", \"line_barrier\") and every value the class takes",
+           t.file());
     b.displayOptics = readDisplayOpticsTable(optics, DisplayOpticsParams{});
     optics.finish();
   }
@@ -88,8 +94,10 @@ void readCapture(ConfigTable t, BenchFile& b) {
   if (t.has("uri") == t.has("light_field"))
     fail(Errc::Config, "{}: [capture] needs exactly one of 'uri' (a capture device) and 'light_field' (a file)",
          t.where(t.has("uri") ? "uri" : "light_field"));
-  if (t.has("uri")) b.captureUri = uriIn(t, "uri", "light field capture");
-  else b.lightFieldFile = pathIn(t, "light_field");
+  if (t.has("uri"))
+    b.captureUri = uriIn(t, "uri", "light field capture");
+  else
+    b.lightFieldFile = pathIn(t, "light_field");
   t.finish();
 }
 
@@ -136,9 +144,10 @@ void readInspection(ConfigTable t, BenchFile& b) {
   // The same limits in camera pixels (findDefects'): named here, not at the first part.
   const DetectionSettings d = b.detection();
   if (d.smoothing_px > 100 || d.closing_px > 100)
-    fail(Errc::Config, "{}: smallest_defect_mm = {} and closing_mm = {} are {:.3g} and {} camera pixels of {} mm; "
-         "at most 400 and 100", t.file(), b.smallestDefect_mm, b.closing_mm, 4 * d.smoothing_px, d.closing_px,
-         b.objectPixel_mm);
+    fail(Errc::Config,
+         "{}: smallest_defect_mm = {} and closing_mm = {} are {:.3g} and {} camera pixels of {} mm; "
+         "at most 400 and 100",
+         t.file(), b.smallestDefect_mm, b.closing_mm, 4 * d.smoothing_px, d.closing_px, b.objectPixel_mm);
 }
 
 void readOutput(ConfigTable t, BenchFile& b) {
@@ -149,8 +158,8 @@ void readOutput(ConfigTable t, BenchFile& b) {
 }
 
 void readRun(ConfigTable t, BenchFile& b) {
-  b.onDeviceLoss = t.string("on_device_loss", "stop", {"stop", "wait"}) == "wait" ? OnDeviceLoss::Wait
-                                                                                  : OnDeviceLoss::Stop;
+  b.onDeviceLoss =
+      t.string("on_device_loss", "stop", {"stop", "wait"}) == "wait" ? OnDeviceLoss::Wait : OnDeviceLoss::Stop;
   b.waitLimit_s = t.number("wait_limit_s", 60.0, 0, 86400.0 * 365);
   t.finish();
 }
@@ -175,8 +184,8 @@ std::string portableUri(const fs::path& benchFile, const std::string& text) {
 
 BenchFile readBenchFile(const fs::path& file) {
   ConfigTable root = ConfigTable::parseFile(file);
-  root.requireKnownKeys({"format", "version", "camera", "display", "capture", "geometry", "reference", "inspection",
-                         "output", "run"});
+  root.requireKnownKeys(
+      {"format", "version", "camera", "display", "capture", "geometry", "reference", "inspection", "output", "run"});
   root.string("format", std::nullopt, {"lfi-inspection-bench"});
   root.integer("version", std::nullopt, 1, 1);
   BenchFile b;
@@ -195,9 +204,9 @@ BenchFile readBenchFile(const fs::path& file) {
              b);
   readDisplay(*table("display", {"uri", "settle_ms", "white", "optics"}, true), b);
   readCapture(*table("capture", {"uri", "light_field"}, true), b);
-  readGeometry(*table("geometry",
-                      {"distance_mm", "part_centre_px", "display_per_pixel_mm", "display_at_image_centre_mm"}, true),
-               b);
+  readGeometry(
+      *table("geometry", {"distance_mm", "part_centre_px", "display_per_pixel_mm", "display_at_image_centre_mm"}, true),
+      b);
   readReference(*table("reference", {"folder", "frames", "mask_radius_mm", "mask_lit_fraction"}, true), b);
   if (auto t = table("inspection",
                      {"frames", "absolute_dn", "relative", "smallest_defect_mm", "closing_mm", "min_defect_area_mm2",
@@ -215,27 +224,30 @@ namespace {
 // The optics override in one line (absent from the identity of a bench without it, whose hash stays).
 std::string opticsIdentity(const std::optional<DisplayOpticsParams>& o) {
   if (!o) return "";
-  return fmt::format("display.optics = {} {} {:.17g} {:.17g} {:.17g} {:.17g} {:.17g} {:.17g} {:.17g} {:.17g} {:.17g} "
-                     "{:.17g} {:.17g} {:.17g}\n",
-                     toString(o->type), toString(o->packing), o->lensPitch_px, o->slant_rad, o->offset_px,
-                     o->arrayPitch_mm, o->rotation_rad, o->arrayOffsetX_mm, o->arrayOffsetY_mm, o->fillFactor,
-                     o->pinholeDiameter_mm, o->gap_mm, o->focalLength_mm, o->slitWidth_mm);
+  return fmt::format(
+      "display.optics = {} {} {:.17g} {:.17g} {:.17g} {:.17g} {:.17g} {:.17g} {:.17g} {:.17g} {:.17g} "
+      "{:.17g} {:.17g} {:.17g}\n",
+      toString(o->type), toString(o->packing), o->lensPitch_px, o->slant_rad, o->offset_px, o->arrayPitch_mm,
+      o->rotation_rad, o->arrayOffsetX_mm, o->arrayOffsetY_mm, o->fillFactor, o->pinholeDiameter_mm, o->gap_mm,
+      o->focalLength_mm, o->slitWidth_mm);
 }
 
 }  // namespace
 
 std::string BenchFile::referenceIdentity() const {
   // (%.17g: a number reads back as the same double, so equal settings give equal text.)
-  return opticsIdentity(displayOptics) + fmt::format(
-      "camera.uri = {}\ncamera.exposure_us = {:.17g}\ncamera.gain = {:.17g}\ncamera.pixel_format = {}\n"
-      "camera.binning = {}\ncamera.object_pixel_mm = {:.17g}\ndisplay.uri = {}\ndisplay.white = {:.17g}\n"
-      "capture.uri = {}\ncapture.light_field = {}\ngeometry.distance_mm = {:.17g}\ngeometry.part_centre_px = {}\n"
-      "reference.mask_radius_mm = {}\nreference.mask_lit_fraction = {:.17g}\n",
-      portableUri(file, cameraUri), camera.exposure_us, camera.gain, toString(camera.pixelFormat), camera.binning,
-      objectPixel_mm, portableUri(file, displayUri), white, portableUri(file, captureUri),
-      lightFieldFile.empty() ? "" : fromBenchFolder(file, lightFieldFile), distance_mm,
-      partCentre_px ? fmt::format("[{:.17g}, {:.17g}]", partCentre_px->x, partCentre_px->y) : "centre",
-      maskRadius_mm ? fmt::format("{:.17g}", *maskRadius_mm) : "none", maskLitFraction);
+  return opticsIdentity(displayOptics) +
+         fmt::format(
+             "camera.uri = {}\ncamera.exposure_us = {:.17g}\ncamera.gain = {:.17g}\ncamera.pixel_format = {}\n"
+             "camera.binning = {}\ncamera.object_pixel_mm = {:.17g}\ndisplay.uri = {}\ndisplay.white = {:.17g}\n"
+             "capture.uri = {}\ncapture.light_field = {}\ngeometry.distance_mm = {:.17g}\ngeometry.part_centre_px = "
+             "{}\n"
+             "reference.mask_radius_mm = {}\nreference.mask_lit_fraction = {:.17g}\n",
+             portableUri(file, cameraUri), camera.exposure_us, camera.gain, toString(camera.pixelFormat),
+             camera.binning, objectPixel_mm, portableUri(file, displayUri), white, portableUri(file, captureUri),
+             lightFieldFile.empty() ? "" : fromBenchFolder(file, lightFieldFile), distance_mm,
+             partCentre_px ? fmt::format("[{:.17g}, {:.17g}]", partCentre_px->x, partCentre_px->y) : "centre",
+             maskRadius_mm ? fmt::format("{:.17g}", *maskRadius_mm) : "none", maskLitFraction);
 }
 
 std::string BenchFile::referenceHash() const {

@@ -26,18 +26,16 @@ std::string displayName(const Display& display) {
 
 // The bench as a capture through it sees it: the controller's own show and inspect.
 class Controller::Probe final : public BenchProbe {
-public:
+ public:
   explicit Probe(Controller& c) : c_(c) {}
   DisplayInfo display() const override { return c_.display_.info(); }
-  double cameraFullScale_dn() const override {
-    return (1 << significantBits(c_.camera_.settings().pixelFormat)) - 1;
-  }
+  double cameraFullScale_dn() const override { return (1 << significantBits(c_.camera_.settings().pixelFormat)) - 1; }
   cv::Mat take(const cv::Mat& levels) override {
     c_.showPanel(levels);
     return c_.inspect();
   }
 
-private:
+ private:
   Controller& c_;
 };
 
@@ -129,12 +127,14 @@ std::uint32_t Controller::shown(const PresentResult& r, const char* what) {
 }
 
 void Controller::requireShowing() {
-  if (!shownSequence_) fail(Errc::InvalidArgument, "inspect: display '{}' was not sent anything to show",
-                            displayName(display_));
+  if (!shownSequence_)
+    fail(Errc::InvalidArgument, "inspect: display '{}' was not sent anything to show", displayName(display_));
   const DisplayStatus s = display_.status();
   if (!s.showing || s.presentedSequence != *shownSequence_)
-    fail(Errc::Device, "inspect: display '{}' no longer shows the reference (frame {} was shown; it {}): the image "
-         "taken is not of the reference", displayName(display_), *shownSequence_,
+    fail(Errc::Device,
+         "inspect: display '{}' no longer shows the reference (frame {} was shown; it {}): the image "
+         "taken is not of the reference",
+         displayName(display_), *shownSequence_,
          s.showing ? fmt::format("shows frame {}", s.presentedSequence) : std::string("is dark"));
 }
 
@@ -154,8 +154,10 @@ cv::Mat Controller::inspect() {
   if ((streaming && staleFrames_) || camera_.state() == Camera::State::Configured)
     std::this_thread::sleep_until(shown_ + options_.settle);  // the panel settles before the first exposure
   if (restart || camera_.state() == Camera::State::Configured) {
-    if (restart) camera_.stop();
-    else startedCamera_ = true;
+    if (restart)
+      camera_.stop();
+    else
+      startedCamera_ = true;
     camera_.start(buffers);
     ownStream_ = true;
     pendingFrames_ = 0;

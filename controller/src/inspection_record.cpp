@@ -40,8 +40,9 @@ nlohmann::ordered_json recordJson(const InspectionRecord& r) {
   j["defects"] = defects;
   j["images"] = r.images;
   j["analysis_ms"] = r.analysis_ms;
-  j["units"] = "lengths mm, areas mm², pixels of the camera image (OpenCV's: the top-left pixel's centre is (0, 0)); "
-               "the part's frame: x along columns, y up the image, origin at the bench's part_centre_px";
+  j["units"] =
+      "lengths mm, areas mm², pixels of the camera image (OpenCV's: the top-left pixel's centre is (0, 0)); "
+      "the part's frame: x along columns, y up the image, origin at the bench's part_centre_px";
   return j;
 }
 
@@ -89,8 +90,8 @@ cv::Mat overlayImage(const cv::Mat& image, const PartVerdict& verdict, const cv:
     const cv::Rect r = d.image.bounds_px;
     const cv::Scalar colour = d.image.dark ? cv::Scalar(0, 0, 255) : cv::Scalar(0, 255, 255);
     cv::rectangle(out, cv::Point(r.x - 1, r.y - 1), cv::Point(r.x + r.width, r.y + r.height), colour, 1);
-    cv::putText(out, std::to_string(++number), cv::Point(r.x + r.width + 2, std::max(r.y, 8)),
-                cv::FONT_HERSHEY_PLAIN, scale, colour, 1);
+    cv::putText(out, std::to_string(++number), cv::Point(r.x + r.width + 2, std::max(r.y, 8)), cv::FONT_HERSHEY_PLAIN,
+                scale, colour, 1);
   }
   return out;
 }

@@ -17,17 +17,18 @@ Inspector::Inspector(const BenchFile& bench, const ReferencePackage& package, Di
       white_(package.info.white),
       mask_(package.mask),
       frame_(bench.partFrame(package.mask.cols, package.mask.rows)),
-      finder_(package.trainer.model(noiseOfMean(bench.noise, bench.inspectionFrames)), package.mask,
-              bench.detection()),
+      finder_(package.trainer.model(noiseOfMean(bench.noise, bench.inspectionFrames)), package.mask, bench.detection()),
       panel_(package.panel),
       reference_(std::make_unique<StoredLightField>(package.lightField, "the reference package's light field")),
       controller_(*reference_, display, camera, controllerOptions(bench, bench.inspectionFrames)) {
   if (panel_.empty()) return;
   const DisplayInfo info = display.info();
   if (panel_.cols != info.panelWidth_px || panel_.rows != info.panelHeight_px)
-    fail(Errc::Config, "{}: the reference package's panel image is {} x {}, display '{}' has a {} x {} panel (another "
-         "display at the same URI?): take a new reference with `lfi capture {} --force`", bench.file.string(),
-         panel_.cols, panel_.rows, info.deviceId, info.panelWidth_px, info.panelHeight_px, bench.file.string());
+    fail(Errc::Config,
+         "{}: the reference package's panel image is {} x {}, display '{}' has a {} x {} panel (another "
+         "display at the same URI?): take a new reference with `lfi capture {} --force`",
+         bench.file.string(), panel_.cols, panel_.rows, info.deviceId, info.panelWidth_px, info.panelHeight_px,
+         bench.file.string());
 }
 
 Inspector::~Inspector() = default;
@@ -56,8 +57,10 @@ PartInspection Inspector::inspectPart() {
 
 PartVerdict Inspector::judge(const cv::Mat& image) const {
   if (image.size() != mask_.size())
-    fail(Errc::Device, "inspect: the camera's image is {} x {}, the reference's {} x {} (a changed camera region or "
-         "binning? take a new reference with `lfi capture`)", image.cols, image.rows, mask_.cols, mask_.rows);
+    fail(Errc::Device,
+         "inspect: the camera's image is {} x {}, the reference's {} x {} (a changed camera region or "
+         "binning? take a new reference with `lfi capture`)",
+         image.cols, image.rows, mask_.cols, mask_.rows);
   return judgePart(finder_.find(image), frame_, bench_.rules);
 }
 

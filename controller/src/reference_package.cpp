@@ -41,8 +41,7 @@ void writeImage(const fs::path& file, const cv::Mat& image, const std::string& d
 fs::path packageFile(const fs::path& folder, const char* name) {
   const fs::path file = folder / name;
   std::error_code ec;
-  if (!fs::exists(file, ec))
-    fail(Errc::InvalidFile, "reference package '{}': {} is missing", folder.string(), name);
+  if (!fs::exists(file, ec)) fail(Errc::InvalidFile, "reference package '{}': {} is missing", folder.string(), name);
   return file;
 }
 
@@ -70,8 +69,10 @@ void checkPixels(const fs::path& folder, const char* name, const ordered_json& f
          name, e.what());
   }
   if (pixelChecksum(pixels) != recorded)
-    fail(Errc::Checksum, "reference package '{}': {} is not the image the package recorded (pixel CRC-32 {:08x}, "
-         "recorded {:08x}): a file from another package?", folder.string(), name, pixelChecksum(pixels), recorded);
+    fail(Errc::Checksum,
+         "reference package '{}': {} is not the image the package recorded (pixel CRC-32 {:08x}, "
+         "recorded {:08x}): a file from another package?",
+         folder.string(), name, pixelChecksum(pixels), recorded);
 }
 
 cv::Mat readImage(const fs::path& folder, const char* name, const ordered_json& files, const cv::Size& size) {
@@ -122,22 +123,28 @@ void writeReferencePackage(const fs::path& folder, const ReferencePackage& p, Ov
   j["devices"] = {{"camera", i.camera}, {"display", i.display}, {"capture", i.capture}};
   j["camera_settings"] = {{"exposure_us", i.exposure_us}, {"gain", i.gain}, {"pixel_format", i.pixelFormat}};
   j["white"] = i.white;
-  j["image"] = {{"width_px", mean.cols}, {"height_px", mean.rows}, {"type", typeName(p.trainer.imageType())},
+  j["image"] = {{"width_px", mean.cols},
+                {"height_px", mean.rows},
+                {"type", typeName(p.trainer.imageType())},
                 {"images_trained", p.trainer.count()}};
-  j["files"] = {{"lightfield.exr", {{"content", "the reference light field the display shows"},
-                                    {"pixel_crc32", pixelChecksum(p.lightField.lensletImage())}}},
-                {"ideal.exr", {{"content", "golden model: mean of the trained images (DN)"},
-                               {"pixel_crc32", pixelChecksum(mean)}}},
-                {"spread.exr", {{"content", "sample standard deviation of the trained images (DN), no noise floor"},
-                                {"pixel_crc32", pixelChecksum(spread)}}},
-                {"mask.exr", {{"content", "the part: 1 where defects are looked for"},
-                              {"pixel_crc32", pixelChecksum(mask01)}}}};
+  j["files"] = {
+      {"lightfield.exr",
+       {{"content", "the reference light field the display shows"},
+        {"pixel_crc32", pixelChecksum(p.lightField.lensletImage())}}},
+      {"ideal.exr",
+       {{"content", "golden model: mean of the trained images (DN)"}, {"pixel_crc32", pixelChecksum(mean)}}},
+      {"spread.exr",
+       {{"content", "sample standard deviation of the trained images (DN), no noise floor"},
+        {"pixel_crc32", pixelChecksum(spread)}}},
+      {"mask.exr", {{"content", "the part: 1 where defects are looked for"}, {"pixel_crc32", pixelChecksum(mask01)}}}};
   if (!p.panel.empty()) {
     double lo = 0, hi = 0;
     if (p.panel.type() == CV_32FC1) cv::minMaxLoc(p.panel, &lo, &hi);
     if (p.panel.type() != CV_32FC1 || !(lo >= 0 && hi <= 1))
-      fail(Errc::InvalidArgument, "reference package: the panel image ({}, drive levels {} .. {}) is not CV_32FC1 "
-           "drive levels in 0 .. 1", cv::typeToString(p.panel.type()), lo, hi);
+      fail(Errc::InvalidArgument,
+           "reference package: the panel image ({}, drive levels {} .. {}) is not CV_32FC1 "
+           "drive levels in 0 .. 1",
+           cv::typeToString(p.panel.type()), lo, hi);
     j["files"]["panel.exr"] = {{"content", "the reference panel image the display shows: drive levels 0 .. 1"},
                                {"pixel_crc32", pixelChecksum(p.panel)}};
   }
@@ -149,8 +156,10 @@ void writeReferencePackage(const fs::path& folder, const ReferencePackage& p, Ov
                kCameraDigitalNumbers);
     writeImage(tmp / "mask.exr", mask01, "the part's mask: 1 where defects are looked for", "mask (0 or 1)");
     if (!p.panel.empty())
-      writeImage(tmp / "panel.exr", p.panel, "the reference panel image: column x right, row y down, as the "
-                 "display's panel", "drive level (0 .. 1 of full)");
+      writeImage(tmp / "panel.exr", p.panel,
+                 "the reference panel image: column x right, row y down, as the "
+                 "display's panel",
+                 "drive level (0 .. 1 of full)");
     std::ofstream out(tmp / "reference.json");
     out << j.dump(2, ' ', false, ordered_json::error_handler_t::replace) << "\n";  // (non-UTF-8 names: U+FFFD)
     out.close();
@@ -203,7 +212,8 @@ ReferencePackage readReferencePackage(const fs::path& folder, const BenchFile* b
     fail(Errc::InvalidFile, "reference package '{}': reference.json's image ({} x {}, {} images) is not valid",
          folder.string(), width, height, images);
   if (bench && bench->referenceHash() != p.info.benchHash)
-    fail(Errc::Config, "reference package '{}' was taken on another bench (reference hash {}, from '{}'); bench file "
+    fail(Errc::Config,
+         "reference package '{}' was taken on another bench (reference hash {}, from '{}'); bench file "
          "'{}' has {}: take a new reference with `lfi capture {} --force`",
          folder.string(), p.info.benchHash, p.info.benchFile, bench->file.string(), bench->referenceHash(),
          bench->file.string());

@@ -88,7 +88,7 @@ void removeTemporariesAndDie(int signal) {
 // Registers `temporary` for removal by a signal whose action is to end the
 // process (signals with a handler of the program's own are left alone).
 class TemporaryGuard {
-public:
+ public:
   explicit TemporaryGuard(const fs::path& temporary) {
     std::error_code ec;
     const fs::path absolute = fs::absolute(temporary, ec);
@@ -129,7 +129,7 @@ public:
   TemporaryGuard(const TemporaryGuard&) = delete;
   TemporaryGuard& operator=(const TemporaryGuard&) = delete;
 
-private:
+ private:
   TemporarySlot* slot_ = nullptr;
 };
 

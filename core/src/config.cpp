@@ -32,7 +32,9 @@ std::string ConfigTable::where(const std::string& key) const {
   return fmt::format("{}:{}: key '{}'", file_, line, full);
 }
 
-bool ConfigTable::has(const std::string& key) const { return table_->contains(key); }
+bool ConfigTable::has(const std::string& key) const {
+  return table_->contains(key);
+}
 
 const toml::node* ConfigTable::node(const std::string& key) {
   used_.insert(key);
@@ -45,8 +47,8 @@ double ConfigTable::number(const std::string& key, std::optional<double> fallbac
     if (!fallback) fail(Errc::Config, "{} is missing", where(key));
     return *fallback;
   }
-  std::optional<double> v = n->is_integer() ? std::optional<double>(static_cast<double>(*n->value<int64_t>()))
-                                            : n->value<double>();
+  std::optional<double> v =
+      n->is_integer() ? std::optional<double>(static_cast<double>(*n->value<int64_t>())) : n->value<double>();
   if (!v || !n->is_number()) fail(Errc::Config, "{} must be a number", where(key));
   if (!std::isfinite(*v) || *v < min || *v > max)
     fail(Errc::Config, "{} = {} is outside [{}, {}]", where(key), *v, min, max);
@@ -95,8 +97,8 @@ std::vector<double> ConfigTable::numbers(const std::string& key, size_t count,
   if (!a || a->size() != count) fail(Errc::Config, "{} must be an array of {} numbers", where(key), count);
   std::vector<double> out;
   for (const toml::node& e : *a) {
-    std::optional<double> v = e.is_integer() ? std::optional<double>(static_cast<double>(*e.value<int64_t>()))
-                                             : e.value<double>();
+    std::optional<double> v =
+        e.is_integer() ? std::optional<double>(static_cast<double>(*e.value<int64_t>())) : e.value<double>();
     if (!e.is_number() || !v || !std::isfinite(*v))
       fail(Errc::Config, "{} must be an array of {} numbers", where(key), count);
     if (*v < min || *v > max)

@@ -1,8 +1,8 @@
 #include "lfi/core/exr_io.h"
 
 #include "lfi/core/error.h"
-#include "lfi/core/input_file.h"
 #include "lfi/core/image.h"
+#include "lfi/core/input_file.h"
 
 #include <Iex.h>
 #include <OpenEXR/ImfChannelList.h>
@@ -60,7 +60,9 @@ constexpr const char* kRadianceFrameText = "camera image: row 0 at world +y, col
 constexpr const char* kLightFieldKind = "light-field";
 constexpr const char* kRadianceKind = "radiance-image";
 
-std::string checksumText(unsigned long crc) { return fmt::format("crc32:{:08x}", crc); }
+std::string checksumText(unsigned long crc) {
+  return fmt::format("crc32:{:08x}", crc);
+}
 
 // The lfi.* attributes but lfi.checksum, as the text the checksum covers
 // (format version 2, docs/file-formats.md): by name, one line each,
@@ -130,8 +132,10 @@ void writeExr(const fs::path& path, const cv::Mat& image, Imf::Header header, Ov
   configureOpenExr();  // (the read-back check opens the file too)
   requireImageType(image, CV_32FC1, "EXR image '" + path.string() + "'");
   if (image.cols > kMaxExrSide || image.rows > kMaxExrSide || static_cast<long>(image.total()) > kMaxExrPixels)
-    fail(Errc::InvalidArgument, "cannot write '{}': {}x{} pixels is more than an lfi file holds (2^17 a side, 2^30 "
-         "pixels)", path.string(), image.cols, image.rows);
+    fail(Errc::InvalidArgument,
+         "cannot write '{}': {}x{} pixels is more than an lfi file holds (2^17 a side, 2^30 "
+         "pixels)",
+         path.string(), image.cols, image.rows);
   if (const auto bad = firstNonFinite(image))
     fail(Errc::InvalidArgument, "cannot write '{}': pixel ({}, {}) is {}; radiance must be finite", path.string(),
          bad->x, bad->y, image.at<float>(*bad));
@@ -175,8 +179,8 @@ const Attribute& requireAttribute(const fs::path& path, const Imf::Header& heade
   const Imf::Attribute* any = &it.attribute();
   const auto* typed = dynamic_cast<const Attribute*>(any);
   if (!typed)
-    fail(Errc::InvalidFile, "'{}': attribute '{}' has type '{}', expected '{}'", path.string(), name,
-         any->typeName(), Attribute::staticTypeName());
+    fail(Errc::InvalidFile, "'{}': attribute '{}' has type '{}', expected '{}'", path.string(), name, any->typeName(),
+         Attribute::staticTypeName());
   return *typed;
 }
 
@@ -184,8 +188,10 @@ const Attribute& requireAttribute(const fs::path& path, const Imf::Header& heade
 void requireConvention(const fs::path& path, const Imf::Header& header, const char* name, const std::string& text) {
   const std::string& value = requireAttribute<Imf::StringAttribute>(path, header, name).value();
   if (value != text)
-    fail(Errc::InvalidFile, "'{}': attribute '{}' is '{}', not lfi's convention '{}': the file is in another "
-         "parametrisation, which lfi does not read", path.string(), name, shown(value), text);
+    fail(Errc::InvalidFile,
+         "'{}': attribute '{}' is '{}', not lfi's convention '{}': the file is in another "
+         "parametrisation, which lfi does not read",
+         path.string(), name, shown(value), text);
 }
 
 // The OpenEXR attribute types of a fixed size, and their sizes in bytes.
@@ -217,7 +223,9 @@ void checkHeaderSizes(const fs::path& path) {
   // this walk would check only the first of several headers.
   if (const unsigned flags = start[5]; (flags & 0x1a) != 0)
     fail(Errc::InvalidFile, "'{}': a {} OpenEXR file; lfi files are single-part scanline images", path.string(),
-         (flags & 0x10) ? "multi-part" : (flags & 0x08) ? "deep" : "tiled");
+         (flags & 0x10)   ? "multi-part"
+         : (flags & 0x08) ? "deep"
+                          : "tiled");
   auto cString = [&](std::string& s) {  // names are at most 255 bytes
     s.clear();
     for (char c; in.get(c) && c != '\0';)
@@ -233,8 +241,10 @@ void checkHeaderSizes(const fs::path& path) {
     const std::uint32_t n = u32(size);
     const auto at = static_cast<std::uint64_t>(in.tellg());
     if (n > fileSize - std::min(at, fileSize))
-      fail(Errc::InvalidFile, "'{}': attribute '{}' declares {} bytes, more than the file's remaining {} "
-           "(truncated or corrupt)", path.string(), shown(name), n, fileSize - std::min(at, fileSize));
+      fail(Errc::InvalidFile,
+           "'{}': attribute '{}' declares {} bytes, more than the file's remaining {} "
+           "(truncated or corrupt)",
+           path.string(), shown(name), n, fileSize - std::min(at, fileSize));
     // OpenEXR reads a value of a fixed-size type, and a channel list, by its own length, not the declared one,
     // and goes on parsing where its read ended: a declared size that differs would have the rest of the header
     // read from inside this value (a 700-byte file then declared a 1.9 GB string there, found by fuzzing).
@@ -348,8 +358,10 @@ void writeLightFieldExr(const fs::path& path, const LightField& lightField, Over
   // (at() and lensletImage() may have changed the image since it was checked)
   if (lightField.lensletImage().type() != CV_32FC1 || lightField.lensletImage().cols != g.width() ||
       lightField.lensletImage().rows != g.height())
-    fail(Errc::InvalidArgument, "cannot write '{}': the lenslet image is {}x{} (type {}); the geometry needs {}x{} "
-         "CV_32FC1", path.string(), lightField.lensletImage().cols, lightField.lensletImage().rows,
+    fail(Errc::InvalidArgument,
+         "cannot write '{}': the lenslet image is {}x{} (type {}); the geometry needs {}x{} "
+         "CV_32FC1",
+         path.string(), lightField.lensletImage().cols, lightField.lensletImage().rows,
          lightField.lensletImage().type(), g.width(), g.height());
   if (const auto bad = firstNegative(lightField.lensletImage()))
     fail(Errc::InvalidArgument, "cannot write '{}': lenslet pixel ({}, {}) is {}; radiance cannot be negative",
@@ -384,8 +396,8 @@ LightField readLightFieldExr(const fs::path& path) {
   }
   if (exr.pixels.cols != g.width() || exr.pixels.rows != g.height())
     fail(Errc::InvalidFile, "'{}': image is {}x{} but attributes {}={}, {}={}, {}={} need {}x{}", path.string(),
-         exr.pixels.cols, exr.pixels.rows, kSpatialX, g.spatialX, kSpatialY, g.spatialY, kAngular, g.angular,
-         g.width(), g.height());
+         exr.pixels.cols, exr.pixels.rows, kSpatialX, g.spatialX, kSpatialY, g.spatialY, kAngular, g.angular, g.width(),
+         g.height());
   try {  // (LightField checks the pixels: a negative radiance, say, is the file's fault here)
     return LightField(g, std::move(exr.pixels));
   } catch (const Error& e) {
@@ -393,8 +405,7 @@ LightField readLightFieldExr(const fs::path& path) {
   }
 }
 
-void writeRadianceExr(const fs::path& path, const cv::Mat& image, const RadianceImageInfo& info,
-                      Overwrite overwrite) {
+void writeRadianceExr(const fs::path& path, const cv::Mat& image, const RadianceImageInfo& info, Overwrite overwrite) {
   requireImageType(image, CV_32FC1, "radiance image for '" + path.string() + "'");
   if (!(info.objectPixel_mm >= 0) || !std::isfinite(info.objectPixel_mm))
     fail(Errc::InvalidArgument, "cannot write '{}': objectPixel_mm = {} must be finite and >= 0", path.string(),

@@ -2,8 +2,8 @@
 
 #include "lfi/core/error.h"
 
-#include <opencv2/imgproc.hpp>
 #include <png.h>
+#include <opencv2/imgproc.hpp>
 
 #include <algorithm>
 #include <cmath>

@@ -43,15 +43,15 @@ LightField::LightField(const LightFieldGeometry& geometry, cv::Mat lensletImage)
     fail(Errc::InvalidArgument, "light field lenslet image must be CV_32FC1 (got type {})", lenslet_.type());
   if (lenslet_.cols != geometry_.width() || lenslet_.rows != geometry_.height())
     fail(Errc::InvalidArgument, "light field lenslet image is {}x{} but {}x{} elements of {}x{} need {}x{}",
-         lenslet_.cols, lenslet_.rows, geometry_.spatialX, geometry_.spatialY, geometry_.angular,
-         geometry_.angular, geometry_.width(), geometry_.height());
+         lenslet_.cols, lenslet_.rows, geometry_.spatialX, geometry_.spatialY, geometry_.angular, geometry_.angular,
+         geometry_.width(), geometry_.height());
   // (One NaN would spread to every interpolated lookup that weighs it, even by 0.)
   if (const auto bad = firstNonFinite(lenslet_))
     fail(Errc::InvalidArgument, "light field lenslet pixel ({}, {}) is {}; radiance must be finite", bad->x, bad->y,
          lenslet_.at<float>(*bad));
   if (const auto bad = firstNegative(lenslet_))
-    fail(Errc::InvalidArgument, "light field lenslet pixel ({}, {}) is {}; radiance cannot be negative", bad->x,
-         bad->y, lenslet_.at<float>(*bad));
+    fail(Errc::InvalidArgument, "light field lenslet pixel ({}, {}) is {}; radiance cannot be negative", bad->x, bad->y,
+         lenslet_.at<float>(*bad));
 }
 
 Vec2 LightField::elementCentre(int ex, int ey) const {

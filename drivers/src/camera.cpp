@@ -87,8 +87,8 @@ void requireSaneSettings(const CameraSettings& s, const std::string& device) {
   if (!std::isfinite(s.gain)) fail(Errc::InvalidArgument, "camera '{}': gain {} must be finite", device, s.gain);
   if (s.binning < 1) fail(Errc::InvalidArgument, "camera '{}': binning {} must be >= 1", device, s.binning);
   if (s.roiX_px < 0 || s.roiY_px < 0 || s.roiWidth_px < 0 || s.roiHeight_px < 0)
-    fail(Errc::InvalidArgument, "camera '{}': ROI ({}, {}, {} x {}) has a negative value", device, s.roiX_px,
-         s.roiY_px, s.roiWidth_px, s.roiHeight_px);
+    fail(Errc::InvalidArgument, "camera '{}': ROI ({}, {}, {} x {}) has a negative value", device, s.roiX_px, s.roiY_px,
+         s.roiWidth_px, s.roiHeight_px);
   if (!(s.frameRate_hz >= 0) || !std::isfinite(s.frameRate_hz))
     fail(Errc::InvalidArgument, "camera '{}': frameRate_hz {} must be finite and >= 0", device, s.frameRate_hz);
   if (s.trigger == TriggerMode::Line && s.triggerLine.empty())

@@ -16,50 +16,67 @@ namespace lfi {
 
 const char* toString(SubpixelLayout layout) {
   switch (layout) {
-    case SubpixelLayout::Mono: return "mono";
-    case SubpixelLayout::RgbStripe: return "RGB stripe";
-    case SubpixelLayout::BgrStripe: return "BGR stripe";
+    case SubpixelLayout::Mono:
+      return "mono";
+    case SubpixelLayout::RgbStripe:
+      return "RGB stripe";
+    case SubpixelLayout::BgrStripe:
+      return "BGR stripe";
   }
   return "unknown";
 }
 
 const char* toString(OpticsType type) {
   switch (type) {
-    case OpticsType::Lenticular: return "lenticular";
-    case OpticsType::LineBarrier: return "line_barrier";
-    case OpticsType::LensletArray: return "lenslet_array";
-    case OpticsType::PinholeArray: return "pinhole_array";
+    case OpticsType::Lenticular:
+      return "lenticular";
+    case OpticsType::LineBarrier:
+      return "line_barrier";
+    case OpticsType::LensletArray:
+      return "lenslet_array";
+    case OpticsType::PinholeArray:
+      return "pinhole_array";
   }
   return "unknown";
 }
 
 const char* toString(LensPacking packing) {
   switch (packing) {
-    case LensPacking::Square: return "square";
-    case LensPacking::Hexagonal: return "hexagonal";
+    case LensPacking::Square:
+      return "square";
+    case LensPacking::Hexagonal:
+      return "hexagonal";
   }
   return "unknown";
 }
 
 const char* toString(PresentStatus status) {
   switch (status) {
-    case PresentStatus::Presented: return "Presented";
-    case PresentStatus::Rejected: return "Rejected";
-    case PresentStatus::Timeout: return "Timeout";
+    case PresentStatus::Presented:
+      return "Presented";
+    case PresentStatus::Rejected:
+      return "Rejected";
+    case PresentStatus::Timeout:
+      return "Timeout";
   }
   return "unknown";
 }
 
 const char* toString(Display::State state) {
   switch (state) {
-    case Display::State::Closed: return "Closed";
-    case Display::State::Open: return "Open";
-    case Display::State::Showing: return "Showing";
+    case Display::State::Closed:
+      return "Closed";
+    case Display::State::Open:
+      return "Open";
+    case Display::State::Showing:
+      return "Showing";
   }
   return "unknown";
 }
 
-int DisplayInfo::panelType() const { return subpixels == SubpixelLayout::Mono ? CV_8UC1 : CV_8UC3; }
+int DisplayInfo::panelType() const {
+  return subpixels == SubpixelLayout::Mono ? CV_8UC1 : CV_8UC3;
+}
 
 void DisplayInfo::validate() const {
   auto check = [](bool ok, const char* field, double value, const char* range) {
@@ -68,16 +85,14 @@ void DisplayInfo::validate() const {
   auto finite = [](double v) { return std::isfinite(v); };
   check(panelWidth_px >= 1 && panelWidth_px <= 16384, "panelWidth_px", panelWidth_px, "[1, 16384]");
   check(panelHeight_px >= 1 && panelHeight_px <= 16384, "panelHeight_px", panelHeight_px, "[1, 16384]");
-  check(finite(pixelPitch_mm) && pixelPitch_mm > 0 && pixelPitch_mm <= 10, "pixelPitch_mm", pixelPitch_mm,
-        "(0, 10]");
+  check(finite(pixelPitch_mm) && pixelPitch_mm > 0 && pixelPitch_mm <= 10, "pixelPitch_mm", pixelPitch_mm, "(0, 10]");
   const OpticsType type = optics.type;
   if (type == OpticsType::Lenticular || type == OpticsType::LineBarrier) {
     check(finite(optics.lensPitch_px) && optics.lensPitch_px >= 1 && optics.lensPitch_px <= 1000, "lensPitch_px",
           optics.lensPitch_px, "[1, 1000]");
-    check(finite(optics.slant_rad) && std::abs(optics.slant_rad) < std::numbers::pi / 4, "slant_rad",
-          optics.slant_rad, "(-pi/4, pi/4)");
-    check(finite(optics.offset_px) && std::abs(optics.offset_px) <= 1e6, "offset_px", optics.offset_px,
-          "[-1e6, 1e6]");
+    check(finite(optics.slant_rad) && std::abs(optics.slant_rad) < std::numbers::pi / 4, "slant_rad", optics.slant_rad,
+          "(-pi/4, pi/4)");
+    check(finite(optics.offset_px) && std::abs(optics.offset_px) <= 1e6, "offset_px", optics.offset_px, "[-1e6, 1e6]");
   } else if (type == OpticsType::LensletArray || type == OpticsType::PinholeArray) {
     // At least one panel pixel under each lens, or the display has no directions to give.
     check(finite(optics.arrayPitch_mm) && optics.arrayPitch_mm >= pixelPitch_mm && optics.arrayPitch_mm <= 100,

@@ -20,8 +20,10 @@ constexpr std::array kClasses = {OpticsType::Lenticular, OpticsType::LineBarrier
 // The keys each class takes (beside "optics", "gap_mm").
 std::vector<std::string> keysOf(OpticsType type) {
   switch (type) {
-    case OpticsType::Lenticular: return {"lens_pitch_px", "slant_rad", "offset_px", "focal_length_mm"};
-    case OpticsType::LineBarrier: return {"lens_pitch_px", "slant_rad", "offset_px", "slit_width_mm"};
+    case OpticsType::Lenticular:
+      return {"lens_pitch_px", "slant_rad", "offset_px", "focal_length_mm"};
+    case OpticsType::LineBarrier:
+      return {"lens_pitch_px", "slant_rad", "offset_px", "slit_width_mm"};
     case OpticsType::LensletArray:
       return {"packing", "array_pitch_mm", "rotation_rad", "array_offset_mm", "fill_factor", "focal_length_mm"};
     case OpticsType::PinholeArray:
@@ -62,7 +64,7 @@ DisplayOpticsParams readDisplayOpticsTable(ConfigTable& t, const DisplayOpticsPa
   if (has("array_pitch_mm")) {
     if (t.has("packing"))
       p.packing = t.string("packing", std::nullopt, {"square", "hexagonal"}) == "square" ? LensPacking::Square
-                                                                                          : LensPacking::Hexagonal;
+                                                                                         : LensPacking::Hexagonal;
     number("array_pitch_mm", p.arrayPitch_mm, 1e-3, 100);
     number("rotation_rad", p.rotation_rad, -0.785, 0.785);
     if (t.has("array_offset_mm")) {
@@ -83,8 +85,8 @@ DisplayOpticsParams readDisplayOpticsTable(ConfigTable& t, const DisplayOpticsPa
   // What the chosen class needs, given here or by `base`.
   auto require = [&](const char* key, double value) {
     if (has(key) && !(value > 0))
-      fail(Errc::Config, "{}: {} optics need {} > 0 (none given, and the device or defaults give {})",
-           t.where(key), toString(p.type), key, value);
+      fail(Errc::Config, "{}: {} optics need {} > 0 (none given, and the device or defaults give {})", t.where(key),
+           toString(p.type), key, value);
   };
   require("lens_pitch_px", p.lensPitch_px);
   require("array_pitch_mm", p.arrayPitch_mm);
@@ -92,8 +94,7 @@ DisplayOpticsParams readDisplayOpticsTable(ConfigTable& t, const DisplayOpticsPa
   require("focal_length_mm", p.focalLength_mm);
   require("pinhole_diameter_mm", p.pinholeDiameter_mm);
   if (!(p.gap_mm > 0))
-    fail(Errc::Config, "{}: the optics need gap_mm > 0 (the device or defaults give {})", t.where("gap_mm"),
-         p.gap_mm);
+    fail(Errc::Config, "{}: the optics need gap_mm > 0 (the device or defaults give {})", t.where("gap_mm"), p.gap_mm);
   if (p.type == OpticsType::PinholeArray && p.pinholeDiameter_mm > p.arrayPitch_mm)
     fail(Errc::Config, "{}: pinhole_diameter_mm = {} is larger than the array pitch {} mm",
          t.where(t.has("pinhole_diameter_mm") ? "pinhole_diameter_mm" : "array_pitch_mm"), p.pinholeDiameter_mm,

@@ -12,9 +12,11 @@ namespace {
 std::variant<LenticularOptics, LensArrayOptics> makeModel(const DisplayInfo& info) {
   switch (info.optics.type) {
     case OpticsType::Lenticular:
-    case OpticsType::LineBarrier: return LenticularOptics(info);
+    case OpticsType::LineBarrier:
+      return LenticularOptics(info);
     case OpticsType::LensletArray:
-    case OpticsType::PinholeArray: return LensArrayOptics(info);
+    case OpticsType::PinholeArray:
+      return LensArrayOptics(info);
   }
   fail(Errc::InvalidArgument, "display info optics type {} is not a known class", static_cast<int>(info.optics.type));
 }
@@ -158,10 +160,13 @@ DisplayInfo defaultPinholeArrayDisplay() {
 
 DisplayInfo defaultDisplay(OpticsType type) {
   switch (type) {
-    case OpticsType::LensletArray: return defaultLensletArrayDisplay();
-    case OpticsType::PinholeArray: return defaultPinholeArrayDisplay();
+    case OpticsType::LensletArray:
+      return defaultLensletArrayDisplay();
+    case OpticsType::PinholeArray:
+      return defaultPinholeArrayDisplay();
     case OpticsType::Lenticular:
-    case OpticsType::LineBarrier: break;
+    case OpticsType::LineBarrier:
+      break;
   }
   return defaultLenticularDisplay();
 }
@@ -211,8 +216,9 @@ LightField decodePanelImage(const cv::Mat& panel, const DisplayOptics& optics, c
             if (!(disc.length2() < 1)) continue;
             const std::optional<PanelSample> s =
                 optics.pixelFromRay({lens.x, lens.y, 0}, LightField::directionFromDisc(disc));
-            if (s) out.at(ex, ey, u, v) = static_cast<float>(scale * panel.ptr<std::uint8_t>(s->row)[s->col * sub +
-                                                                                                      s->subpixel]);
+            if (s)
+              out.at(ex, ey, u, v) =
+                  static_cast<float>(scale * panel.ptr<std::uint8_t>(s->row)[s->col * sub + s->subpixel]);
           }
       }
   });

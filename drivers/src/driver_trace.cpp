@@ -21,8 +21,9 @@ namespace lfi {
 
 namespace {
 
-constexpr char kHeader[] = "# lfi driver trace, version 1: time (s since the Unix epoch), pid, layer "
-                           "(camera|display|aravis|usb|served), device, call, detail; tab-separated\n";
+constexpr char kHeader[] =
+    "# lfi driver trace, version 1: time (s since the Unix epoch), pid, layer "
+    "(camera|display|aravis|usb|served), device, call, detail; tab-separated\n";
 
 // The trace file, opened at the first call; -1 when the trace is off.
 int traceFile() {
@@ -70,14 +71,16 @@ void traced(std::string_view layer, const std::string& device, const char* call,
 }
 
 class TracingCamera final : public Camera {
-public:
+ public:
   TracingCamera(std::unique_ptr<Camera> camera, std::string uri) : c_(std::move(camera)), uri_(std::move(uri)) {}
   ~TracingCamera() override {
     c_.reset();  // (closes it)
     traceDriverCall("camera", uri_, "close");
   }
   State state() const override { return c_->state(); }
-  void open() override { traced("camera", uri_, "open", "", [&] { c_->open(); }); }
+  void open() override {
+    traced("camera", uri_, "open", "", [&] { c_->open(); });
+  }
   void close() noexcept override {
     c_->close();
     traceDriverCall("camera", uri_, "close");
@@ -93,8 +96,12 @@ public:
   void start(int bufferCount) override {
     traced("camera", uri_, "start", fmt::format("buffers={}", bufferCount), [&] { c_->start(bufferCount); });
   }
-  void stop() override { traced("camera", uri_, "stop", "", [&] { c_->stop(); }); }
-  void softwareTrigger() override { traced("camera", uri_, "trigger", "", [&] { c_->softwareTrigger(); }); }
+  void stop() override {
+    traced("camera", uri_, "stop", "", [&] { c_->stop(); });
+  }
+  void softwareTrigger() override {
+    traced("camera", uri_, "trigger", "", [&] { c_->softwareTrigger(); });
+  }
   void grabInto(Frame& frame, std::chrono::milliseconds timeout) override {
     traced("camera", uri_, "grab", [&] { c_->grabInto(frame, timeout); });
     traceDriverCall("camera", uri_, "grab", fmt::format("{} frame {}", toString(frame.status), frame.frameId));
@@ -106,7 +113,8 @@ public:
   }
   std::int64_t getIntegerFeature(const std::string& name) override { return c_->getIntegerFeature(name); }
   void setIntegerFeature(const std::string& name, std::int64_t value) override {
-    traced("camera", uri_, "setFeature", fmt::format("{}={}", name, value), [&] { c_->setIntegerFeature(name, value); });
+    traced("camera", uri_, "setFeature", fmt::format("{}={}", name, value),
+           [&] { c_->setIntegerFeature(name, value); });
   }
   double getFloatFeature(const std::string& name) override { return c_->getFloatFeature(name); }
   void setFloatFeature(const std::string& name, double value) override {
@@ -116,13 +124,13 @@ public:
     traced("camera", uri_, "executeCommand", name, [&] { c_->executeCommand(name); });
   }
 
-private:
+ private:
   std::unique_ptr<Camera> c_;
   std::string uri_;
 };
 
 class TracingDisplay final : public Display {
-public:
+ public:
   TracingDisplay(std::unique_ptr<Display> display, std::string uri) : d_(std::move(display)), uri_(std::move(uri)) {}
   ~TracingDisplay() override {
     d_.reset();  // (closes it)
@@ -130,7 +138,9 @@ public:
   }
   State state() const override { return d_->state(); }
   std::string name() const override { return d_->name(); }
-  void open() override { traced("display", uri_, "open", "", [&] { d_->open(); }); }
+  void open() override {
+    traced("display", uri_, "open", "", [&] { d_->open(); });
+  }
   void close() noexcept override {
     d_->close();
     traceDriverCall("display", uri_, "close");
@@ -143,34 +153,36 @@ public:
                                 r.message.empty() ? "" : ": ", r.message));
     return r;
   }
-  void blank() override { traced("display", uri_, "blank", "", [&] { d_->blank(); }); }
+  void blank() override {
+    traced("display", uri_, "blank", "", [&] { d_->blank(); });
+  }
   void setBrightness(int level) override {
     traced("display", uri_, "brightness", std::to_string(level), [&] { d_->setBrightness(level); });
   }
   DisplayStatus status() override {
     const DisplayStatus st = traced("display", uri_, "status", [&] { return d_->status(); });
-    traceDriverCall("display", uri_, "status", fmt::format("showing={} sequence={}", st.showing ? 1 : 0,
-                                                           st.presentedSequence));
+    traceDriverCall("display", uri_, "status",
+                    fmt::format("showing={} sequence={}", st.showing ? 1 : 0, st.presentedSequence));
     return st;
   }
 
-private:
+ private:
   std::unique_ptr<Display> d_;
   std::string uri_;
 };
 
 }  // namespace
 
-bool driverTraceOn() { return traceFile() >= 0; }
+bool driverTraceOn() {
+  return traceFile() >= 0;
+}
 
-void traceDriverCall(std::string_view layer, std::string_view device, std::string_view call,
-                     std::string_view detail) {
+void traceDriverCall(std::string_view layer, std::string_view device, std::string_view call, std::string_view detail) {
   const int fd = traceFile();
   if (fd < 0) return;
   const auto now = std::chrono::system_clock::now().time_since_epoch();
-  const std::string line =
-      fmt::format("{:.6f}\t{}\t{}\t{}\t{}\t{}\n", std::chrono::duration<double>(now).count(), ::getpid(), layer,
-                  clean(device), clean(call), clean(detail));
+  const std::string line = fmt::format("{:.6f}\t{}\t{}\t{}\t{}\t{}\n", std::chrono::duration<double>(now).count(),
+                                       ::getpid(), layer, clean(device), clean(call), clean(detail));
   if (::write(fd, line.data(), line.size()) < 0) {
     // (see traceFile)
   }

@@ -17,7 +17,7 @@ void unpackMono12(const std::uint8_t* data, std::size_t size, int width, int hei
     fail(Errc::InvalidArgument, "unpackMono12: {} x {} pixels need {} bytes, the buffer has {}", width, height, needed,
          size);
   if (!out.isContinuous()) out.release();  // (a view into a larger image)
-  out.create(height, width, CV_16UC1);      // continuous: the pixels are one sequence, as on the wire
+  out.create(height, width, CV_16UC1);     // continuous: the pixels are one sequence, as on the wire
   auto* dst = out.ptr<std::uint16_t>(0);
   const std::size_t pixels = static_cast<std::size_t>(width) * static_cast<std::size_t>(height);
   // Two pixels per three bytes; an odd last pixel has the first two bytes of a triple.

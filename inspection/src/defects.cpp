@@ -19,8 +19,8 @@
 // says why the guards): they do the same float operations in every lane, and
 // without fused multiply-adds (-ffp-contract=off) every build gives the same bits.
 // (Not with clang, the fuzz build's compiler: it takes no target_clones on templates.)
-#if defined(__x86_64__) && !defined(__SANITIZE_ADDRESS__) && !defined(__SANITIZE_THREAD__) && !defined(__AVX2__) \
-    && !defined(__clang__)
+#if defined(__x86_64__) && !defined(__SANITIZE_ADDRESS__) && !defined(__SANITIZE_THREAD__) && !defined(__AVX2__) && \
+    !defined(__clang__)
 #define LFI_ROW_CLONES __attribute__((target_clones("arch=x86-64-v4", "avx2", "default")))
 #else
 #define LFI_ROW_CLONES
@@ -194,8 +194,8 @@ LFI_ROW_CLONES void horizontalAnyRadius(const float* __restrict d, const float* 
 
 // s[j] = Σ_i taps[|i|] rows[R + i][j], and whether any |s[j]| > max(a, relative · σ[j]).
 template <int R>
-LFI_ROW_CLONES bool vertical(const float* const* rows, const float* taps, const float* __restrict sigma,
-                             float relative, float a, int n, float* __restrict s) {
+LFI_ROW_CLONES bool vertical(const float* const* rows, const float* taps, const float* __restrict sigma, float relative,
+                             float a, int n, float* __restrict s) {
   float k[R + 1];
   const float* __restrict r[2 * R + 1];
   for (int i = 0; i <= R; ++i) k[i] = taps[i];
@@ -302,8 +302,8 @@ class Band {
       const int offset = span.begin - c0, count = span.end - span.begin;
       for (int i = 0; i < window; ++i) rows_[static_cast<size_t>(i)] = slot(y - radius_ + i) + offset;
       const float* sigma = model_.variation.ptr<float>(y) + span.begin;
-      const bool any = filters_.vertical ? filters_.vertical(rows_.data(), taps_, sigma, s_.relative,
-                                                             s_.threshold_dn, count, sRow_.data())
+      const bool any = filters_.vertical ? filters_.vertical(rows_.data(), taps_, sigma, s_.relative, s_.threshold_dn,
+                                                             count, sRow_.data())
                                          : verticalAnyRadius(rows_.data(), taps_, radius_, sigma, s_.relative,
                                                              s_.threshold_dn, count, sRow_.data());
       if (!any) continue;

@@ -16,8 +16,10 @@ GoldenModelTrainer& GoldenModelTrainer::operator=(const GoldenModelTrainer& othe
 
 void GoldenModelTrainer::add(const cv::Mat& image) {
   if (image.empty() || image.channels() != 1)
-    fail(Errc::InvalidArgument, "golden model: an image must be single-channel and not empty (got {} x {}, {} "
-         "channels)", image.cols, image.rows, image.channels());
+    fail(Errc::InvalidArgument,
+         "golden model: an image must be single-channel and not empty (got {} x {}, {} "
+         "channels)",
+         image.cols, image.rows, image.channels());
   if (image.depth() != CV_8U && image.depth() != CV_16U && image.depth() != CV_32F)
     fail(Errc::InvalidArgument, "golden model: image depth {} is not 8-bit, 16-bit or float", image.depth());
   if (count_ > 0 && (image.size() != sum_.size() || image.type() != type_))
@@ -75,8 +77,10 @@ cv::Mat GoldenModelTrainer::spread() const {
 GoldenModelTrainer GoldenModelTrainer::resume(const cv::Mat& mean, const cv::Mat& spread, int count, int imageType) {
   if (count < 1) fail(Errc::InvalidArgument, "golden model: {} images trained is not a count to resume from", count);
   if (mean.empty() || mean.type() != CV_32FC1 || spread.type() != CV_32FC1 || spread.size() != mean.size())
-    fail(Errc::InvalidArgument, "golden model: the stored mean ({} x {}) and spread ({} x {}) must be float images "
-         "of one size", mean.cols, mean.rows, spread.cols, spread.rows);
+    fail(Errc::InvalidArgument,
+         "golden model: the stored mean ({} x {}) and spread ({} x {}) must be float images "
+         "of one size",
+         mean.cols, mean.rows, spread.cols, spread.rows);
   if (imageType != CV_8UC1 && imageType != CV_16UC1 && imageType != CV_32FC1)
     fail(Errc::InvalidArgument, "golden model: image type {} is not 8-bit, 16-bit or float single-channel", imageType);
   double lowest = 0;

@@ -11,8 +11,10 @@ namespace lfi {
 PartVerdict judgePart(const std::vector<Defect>& defects, const PartFrame& frame, const PassRules& rules) {
   if (!(frame.pixel_mm > 0) || !std::isfinite(frame.pixel_mm) || !std::isfinite(frame.origin_px.x) ||
       !std::isfinite(frame.origin_px.y))
-    fail(Errc::InvalidArgument, "verdict: the part's frame (pixel {} mm, origin ({}, {}) px) is not finite and "
-         "positive", frame.pixel_mm, frame.origin_px.x, frame.origin_px.y);
+    fail(Errc::InvalidArgument,
+         "verdict: the part's frame (pixel {} mm, origin ({}, {}) px) is not finite and "
+         "positive",
+         frame.pixel_mm, frame.origin_px.x, frame.origin_px.y);
   if (rules.maxDefects < 0 || (rules.maxDefectArea_mm2 && !(*rules.maxDefectArea_mm2 >= 0)) ||
       (rules.maxTotalArea_mm2 && !(*rules.maxTotalArea_mm2 >= 0)))
     fail(Errc::InvalidArgument, "verdict: pass/fail limits must be >= 0");
@@ -25,17 +27,18 @@ PartVerdict judgePart(const std::vector<Defect>& defects, const PartFrame& frame
   }
   const auto count = static_cast<long>(defects.size());
   if (count > rules.maxDefects)
-    verdict.reasons.push_back(fmt::format("{} defect{} (at most {} allowed)", count, count == 1 ? "" : "s",
-                                          rules.maxDefects));
+    verdict.reasons.push_back(
+        fmt::format("{} defect{} (at most {} allowed)", count, count == 1 ? "" : "s", rules.maxDefects));
   if (rules.maxDefectArea_mm2)
     for (const PartDefect& p : verdict.defects)
       if (p.area_mm2 > *rules.maxDefectArea_mm2)
-        verdict.reasons.push_back(fmt::format("a defect of {:.3g} mm² at ({:.2f}, {:.2f}) mm (at most {:.3g} mm² "
-                                              "allowed)", p.area_mm2, p.centroid_mm.x, p.centroid_mm.y,
-                                              *rules.maxDefectArea_mm2));
+        verdict.reasons.push_back(
+            fmt::format("a defect of {:.3g} mm² at ({:.2f}, {:.2f}) mm (at most {:.3g} mm² "
+                        "allowed)",
+                        p.area_mm2, p.centroid_mm.x, p.centroid_mm.y, *rules.maxDefectArea_mm2));
   if (rules.maxTotalArea_mm2 && total_mm2 > *rules.maxTotalArea_mm2)
-    verdict.reasons.push_back(fmt::format("defects of {:.3g} mm² in all (at most {:.3g} mm² allowed)", total_mm2,
-                                          *rules.maxTotalArea_mm2));
+    verdict.reasons.push_back(
+        fmt::format("defects of {:.3g} mm² in all (at most {:.3g} mm² allowed)", total_mm2, *rules.maxTotalArea_mm2));
   verdict.pass = verdict.reasons.empty();
   return verdict;
 }

@@ -73,7 +73,8 @@ void checkGeometry(const Bench& b, const ConfigTable& cameraTable, const ConfigT
   for (const double radial : {0.0, defects.rimRadial_mm})
     if (!sim::sphericalLensHolds(lens.frontRadius_mm, lens.backRadius_mm, lens.centreThickness_mm, lens.diameter_mm,
                                  {radial, 0, 0}, defects.inclusionRadius_mm))
-      fail(Errc::Config, "{}: the inclusion of radius {} mm, {} mm from the axis, would not lie inside the lens "
+      fail(Errc::Config,
+           "{}: the inclusion of radius {} mm, {} mm from the axis, would not lie inside the lens "
            "(diameter {}, centre thickness {})",
            defectsTable.where(radial != 0 ? "rim_radial_mm" : "inclusion_radius_mm"), defects.inclusionRadius_mm,
            radial, lens.diameter_mm, lens.centreThickness_mm);
@@ -193,8 +194,8 @@ Bench::Span Bench::lensSpan(bool misaligned) const {
   const double semi = lens.diameter_mm / 2, t = lens.centreThickness_mm;
   const double front = std::min(sim::sphericalFaceZ(lens.frontRadius_mm, -t / 2, 0),
                                 sim::sphericalFaceZ(lens.frontRadius_mm, -t / 2, semi));
-  const double back = std::max(sim::sphericalFaceZ(lens.backRadius_mm, t / 2, 0),
-                               sim::sphericalFaceZ(lens.backRadius_mm, t / 2, semi));
+  const double back =
+      std::max(sim::sphericalFaceZ(lens.backRadius_mm, t / 2, 0), sim::sphericalFaceZ(lens.backRadius_mm, t / 2, semi));
   const double shift = misaligned ? -defects.misalignment_mm : 0.0;  // the misaligned scene's lens
   return {front + std::min(0.0, shift), back + std::max(0.0, shift)};
 }

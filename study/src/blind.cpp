@@ -24,8 +24,10 @@ BlindScore scoreBlindDetection(const std::vector<lfi::Defect>& found, const std:
     fail(Errc::InvalidArgument, "blind scoring: the object-space pixel {} mm must be > 0", objectPixel_mm);
   for (const TrueDefect& t : truth)
     if (t.mask.type() != CV_8UC1 || t.mask.size() != truth.front().mask.size())
-      fail(Errc::InvalidArgument, "blind scoring: a defect's mask ({} x {}, type {}) is not an 8-bit image of the "
-           "first mask's size", t.mask.cols, t.mask.rows, t.mask.type());
+      fail(Errc::InvalidArgument,
+           "blind scoring: a defect's mask ({} x {}, type {}) is not an 8-bit image of the "
+           "first mask's size",
+           t.mask.cols, t.mask.rows, t.mask.type());
 
   // Every (region, defect) pair that matches, nearest first.
   struct Match {
@@ -39,8 +41,8 @@ BlindScore scoreBlindDetection(const std::vector<lfi::Defect>& found, const std:
     const cv::Point pixel(static_cast<int>(std::lround(c.x)), static_cast<int>(std::lround(c.y)));
     for (size_t d = 0; d < truth.size(); ++d) {
       const double distance = (c - truth[d].centre_px).length();
-      const bool inMask = pixel.inside(cv::Rect(0, 0, truth[d].mask.cols, truth[d].mask.rows)) &&
-                          truth[d].mask.at<uchar>(pixel) != 0;
+      const bool inMask =
+          pixel.inside(cv::Rect(0, 0, truth[d].mask.cols, truth[d].mask.rows)) && truth[d].mask.at<uchar>(pixel) != 0;
       if (inMask || distance <= 1.0) {
         matches.push_back({distance, r, d});
         onDefect[r] = 1;
@@ -75,8 +77,8 @@ BlindScore scoreBlindDetection(const std::vector<lfi::Defect>& found, const std:
 
 namespace detail {
 
-GoldenModel trainGoldenModel(const cv::Mat& intactRadiance, const sim::CameraSensorModel& sensor,
-                             std::uint64_t seed, int threads) {
+GoldenModel trainGoldenModel(const cv::Mat& intactRadiance, const sim::CameraSensorModel& sensor, std::uint64_t seed,
+                             int threads) {
   GoldenModelTrainer trainer;
   for (int k = 0; k < kGoldenFrames; ++k)
     trainer.add(sensor.capture(intactRadiance, seed + static_cast<std::uint64_t>(k), threads));
@@ -99,22 +101,30 @@ DetectionSettings blindSettings(const Bench& bench, const sim::TelecentricCamera
 
 nlohmann::ordered_json blindDetectorJson(const DetectionSettings& s, const sim::TelecentricCamera& camera) {
   return {{"detector", "lfi::DefectFinder (golden-template comparison, no ground truth)"},
-          {"golden_model", "per illumination: mean and sample deviation of training_frames camera frames of the "
-                           "intact lens's rendering (independent noise draws), the camera's noise "
-                           "(read, quantisation, shot) as the deviation's floor"},
+          {"golden_model",
+           "per illumination: mean and sample deviation of training_frames camera frames of the "
+           "intact lens's rendering (independent noise draws), the camera's noise "
+           "(read, quantisation, shot) as the deviation's floor"},
           {"training_frames", kGoldenFrames},
           {"mask", "the intact lens's footprint on the camera (its geometry, as a bench knows it from its design)"},
-          {"settings", {{"absolute_dn", s.absolute_dn}, {"relative", s.relative}, {"smoothing_px", s.smoothing_px},
-                        {"closing_px", s.closing_px}, {"min_area_px", s.minArea_px}}},
+          {"settings",
+           {{"absolute_dn", s.absolute_dn},
+            {"relative", s.relative},
+            {"smoothing_px", s.smoothing_px},
+            {"closing_px", s.closing_px},
+            {"min_area_px", s.minArea_px}}},
           {"object_pixel_mm", camera.objectPixel_mm()},
-          {"hit", "a found region whose centroid lies in a defect's (dilated) ground-truth mask or within one "
-                  "pixel of where the defect's centre appears; one region per defect, nearest first"},
+          {"hit",
+           "a found region whose centroid lies in a defect's (dilated) ground-truth mask or within one "
+           "pixel of where the defect's centre appears; one region per defect, nearest first"},
           {"extra_regions", "further regions on a defect that is already hit (fragments)"},
-          {"false_alarms", "found regions on no defect; secondary: those whose bounding box lies within the "
-                           "smoothing's reach (3 smoothing_px) of a pixel where the rendered radiance differs from "
-                           "the intact lens's"},
-          {"position_error_mm", "distance, in object space, between the hit region's centroid and where the "
-                                "defect's centre appears"}};
+          {"false_alarms",
+           "found regions on no defect; secondary: those whose bounding box lies within the "
+           "smoothing's reach (3 smoothing_px) of a pixel where the rendered radiance differs from "
+           "the intact lens's"},
+          {"position_error_mm",
+           "distance, in object space, between the hit region's centroid and where the "
+           "defect's centre appears"}};
 }
 
 nlohmann::ordered_json blindFindings(const cv::Mat& frame, const DefectFinder& finder,
@@ -149,9 +159,10 @@ nlohmann::ordered_json blindFindings(const cv::Mat& frame, const DefectFinder& f
         {{"centroid_px", {found[r].centroid_px.x, found[r].centroid_px.y}},
          {"area_px", found[r].area_px},
          {"dark", found[r].dark},
-         {"defect", hit == score.regionOf.end() ? nlohmann::ordered_json(nullptr)
-                                                : nlohmann::ordered_json(spec.defects[static_cast<size_t>(
-                                                      hit - score.regionOf.begin())].name)}});
+         {"defect",
+          hit == score.regionOf.end()
+              ? nlohmann::ordered_json(nullptr)
+              : nlohmann::ordered_json(spec.defects[static_cast<size_t>(hit - score.regionOf.begin())].name)}});
   }
   for (size_t k = 0; k < spec.defects.size(); ++k) {
     const std::optional<double>& error = score.positionError_mm[k];

@@ -53,8 +53,8 @@ Vec2 apparentPosition(const sim::Scene& part, const sim::TelecentricCamera& came
   Vec2 p = target;
   for (int step = 0; step < 32; ++step) {
     const double i = std::floor(p.x), j = std::floor(p.y);
-    const auto path = sim::refractionPath(
-        part, camera.ray(static_cast<int>(i), static_cast<int>(j), {p.x - i, p.y - j}, {0, 0}));
+    const auto path =
+        sim::refractionPath(part, camera.ray(static_cast<int>(i), static_cast<int>(j), {p.x - i, p.y - j}, {0, 0}));
     // The path's point nearest `point`.
     Vec3 nearest = path.front();
     for (size_t k = 0; k + 1 < path.size(); ++k) {
@@ -309,8 +309,8 @@ Evaluation evaluate(const Bench& bench, const Illumination& light, const std::ve
     sceneOut["false_positives"] = regions.falsePositives;
     sceneOut["secondary_regions"] = regions.secondary;
     if (blind)
-      sceneOut["blind"] = blindFindings(frame, *finder, *blind, spec, masks, truth.centres[index], changed,
-                                        camera.objectPixel_mm());
+      sceneOut["blind"] =
+          blindFindings(frame, *finder, *blind, spec, masks, truth.centres[index], changed, camera.objectPixel_mm());
 
     if (imagesDir) writeSceneImages(*imagesDir, spec, light, camera, sensor, frame, diff, overwrite);
   }

@@ -44,9 +44,10 @@ std::string svgCnrChart(const std::vector<double>& xs, const std::vector<ChartLi
     return h - bottom - t * (h - top - bottom);
   };
   std::string svg = fmt::format("<svg width=\"{}\" height=\"{}\" style=\"border:1px solid #ccc;margin:4px\">", w, h);
-  svg += fmt::format("<line x1=\"{0}\" x2=\"{1}\" y1=\"{2}\" y2=\"{2}\" stroke=\"#999\" stroke-dasharray=\"2,2\"/>"
-                     "<text x=\"{3}\" y=\"{4}\" font-size=\"10\" fill=\"#666\">detected (CNR {5})</text>",
-                     left, w - right, fy(kDetectedCnr), w - right - 100, fy(kDetectedCnr) - 3, kDetectedCnr);
+  svg += fmt::format(
+      "<line x1=\"{0}\" x2=\"{1}\" y1=\"{2}\" y2=\"{2}\" stroke=\"#999\" stroke-dasharray=\"2,2\"/>"
+      "<text x=\"{3}\" y=\"{4}\" font-size=\"10\" fill=\"#666\">detected (CNR {5})</text>",
+      left, w - right, fy(kDetectedCnr), w - right - 100, fy(kDetectedCnr) - 3, kDetectedCnr);
   for (double c : {0.1, 1.0, 10.0, 100.0, 1000.0})
     svg += fmt::format("<text x=\"4\" y=\"{}\" font-size=\"10\">{}</text>", fy(c) + 3, c);
   for (const double x : xs)
@@ -92,14 +93,15 @@ std::string svgPlot(const nlohmann::ordered_json& sweep, const std::string& seri
 }
 
 std::string sweepHtml(const nlohmann::ordered_json& sweep) {
-  std::string h = "<h2>How good must the display be?</h2><p>Inverse schlieren setup at the quick camera resolution; "
-                  "CNR per defect (log scale) against the light field's angular resolution (element size fixed at " +
-                  fmt::format("{} mm", sweep["reference"]["element_mm"].get<double>()) +
-                  "), its element size (angular resolution fixed at " +
-                  fmt::format("{}", sweep["reference"]["angular"].get<int>()) +
-                  "), and an error in the display's distance &Delta; (light field captured at &Delta;, display moved "
-                  "away from the lens by the error). Solid: nearest lookup (reference model); dashed: interpolated."
-                  "</p><div>";
+  std::string h =
+      "<h2>How good must the display be?</h2><p>Inverse schlieren setup at the quick camera resolution; "
+      "CNR per defect (log scale) against the light field's angular resolution (element size fixed at " +
+      fmt::format("{} mm", sweep["reference"]["element_mm"].get<double>()) +
+      "), its element size (angular resolution fixed at " +
+      fmt::format("{}", sweep["reference"]["angular"].get<int>()) +
+      "), and an error in the display's distance &Delta; (light field captured at &Delta;, display moved "
+      "away from the lens by the error). Solid: nearest lookup (reference model); dashed: interpolated."
+      "</p><div>";
   h += svgPlot(sweep, "angular", "angular elements per side", true);
   h += svgPlot(sweep, "element", "spatial element pitch (mm)", true);
   h += svgPlot(sweep, "delta_error", "display distance error (mm)", false);
@@ -200,10 +202,9 @@ std::string blindHtml(const nlohmann::ordered_json& study) {
       const auto& r = data["blind"][setup.get<std::string>()];
       h += fmt::format("<td>hits {}/{}<br>", r["hits"].get<int>(), r["hits"].get<int>() + r["misses"].get<int>());
       for (const auto& [defect, d] : r["defects"].items())
-        h += d["found"].get<bool>()
-                 ? fmt::format("<span class=\"detected\">{}: {:.3f} mm</span><br>", defect,
-                               d["position_error_mm"].get<double>())
-                 : fmt::format("<span class=\"missed\">{}: missed</span><br>", defect);
+        h += d["found"].get<bool>() ? fmt::format("<span class=\"detected\">{}: {:.3f} mm</span><br>", defect,
+                                                  d["position_error_mm"].get<double>())
+                                    : fmt::format("<span class=\"missed\">{}: missed</span><br>", defect);
       h += fmt::format("false alarms: {} ({} secondary), extra regions: {}</td>", r["false_alarms"].get<int>(),
                        r["secondary_false_alarms"].get<int>(), r["extra_regions"].get<int>());
     }
@@ -262,14 +263,14 @@ difference with the intact lens (grey = 0, &plusmn;8&sigma; full scale).</p><tab
 namespace detail {
 
 void writeSceneImages(const fs::path& imagesDir, const SceneSpec& spec, const Illumination& light,
-                      const sim::TelecentricCamera& camera, const sim::CameraSensorModel& sensor,
-                      const cv::Mat& frame, const cv::Mat& diff, Overwrite overwrite) {
+                      const sim::TelecentricCamera& camera, const sim::CameraSensorModel& sensor, const cv::Mat& frame,
+                      const cv::Mat& diff, Overwrite overwrite) {
   const std::string stem = spec.name + "_" + light.setup;
-  writeRadianceExr(imagesDir / (stem + ".exr"), frame,
-                   {camera.objectPixel_mm(),
-                    fmt::format("camera frame (DN) of scene {} under {}", spec.name, light.setup),
-                    kCameraDigitalNumbers},
-                   overwrite);
+  writeRadianceExr(
+      imagesDir / (stem + ".exr"), frame,
+      {camera.objectPixel_mm(), fmt::format("camera frame (DN) of scene {} under {}", spec.name, light.setup),
+       kCameraDigitalNumbers},
+      overwrite);
   cv::Mat png8;
   frame.convertTo(png8, CV_8U, 255.0 / sensor.maxDigitalNumber());
   writePngAtomically(imagesDir / (stem + ".png"), png8, overwrite);
@@ -331,9 +332,9 @@ std::string verdictTable(const nlohmann::ordered_json& study) {
                             "coarsest e (mm)", "fewest n", "Δ tol. (mm)");
     for (const auto& [defect, byLookup] : study["sweep"]["answers"].items())
       for (const auto& [lookup, a] : byLookup.items())
-        sweepText += fmt::format("{:<32} {:>15} {:>10} {:>14}\n", defect + " / " + lookup,
-                                 cell(a["coarsest_element_mm"]), cell(a["fewest_angular"]),
-                                 cell(a["delta_tolerance_mm"]));
+        sweepText +=
+            fmt::format("{:<32} {:>15} {:>10} {:>14}\n", defect + " / " + lookup, cell(a["coarsest_element_mm"]),
+                        cell(a["fewest_angular"]), cell(a["delta_tolerance_mm"]));
   }
   std::string out = fmt::format("{:<14} {:<8}", "scene", "defect");
   for (const auto& s : study["setups"]) out += fmt::format(" {:>22}", s.get<std::string>());

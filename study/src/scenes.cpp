@@ -36,8 +36,8 @@ std::vector<SceneSpec> sceneSpecs(const Bench& bench) {
   for (auto [name, radius, radial] : {std::tuple{"cut_large", d.cutLargeRadius_mm, d.cutLargeRadial_mm},
                                       std::tuple{"cut_subpixel", d.cutSubpixelRadius_mm, d.cutSubpixelRadial_mm}}) {
     // Centred on the camera-side (back) surface.
-    const Vec3 c(radial, 0, sim::sphericalFaceZ(bench.lens.backRadius_mm, bench.lens.centreThickness_mm / 2,
-                                                std::abs(radial)));
+    const Vec3 c(radial, 0,
+                 sim::sphericalFaceZ(bench.lens.backRadius_mm, bench.lens.centreThickness_mm / 2, std::abs(radial)));
     SceneSpec s{.name = name};
     s.cuts = {{c, radius}};
     s.defects = {{"cut", Solid::sphere(radius, Rigid3::translation(c))}};
@@ -45,8 +45,8 @@ std::vector<SceneSpec> sceneSpecs(const Bench& bench) {
   }
   specs.push_back({.name = "index", .iorFactor = d.indexFactor, .defects = {{"lens", lensSolid}}});
   // Both positions of the lens: where it should be and where it is.
-  const auto moved = Solid::combine(Solid::Kind::Union, lensSolid, lensSolid,
-                                    Rigid3::translation({0, 0, -d.misalignment_mm}));
+  const auto moved =
+      Solid::combine(Solid::Kind::Union, lensSolid, lensSolid, Rigid3::translation({0, 0, -d.misalignment_mm}));
   specs.push_back({.name = "misaligned",
                    .lensShift_mm = -d.misalignment_mm,
                    .defects = {{"lens", Solid::combine(Solid::Kind::Union, lensSolid, moved)}}});
@@ -64,8 +64,8 @@ std::vector<Object> partObjects(const Bench& bench, const SceneSpec& spec) {
   int k = 0;
   for (const auto& [centre, radius] : spec.inclusions) {
     sim::Material m = spec.bubbles ? sim::Material(sim::Dielectric{1.0, 0}) : sim::Material(sim::Absorber{});
-    objects.push_back({fmt::format("inclusion{}", k++), Solid::sphere(radius), Rigid3::translation(centre), m,
-                       std::nullopt});
+    objects.push_back(
+        {fmt::format("inclusion{}", k++), Solid::sphere(radius), Rigid3::translation(centre), m, std::nullopt});
   }
   return objects;
 }

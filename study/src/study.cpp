@@ -30,14 +30,15 @@ namespace {
 const std::vector<std::string> kSetups = {"parallel", "area", "schlieren", "inverse_schlieren", "display"};
 
 struct QualitySettings {
-  int binning;           // extra binning of the bench camera (fewer, larger pixels)
-  int samplesPerPixel;   // camera images
-  int captureSamples;    // light field capture, per sensor pixel
+  int binning;          // extra binning of the bench camera (fewer, larger pixels)
+  int samplesPerPixel;  // camera images
+  int captureSamples;   // light field capture, per sensor pixel
 };
 
 QualitySettings settingsFor(Quality q) {
   switch (q) {
-    case Quality::Quick: return {4, 8, 16};
+    case Quality::Quick:
+      return {4, 8, 16};
     case Quality::Default:
       return {2, 32, 256};
     case Quality::High:
@@ -128,8 +129,8 @@ auto namingTheStep(const std::string& step, Step run) {
 nlohmann::ordered_json runStudy(const Bench& bench, const fs::path& outDir, const StudyOptions& options) {
   const Overwrite overwrite = options.overwrite ? Overwrite::Allow : Overwrite::Refuse;
   const std::vector<SweepVariant> sweep = sweepVariants(
-      bench,
-      options.sweep ? *options.sweep : (options.quality == Quality::Quick ? std::vector<SweepPoint>{} : defaultSweep()));
+      bench, options.sweep ? *options.sweep
+                           : (options.quality == Quality::Quick ? std::vector<SweepPoint>{} : defaultSweep()));
   const std::vector<LimitPoint> limits =
       options.limits ? *options.limits
                      : (options.quality == Quality::Quick ? std::vector<LimitPoint>{} : defaultLimits());
@@ -143,8 +144,8 @@ nlohmann::ordered_json runStudy(const Bench& bench, const fs::path& outDir, cons
              file.filename().string());
       if (ec) fail(Errc::Io, "study: cannot look for '{}' in the output folder: {}", file.string(), ec.message());
     }
-  if (std::error_code ec; !options.overwrite && fs::is_directory(outDir / "images", ec) &&
-                          !fs::is_empty(outDir / "images", ec))
+  if (std::error_code ec;
+      !options.overwrite && fs::is_directory(outDir / "images", ec) && !fs::is_empty(outDir / "images", ec))
     fail(Errc::Exists, "'{}' already holds a study's images; use --force to replace them", outDir.string());
   if (std::error_code ec; !fs::create_directories(outDir / "images", ec) && ec)
     fail(Errc::Io, "study: cannot make the folder '{}' for its results: {}", (outDir / "images").string(),
@@ -209,9 +210,12 @@ nlohmann::ordered_json runStudy(const Bench& bench, const fs::path& outDir, cons
                      : options.quality == Quality::High ? "high"
                                                         : "default";
   study["provenance"] = {{"bench", bench.source}, {"seed", options.seed}};  // (results do not depend on threads)
-  study["camera"] = {{"width", camera.width}, {"height", camera.height}, {"object_pixel_mm", camera.objectPixel_mm()},
+  study["camera"] = {{"width", camera.width},
+                     {"height", camera.height},
+                     {"object_pixel_mm", camera.objectPixel_mm()},
                      {"acceptance_half_angle_rad", camera.acceptanceHalfAngle_rad()},
-                     {"samples_per_pixel", q.samplesPerPixel}, {"bit_depth", bench.sensorModel().bitDepth}};
+                     {"samples_per_pixel", q.samplesPerPixel},
+                     {"bit_depth", bench.sensorModel().bitDepth}};
   study["light_field"] = {{"spatial", lightField->geometry().spatialX},
                           {"angular", lightField->geometry().angular},
                           {"pixel_pitch_mm", lightField->geometry().pixelPitch_mm},
@@ -297,10 +301,11 @@ nlohmann::ordered_json runStudy(const Bench& bench, const fs::path& outDir, cons
     const LightFieldGeometry reference = bench.lightFieldGeometry();
     auto& out = study["sweep"];
     out["setup"] = "inverse_schlieren";
-    out["camera"] = {{"width", sweepCamera.width}, {"height", sweepCamera.height},
-                     {"samples_per_pixel", sro.samplesPerPixel}};
+    out["camera"] = {
+        {"width", sweepCamera.width}, {"height", sweepCamera.height}, {"samples_per_pixel", sro.samplesPerPixel}};
     out["capture_samples_per_pixel"] = sweepQuality.captureSamples;
-    out["reference"] = {{"angular", reference.angular}, {"element_mm", reference.elementPitch_mm()},
+    out["reference"] = {{"angular", reference.angular},
+                        {"element_mm", reference.elementPitch_mm()},
                         {"distance_mm", reference.distance_mm}};
     for (const auto& [point, g, displayError] : sweep) {
       const std::string label = fmt::format("sweep {}={}", point.series, point.value);
@@ -308,8 +313,8 @@ nlohmann::ordered_json runStudy(const Bench& bench, const fs::path& outDir, cons
           bench.displayed(captureLightField(bench, g, sweepQuality.captureSamples, options.seed, options.threads,
                                             progress.step(label + ": capture", 0.25))));
       nlohmann::ordered_json entry = {{"series", point.series}, {"value", point.value},
-                                      {"angular", g.angular}, {"element_mm", g.elementPitch_mm()},
-                                      {"spatial", g.spatialX}, {"display_error_mm", displayError}};
+                                      {"angular", g.angular},   {"element_mm", g.elementPitch_mm()},
+                                      {"spatial", g.spatialX},  {"display_error_mm", displayError}};
       const std::vector<std::pair<std::string, LightFieldLookup>> lookups = {
           {"nearest", LightFieldLookup::Nearest}, {"interpolated", LightFieldLookup::Interpolated}};
       for (const auto& [name, lookup] : lookups) {

@@ -28,14 +28,14 @@ namespace lfi::study::detail {
 // The declared detection criterion (docs/study.md).
 inline constexpr double kDetectedCnr = 3.0;  // RMS excess signal per defect pixel >= 3 sigma
 inline constexpr double kWeakCnr = 1.5;
-inline constexpr double kFlagSigma = 5.0;    // false-positive flag: |3x3 mean of the difference| > 5 sigma_mean
+inline constexpr double kFlagSigma = 5.0;  // false-positive flag: |3x3 mean of the difference| > 5 sigma_mean
 inline const char* verdictOf(double cnr) {
   return cnr >= kDetectedCnr ? "detected" : cnr >= kWeakCnr ? "weak" : "missed";
 }
 
 // Overall progress of a study made of weighted steps.
 class Progress {
-public:
+ public:
   Progress(const StudyOptions& options, double totalUnits) : options_(options), total_(totalUnits) {}
   std::function<void(double)> step(const std::string& label, double units) {
     const double start = done_;
@@ -45,7 +45,7 @@ public:
     };
   }
 
-private:
+ private:
   const StudyOptions& options_;
   double total_;
   double done_ = 0;
@@ -61,7 +61,7 @@ struct Defect {
 struct SceneSpec {
   std::string name;
   double iorFactor = 1;
-  double lensShift_mm = 0;  // along z
+  double lensShift_mm = 0;                          // along z
   std::vector<std::pair<Vec3, double>> cuts;        // centre (lens frame), radius
   std::vector<std::pair<Vec3, double>> inclusions;  // centre (world), radius
   bool bubbles = false;
@@ -107,8 +107,8 @@ struct GroundTruth {
   // chief ray, refracted by the scene's lens without its defects, passes through
   // it), (column, row) with pixel centres at whole numbers.
   std::vector<std::vector<Vec2>> centres;
-  std::vector<cv::Mat> allDefects;          // [scene]
-  cv::Mat lens;                             // the intact lens
+  std::vector<cv::Mat> allDefects;  // [scene]
+  cv::Mat lens;                     // the intact lens
 };
 
 GroundTruth traceGroundTruth(const Bench& bench, const std::vector<SceneSpec>& specs,
@@ -118,8 +118,8 @@ struct Evaluation {
   // scene -> {defects: {defect: {verdict, cnr, pixels}}, false_positives, secondary_regions}
   nlohmann::ordered_json scenes;
   nlohmann::ordered_json noise;
-  double intactLitFraction = 0;   // lens pixels of the intact frame above a quarter of the brightest
-  Uniformity intactUniformity;    // of the intact lens's rendering
+  double intactLitFraction = 0;  // lens pixels of the intact frame above a quarter of the brightest
+  Uniformity intactUniformity;   // of the intact lens's rendering
 };
 
 // The uniformity of an intact lens's rendering (study.h, Uniformity).
@@ -144,18 +144,18 @@ nlohmann::ordered_json criterionJson();
 // ---- The blind detector (blind.cpp) -----------------------------------------
 
 // Its declared settings (docs/study.md, "Blind detector").
-inline constexpr int kGoldenFrames = 16;          // frames of the intact lens the golden model is trained from
-inline constexpr double kBlindAbsoluteDn = 0;     // a: the variation holds all the study's frames vary by
-inline constexpr double kBlindRelative = 5;       // b: 5 sigma of the smoothed difference
+inline constexpr int kGoldenFrames = 16;                // frames of the intact lens the golden model is trained from
+inline constexpr double kBlindAbsoluteDn = 0;           // a: the variation holds all the study's frames vary by
+inline constexpr double kBlindRelative = 5;             // b: 5 sigma of the smoothed difference
 inline constexpr double kMatchedSigmaPerRadius = 0.63;  // Gaussian that best finds a disc of radius R: 0.63 R
-inline constexpr double kClosingPerRadius = 1.0;  // closing radius, per inclusion radius
+inline constexpr double kClosingPerRadius = 1.0;        // closing radius, per inclusion radius
 inline constexpr int kBlindMinArea_px = 1;
 
 // The golden model of the intact lens under one illumination: kGoldenFrames
 // camera frames of its rendering, each with its own noise draw (seeds seed,
 // seed + 1, ...), and the camera's noise as the variation's floor.
-GoldenModel trainGoldenModel(const cv::Mat& intactRadiance, const sim::CameraSensorModel& sensor,
-                             std::uint64_t seed, int threads);
+GoldenModel trainGoldenModel(const cv::Mat& intactRadiance, const sim::CameraSensorModel& sensor, std::uint64_t seed,
+                             int threads);
 // The declared settings for the camera: smoothing and closing scale with the
 // inclusion radius in its pixels.
 DetectionSettings blindSettings(const Bench& bench, const sim::TelecentricCamera& camera);
@@ -217,8 +217,8 @@ nlohmann::ordered_json limitCurves(const std::vector<LimitPoint>& points, const 
 // One scene's camera frame under one illumination (EXR in DN, PNG) and its
 // difference with the intact lens (PNG), in imagesDir.
 void writeSceneImages(const std::filesystem::path& imagesDir, const SceneSpec& spec, const Illumination& light,
-                      const sim::TelecentricCamera& camera, const sim::CameraSensorModel& sensor,
-                      const cv::Mat& frame, const cv::Mat& diff, Overwrite overwrite);
+                      const sim::TelecentricCamera& camera, const sim::CameraSensorModel& sensor, const cv::Mat& frame,
+                      const cv::Mat& diff, Overwrite overwrite);
 
 // OUTDIR/report.html and OUTDIR/study.json from the study's document.
 void writeReport(const std::filesystem::path& outDir, Overwrite mode, const nlohmann::ordered_json& study);

@@ -88,18 +88,19 @@ std::vector<SweepVariant> sweepVariants(const Bench& bench, const std::vector<Sw
     } else if (point.series == "delta_error") {
       v.displayError_mm = point.value;
       if (-(delta + point.value) >= lowest)
-        refuse(fmt::format("the display plane at z = {} would be inside or above the lens, which reaches down to "
-                           "z = {:.4g} (with the bench's misalignment_mm); choose a larger [inverse_schlieren] "
-                           "distance_mm, or leave the sweep out (--no-sweep)",
-                           -(delta + point.value), lowest));
+        refuse(
+            fmt::format("the display plane at z = {} would be inside or above the lens, which reaches down to "
+                        "z = {:.4g} (with the bench's misalignment_mm); choose a larger [inverse_schlieren] "
+                        "distance_mm, or leave the sweep out (--no-sweep)",
+                        -(delta + point.value), lowest));
     } else {
       refuse("unknown series (angular, element, delta_error)");
     }
     // (In double first: a tiny element would make a count past int, and LightFieldGeometry refuses past 2^15.)
     const double elements = std::ceil(2 * footprint / g.elementPitch_mm());
     if (!(elements <= 1 << 15))
-      refuse(fmt::format("the lens's {:.4g} mm footprint needs {:g} elements a side, more than 32768",
-                         2 * footprint, elements));
+      refuse(fmt::format("the lens's {:.4g} mm footprint needs {:g} elements a side, more than 32768", 2 * footprint,
+                         elements));
     g.spatialX = g.spatialY = std::max(2, static_cast<int>(elements));
     try {
       g.validate();

@@ -8,9 +8,9 @@
 
 #include <fmt/format.h>
 #include <gtest/gtest.h>
+#include <unistd.h>
 #include <nlohmann/json.hpp>
 #include <opencv2/core.hpp>
-#include <unistd.h>
 
 #include <cmath>
 #include <cstdio>
@@ -25,14 +25,16 @@ namespace fs = std::filesystem;
 using Result = lfi::testing_support::LfiResult;
 const auto quoted = [](const auto& s) { return lfi::testing_support::shellQuoted(std::string(s)); };
 
-Result lfi(const std::string& arguments) { return lfi::testing_support::runLfi(arguments); }
+Result lfi(const std::string& arguments) {
+  return lfi::testing_support::runLfi(arguments);
+}
 
 using lfi::testing_support::readText;
 using lfi::testing_support::replaceAll;
 using lfi::testing_support::replaceOnce;
 
 class LfiCli : public testing::Test {
-protected:
+ protected:
   void SetUp() override {
     const auto* test = testing::UnitTest::GetInstance()->current_test_info();
     dir_ = fs::path(testing::TempDir()) / ("lfi_cli_" + std::string(test->name()) + "_" + std::to_string(::getpid()));
@@ -93,7 +95,7 @@ TEST_F(LfiCli, RenderGivesTheSameImageForAnyThreadCount) {
   for (const int threads : {1, 2}) {
     const fs::path out = dir_ / ("threads" + std::to_string(threads));
     const Result run = lfi("render " + quoted(scene) + " --out " + quoted(out) + " --spp 9 --seed 7 --threads " +
-                        std::to_string(threads));
+                           std::to_string(threads));
     ASSERT_EQ(run.status, 0) << run.output;
     images[threads - 1] = lfi::readRadianceExr(out / "small.exr");
   }
@@ -114,7 +116,8 @@ TEST_F(LfiCli, BadArgumentsNameTheOptionAndTheValue) {
         {"--threads -1", "--threads: '-1' is not a whole number in [0, 4096]"},
         {"--seed -1", "--seed: '-1' is not a whole number in [0, 9223372036854775807]"},
         // (TOML's largest integer: every seed taken here can be written in a scene file)
-        {"--seed 9223372036854775808", "--seed: '9223372036854775808' is not a whole number in [0, 9223372036854775807]"}}) {
+        {"--seed 9223372036854775808",
+         "--seed: '9223372036854775808' is not a whole number in [0, 9223372036854775807]"}}) {
     const Result run = lfi("render " + quoted(scene) + " --out " + quoted(out) + " " + arguments);
     EXPECT_NE(run.status, 0) << arguments;
     EXPECT_NE(run.output.find(message), std::string::npos) << arguments << ": " << run.output;

@@ -31,8 +31,8 @@ namespace {
 
 namespace fs = std::filesystem;
 using lfi::testing_support::readText;
-using lfi::testing_support::replaceOnce;
 using lfi::testing_support::replaceAll;
+using lfi::testing_support::replaceOnce;
 using lfi::testing_support::runLfi;
 using lfi::testing_support::shellQuoted;
 using lfi::testing_support::StudyPart;
@@ -76,13 +76,13 @@ std::vector<TraceLine> readTrace(const fs::path& file) {
 
 // Param: the reference's capture, "sim" (the simulated light field sensor) or "coded" (through the display).
 class LfiHilLoop : public testing::TestWithParam<std::string> {
-protected:
+ protected:
   void SetUp() override {
     const std::string scenes = (source_ / "data" / "scenes").string() + "/";
     const bool coded = GetParam() == "coded";
     // In process: the shipped simulated bench of this capture.
-    std::string text = readText(source_ / "data" / "benches" / (coded ? "inspection_coded_sim.toml"
-                                                                        : "inspection_sim.toml"));
+    std::string text =
+        readText(source_ / "data" / "benches" / (coded ? "inspection_coded_sim.toml" : "inspection_sim.toml"));
     replaceAll(text, "sim:../scenes/", "sim:" + scenes);
     replaceOnce(text, "folder = \"../../out/" + std::string(coded ? "bench/coded_reference" : "bench/reference"),
                 "folder = \"" + (folder_ / "in-process" / "reference").string());
@@ -91,7 +91,8 @@ protected:
     simBench_ = folder_.write("sim-bench.toml", text);
     // Through the real drivers: the shipped bench that names sim-bench's devices, with this capture.
     text = readText(source_ / "data" / "benches" / "inspection_hil.toml");
-    replaceOnce(text, "folder = \"../../out/bench-hil/reference", "folder = \"" + (folder_ / "hil" / "reference").string());
+    replaceOnce(text, "folder = \"../../out/bench-hil/reference",
+                "folder = \"" + (folder_ / "hil" / "reference").string());
     replaceOnce(text, "folder = \"../../out/bench-hil/inspections",
                 "folder = \"" + (folder_ / "hil" / "inspections").string());
     if (!coded)
@@ -111,7 +112,8 @@ protected:
     EXPECT_EQ(capture.status, 0) << capture.output;
     for (const StudyPart& part : studyParts()) {
       const auto r = runLfi("-q inspect " + shellQuoted(simBench_.string()) + " --json --part " +
-                                shellQuoted(scenes_[part.name].string()), false, trace);
+                                shellQuoted(scenes_[part.name].string()),
+                            false, trace);
       out[part.name] = {r.status, nlohmann::json::parse(r.output, nullptr, false)};
     }
     return out;
@@ -128,9 +130,9 @@ protected:
                 out + ".status\n";
     }
     const fs::path file = folder_.write("hil.sh", script);
-    const auto r = runLfi("-q sim-bench " + shellQuoted(simBench_.string()) + " -- sh " + shellQuoted(file.string()),
-                          true, "LFI_DRIVER_TRACE=" + shellQuoted(remoteTrace().string()) +
-                                    " timeout --foreground --signal=KILL 600 ");
+    const auto r =
+        runLfi("-q sim-bench " + shellQuoted(simBench_.string()) + " -- sh " + shellQuoted(file.string()), true,
+               "LFI_DRIVER_TRACE=" + shellQuoted(remoteTrace().string()) + " timeout --foreground --signal=KILL 600 ");
     EXPECT_EQ(r.status, 0) << r.output;
     std::map<std::string, Inspection> out;
     for (const StudyPart& part : studyParts()) {
@@ -154,15 +156,15 @@ protected:
     for (const TraceLine& l : remote)
       if (l.layer == "camera" || l.layer == "display") reached.insert(l.layer + "." + l.call);
     for (const std::string& call : made) EXPECT_TRUE(reached.count(call)) << call << " never reached the real drivers";
-    for (const char* call : {"camera.open", "camera.configure", "camera.start", "camera.trigger", "camera.grab",
-                             "camera.stop", "camera.close", "display.open", "display.show", "display.status",
-                             "display.close"})
+    for (const char* call :
+         {"camera.open", "camera.configure", "camera.start", "camera.trigger", "camera.grab", "camera.stop",
+          "camera.close", "display.open", "display.show", "display.status", "display.close"})
       EXPECT_TRUE(made.count(call)) << call << ": the bench path makes it (a sim: device saw none)";
     // What each interface call must have done on the wire.
     const std::map<std::string, std::vector<std::string>> wire = {
         {"camera.open", {"arv_camera_new"}},
-        {"camera.configure", {"arv_camera_set_exposure_time", "arv_camera_set_pixel_format_from_string",
-                              "arv_camera_set_trigger"}},
+        {"camera.configure",
+         {"arv_camera_set_exposure_time", "arv_camera_set_pixel_format_from_string", "arv_camera_set_trigger"}},
         {"camera.start", {"arv_camera_start_acquisition"}},
         {"camera.trigger", {"arv_camera_software_trigger"}},
         {"camera.grab", {"arv_stream_timeout_pop_buffer"}},
@@ -172,7 +174,8 @@ protected:
         {"display.status", {"GET_STATUS"}},
         {"display.blank", {"BLANK"}},
         {"display.brightness", {"SET_BRIGHTNESS"}}};
-    std::map<std::string, std::set<std::string>> since;  // per process and interface layer: wire calls since its last line
+    std::map<std::string, std::set<std::string>>
+        since;  // per process and interface layer: wire calls since its last line
     std::map<std::string, int> checked;
     for (const TraceLine& l : remote) {
       const bool camera = l.layer == "camera" || l.layer == "aravis";
@@ -233,7 +236,8 @@ TEST_P(LfiHilLoop, TheRealDriversGiveTheVerdictsAndDefectsOfTheInProcessLoop) {
       EXPECT_LE(std::hypot(da["centroid_mm"][0].get<double>() - db["centroid_mm"][0].get<double>(),
                            da["centroid_mm"][1].get<double>() - db["centroid_mm"][1].get<double>()),
                 lfi::testing_support::kInspectionPixel_mm)
-          << da.dump() << "\n" << db.dump();
+          << da.dump() << "\n"
+          << db.dump();
     }
   }
   checkDriverCalls();

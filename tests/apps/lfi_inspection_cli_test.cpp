@@ -34,7 +34,7 @@ constexpr double kPixel_mm = lfi::testing_support::kInspectionPixel_mm;
 using lfi::testing_support::inspectionLensFaceZ;
 
 class LfiInspectionCli : public testing::Test {
-protected:
+ protected:
   // The shipped bench file with its folders in the test's own.
   void SetUp() override {
     std::string text = readText(source_ / "data" / "benches" / benchName());
@@ -82,7 +82,7 @@ protected:
 // The same on each shipped simulated bench: its reference from the simulated light field sensor (sim:) or
 // measured through the display and camera (coded:).
 class LfiInspectionCliEachCapture : public LfiInspectionCli, public testing::WithParamInterface<std::string> {
-protected:
+ protected:
   std::string benchName() const override { return GetParam(); }
 };
 
@@ -149,9 +149,9 @@ TEST_P(LfiInspectionCliEachCapture, EveryDefectOfTheStudyIsFoundBlindWhereItIs) 
     EXPECT_LT(distance(record["defects"][0], 6, 0), 2.0) << record.dump(1);
   }
   // The index 10 % high, and the lens 3 mm away from its place along the axis: the whole part is off.
-  for (const auto& [name, edit] : {std::pair<std::string, std::pair<std::string, std::string>>{
-                                       "index", {"ior = 1.5168", "ior = 1.66848"}},
-                                   {"misaligned", {"material = \"dielectric\"", "material = \"dielectric\"\nposition_mm = [0, 0, -3]"}}}) {
+  for (const auto& [name, edit] :
+       {std::pair<std::string, std::pair<std::string, std::string>>{"index", {"ior = 1.5168", "ior = 1.66848"}},
+        {"misaligned", {"material = \"dielectric\"", "material = \"dielectric\"\nposition_mm = [0, 0, -3]"}}}) {
     const auto [status, record] = inspect(partScene(name, {edit}, ""));
     EXPECT_EQ(status, 3) << name;
     EXPECT_FALSE(record["defects"].empty()) << name;
@@ -159,7 +159,7 @@ TEST_P(LfiInspectionCliEachCapture, EveryDefectOfTheStudyIsFoundBlindWhereItIs) 
 }
 
 class LfiCodedBenchCli : public LfiInspectionCli {
-protected:
+ protected:
   std::string benchName() const override { return "inspection_coded_sim.toml"; }
 };
 
@@ -167,9 +167,10 @@ TEST_F(LfiCodedBenchCli, ACodedReferenceTakesTheDisplayWhereItIs) {
   // The display 2 mm further from the lens than the bench file's 30 mm, or tilted by 0.5°: the coded reference
   // is measured through the display where it is, so the intact lens passes and two weak inclusions (Ø1 mm,
   // index 1.53 in the lens's 1.5168) are found where they are, as on the nominal bench.
-  const std::string weak = "[[object]]\nname = \"a\"\nshape = \"sphere\"\nradius_mm = 0.5\nposition_mm = [3, 3, 0]\n"
-                           "material = \"dielectric\"\nior = 1.53\n[[object]]\nname = \"b\"\nshape = \"sphere\"\n"
-                           "radius_mm = 0.5\nposition_mm = [9, -4, 0]\nmaterial = \"dielectric\"\nior = 1.53\n";
+  const std::string weak =
+      "[[object]]\nname = \"a\"\nshape = \"sphere\"\nradius_mm = 0.5\nposition_mm = [3, 3, 0]\n"
+      "material = \"dielectric\"\nior = 1.53\n[[object]]\nname = \"b\"\nshape = \"sphere\"\n"
+      "radius_mm = 0.5\nposition_mm = [9, -4, 0]\nmaterial = \"dielectric\"\nior = 1.53\n";
   const std::string displayAt = "position_mm = [0, 0, -30]\noptics";
   for (const auto& [name, display] :
        {std::pair<std::string, std::string>{"further", "position_mm = [0, 0, -32]\noptics"},
@@ -213,8 +214,9 @@ TEST_F(LfiCodedBenchCli, APanelReferenceOnAnotherPanelIsRefused) {
 TEST_F(LfiInspectionCli, AFailedPartKeepsItsRecordImageAndOverlay) {
   capture();
   const fs::path out = folder_ / "part";
-  const fs::path scene = partScene("particle", {}, "[[object]]\nname = \"p\"\nshape = \"sphere\"\nradius_mm = 0.5\n"
-                                                   "position_mm = [-4, 3, 0]\nmaterial = \"absorber\"");
+  const fs::path scene = partScene("particle", {},
+                                   "[[object]]\nname = \"p\"\nshape = \"sphere\"\nradius_mm = 0.5\n"
+                                   "position_mm = [-4, 3, 0]\nmaterial = \"absorber\"");
   const auto r = runLfi("-q inspect " + bench() + " --part " + shellQuoted(scene.string()) + " --out " +
                         shellQuoted(out.string()));
   EXPECT_EQ(r.status, 3) << r.output;
@@ -310,7 +312,8 @@ TEST_F(LfiInspectionCli, DevicesChecksWhatABenchNames) {
   EXPECT_NE(sim.output.find("taken"), std::string::npos) << "the reference package is there\n" << sim.output;
   EXPECT_EQ(sim.output.find("NOT AVAILABLE"), std::string::npos) << sim.output;
   // The physical template names devices this machine does not have: each one said, and the status says so.
-  const auto physical = runLfi("devices " + shellQuoted((source_ / "data" / "benches" / "inspection_physical.toml").string()));
+  const auto physical =
+      runLfi("devices " + shellQuoted((source_ / "data" / "benches" / "inspection_physical.toml").string()));
   EXPECT_EQ(physical.status, 1) << physical.output;
   EXPECT_NE(physical.output.find("camera    aravis:Basler"), std::string::npos) << physical.output;
   EXPECT_NE(physical.output.find("display   usb:1209:4c46  NOT AVAILABLE"), std::string::npos) << physical.output;
@@ -342,7 +345,8 @@ TEST_F(LfiInspectionCli, ARunInterruptedFromTheTerminalEndsWithEveryRecordAndIts
   const std::string signalAfterFirstRecord =
       "sh -c 'rec=$0; timeout --foreground --preserve-status --signal=KILL 300 \"$@\" & pid=$!; i=0; "
       "while [ ! -s \"$rec\" ] && [ $i -lt 1200 ]; do sleep 0.1; i=$((i+1)); done; sleep 0.5; kill -INT $pid; "
-      "wait $pid' " + shellQuoted((run / "records.jsonl").string()) + " ";
+      "wait $pid' " +
+      shellQuoted((run / "records.jsonl").string()) + " ";
   const auto r = runLfi("-q run " + bench() + " --out " + shellQuoted(run.string()), true, signalAfterFirstRecord);
   EXPECT_EQ(r.status, 0) << r.output;
   std::ifstream records(run / "records.jsonl");

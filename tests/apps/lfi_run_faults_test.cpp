@@ -13,8 +13,8 @@
 
 #include <fmt/format.h>
 #include <gtest/gtest.h>
-#include <nlohmann/json.hpp>
 #include <unistd.h>
+#include <nlohmann/json.hpp>
 
 #include <chrono>
 #include <filesystem>
@@ -36,8 +36,14 @@ using lfi::testing_support::shellQuoted;
 // The served camera's scene: a lens over a Lambertian back light, 48 x 48 pixels of 0.625 mm
 // (magnification 1), 4095 DN over a 10 000 e- well, 3 e- read noise; served as Mono16 (x 16).
 const std::string kScene =
-    lfi::testing_support::cameraSceneText({.samplesPerPixel = 2, .seed = 7, .pixelPitch_mm = 0.625, .width_px = 48,
-                                           .height_px = 48, .fullWell_e = 10000, .readNoise_e = 3, .bitDepth = 12,
+    lfi::testing_support::cameraSceneText({.samplesPerPixel = 2,
+                                           .seed = 7,
+                                           .pixelPitch_mm = 0.625,
+                                           .width_px = 48,
+                                           .height_px = 48,
+                                           .fullWell_e = 10000,
+                                           .readNoise_e = 3,
+                                           .bitDepth = 12,
                                            .electronsPerUnitPerUs = 1.0}) +
     lfi::testing_support::lensObject({.radius_mm = 100, .centreThickness_mm = 7, .diameter_mm = 40, .ior = 1.5}) +
     lfi::testing_support::kBackLightObject;
@@ -54,7 +60,7 @@ std::vector<nlohmann::json> readRecords(const fs::path& file) {
 }
 
 class RunFaults : public testing::Test {
-protected:
+ protected:
   void SetUp() override {
     if (::access(LFI_EXECUTABLE, X_OK) != 0) LFI_SKIP_WITHOUT_TOOL(LFI_EXECUTABLE << " is not built");
     scene_ = folder_.write("served.toml", kScene);
@@ -104,7 +110,8 @@ save_images = "none"
 [run]
 on_device_loss = "{2}"
 wait_limit_s = 60
-)", serial_, scenes.string(), onDeviceLoss));
+)",
+                                                                        serial_, scenes.string(), onDeviceLoss));
   }
 
   // Waits until the run's records file has `count` lines.

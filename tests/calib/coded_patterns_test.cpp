@@ -378,8 +378,11 @@ TEST(DecodeGrayCode, APixelThatSeesTwoColumnsDecodesToBothWithTheirShares) {
   EXPECT_EQ(c.panel.at<cv::Vec2i>(0, 0), cv::Vec2i(2, 0));
   EXPECT_TRUE(c.second.empty() && c.share.empty());
   EXPECT_EQ(decodeOnePixel(1000, {-1000, 1000, 100}, one, 8).decoded, 0);
-  EXPECT_TRUE(throwsError([&] { decodeOnePixel(1000, {0, 0, 0}, {.secondShare = 0.5}, 8); }, Errc::InvalidArgument,
-                          {"secondShare"}));
+  EXPECT_TRUE(throwsError(
+      [&] {
+        decodeOnePixel(1000, {0, 0, 0}, {.secondShare = 0.5}, 8);
+      },
+      Errc::InvalidArgument, {"secondShare"}));
 }
 
 TEST(DecodeGrayCode, ThresholdsHoldAtTheirBoundaries) {

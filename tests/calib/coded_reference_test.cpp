@@ -63,9 +63,9 @@ PanelLinks linksOf(const PanelCorrespondence& c, const cv::Mat& mask = {}, doubl
 
 TEST(CodedReference, ThePanelPixelsThatReachThePartAreLit) {
   PanelCorrespondence c = identity();
-  c.panel.at<cv::Vec2i>(3, 4) = {-1, -1};             // undecoded
-  c.confidence.at<float>(5, 6) = 0.1f;                // decoded, but not trusted
-  c.panel.at<cv::Vec2i>(7, 8) = {9, 10};              // two camera pixels on one panel pixel
+  c.panel.at<cv::Vec2i>(3, 4) = {-1, -1};  // undecoded
+  c.confidence.at<float>(5, 6) = 0.1f;     // decoded, but not trusted
+  c.panel.at<cv::Vec2i>(7, 8) = {9, 10};   // two camera pixels on one panel pixel
   cv::Mat mask = cv::Mat::zeros(kHeight, kWidth, CV_8UC1);
   mask(cv::Rect(0, 0, 20, 20)).setTo(255);
   const PanelLinks links = linksOf(c, mask);

@@ -167,7 +167,9 @@ TEST(DisplayDistance, MeasuresHowFarTheDisplayMoved) {
 
 // The distance of the plane a shown light field was propagated to, from the
 // plane it was captured on: the ε the calibration tried.
-double shownEpsilon(const LightField& shown) { return shown.geometry().distance_mm - smallGeometry().distance_mm; }
+double shownEpsilon(const LightField& shown) {
+  return shown.geometry().distance_mm - smallGeometry().distance_mm;
+}
 
 TEST(DisplayDistance, TheCentreOfThePeakIsFoundBetweenCandidates) {
   const LightField lf(smallGeometry());
@@ -192,10 +194,16 @@ TEST(DisplayDistance, TheCentreOfThePeakIsFoundBetweenCandidates) {
   EXPECT_NEAR(calib::calibrateDisplayDistance(lf, flatTop, {-5, -4, -3, -2, -1, 0, 1, 2, 3, 4, 5}).estimate_mm, 0.4,
               0.05);
   // A peak whose flank is outside the scan is not located: an error that shows the scan, not an answer.
-  EXPECT_TRUE(throwsError([&] { calib::calibrateDisplayDistance(lf, tent, {-3, -2, -1, 0}); }, Errc::InvalidArgument,
-                          {"high side", "-1 mm: 87", "scan further"}));
-  EXPECT_TRUE(throwsError([&] { calib::calibrateDisplayDistance(lf, tent, {1, 2, 3}); }, Errc::InvalidArgument,
-                          {"low side"}));
+  EXPECT_TRUE(throwsError(
+      [&] {
+        calib::calibrateDisplayDistance(lf, tent, {-3, -2, -1, 0});
+      },
+      Errc::InvalidArgument, {"high side", "-1 mm: 87", "scan further"}));
+  EXPECT_TRUE(throwsError(
+      [&] {
+        calib::calibrateDisplayDistance(lf, tent, {1, 2, 3});
+      },
+      Errc::InvalidArgument, {"low side"}));
 }
 
 // What does not change from one image to the next (stray light, a sensor's
@@ -237,8 +245,8 @@ TEST(DisplayDistance, TwoPeaksAsBrightAreRefused) {
   };
   // Level 83.75 (a quarter down from 100 to the scan's lowest, 35 at +6 mm); the first peak's flanks cross it at
   // -3.8125 and -2.1875 mm.
-  EXPECT_TRUE(throwsError([&] { calib::calibrateDisplayDistance(lf, twoTents(95), candidates); },
-                          Errc::InvalidArgument, {"two peaks", "95 again at +3 mm", "above 83.75", "-3.81", "-2.19"}));
+  EXPECT_TRUE(throwsError([&] { calib::calibrateDisplayDistance(lf, twoTents(95), candidates); }, Errc::InvalidArgument,
+                          {"two peaks", "95 again at +3 mm", "above 83.75", "-3.81", "-2.19"}));
   // Level 75 (a quarter down from 100 to 0): crossings at -4.25 and -1.75 mm.
   const auto scan = calib::calibrateDisplayDistance(lf, twoTents(60), candidates);
   EXPECT_NEAR(scan.estimate_mm, -3, 1e-9);
@@ -275,55 +283,93 @@ TEST(DisplayDistance, AFlankWaveringByTheNoiseIsNotASecondPeak) {
 TEST(DisplayDistance, RejectsBadCandidatesAndImages) {
   const LightField lf(smallGeometry());
   auto black = [](const LightField&) { return cv::Mat(8, 8, CV_32FC1, cv::Scalar(0)); };
-  EXPECT_TRUE(throwsError([&] { calib::calibrateDisplayDistance(lf, black, {0, 1}); }, Errc::InvalidArgument,
-                          {"at least 3"}));
-  EXPECT_TRUE(throwsError([&] { calib::calibrateDisplayDistance(lf, black, {0, 2, 1}); }, Errc::InvalidArgument,
-                          {"increasing"}));
+  EXPECT_TRUE(throwsError(
+      [&] {
+        calib::calibrateDisplayDistance(lf, black, {0, 1});
+      },
+      Errc::InvalidArgument, {"at least 3"}));
+  EXPECT_TRUE(throwsError(
+      [&] {
+        calib::calibrateDisplayDistance(lf, black, {0, 2, 1});
+      },
+      Errc::InvalidArgument, {"increasing"}));
   EXPECT_TRUE(throwsError(
       [&] {
         calib::calibrateDisplayDistance(lf, [](const LightField&) { return cv::Mat(); }, {0, 1, 2});
       },
       Errc::Device, {"no image"}));
-  EXPECT_TRUE(throwsError([&] { calib::calibrateDisplayDistance(lf, black, {0, 1, 2}, cv::Mat::ones(4, 4, CV_8UC1)); },
-                          Errc::InvalidArgument, {"ROI"}));
-  EXPECT_TRUE(throwsError([&] { calib::calibrateDisplayDistance(lf, black, {0, 1, 2}, cv::Mat::zeros(8, 8, CV_8UC1)); },
-                          Errc::InvalidArgument, {"ROI", "non-zero"}));
-  EXPECT_TRUE(throwsError([&] { calib::calibrateDisplayDistance(lf, black, {0, 1, 2}, cv::Mat::ones(8, 8, CV_32FC1)); },
-                          Errc::InvalidArgument, {"CV_8UC1"}));
-  EXPECT_TRUE(throwsError([&] { calib::calibrateDisplayDistance(lf, black, {0, NAN, 2}); }, Errc::InvalidArgument,
-                          {"finite"}));
+  EXPECT_TRUE(throwsError(
+      [&] {
+        calib::calibrateDisplayDistance(lf, black, {0, 1, 2}, cv::Mat::ones(4, 4, CV_8UC1));
+      },
+      Errc::InvalidArgument, {"ROI"}));
+  EXPECT_TRUE(throwsError(
+      [&] {
+        calib::calibrateDisplayDistance(lf, black, {0, 1, 2}, cv::Mat::zeros(8, 8, CV_8UC1));
+      },
+      Errc::InvalidArgument, {"ROI", "non-zero"}));
+  EXPECT_TRUE(throwsError(
+      [&] {
+        calib::calibrateDisplayDistance(lf, black, {0, 1, 2}, cv::Mat::ones(8, 8, CV_32FC1));
+      },
+      Errc::InvalidArgument, {"CV_8UC1"}));
+  EXPECT_TRUE(throwsError(
+      [&] {
+        calib::calibrateDisplayDistance(lf, black, {0, NAN, 2});
+      },
+      Errc::InvalidArgument, {"finite"}));
   // A camera whose region changes during the scan, with or without a ROI.
   auto smallerWhenLit = [](const LightField& shown) {
     const int side = shownEpsilon(shown) == 0 ? 8 : 4;
     return cv::Mat(side, side, CV_32FC1, cv::Scalar(0));
   };
-  EXPECT_TRUE(throwsError([&] { calib::calibrateDisplayDistance(lf, smallerWhenLit, {-1, 1, 2}); }, Errc::Device,
-                          {"candidate -1 mm is 4x4", "the first one (with the display dark) 8x8"}));
   EXPECT_TRUE(throwsError(
-      [&] { calib::calibrateDisplayDistance(lf, smallerWhenLit, {-1, 1, 2}, cv::Mat::ones(8, 8, CV_8UC1)); },
+      [&] {
+        calib::calibrateDisplayDistance(lf, smallerWhenLit, {-1, 1, 2});
+      },
+      Errc::Device, {"candidate -1 mm is 4x4", "the first one (with the display dark) 8x8"}));
+  EXPECT_TRUE(throwsError(
+      [&] {
+        calib::calibrateDisplayDistance(lf, smallerWhenLit, {-1, 1, 2}, cv::Mat::ones(8, 8, CV_8UC1));
+      },
       Errc::Device, {"candidate -1 mm is 4x4", "region or binning change"}));
   // The light field was captured 30 mm from the part: the display cannot be 30 mm nearer.
-  EXPECT_TRUE(throwsError([&] { calib::calibrateDisplayDistance(lf, black, {-30, 0, 1}); }, Errc::InvalidArgument,
-                          {"-30 mm", "past the part"}));
+  EXPECT_TRUE(throwsError(
+      [&] {
+        calib::calibrateDisplayDistance(lf, black, {-30, 0, 1});
+      },
+      Errc::InvalidArgument, {"-30 mm", "past the part"}));
   EXPECT_TRUE(throwsError([&] { calib::propagateLightField(lf, 31); }, Errc::InvalidArgument, {"pass it"}));
   // A dark (or saturated) image at every candidate has no maximum: not an answer.
-  EXPECT_TRUE(throwsError([&] { calib::calibrateDisplayDistance(lf, black, {0, 1, 2}); }, Errc::Device,
-                          {"hardly changes", "+1 mm: 0"}));
+  EXPECT_TRUE(throwsError(
+      [&] {
+        calib::calibrateDisplayDistance(lf, black, {0, 1, 2});
+      },
+      Errc::Device, {"hardly changes", "+1 mm: 0"}));
   auto nan = [](const LightField&) { return cv::Mat(8, 8, CV_32FC1, cv::Scalar(NAN)); };
-  EXPECT_TRUE(throwsError([&] { calib::calibrateDisplayDistance(lf, nan, {0, 1, 2}); }, Errc::Device,
-                          {"non-finite", "with the display dark"}));
+  EXPECT_TRUE(throwsError(
+      [&] {
+        calib::calibrateDisplayDistance(lf, nan, {0, 1, 2});
+      },
+      Errc::Device, {"non-finite", "with the display dark"}));
   // A reference that does not say how far from the part it was captured.
   LightFieldGeometry unset = smallGeometry();
   unset.distance_mm = 0;
-  EXPECT_TRUE(throwsError([&] { calib::calibrateDisplayDistance(LightField(unset), black, {0, 1, 2}); },
-                          Errc::InvalidArgument, {"distance_mm", "not set"}));
+  EXPECT_TRUE(throwsError(
+      [&] {
+        calib::calibrateDisplayDistance(LightField(unset), black, {0, 1, 2});
+      },
+      Errc::InvalidArgument, {"distance_mm", "not set"}));
   // A camera that fails mid-scan: its error, its code, the candidate and what the scan had so far.
   auto stallsAtOne = [](const LightField& shown) {
     if (shownEpsilon(shown) == 1) lfi::fail(Errc::Timeout, "camera 'x': no frame");
     return cv::Mat(8, 8, CV_32FC1, cv::Scalar(10 - std::abs(shownEpsilon(shown))));
   };
-  EXPECT_TRUE(throwsError([&] { calib::calibrateDisplayDistance(lf, stallsAtOne, {-1, 0, 1, 2}); }, Errc::Timeout,
-                          {"candidate +1 mm", "camera 'x': no frame", "-1 mm: 9", "+0 mm: 10"}));
+  EXPECT_TRUE(throwsError(
+      [&] {
+        calib::calibrateDisplayDistance(lf, stallsAtOne, {-1, 0, 1, 2});
+      },
+      Errc::Timeout, {"candidate +1 mm", "camera 'x': no frame", "-1 mm: 9", "+0 mm: 10"}));
 }
 
 // The noise where the signal is: a camera's shot noise grows with the light,
@@ -364,8 +410,11 @@ TEST(DisplayDistance, DriftDuringTheScanIsRefused) {
     cv::RNG(shows).fill(image, cv::RNG::NORMAL, value, 0.16);  // a mean's noise 0.01
     return image;
   };
-  EXPECT_TRUE(throwsError([&] { calib::calibrateDisplayDistance(lf, drifting, {-3, -2, -1, 0, 1, 2, 3}); },
-                          Errc::Device, {"candidate +0 mm", "after the scan", "drifting"}));
+  EXPECT_TRUE(throwsError(
+      [&] {
+        calib::calibrateDisplayDistance(lf, drifting, {-3, -2, -1, 0, 1, 2, 3});
+      },
+      Errc::Device, {"candidate +0 mm", "after the scan", "drifting"}));
 }
 
 // A display that shows nothing (or a camera that sees nothing of it) gives a
@@ -381,8 +430,11 @@ TEST(DisplayDistance, APeakOfNoiseIsNotAnAnswer) {
     return image;
   };
   auto dark = [&](const LightField&) { return noisy(10); };
-  EXPECT_TRUE(throwsError([&] { calib::calibrateDisplayDistance(lf, dark, {-3, -2, -1, 0, 1, 2, 3}); }, Errc::Device,
-                          {"hardly changes", "the noise of a mean about 0.06"}));
+  EXPECT_TRUE(throwsError(
+      [&] {
+        calib::calibrateDisplayDistance(lf, dark, {-3, -2, -1, 0, 1, 2, 3});
+      },
+      Errc::Device, {"hardly changes", "the noise of a mean about 0.06"}));
   auto peak = [&](const LightField& shown) {
     const bool lit = cv::countNonZero(shown.lensletImage()) > 0;
     return noisy(10 + (lit ? 20 - 5 * std::abs(shownEpsilon(shown) - 0.5) : 0));
@@ -398,8 +450,8 @@ TEST(DisplayDistance, APeakOfNoiseIsNotAnAnswer) {
   EXPECT_NEAR(scan.noise, 7.9 / 4, 1e-12);
   EXPECT_TRUE(throwsError([&] { calib::calibrateDisplayDistance(lf, tent, candidates, {}, 8.1); }, Errc::Device,
                           {"hardly changes", "noise of a mean about 2"}));
-  EXPECT_TRUE(throwsError([&] { calib::calibrateDisplayDistance(lf, tent, candidates, {}, -1); },
-                          Errc::InvalidArgument, {"noise floor -1"}));
+  EXPECT_TRUE(throwsError([&] { calib::calibrateDisplayDistance(lf, tent, candidates, {}, -1); }, Errc::InvalidArgument,
+                          {"noise floor -1"}));
 }
 
 }  // namespace

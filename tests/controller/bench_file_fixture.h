@@ -21,7 +21,6 @@ namespace fs = std::filesystem;
 using lfi::testing_support::TestFolder;
 using lfi::testing_support::throwsError;
 
-
 // A bench whose devices are never opened: every key set, relative paths in
 // [capture], [reference] and [output].
 inline const std::string kBench = R"(# A bench for the tests.

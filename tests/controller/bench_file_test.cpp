@@ -18,7 +18,6 @@ namespace {
 using namespace lfi;
 using namespace lfi::bench_file_test;
 
-
 // ---------------------------------------------------------------------------
 // The shipped bench
 

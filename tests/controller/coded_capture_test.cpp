@@ -36,20 +36,29 @@ struct SceneOptions {
 };
 
 std::string sceneText(const SceneOptions& o) {
-  std::string text =
-      cameraSceneText({.samplesPerPixel = 8, .seed = 5, .focalLength_mm = 20.03, .imageDistance_mm = 24.9075,
-                       .stopDiameter_mm = 0.609, .pixelPitch_mm = 0.1215, .width_px = 56, .height_px = 56,
-                       .positionZ_mm = 102.5, .fullWell_e = 10500, .readNoise_e = 2.4, .bitDepth = 12}) +
-      fmt::format("[display]\nposition_mm = [{}, 0, -30]\noptics = \"lenslet_array\"\npanel_width_px = 800\n"
-                  "panel_height_px = 800\n",
-                  o.displayX_mm);
+  std::string text = cameraSceneText({.samplesPerPixel = 8,
+                                      .seed = 5,
+                                      .focalLength_mm = 20.03,
+                                      .imageDistance_mm = 24.9075,
+                                      .stopDiameter_mm = 0.609,
+                                      .pixelPitch_mm = 0.1215,
+                                      .width_px = 56,
+                                      .height_px = 56,
+                                      .positionZ_mm = 102.5,
+                                      .fullWell_e = 10500,
+                                      .readNoise_e = 2.4,
+                                      .bitDepth = 12}) +
+                     fmt::format(
+                         "[display]\nposition_mm = [{}, 0, -30]\noptics = \"lenslet_array\"\npanel_width_px = 800\n"
+                         "panel_height_px = 800\n",
+                         o.displayX_mm);
   if (o.lens) text += lensObject({.radius_mm = 51.5, .centreThickness_mm = 5, .diameter_mm = 25.4, .ior = 1.5168});
   return text;
 }
 
 // A display that refuses its n-th frame, as a device that fails a CRC does, and passes everything else on.
 class RefusingDisplay final : public Display {
-public:
+ public:
   RefusingDisplay(Display& inner, int refuse) : inner_(inner), refuse_(refuse) {}
   State state() const override { return inner_.state(); }
   std::string name() const override { return inner_.name(); }
@@ -64,14 +73,14 @@ public:
   void setBrightness(int level) override { inner_.setBrightness(level); }
   DisplayStatus status() override { return inner_.status(); }
 
-private:
+ private:
   Display& inner_;
   int refuse_;
   int shown_ = 0;
 };
 
 class CodedCaptureTest : public testing::Test {
-protected:
+ protected:
   void SetUp() override {
     sim::registerSimBackends();
     registerControllerBackends();
@@ -135,7 +144,8 @@ TEST_F(CodedCaptureTest, ItFindsTheLightThatReachesTheCameraThroughThePart) {
     controller.showPanel(levels);
     return controller.inspect();
   };
-  const cv::Mat white = image(cv::Mat(800, 800, CV_8UC1, cv::Scalar(255))), black = image(cv::Mat::zeros(800, 800, CV_8UC1));
+  const cv::Mat white = image(cv::Mat(800, 800, CV_8UC1, cv::Scalar(255))),
+                black = image(cv::Mat::zeros(800, 800, CV_8UC1));
   const cv::Mat lit = (white - black) > 0.5 * (cv::mean(white - black)[0]);
   const double all = cv::mean(white - black, lit)[0];
   const double left = cv::mean(image(rest) - black, lit)[0];
@@ -208,7 +218,8 @@ TEST_F(CodedCaptureTest, AFrameTheDisplayRefusesIsNamed) {
 TEST_F(CodedCaptureTest, ItNeedsTheBenchAndValidSettings) {
   auto capture = openLightFieldCapture("coded:");
   EXPECT_TRUE(throwsError([&] { capture->capture(); }, Errc::InvalidArgument, {"no bench"}));
-  EXPECT_TRUE(throwsError([&] { openLightFieldCapture("coded:?rounds=0"); }, Errc::Config, {"rounds = '0'", "1 .. 16"}));
+  EXPECT_TRUE(
+      throwsError([&] { openLightFieldCapture("coded:?rounds=0"); }, Errc::Config, {"rounds = '0'", "1 .. 16"}));
   EXPECT_TRUE(throwsError([&] { openLightFieldCapture("coded:?target_cv=x"); }, Errc::Config, {"target_cv = 'x'"}));
   EXPECT_TRUE(throwsError([&] { openLightFieldCapture("coded:?frames=3"); }, Errc::Config, {"frames"}));
   EXPECT_TRUE(throwsError([&] { openLightFieldCapture("coded:bench.toml"); }, Errc::Config, {"takes no path"}));

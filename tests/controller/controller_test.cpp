@@ -33,11 +33,19 @@ using lfi::testing_support::throwsError;
 // camera (object NA 0.0152, 0.5 mm object pixels); a lenticular display of the
 // default class 30 mm below the lens, 640 x 400 pixels (48 x 30 mm).
 std::string sceneText(bool inclusion) {
-  std::string text =
-      cameraSceneText({.samplesPerPixel = 8, .seed = 5, .focalLength_mm = 20.03, .imageDistance_mm = 24.9075,
-                       .stopDiameter_mm = 0.609, .pixelPitch_mm = 0.1215, .width_px = 56, .height_px = 56,
-                       .positionZ_mm = 102.5, .fullWell_e = 10500, .readNoise_e = 2.4, .bitDepth = 12}) +
-      R"([display]
+  std::string text = cameraSceneText({.samplesPerPixel = 8,
+                                      .seed = 5,
+                                      .focalLength_mm = 20.03,
+                                      .imageDistance_mm = 24.9075,
+                                      .stopDiameter_mm = 0.609,
+                                      .pixelPitch_mm = 0.1215,
+                                      .width_px = 56,
+                                      .height_px = 56,
+                                      .positionZ_mm = 102.5,
+                                      .fullWell_e = 10500,
+                                      .readNoise_e = 2.4,
+                                      .bitDepth = 12}) +
+                     R"([display]
 position_mm = [0, 0, -30]
 panel_width_px = 640
 panel_height_px = 400
@@ -57,7 +65,7 @@ material = "absorber"
 // the stream starts; `loseNextFrame` makes the next grab time out without
 // taking the frame, which stays in the stream (a frame late beyond the timeout).
 class RecordingCamera : public Camera {
-public:
+ public:
   explicit RecordingCamera(Camera& inner) : inner_(inner) {}
   std::vector<std::int64_t> timestamps_ns;
   int starts = 0;
@@ -94,12 +102,12 @@ public:
   void setFloatFeature(const std::string& name, double value) override { inner_.setFloatFeature(name, value); }
   void executeCommand(const std::string& name) override { inner_.executeCommand(name); }
 
-private:
+ private:
   Camera& inner_;
 };
 
 class ControllerTest : public testing::Test {
-protected:
+ protected:
   void SetUp() override {
     registerDriverBackends();
     sim::registerSimBackends();  // camera, display and light field capture
@@ -166,7 +174,8 @@ TEST(SimBackends, RegisterWhenAnotherLibraryTookTheCaptureScheme) {
     });
     sim::registerSimBackends();
     sim::registerSimBackends();
-    const std::vector<std::string> cameras = backendRegistry<Camera>().schemes(), displays = backendRegistry<Display>().schemes();
+    const std::vector<std::string> cameras = backendRegistry<Camera>().schemes(),
+                                   displays = backendRegistry<Display>().schemes();
     const bool registered = std::ranges::find(cameras, std::string("sim")) != cameras.end() &&
                             std::ranges::find(displays, std::string("sim")) != displays.end();
     std::_Exit(registered ? 0 : 1);
@@ -311,8 +320,8 @@ TEST_F(ControllerTest, FramesAfterAnEmitStartOnlyAfterTheSettleTime) {
   for (const std::int64_t t : camera.timestamps_ns)
     EXPECT_GE(std::chrono::nanoseconds(t), (emittingAgain + options.settle).time_since_epoch());
   options.settle = std::chrono::milliseconds(-1);
-  EXPECT_TRUE(throwsError([&] { Controller(*rig.capture, *rig.display, *rig.camera, options); },
-                          Errc::InvalidArgument, {"settle"}));
+  EXPECT_TRUE(throwsError([&] { Controller(*rig.capture, *rig.display, *rig.camera, options); }, Errc::InvalidArgument,
+                          {"settle"}));
 }
 
 // A software-triggered stream holds no frame once every trigger has been
@@ -363,8 +372,8 @@ TEST_F(ControllerTest, ErrorsNameTheProblem) {
   auto capture = openLightFieldCapture(captureUri());
   auto camera = openCamera(uri("intact.toml"));
   auto display = openDisplay(uri("intact.toml"));
-  EXPECT_TRUE(throwsError([&] { Controller(*capture, *display, *camera, {.frames = 0}); }, Errc::InvalidArgument,
-                          {"frames"}));
+  EXPECT_TRUE(
+      throwsError([&] { Controller(*capture, *display, *camera, {.frames = 0}); }, Errc::InvalidArgument, {"frames"}));
   Controller controller(*capture, *display, *camera);
   // The camera was never configured.
   EXPECT_TRUE(throwsError([&] { controller.inspect(); }, Errc::InvalidArgument, {"configured or streaming"}));
@@ -373,13 +382,13 @@ TEST_F(ControllerTest, ErrorsNameTheProblem) {
                           {"spacial", "accepted"}));
   EXPECT_TRUE(throwsError([&] { openLightFieldCapture("sim:" + (dir_ / "missing.toml").string()); }, Errc::NotFound,
                           {"missing.toml"}));
-  EXPECT_TRUE(throwsError([&] { openLightFieldCapture(uri("intact.toml") + "?angular=0"); }, Errc::Config,
-                          {"angular"}));
+  EXPECT_TRUE(
+      throwsError([&] { openLightFieldCapture(uri("intact.toml") + "?angular=0"); }, Errc::Config, {"angular"}));
   // The lens spans z = -2.5 .. 2.5 mm: a sensor plane or a beam inside it is refused at open, naming both.
   EXPECT_TRUE(throwsError([&] { openLightFieldCapture(uri("intact.toml") + "?distance_mm=2"); }, Errc::Config,
                           {"intact.toml", "'lens'", "distance_mm", "-2"}));
-  EXPECT_TRUE(throwsError([&] { openLightFieldCapture(uri("intact.toml") + "?beam_distance_mm=2.4"); },
-                          Errc::Config, {"'lens'", "beam_distance_mm", "2.4"}));
+  EXPECT_TRUE(throwsError([&] { openLightFieldCapture(uri("intact.toml") + "?beam_distance_mm=2.4"); }, Errc::Config,
+                          {"'lens'", "beam_distance_mm", "2.4"}));
   EXPECT_NO_THROW(openLightFieldCapture(uri("intact.toml") + "?distance_mm=2.6&beam_distance_mm=2.6"));
   // Numbers that parse but mean nothing here: a beam at infinity lights nothing; more samples than a scene file takes.
   for (const char* bad : {"beam_distance_mm=inf", "beam_distance_mm=1e300", "beam_distance_mm=nan"})
@@ -388,8 +397,8 @@ TEST_F(ControllerTest, ErrorsNameTheProblem) {
         << bad;
   EXPECT_TRUE(throwsError([&] { openLightFieldCapture(uri("intact.toml") + "?spp=2000000"); }, Errc::Config,
                           {uri("intact.toml") + "?spp=2000000", "spp = 2000000", "2^20"}));
-  EXPECT_TRUE(throwsError([&] { openLightFieldCapture(uri("intact.toml") + "?beam_half_angle_rad=0"); },
-                          Errc::Config, {uri("intact.toml") + "?beam_half_angle_rad=0", "[1e-6, 1.5)"}));
+  EXPECT_TRUE(throwsError([&] { openLightFieldCapture(uri("intact.toml") + "?beam_half_angle_rad=0"); }, Errc::Config,
+                          {uri("intact.toml") + "?beam_half_angle_rad=0", "[1e-6, 1.5)"}));
 }
 
 // No part passes a line-triggered bench's sensor while it calibrates or takes its reference: lfi triggers

@@ -44,8 +44,9 @@ using testing_support::studyParts;
 
 enum class Wiring { AllSim, ServedCamera, ServedDisplay };
 void PrintTo(Wiring w, std::ostream* os) {
-  *os << (w == Wiring::AllSim ? "sim: camera and display" : w == Wiring::ServedCamera ? "aravis: camera, sim: display"
-                                                                                       : "sim: camera, usb: display");
+  *os << (w == Wiring::AllSim         ? "sim: camera and display"
+          : w == Wiring::ServedCamera ? "aravis: camera, sim: display"
+                                      : "sim: camera, usb: display");
 }
 
 struct Outcome {
@@ -55,7 +56,7 @@ struct Outcome {
 
 // Param: the wiring, and the reference's capture ("sim" or "coded").
 class MixedWiring : public testing::TestWithParam<std::tuple<Wiring, std::string>> {
-protected:
+ protected:
   static void SetUpTestSuite() {
     emulation::usePrivateTmpDir();
     registerDriverBackends();
@@ -75,7 +76,9 @@ protected:
   BenchFile bench(Wiring wiring, const std::string& capture, const fs::path& scene) const {
     const std::string sim = "sim:" + scene.string();
     const bool servedCamera = wiring == Wiring::ServedCamera;
-    return readBenchFile(folder_.write("bench.toml", fmt::format(R"(format = "lfi-inspection-bench"
+    return readBenchFile(folder_.write(
+        "bench.toml",
+        fmt::format(R"(format = "lfi-inspection-bench"
 version = 1
 [camera]
 uri = "{0}"
@@ -99,12 +102,13 @@ smallest_defect_mm = 1.0
 closing_mm = 0.5
 [output]
 folder = "out"
-)", servedCamera ? served_->cameraUri() : sim,
-        // The served camera's format is Mono16 (the scene's 12 bits x 16); the sim: camera's Mono12.
-        servedCamera ? "Mono16" : "Mono12", servedCamera ? 6.24 : 0.39, servedCamera ? 15.7 : 0.98,
-        wiring == Wiring::ServedDisplay ? served_->displayUri() : sim,
-        capture == "coded" ? std::string("coded:?distance_mm=30") : "sim:" + scenes_.at("intact").string() +
-                                                                         "?distance_mm=30")));
+)",
+                    servedCamera ? served_->cameraUri() : sim,
+                    // The served camera's format is Mono16 (the scene's 12 bits x 16); the sim: camera's Mono12.
+                    servedCamera ? "Mono16" : "Mono12", servedCamera ? 6.24 : 0.39, servedCamera ? 15.7 : 0.98,
+                    wiring == Wiring::ServedDisplay ? served_->displayUri() : sim,
+                    capture == "coded" ? std::string("coded:?distance_mm=30")
+                                       : "sim:" + scenes_.at("intact").string() + "?distance_mm=30")));
   }
 
   // Capture → emit → inspect: the reference with the intact part, then each part of the study in turn.
@@ -148,14 +152,14 @@ folder = "out"
   std::unique_ptr<emulation::ServedBench> served_;
 };
 
-INSTANTIATE_TEST_SUITE_P(
-    Wirings, MixedWiring,
-    testing::Combine(testing::Values(Wiring::ServedCamera, Wiring::ServedDisplay), testing::Values("sim", "coded")),
-    [](const testing::TestParamInfo<std::tuple<Wiring, std::string>>& p) {
-      return std::string(std::get<0>(p.param) == Wiring::ServedCamera ? "AravisCameraSimDisplay"
-                                                                      : "SimCameraUsbDisplay") +
-             (std::get<1>(p.param) == "sim" ? "SimulatedSensor" : "Coded");
-    });
+INSTANTIATE_TEST_SUITE_P(Wirings, MixedWiring,
+                         testing::Combine(testing::Values(Wiring::ServedCamera, Wiring::ServedDisplay),
+                                          testing::Values("sim", "coded")),
+                         [](const testing::TestParamInfo<std::tuple<Wiring, std::string>>& p) {
+                           return std::string(std::get<0>(p.param) == Wiring::ServedCamera ? "AravisCameraSimDisplay"
+                                                                                           : "SimCameraUsbDisplay") +
+                                  (std::get<1>(p.param) == "sim" ? "SimulatedSensor" : "Coded");
+                         });
 
 // As tests/apps/lfi_hil_loop_test.cpp: the verdicts agree and are the truth; each localised defect is
 // found where it is, and the two wirings place it within a pixel of each other (the same radiance through

@@ -507,9 +507,8 @@ TEST_F(ReferencePackageTest, APanelReferenceReadsBackAndIsChecked) {
   EXPECT_TRUE(throwsError([&] { writeReferencePackage(folder_ / "third", written, Overwrite::Refuse); },
                           Errc::InvalidArgument, {"drive levels", "1.5"}));
   writeRadianceExr(folder / "panel.exr", written.panel, {0, "panel", "drive level"}, Overwrite::Allow);
-  editJson(folder, [&](nlohmann::ordered_json& j) {
-    j["files"]["panel.exr"]["pixel_crc32"] = pixelChecksum(written.panel);
-  });
+  editJson(folder,
+           [&](nlohmann::ordered_json& j) { j["files"]["panel.exr"]["pixel_crc32"] = pixelChecksum(written.panel); });
   EXPECT_TRUE(throwsError([&] { readReferencePackage(folder, nullptr); }, Errc::InvalidFile,
                           {folder.string(), "panel.exr", "1.5"}));
 }

@@ -38,10 +38,12 @@ std::string readAll(const fs::path& path) {
   return s.str();
 }
 
-void writePlain(const fs::path& path, const std::string& content) { std::ofstream(path, std::ios::binary) << content; }
+void writePlain(const fs::path& path, const std::string& content) {
+  std::ofstream(path, std::ios::binary) << content;
+}
 
 class AtomicFile : public testing::Test {
-protected:
+ protected:
   void SetUp() override {
     static std::atomic<int> counter{0};
     const auto* info = testing::UnitTest::GetInstance()->current_test_info();
@@ -315,9 +317,9 @@ TEST_F(AtomicFile, AFolderIsPublishedWholeAndNeverReplacedUnasked) {
   EXPECT_EQ(readAll(target / "b.txt"), "oneone");
   EXPECT_EQ(entries(), (Names{"package"}));
   bool called = false;
-  EXPECT_TRUE(throwsError([&] {
-    lfi::writeFolderAtomically(target, Overwrite::Refuse, [&](const fs::path&) { called = true; });
-  }, Errc::Exists, {"package", "--force"}));
+  EXPECT_TRUE(throwsError(
+      [&] { lfi::writeFolderAtomically(target, Overwrite::Refuse, [&](const fs::path&) { called = true; }); },
+      Errc::Exists, {"package", "--force"}));
   EXPECT_FALSE(called) << "an existing folder is refused before any work";
   EXPECT_EQ(readAll(target / "a.txt"), "one");
 }
@@ -337,19 +339,24 @@ TEST_F(AtomicFile, AFolderReplacedWithAllowHoldsOnlyTheNewFiles) {
 TEST_F(AtomicFile, AFolderWriteThatFailsLeavesTheOldFolderAndNoTemporary) {
   const fs::path target = dir_ / "package";
   lfi::writeFolderAtomically(target, Overwrite::Refuse, [](const fs::path& tmp) { writePackage(tmp, "old"); });
-  EXPECT_THROW(lfi::writeFolderAtomically(target, Overwrite::Allow, [](const fs::path& tmp) {
-    writePackage(tmp, "half");
-    throw std::runtime_error("the writer failed");
-  }), std::runtime_error);
+  EXPECT_THROW(lfi::writeFolderAtomically(target, Overwrite::Allow,
+                                          [](const fs::path& tmp) {
+                                            writePackage(tmp, "half");
+                                            throw std::runtime_error("the writer failed");
+                                          }),
+               std::runtime_error);
   EXPECT_EQ(readAll(target / "a.txt"), "old");
   EXPECT_EQ(entries(), (Names{"package"}));
 }
 
 TEST_F(AtomicFile, AFileInTheWayOfAFolderIsAnError) {
   writePlain(dir_ / "package", "a file");
-  EXPECT_TRUE(throwsError([&] {
-    lfi::writeFolderAtomically(dir_ / "package", Overwrite::Allow, [](const fs::path& tmp) { writePackage(tmp, "x"); });
-  }, Errc::Io, {"package", "in the way"}));
+  EXPECT_TRUE(throwsError(
+      [&] {
+        lfi::writeFolderAtomically(dir_ / "package", Overwrite::Allow,
+                                   [](const fs::path& tmp) { writePackage(tmp, "x"); });
+      },
+      Errc::Io, {"package", "in the way"}));
   EXPECT_EQ(readAll(dir_ / "package"), "a file");
   EXPECT_EQ(entries(), (Names{"package"}));
 }

@@ -48,7 +48,6 @@ void writeBytes(const fs::path& path, const std::string& bytes) {
   std::ofstream(path, std::ios::binary | std::ios::trunc) << bytes;
 }
 
-
 TEST_F(ExrIo, TruncatedFileIsInvalid) {
   const LightFieldGeometry g = geometry();
   const fs::path valid = file("valid.exr");
@@ -112,7 +111,7 @@ TEST_F(ExrIo, HugeDataWindowIsRefusedBeforeOpenExrSizesItsTables) {
   ASSERT_NE(window, std::string::npos);
   ASSERT_NE(compressionAt, std::string::npos);
   bytes.replace(window + 4 + 12, 4, std::string("\xff\xff\xff\x0f", 4));  // ymax 2^28 - 1
-  for (const char compression : {'\x03', '\x09'}) {  // ZIP (as written), DWAB
+  for (const char compression : {'\x03', '\x09'}) {                       // ZIP (as written), DWAB
     bytes[compressionAt + 4] = compression;
     std::ofstream(file("tall.exr"), std::ios::binary) << bytes;
     EXPECT_TRUE(throwsError([&] { lfi::readRadianceExr(file("tall.exr")); }, Errc::InvalidFile,

@@ -36,7 +36,7 @@ namespace fs = std::filesystem;
 
 // A fresh directory per test, removed with everything in it at the end.
 class ExrIo : public testing::Test {
-protected:
+ protected:
   void SetUp() override {
     static std::atomic<int> counter{0};
     const auto* info = testing::UnitTest::GetInstance()->current_test_info();
@@ -98,7 +98,9 @@ inline bool bitIdentical(const cv::Mat& a, const cv::Mat& b) {
   return true;
 }
 
-inline std::string checksumText(unsigned long crc) { return fmt::format("crc32:{:08x}", crc); }
+inline std::string checksumText(unsigned long crc) {
+  return fmt::format("crc32:{:08x}", crc);
+}
 inline std::string checksumText(const cv::Mat& pixels) {
   return checksumText(lfi::pixelChecksum(pixels));
 }

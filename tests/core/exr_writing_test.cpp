@@ -61,19 +61,19 @@ TEST_F(ExrIo, WritingRejectsWrongImages) {
   bad.at<float>(2, 3) = std::numeric_limits<float>::quiet_NaN();
   EXPECT_TRUE(throwsError([&] { lfi::writeRadianceExr(file("c.exr"), bad, {}, lfi::Overwrite::Allow); },
                           Errc::InvalidArgument, {"c.exr", "(3, 2)", "finite"}));
-  EXPECT_TRUE(throwsError(
-      [&] { lfi::writeRadianceExr(file("c.exr"), good, {.objectPixel_mm = -1}, lfi::Overwrite::Allow); },
-      Errc::InvalidArgument, {"c.exr", "objectPixel_mm"}));
+  EXPECT_TRUE(
+      throwsError([&] { lfi::writeRadianceExr(file("c.exr"), good, {.objectPixel_mm = -1}, lfi::Overwrite::Allow); },
+                  Errc::InvalidArgument, {"c.exr", "objectPixel_mm"}));
   EXPECT_TRUE(bitIdentical(lfi::readRadianceExr(file("c.exr")), good));
   // A light field whose image was changed through lensletImage() after it was checked.
   const LightFieldGeometry g = geometry();
   LightField lf(g, randomFloats(g.height(), g.width(), 16));
   lf.lensletImage().at<float>(1, 1) = std::numeric_limits<float>::infinity();
-  EXPECT_TRUE(throwsError([&] { lfi::writeLightFieldExr(file("lf.exr"), lf); }, Errc::InvalidArgument,
-                          {"lf.exr", "(1, 1)"}));
+  EXPECT_TRUE(
+      throwsError([&] { lfi::writeLightFieldExr(file("lf.exr"), lf); }, Errc::InvalidArgument, {"lf.exr", "(1, 1)"}));
   lf.lensletImage() = cv::Mat(3, 3, CV_32FC1, cv::Scalar(0));
-  EXPECT_TRUE(throwsError([&] { lfi::writeLightFieldExr(file("lf.exr"), lf); }, Errc::InvalidArgument,
-                          {"lf.exr", "3x3"}));
+  EXPECT_TRUE(
+      throwsError([&] { lfi::writeLightFieldExr(file("lf.exr"), lf); }, Errc::InvalidArgument, {"lf.exr", "3x3"}));
   EXPECT_FALSE(fs::exists(file("lf.exr")));
 }
 

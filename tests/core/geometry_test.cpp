@@ -20,7 +20,9 @@ void expectNear(const Vec3& actual, const Vec3& expected, double tol = kTol) {
 
 // A transform with a rotation about an oblique axis and a translation, so no
 // component is trivially zero.
-Rigid3 generalTransform() { return Rigid3::translation({3.5, -1.25, 7.0}) * Rigid3::rotation(Vec3(1, 2, -0.5), 0.73); }
+Rigid3 generalTransform() {
+  return Rigid3::translation({3.5, -1.25, 7.0}) * Rigid3::rotation(Vec3(1, 2, -0.5), 0.73);
+}
 
 TEST(Rigid3, QuarterTurnAboutZMapsXToY) {
   const Rigid3 r = Rigid3::rotation({0, 0, 1}, std::numbers::pi / 2);

@@ -5,8 +5,8 @@
 #include "lfi_test_support.h"
 
 #include <gtest/gtest.h>
-#include <opencv2/imgcodecs.hpp>
 #include <unistd.h>
+#include <opencv2/imgcodecs.hpp>
 
 #include <filesystem>
 #include <numeric>

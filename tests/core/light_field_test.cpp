@@ -37,7 +37,9 @@ LightFieldGeometry smallGeometry(int angular = 7) {
 }
 
 // Every (ex, ey, u, v) gets its own value, so a lookup result identifies the sample.
-float codeOf(int ex, int ey, int u, int v) { return static_cast<float>(((ex * 10 + ey) * 100 + u) * 100 + v); }
+float codeOf(int ex, int ey, int u, int v) {
+  return static_cast<float>(((ex * 10 + ey) * 100 + u) * 100 + v);
+}
 
 LightField codedLightField(const LightFieldGeometry& g) {
   LightField lf(g);
@@ -57,7 +59,9 @@ LightField randomLightField(const LightFieldGeometry& g, unsigned seed) {
   return lf;
 }
 
-bool insideDisc(const Vec2& p) { return p.x * p.x + p.y * p.y < 1; }
+bool insideDisc(const Vec2& p) {
+  return p.x * p.x + p.y * p.y < 1;
+}
 
 TEST(LightFieldGeometry, DerivedSizes) {
   const LightFieldGeometry g = smallGeometry();

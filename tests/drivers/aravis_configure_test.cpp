@@ -66,8 +66,9 @@ std::filesystem::path genicamWithout(std::initializer_list<std::string> features
 // SFNC only recommends SensorWidth and SensorHeight: a device without them
 // opens, and its sensor is the largest image it gives.
 TEST_F(AravisCameraTest, ADeviceWithoutSensorSizeFeaturesOpensWithItsLargestImage) {
-  const std::filesystem::path xml = genicamWithout(
-      {"SensorWidth", "SensorHeight"}, std::filesystem::temp_directory_path() / ("lfi-genicam-" + fake_->serial() + ".xml"));
+  const std::filesystem::path xml =
+      genicamWithout({"SensorWidth", "SensorHeight"},
+                     std::filesystem::temp_directory_path() / ("lfi-genicam-" + fake_->serial() + ".xml"));
   auto camera = openFakeWith("LFIG", xml);
   EXPECT_TRUE(throwsError([&] { camera->getIntegerFeature("SensorWidth"); }, Errc::NotFound, {"SensorWidth"}));
   EXPECT_EQ(camera->getIntegerFeature("Width"), 512);  // the fake device's start-up image, smaller than its sensor
@@ -99,18 +100,18 @@ TEST_F(AravisCameraTest, ADeviceWithoutSensorSizeFeaturesOpensWithItsLargestImag
 // A fake device with both bounds (its description edited) takes both ways.
 TEST_F(AravisCameraTest, AnExposureAndAFrameRateThatBoundEachOtherAreSetInAnOrderThatWorks) {
   std::string text = fakeGenicam();
-  replaceOnce(text, "<Max>10000000.0</Max>", "<pMax>ExposureTimeAbsMax</pMax>");  // ExposureTimeAbs's, in us
+  replaceOnce(text, "<Max>10000000.0</Max>", "<pMax>ExposureTimeAbsMax</pMax>");   // ExposureTimeAbs's, in us
   replaceOnce(text, "<Min>1000</Min>", "<pMin>AcquisitionFramePeriodMin</pMin>");  // AcquisitionFramePeriod's, in us
   if (HasFatalFailure()) return;  // (the fake device's description changed)
-  const std::filesystem::path xml = writeGenicam(
-      text, std::filesystem::temp_directory_path() / ("lfi-genicam-bounds-" + fake_->serial() + ".xml"),
-      "<SwissKnife Name=\"ExposureTimeAbsMax\" NameSpace=\"Custom\">\n"
-      "  <pVariable Name=\"PERIOD\">AcquisitionFramePeriod</pVariable><Formula>PERIOD</Formula>\n"
-      "</SwissKnife>\n"
-      "<IntSwissKnife Name=\"AcquisitionFramePeriodMin\" NameSpace=\"Custom\">\n"
-      "  <pVariable Name=\"EXPOSURE\">ExposureTimeAbsRegister</pVariable>\n"
-      "  <Formula>(EXPOSURE &gt; 1000) ? EXPOSURE : 1000</Formula>\n"
-      "</IntSwissKnife>\n");
+  const std::filesystem::path xml =
+      writeGenicam(text, std::filesystem::temp_directory_path() / ("lfi-genicam-bounds-" + fake_->serial() + ".xml"),
+                   "<SwissKnife Name=\"ExposureTimeAbsMax\" NameSpace=\"Custom\">\n"
+                   "  <pVariable Name=\"PERIOD\">AcquisitionFramePeriod</pVariable><Formula>PERIOD</Formula>\n"
+                   "</SwissKnife>\n"
+                   "<IntSwissKnife Name=\"AcquisitionFramePeriodMin\" NameSpace=\"Custom\">\n"
+                   "  <pVariable Name=\"EXPOSURE\">ExposureTimeAbsRegister</pVariable>\n"
+                   "  <Formula>(EXPOSURE &gt; 1000) ? EXPOSURE : 1000</Formula>\n"
+                   "</IntSwissKnife>\n");
   auto camera = openFakeWith("LFIB", xml);
   const CameraSettings fast = smallSettings();  // 1 ms at 200 Hz
   CameraSettings slow = fast;
@@ -142,17 +143,17 @@ TEST_F(AravisCameraTest, ATriggeredExposureIsNotBoundByAnEarlierFreeRunsFrameRat
   std::string text = fakeGenicam();
   replaceOnce(text, "<Max>10000000.0</Max>", "<pMax>ExposureTimeAbsMax</pMax>");  // ExposureTimeAbs's, in us
   if (HasFatalFailure()) return;  // (the fake device's description changed)
-  const std::filesystem::path xml = writeGenicam(
-      text, std::filesystem::temp_directory_path() / ("lfi-genicam-cap-" + fake_->serial() + ".xml"),
-      "<Boolean Name=\"AcquisitionFrameRateEnable\" NameSpace=\"Standard\">\n"
-      "  <pValue>AcquisitionFrameRateEnableValue</pValue><OnValue>1</OnValue><OffValue>0</OffValue>\n"
-      "</Boolean>\n"
-      "<Integer Name=\"AcquisitionFrameRateEnableValue\" NameSpace=\"Custom\"><Value>1</Value></Integer>\n"
-      "<SwissKnife Name=\"ExposureTimeAbsMax\" NameSpace=\"Custom\">\n"
-      "  <pVariable Name=\"PERIOD\">AcquisitionFramePeriod</pVariable>\n"
-      "  <pVariable Name=\"CAPPED\">AcquisitionFrameRateEnableValue</pVariable>\n"
-      "  <Formula>CAPPED ? PERIOD : 10000000</Formula>\n"
-      "</SwissKnife>\n");
+  const std::filesystem::path xml =
+      writeGenicam(text, std::filesystem::temp_directory_path() / ("lfi-genicam-cap-" + fake_->serial() + ".xml"),
+                   "<Boolean Name=\"AcquisitionFrameRateEnable\" NameSpace=\"Standard\">\n"
+                   "  <pValue>AcquisitionFrameRateEnableValue</pValue><OnValue>1</OnValue><OffValue>0</OffValue>\n"
+                   "</Boolean>\n"
+                   "<Integer Name=\"AcquisitionFrameRateEnableValue\" NameSpace=\"Custom\"><Value>1</Value></Integer>\n"
+                   "<SwissKnife Name=\"ExposureTimeAbsMax\" NameSpace=\"Custom\">\n"
+                   "  <pVariable Name=\"PERIOD\">AcquisitionFramePeriod</pVariable>\n"
+                   "  <pVariable Name=\"CAPPED\">AcquisitionFrameRateEnableValue</pVariable>\n"
+                   "  <Formula>CAPPED ? PERIOD : 10000000</Formula>\n"
+                   "</SwissKnife>\n");
   auto camera = openFakeWith("LFIC", xml);
   const CameraSettings fast = smallSettings();  // 1 ms at 200 Hz: a 5 ms period
   CameraSettings triggered = fast;

@@ -90,8 +90,9 @@ std::string ownNonLoopbackAddress() {
 TEST_F(AravisCameraTest, ADeviceAtAnotherOwnAddressStreams) {
   const std::string address = ownNonLoopbackAddress();
   if (address.empty())
-    LFI_SKIP_WITHOUT_TOOL("this host has no IPv4 address outside 127/8 (the test drivers.OwnAddressInANetworkNamespace "
-                          "runs this one where it has)");
+    LFI_SKIP_WITHOUT_TOOL(
+        "this host has no IPv4 address outside 127/8 (the test drivers.OwnAddressInANetworkNamespace "
+        "runs this one where it has)");
   FakeGvCamera other("LFIO" + std::to_string(::getpid()));
   other.start(binary_, 0, {}, address);
   auto camera = openCamera("aravis:" + address);
@@ -101,8 +102,8 @@ TEST_F(AravisCameraTest, ADeviceAtAnotherOwnAddressStreams) {
     const Frame frame = grabComplete(*camera);
     const StreamStatistics st = camera->statistics();
     ASSERT_EQ(frame.status, FrameStatus::Complete)
-        << "device at " << address << ", frame " << i << ": " << toString(frame.status) << "; stream: "
-        << st.completed << " completed, " << st.failed << " failed, " << st.missingPackets << " packets missing";
+        << "device at " << address << ", frame " << i << ": " << toString(frame.status) << "; stream: " << st.completed
+        << " completed, " << st.failed << " failed, " << st.missingPackets << " packets missing";
   }
 }
 

@@ -28,7 +28,9 @@ namespace {
 
 using testing_support::throwsError;
 
-const LenticularOptics& lenticular(const DisplayOptics& optics) { return *optics.model<LenticularOptics>(); }
+const LenticularOptics& lenticular(const DisplayOptics& optics) {
+  return *optics.model<LenticularOptics>();
+}
 
 DisplayInfo smallLenticular(SubpixelLayout layout, double slant_rad) {
   DisplayInfo info = defaultLenticularDisplay();
@@ -42,7 +44,7 @@ DisplayInfo smallLenticular(SubpixelLayout layout, double slant_rad) {
 TEST(DisplayOptics, DefaultsAreALenticularOfTheLookingGlassClass) {
   const DisplayInfo info = defaultLenticularDisplay();
   const DisplayOptics optics(info);
-  EXPECT_NEAR(info.optics.lensPitch_px, 7.2, 0.1);                          // ~7 pixels per lens
+  EXPECT_NEAR(info.optics.lensPitch_px, 7.2, 0.1);                           // ~7 pixels per lens
   EXPECT_NEAR(info.optics.slant_rad * 180 / std::numbers::pi, 10.45, 0.05);  // ~10 degrees
   EXPECT_NEAR(optics.viewCone_rad() * 180 / std::numbers::pi, 40.0, 1e-9);   // 40 degree view cone
   EXPECT_NEAR(lenticular(optics).lensPitchPerp_mm(), 25.4 / 47.58427, 1e-12);
@@ -180,7 +182,8 @@ TEST(DisplayOptics, EncodingIsTheInterpolatedLookupAlongEachChiefRay) {
       for (int col = 0; col < info.panelWidth_px; ++col)
         for (int k = 0; k < sub; ++k) {
           const DisplayRay ray = optics.rayFromPixel(col, row, k);
-          const double r = lf.radiance({ray.origin_mm.x, ray.origin_mm.y}, ray.direction, LightFieldLookup::Interpolated);
+          const double r =
+              lf.radiance({ray.origin_mm.x, ray.origin_mm.y}, ray.direction, LightFieldLookup::Interpolated);
           const long expected = std::clamp(std::lround(255 * r / white), 0L, 255L);
           const int got = panel.ptr<std::uint8_t>(row)[col * sub + k];
           differing += got != expected;
@@ -188,9 +191,9 @@ TEST(DisplayOptics, EncodingIsTheInterpolatedLookupAlongEachChiefRay) {
           dark += r == 0;  // off the light field's plane
         }
     const int subpixels = info.panelWidth_px * info.panelHeight_px * sub;
-    EXPECT_LE(maxError, 1) << toString(layout);            // a level, where rounding meets a half-way value
+    EXPECT_LE(maxError, 1) << toString(layout);  // a level, where rounding meets a half-way value
     EXPECT_LE(differing, subpixels / 1000) << toString(layout);
-    EXPECT_GT(dark, 0) << toString(layout);                 // the panel reaches past the light field
+    EXPECT_GT(dark, 0) << toString(layout);  // the panel reaches past the light field
     EXPECT_LT(dark, subpixels / 2) << toString(layout);
   }
 }
@@ -244,7 +247,9 @@ TEST(UsbDisplayProtocol, RepliesThatAreNonsenseNameTheFieldAndTheDevice) {
   auto put16 = [](std::size_t at, unsigned v) -> Edit {
     return [=](std::vector<std::uint8_t>& b) { b[at] = v & 0xff, b[at + 1] = (v >> 8) & 0xff; };
   };
-  auto put8 = [](std::size_t at, unsigned v) -> Edit { return [=](std::vector<std::uint8_t>& b) { b[at] = v & 0xff; }; };
+  auto put8 = [](std::size_t at, unsigned v) -> Edit {
+    return [=](std::vector<std::uint8_t>& b) { b[at] = v & 0xff; };
+  };
   auto put32 = [](std::size_t at, std::uint32_t v) -> Edit {
     return [=](std::vector<std::uint8_t>& b) {
       for (int i = 0; i < 4; ++i) b[at + i] = static_cast<std::uint8_t>(v >> (8 * i));
@@ -383,8 +388,8 @@ TEST(UsbDisplayProtocol, ADeviceInfoBlockIsTheDocumentedBytes) {
     return static_cast<std::uint32_t>(u16(at)) | static_cast<std::uint32_t>(u16(at + 2)) << 16;
   };
   auto text = [&](size_t at) { return std::string(reinterpret_cast<const char*>(&b[at])); };  // NUL-terminated
-  EXPECT_EQ(u16(0), 1);    // info version
-  EXPECT_EQ(u16(2), 128);  // block size
+  EXPECT_EQ(u16(0), 1);                                                                       // info version
+  EXPECT_EQ(u16(2), 128);                                                                     // block size
   EXPECT_EQ(text(4), "Vend");
   EXPECT_EQ(text(36), "Model X");
   EXPECT_EQ(text(68), "S/1");
@@ -427,8 +432,7 @@ TEST(DisplayCalibrationFile, ValuesTheDisplayWouldRefuseAreNamedInTheFile) {
     DisplayInfo info = defaultLenticularDisplay();
     c.spoil(info);
     // The display's own check refuses the same value, naming the field: the file keeps to the display's bounds.
-    EXPECT_TRUE(throwsError([&] { info.validate(); }, Errc::InvalidArgument, {"display info " + c.field}))
-        << c.optics;
+    EXPECT_TRUE(throwsError([&] { info.validate(); }, Errc::InvalidArgument, {"display info " + c.field})) << c.optics;
   }
   EXPECT_EQ(read("optics = \"line_barrier\"\nslit_width_mm = 0.05\n").type, OpticsType::LineBarrier);
   std::filesystem::remove(file);

@@ -73,8 +73,8 @@ TEST(LensLattice, NearestCentreIsTheNearestLatticePoint) {
       const double pitch = 1.3, c = std::cos(rotation), s = std::sin(rotation);
       const Vec2 offset(0.2, -0.45);
       const LensLattice lattice(packing, pitch, rotation, offset);
-      const Vec2 a1(pitch, 0), a2 = packing == LensPacking::Square ? Vec2(0, pitch)
-                                                                   : Vec2(0.5 * pitch, 0.5 * std::sqrt(3.0) * pitch);
+      const Vec2 a1(pitch, 0),
+          a2 = packing == LensPacking::Square ? Vec2(0, pitch) : Vec2(0.5 * pitch, 0.5 * std::sqrt(3.0) * pitch);
       for (int n = 0; n < 2000; ++n) {
         const Vec2 p(coordinate(rng), coordinate(rng));
         const Vec2 found = lattice.nearestCentre(p);
@@ -332,8 +332,7 @@ TEST(LensArrayOptics, BadParametersAreNamed) {
   for (const Case& c : cases) {
     DisplayInfo info = defaultLensletArrayDisplay();
     c.spoil(info.optics);
-    EXPECT_TRUE(throwsError([&] { DisplayOptics{info}; }, Errc::InvalidArgument, {"display info", c.field}))
-        << c.field;
+    EXPECT_TRUE(throwsError([&] { DisplayOptics{info}; }, Errc::InvalidArgument, {"display info", c.field})) << c.field;
   }
   DisplayInfo pinhole = defaultPinholeArrayDisplay();
   pinhole.optics.pinholeDiameter_mm = 1.5;  // larger than its 1 mm pitch
@@ -419,9 +418,9 @@ TEST(DisplayCalibrationFile, ArrayKeysAreReadAndKeysOfAnotherClassAreNamed) {
     std::ofstream(file) << "format = \"lfi-display-calibration\"\nversion = 1\n[optics]\n" << optics;
     return readDisplayOpticsFile(file, device);
   };
-  const DisplayOpticsParams p =
-      read("optics = \"lenslet_array\"\npacking = \"hexagonal\"\narray_pitch_mm = 0.8\nrotation_rad = 0.05\n"
-           "array_offset_mm = [0.1, -0.2]\nfill_factor = 0.9\ngap_mm = 1.2\n");
+  const DisplayOpticsParams p = read(
+      "optics = \"lenslet_array\"\npacking = \"hexagonal\"\narray_pitch_mm = 0.8\nrotation_rad = 0.05\n"
+      "array_offset_mm = [0.1, -0.2]\nfill_factor = 0.9\ngap_mm = 1.2\n");
   EXPECT_EQ(p.type, OpticsType::LensletArray);
   EXPECT_EQ(p.packing, LensPacking::Hexagonal);
   EXPECT_EQ(p.arrayPitch_mm, 0.8);
@@ -434,9 +433,8 @@ TEST(DisplayCalibrationFile, ArrayKeysAreReadAndKeysOfAnotherClassAreNamed) {
                           Errc::Config, {file.string() + ":", "slant_rad", "not a parameter of lenslet_array"}));
   EXPECT_TRUE(throwsError([&] { read("optics = \"pinhole_array\"\narray_pitch_mm = 1\n"); }, Errc::Config,
                           {"pinhole_diameter_mm"}));  // required, and the device has none
-  EXPECT_TRUE(throwsError(
-      [&] { read("optics = \"pinhole_array\"\narray_pitch_mm = 1\npinhole_diameter_mm = 1.2\n"); }, Errc::Config,
-      {"pinhole_diameter_mm", "larger than the array pitch"}));
+  EXPECT_TRUE(throwsError([&] { read("optics = \"pinhole_array\"\narray_pitch_mm = 1\npinhole_diameter_mm = 1.2\n"); },
+                          Errc::Config, {"pinhole_diameter_mm", "larger than the array pitch"}));
   EXPECT_TRUE(throwsError([&] { read("optics = \"hologram\"\n"); }, Errc::Config, {"optics.optics"}));
   std::filesystem::remove(file);
 }

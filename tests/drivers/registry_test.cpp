@@ -31,14 +31,17 @@ TEST(DeviceUri, PathKeepsColonsAndMayBeEmpty) {
 // The characters that split a URI, percent-encoded, reach the backend as
 // themselves: in the path, a key and a value (e.g. a calibration file "a&b.toml").
 TEST(DeviceUri, PathKeysAndValuesArePercentDecoded) {
-  const DeviceUri uri = backendRegistry<Camera>().parse("sim:/benches/a%3Fb/100%25.toml?file=x%26y%3Dz.toml&k%3D1=%2f%2F");
+  const DeviceUri uri =
+      backendRegistry<Camera>().parse("sim:/benches/a%3Fb/100%25.toml?file=x%26y%3Dz.toml&k%3D1=%2f%2F");
   EXPECT_EQ(uri.path, "/benches/a?b/100%.toml");
   ASSERT_EQ(uri.query.size(), 2u);
   EXPECT_EQ(uri.query.at("file"), "x&y=z.toml");
   EXPECT_EQ(uri.query.at("k=1"), "//");
   EXPECT_EQ(backendRegistry<Camera>().parse("aravis:%C3%A9").path, "\xC3\xA9");  // any byte but NUL
   for (const char* bad : {"sim:100%.toml", "sim:a%2", "sim:a%zz", "sim:a%00b", "aravis:x?a=%", "aravis:x?%g1=2"})
-    EXPECT_TRUE(throwsError([&] { backendRegistry<Camera>().parse(bad); }, Errc::Config, {bad, "two hex digits", "%25"})) << bad;
+    EXPECT_TRUE(
+        throwsError([&] { backendRegistry<Camera>().parse(bad); }, Errc::Config, {bad, "two hex digits", "%25"}))
+        << bad;
 }
 
 // Every byte but NUL survives the way through a URI, in the path and in a value.
@@ -54,14 +57,16 @@ TEST(DeviceUri, PercentEncodingRoundTrips) {
 }
 
 TEST(DeviceUri, MalformedUrisAreConfigErrors) {
-  EXPECT_TRUE(throwsError([] { backendRegistry<Camera>().parse("Aravis-Fake-GV01"); }, Errc::Config, {"Aravis-Fake-GV01", "no scheme"}));
+  EXPECT_TRUE(throwsError([] { backendRegistry<Camera>().parse("Aravis-Fake-GV01"); }, Errc::Config,
+                          {"Aravis-Fake-GV01", "no scheme"}));
   EXPECT_TRUE(throwsError([] { backendRegistry<Camera>().parse(":x"); }, Errc::Config, {"no scheme"}));
-  EXPECT_TRUE(
-      throwsError([] { backendRegistry<Camera>().parse("aravis:x?packetSize"); }, Errc::Config, {"'packetSize'", "<key>=<value>"}));
+  EXPECT_TRUE(throwsError([] { backendRegistry<Camera>().parse("aravis:x?packetSize"); }, Errc::Config,
+                          {"'packetSize'", "<key>=<value>"}));
   EXPECT_TRUE(throwsError([] { backendRegistry<Camera>().parse("aravis:x?=3"); }, Errc::Config, {"<key>=<value>"}));
   EXPECT_TRUE(throwsError([] { backendRegistry<Camera>().parse("aravis:x?a=1&a=2"); }, Errc::Config, {"'a'", "twice"}));
   EXPECT_TRUE(throwsError([] { backendRegistry<Camera>().parse("aravis:x?a=1&"); }, Errc::Config, {"ends with '&'"}));
-  EXPECT_TRUE(throwsError([] { backendRegistry<Camera>().parse("aravis:x?"); }, Errc::Config, {"aravis:x?", "ends with '?'"}));
+  EXPECT_TRUE(
+      throwsError([] { backendRegistry<Camera>().parse("aravis:x?"); }, Errc::Config, {"aravis:x?", "ends with '?'"}));
 }
 
 TEST(CameraRegistry, UnknownSchemeListsKnownSchemes) {
@@ -83,12 +88,12 @@ TEST(CameraRegistry, OtherLibrariesRegisterTheirSchemes) {
   registerDriverBackends();
   static DeviceUri seen;  // (static: the process-wide registry keeps the factory)
   backendRegistry<Camera>().add({.scheme = "test-registry",
-                         .queryKeys = {"seed"},
-                         .description = "test-registry:<anything>",
-                         .factory = [](const DeviceUri& uri) -> std::unique_ptr<Camera> {
-                           seen = uri;
-                           return nullptr;
-                         }});
+                                 .queryKeys = {"seed"},
+                                 .description = "test-registry:<anything>",
+                                 .factory = [](const DeviceUri& uri) -> std::unique_ptr<Camera> {
+                                   seen = uri;
+                                   return nullptr;
+                                 }});
   const std::vector<std::string> schemes = backendRegistry<Camera>().schemes();
   EXPECT_NE(std::find(schemes.begin(), schemes.end(), "test-registry"), schemes.end());
   EXPECT_NE(std::find(schemes.begin(), schemes.end(), "aravis"), schemes.end());

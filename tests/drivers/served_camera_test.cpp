@@ -33,7 +33,6 @@
 #include <thread>
 #include <vector>
 
-
 namespace lfi {
 namespace {
 
@@ -57,12 +56,21 @@ double secondsSince(Clock::time_point t0) {
 }
 
 // A small bench: the reference lens over a Lambertian back light, 96 x 64 px.
-const std::string kScene =
-    cameraSceneText({.samplesPerPixel = 2, .seed = 7, .pixelPitch_mm = 0.625, .width_px = 96, .height_px = 64,
-                     .fullWell_e = 10000, .readNoise_e = 3, .bitDepth = 12, .electronsPerUnitPerUs = 1.0}) +
-    lensObject({.radius_mm = 100, .centreThickness_mm = 7, .diameter_mm = 40, .ior = 1.5}) + kBackLightObject;
+const std::string kScene = cameraSceneText({.samplesPerPixel = 2,
+                                            .seed = 7,
+                                            .pixelPitch_mm = 0.625,
+                                            .width_px = 96,
+                                            .height_px = 64,
+                                            .fullWell_e = 10000,
+                                            .readNoise_e = 3,
+                                            .bitDepth = 12,
+                                            .electronsPerUnitPerUs = 1.0}) +
+                           lensObject({.radius_mm = 100, .centreThickness_mm = 7, .diameter_mm = 40, .ior = 1.5}) +
+                           kBackLightObject;
 
-bool answersGvcp() { return gigeDeviceAnswers(); }
+bool answersGvcp() {
+  return gigeDeviceAnswers();
+}
 
 // `lfi serve-camera` as a child process.
 class ServedCamera {

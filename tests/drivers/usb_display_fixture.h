@@ -20,7 +20,7 @@ using emulation::EmulatedUsbDisplay;
 inline const bool kPrivateTmp = (emulation::usePrivateTmpDir(), true);
 
 class UsbDisplayTest : public ::testing::Test {
-protected:
+ protected:
   void SetUp() override {
     ASSERT_TRUE(kPrivateTmp);
     ASSERT_TRUE(emulation::umockdevPreloadActive())

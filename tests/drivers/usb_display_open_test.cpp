@@ -2,8 +2,8 @@
 // its info and calibration, serials and URIs, the listing, and devices that cannot be opened.
 // Runs under umockdev's preload library (CTest starts it through tests/drivers/run_with_umockdev.sh).
 
-#include "usb_display_fixture.h"
 #include "lfi_test_support.h"
+#include "usb_display_fixture.h"
 
 #include "lfi/drivers/backend_registry.h"
 #include "lfi/drivers/display.h"
@@ -156,7 +156,8 @@ TEST_F(UsbDisplayTest, ASerialWithSpacesAndSlashesIsNamedPercentEncoded) {
   EmulatedUsbDisplay device(config);
   device.plug();
   const std::string uri = "usb:1209:4c46/Bench%20A%2F2%2050%25";
-  EXPECT_TRUE(throwsError([] { openDisplay("usb:1209:4c46/NOPE"); }, Errc::NotFound, {"1209:4c46/Bench%20A%2F2%2050%25"}));
+  EXPECT_TRUE(
+      throwsError([] { openDisplay("usb:1209:4c46/NOPE"); }, Errc::NotFound, {"1209:4c46/Bench%20A%2F2%2050%25"}));
   auto display = openDisplay(uri);
   EXPECT_EQ(display->info().serial, config.serial);
   EXPECT_EQ("usb:" + display->info().deviceId, uri);
@@ -235,8 +236,8 @@ TEST_F(UsbDisplayTest, AbsurdDeviceRepliesAreClearErrors) {
                           {"usb:1209:4c46", "calibration size 4294967295 bytes is outside"}));
   device.setAbsurdDeviceInfo(false);
   device.setBadCalibrationCrc(true);
-  EXPECT_TRUE(throwsError([] { openDisplay("usb:1209:4c46"); }, Errc::Device,
-                          {"usb:1209:4c46", "calibration blob CRC-32"}));
+  EXPECT_TRUE(
+      throwsError([] { openDisplay("usb:1209:4c46"); }, Errc::Device, {"usb:1209:4c46", "calibration blob CRC-32"}));
   device.setBadCalibrationCrc(false);
   EXPECT_NO_THROW(openDisplay("usb:1209:4c46"));  // the failed opens released the device
 }

@@ -2,8 +2,8 @@
 // state machine, brightness, frames that arrive byte-exact, and frames or statuses the device refuses.
 // Runs under umockdev's preload library (CTest starts it through tests/drivers/run_with_umockdev.sh).
 
-#include "usb_display_fixture.h"
 #include "lfi_test_support.h"
+#include "usb_display_fixture.h"
 
 #include "lfi/drivers/display.h"
 #include "lfi/drivers/display_optics.h"
@@ -59,8 +59,8 @@ TEST_F(UsbDisplayTest, StateMachine) {
   display->open();
   EXPECT_EQ(display->state(), Display::State::Open);
   // A wrong panel image is the caller's error.
-  EXPECT_TRUE(throwsError([&] { display->show(cv::Mat(4, 4, CV_8UC3)); }, Errc::InvalidArgument,
-                          {"640x400", "got 4x4"}));
+  EXPECT_TRUE(
+      throwsError([&] { display->show(cv::Mat(4, 4, CV_8UC3)); }, Errc::InvalidArgument, {"640x400", "got 4x4"}));
 }
 
 TEST_F(UsbDisplayTest, Brightness) {
@@ -274,8 +274,9 @@ TEST_F(UsbDisplayTest, AStatusOrARejectionThatContradictsTheHostIsAnError) {
   ASSERT_EQ(display->show(randomPanel(info, 5)).status, PresentStatus::Presented);  // frame 1
   EXPECT_NO_THROW(display->status());
   device.lieInStatus(-1, 7);
-  EXPECT_TRUE(throwsError([&] { display->status(); }, Errc::Device,
-                          {"usb:1209:4c46", "GET_STATUS says it shows frame 7", "last frame this host presented is 1"}));
+  EXPECT_TRUE(
+      throwsError([&] { display->status(); }, Errc::Device,
+                  {"usb:1209:4c46", "GET_STATUS says it shows frame 7", "last frame this host presented is 1"}));
   device.lieInStatus(info.brightnessMax + 1, -1);
   EXPECT_TRUE(throwsError([&] { display->status(); }, Errc::Device,
                           {"usb:1209:4c46", fmt::format("brightness {}", info.brightnessMax + 1)}));

@@ -2,8 +2,8 @@
 // stalls, short transfers, timeouts, failed CLEAR_HALTs and a device that vanishes and comes back.
 // Runs under umockdev's preload library (CTest starts it through tests/drivers/run_with_umockdev.sh).
 
-#include "usb_display_fixture.h"
 #include "lfi_test_support.h"
+#include "usb_display_fixture.h"
 
 #include "lfi/drivers/display.h"
 #include "lfi/drivers/display_registry.h"
@@ -79,8 +79,8 @@ TEST_F(UsbDisplayTest, ATransferTheDeviceTookOnlyPartOfIsAnErrorAndTheNextFrameI
   auto display = openUsbDisplay(selector, options);
   const cv::Mat first = randomPanel(display->info(), 22), second = randomPanel(display->info(), 23);
   device.shortenNextFrame(2, 100);
-  EXPECT_TRUE(throwsError([&] { display->show(first); }, Errc::Device,
-                          {"usb:1209:4c46", "bulk OUT of frame 1", "failed"}));
+  EXPECT_TRUE(
+      throwsError([&] { display->show(first); }, Errc::Device, {"usb:1209:4c46", "bulk OUT of frame 1", "failed"}));
   EXPECT_EQ(device.state().framesPresented, 0u);
   EXPECT_EQ(device.state().framesRejected, 0u);  // (nothing PRESENTed, so nothing refused)
   expectPresentedAfterOneClearHalt(device, *display, second);

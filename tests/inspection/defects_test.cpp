@@ -72,8 +72,8 @@ TEST(GoldenModel, RefusesImagesThatDoNotMatch) {
   trainer.add(cv::Mat(4, 5, CV_16UC1, cv::Scalar(1)));
   EXPECT_TRUE(throwsError([&] { trainer.add(cv::Mat(4, 6, CV_16UC1, cv::Scalar(1))); }, Errc::InvalidArgument,
                           {"6 x 4", "5 x 4"}));
-  EXPECT_TRUE(throwsError([&] { trainer.add(cv::Mat(4, 5, CV_8UC1, cv::Scalar(1))); }, Errc::InvalidArgument,
-                          {"differs"}));
+  EXPECT_TRUE(
+      throwsError([&] { trainer.add(cv::Mat(4, 5, CV_8UC1, cv::Scalar(1))); }, Errc::InvalidArgument, {"differs"}));
   EXPECT_TRUE(throwsError([&] { trainer.add(cv::Mat(4, 5, CV_8UC3)); }, Errc::InvalidArgument, {"single-channel"}));
   EXPECT_TRUE(throwsError([&] { trainer.add(cv::Mat()); }, Errc::InvalidArgument, {"not empty"}));
 }
@@ -219,10 +219,10 @@ TEST(Defects, InputThatDoesNotMatchIsNamed) {
   const GoldenModel model = trained(rng, 2);
   EXPECT_TRUE(throwsError([&] { findDefects(cv::Mat(10, 10, CV_16UC1), model, {}, {}); }, Errc::InvalidArgument,
                           {"10 x 10", "160 x 120"}));
-  EXPECT_TRUE(throwsError([&] { findDefects(frame(rng), model, cv::Mat(5, 5, CV_8UC1), {}); },
-                          Errc::InvalidArgument, {"mask 5 x 5"}));
-  EXPECT_TRUE(throwsError([&] { findDefects(frame(rng), model, {}, {.relative = -1}); }, Errc::InvalidArgument,
-                          {"b = -1"}));
+  EXPECT_TRUE(throwsError([&] { findDefects(frame(rng), model, cv::Mat(5, 5, CV_8UC1), {}); }, Errc::InvalidArgument,
+                          {"mask 5 x 5"}));
+  EXPECT_TRUE(
+      throwsError([&] { findDefects(frame(rng), model, {}, {.relative = -1}); }, Errc::InvalidArgument, {"b = -1"}));
   EXPECT_TRUE(throwsError([&] { findDefects(frame(rng), GoldenModel{}, {}, {}); }, Errc::InvalidArgument,
                           {"golden model is empty"}));
 }

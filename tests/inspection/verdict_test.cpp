@@ -1,9 +1,9 @@
 // A part's verdict from its defects: positions and areas in the part's frame,
 // pass/fail by each rule; and a stored golden model that training goes on from.
 
+#include "lfi/inspection/verdict.h"
 #include "lfi/core/error.h"
 #include "lfi/inspection/golden_model.h"
-#include "lfi/inspection/verdict.h"
 
 #include "lfi_test_support.h"
 
@@ -56,7 +56,11 @@ TEST(Verdict, EachRuleFailsThePartOnItsOwnAndSaysWhy) {
 
 TEST(Verdict, AFrameOrRuleOutOfRangeIsRefused) {
   EXPECT_TRUE(throwsError([] { lfi::judgePart({}, {0, {0, 0}}, {}); }, Errc::InvalidArgument, {"frame"}));
-  EXPECT_TRUE(throwsError([] { lfi::judgePart({}, {1, {0, 0}}, {.maxDefects = -1}); }, Errc::InvalidArgument, {"limits"}));
+  EXPECT_TRUE(throwsError(
+      [] {
+        lfi::judgePart({}, {1, {0, 0}}, {.maxDefects = -1});
+      },
+      Errc::InvalidArgument, {"limits"}));
 }
 
 // Images of one noisy level: mean and spread that training sees.
@@ -64,7 +68,8 @@ cv::Mat noisyImage(std::mt19937& rng, int size) {
   cv::Mat m(size, size, CV_16UC1);
   std::normal_distribution<double> noise(1000, 30);
   for (int r = 0; r < size; ++r)
-    for (int c = 0; c < size; ++c) m.at<std::uint16_t>(r, c) = static_cast<std::uint16_t>(std::lround(noise(rng)) + 10 * c);
+    for (int c = 0; c < size; ++c)
+      m.at<std::uint16_t>(r, c) = static_cast<std::uint16_t>(std::lround(noise(rng)) + 10 * c);
   return m;
 }
 
@@ -76,7 +81,8 @@ TEST(GoldenModel, TrainingGoesOnFromStoredStatisticsAsIfItHadSeenEveryImage) {
     all.add(image);
     first.add(image);
   }
-  lfi::GoldenModelTrainer resumed = lfi::GoldenModelTrainer::resume(first.mean(), first.spread(), first.count(), CV_16UC1);
+  lfi::GoldenModelTrainer resumed =
+      lfi::GoldenModelTrainer::resume(first.mean(), first.spread(), first.count(), CV_16UC1);
   for (int i = 0; i < 3; ++i) {
     const cv::Mat image = noisyImage(rng, 16);
     all.add(image);
@@ -88,8 +94,8 @@ TEST(GoldenModel, TrainingGoesOnFromStoredStatisticsAsIfItHadSeenEveryImage) {
   // sum of squares as 2 n μ δμ ≈ 0.8 DN², the variance as 0.8 / 7 DN², a 30 DN spread as 0.12 / 60 = 0.002 DN.
   EXPECT_LE(cv::norm(a.ideal, b.ideal, cv::NORM_INF), 1e-3);
   EXPECT_LE(cv::norm(a.variation, b.variation, cv::NORM_INF), 1e-2);
-  EXPECT_TRUE(throwsError([&] { resumed.add(cv::Mat(16, 16, CV_8UC1, cv::Scalar(1))); }, Errc::InvalidArgument,
-                          {"differs"}))
+  EXPECT_TRUE(
+      throwsError([&] { resumed.add(cv::Mat(16, 16, CV_8UC1, cv::Scalar(1))); }, Errc::InvalidArgument, {"differs"}))
       << "the resumed trainer knows the type of the images it was trained on";
   EXPECT_TRUE(throwsError([&] { lfi::GoldenModelTrainer::resume(first.mean(), -first.spread(), 5, CV_16UC1); },
                           Errc::InvalidArgument, {"negative"}));

@@ -142,8 +142,8 @@ TEST(DisplayParallax, AFullParallaxDisplayLightsTheWholeIntactLens) {
       dir.write("full.toml", benchText("optics = \"lenslet_array\"\npanel_width_px = 640\npanel_height_px = 640")));
   const Lighting lenticular = inspectIntactLens(
       dir.write("lenticular.toml", benchText("optics = \"lenticular\"\npanel_width_px = 640\npanel_height_px = 400")));
-  std::printf("lit within 0.9 R: lenslet array %.3f (cv %.3f), lenticular %.3f (cv %.3f)\n", full.fractionLit,
-              full.cv, lenticular.fractionLit, lenticular.cv);
+  std::printf("lit within 0.9 R: lenslet array %.3f (cv %.3f), lenticular %.3f (cv %.3f)\n", full.fractionLit, full.cv,
+              lenticular.fractionLit, lenticular.cv);
   RecordProperty("lenslet_array_fraction_lit", std::to_string(full.fractionLit));
   RecordProperty("lenticular_fraction_lit", std::to_string(lenticular.fractionLit));
   // The lens bends the rays it needs by up to 14 degrees in every direction
@@ -178,9 +178,9 @@ TEST(DisplayParallax, BothReferenceCapturesLightTheLensAndShowAParticle) {
   TestFolder dir("lfi-capture-paths");
   const std::string display = "optics = \"lenslet_array\"\npanel_width_px = 640\npanel_height_px = 640";
   const auto intact = dir.write("intact.toml", benchText(display));
-  const auto particle =
-      dir.write("particle.toml", benchText(display, "[[object]]\nname = \"particle\"\nshape = \"sphere\"\n"
-                                                    "radius_mm = 1.5\nmaterial = \"absorber\""));
+  const auto particle = dir.write("particle.toml", benchText(display,
+                                                             "[[object]]\nname = \"particle\"\nshape = \"sphere\"\n"
+                                                             "radius_mm = 1.5\nmaterial = \"absorber\""));
 
   const auto t0 = std::chrono::steady_clock::now();
   const LightField reference = sensorReference(intact);
@@ -199,10 +199,10 @@ TEST(DisplayParallax, BothReferenceCapturesLightTheLensAndShowAParticle) {
   const Lighting panelIntact = inspect(intact, nullptr, &panel);
   const Lighting panelParticle = inspect(particle, nullptr, &panel);
   const auto seconds = [](auto a, auto b) { return std::chrono::duration<double>(b - a).count(); };
-  std::printf("sensor path: lit %.3f, cv %.3f, particle %.3f of the mean (capture %.2f s)\n",
-              sensorIntact.fractionLit, sensorIntact.cv, sensorParticle.particle, seconds(t0, t1));
-  std::printf("panel path:  lit %.3f, cv %.3f, particle %.3f of the mean (capture %.2f s)\n",
-              panelIntact.fractionLit, panelIntact.cv, panelParticle.particle, seconds(t1, t2));
+  std::printf("sensor path: lit %.3f, cv %.3f, particle %.3f of the mean (capture %.2f s)\n", sensorIntact.fractionLit,
+              sensorIntact.cv, sensorParticle.particle, seconds(t0, t1));
+  std::printf("panel path:  lit %.3f, cv %.3f, particle %.3f of the mean (capture %.2f s)\n", panelIntact.fractionLit,
+              panelIntact.cv, panelParticle.particle, seconds(t1, t2));
   RecordProperty("sensor_path_cv", std::to_string(sensorIntact.cv));
   RecordProperty("panel_path_cv", std::to_string(panelIntact.cv));
   // The sensor's reference, encoded, lights every direction near the one the

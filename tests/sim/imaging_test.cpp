@@ -122,8 +122,8 @@ TEST(Imaging, KnifeEdgeCutsTheSourceImageInTheStop) {
 }
 
 struct RoundTrip {
-  double fractionLit;   // inner-lens pixels brighter than a quarter of the brightest
-  double cv;            // coefficient of variation over the inner lens
+  double fractionLit;  // inner-lens pixels brighter than a quarter of the brightest
+  double cv;           // coefficient of variation over the inner lens
 };
 
 // What lights the intact lens from Δ below it.

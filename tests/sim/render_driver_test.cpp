@@ -1,7 +1,7 @@
 // render() as a caller sees it: a bit-identical image for any thread count and
 // tile size, cancellation, progress reports, and the options it refuses.
-#include "lfi/sim/render.h"
 #include "lfi/core/error.h"
+#include "lfi/sim/render.h"
 #include "lfi/sim/scene.h"
 #include "lfi/sim/sensors.h"
 
@@ -145,8 +145,7 @@ TEST(Render, RejectsInvalidOptions) {
   EXPECT_TRUE(throwsError([&] { render(s.scene, s.cam, opt); }, Errc::InvalidArgument, {"samplesPerPixel"}));
   opt.samplesPerPixel = 1;
   opt.splitDepth = 13;
-  EXPECT_TRUE(
-      throwsError([&] { render(s.scene, s.cam, opt); }, Errc::InvalidArgument, {"splitDepth = 13", "[0, 12]"}));
+  EXPECT_TRUE(throwsError([&] { render(s.scene, s.cam, opt); }, Errc::InvalidArgument, {"splitDepth = 13", "[0, 12]"}));
   opt.splitDepth = 12;  // the largest taken
   EXPECT_NO_THROW(render(s.scene, s.cam, opt));
 }

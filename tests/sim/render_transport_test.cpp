@@ -1,8 +1,8 @@
 // The path tracer against analytic radiometry and geometry: a flat slab's
 // transmission with incoherent multiple reflections and Beer-Lambert absorption,
 // nested dielectrics, the bright disc of a lens under parallel illumination, meshes far out.
-#include "lfi/sim/render.h"
 #include "lfi/core/error.h"
+#include "lfi/sim/render.h"
 #include "lfi/sim/scene.h"
 #include "lfi/sim/sensors.h"
 
@@ -167,8 +167,8 @@ TEST(NestedDielectrics, OverlapsTakeTheMediumEnteredLast) {
   std::vector<Object> objects;
   objects.push_back(emitterBelow(-30, LambertianEmission{1.0}));
   objects.push_back({.name = "A", .shape = Solid::sphere(10), .material = Dielectric{1.7, 0}});
-  objects.push_back({.name = "B", .shape = Solid::sphere(10, Rigid3::translation({0, 0, -12})),
-                     .material = Dielectric{1.5, 0}});
+  objects.push_back(
+      {.name = "B", .shape = Solid::sphere(10, Rigid3::translation({0, 0, -12})), .material = Dielectric{1.5, 0}});
   const Scene scene(std::move(objects));
   // Down from above, off the axis: into A, into B (inside A), out of A (inside B), out of B, to the back light.
   const std::vector<Vec3> path = refractionPath(scene, {{3, 1, 40}, Vec3(0.05, 0.02, -1).normalized()});
@@ -303,7 +303,9 @@ TEST(MeshPaths, AMeshFarFromTheOriginIsCrossedAsNearIt) {
   const Rigid3 tilt = Rigid3::rotation(Vec3(1, 1, 0).normalized(), 0.3);
   auto paths = [&](double far) {
     const Vec3 shift(far, far, far);
-    const Scene scene({{.name = "box", .shape = box, .worldFromObject = Rigid3::translation(shift) * tilt,
+    const Scene scene({{.name = "box",
+                        .shape = box,
+                        .worldFromObject = Rigid3::translation(shift) * tilt,
                         .material = Dielectric{1.5, 0}}});
     std::vector<std::vector<Vec3>> out;
     for (int i = 0; i < 1000; ++i) {

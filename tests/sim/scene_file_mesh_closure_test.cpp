@@ -38,16 +38,16 @@ TEST_F(SceneFile, ADielectricMeshMustBoundASolid) {
   };
   auto scene = [&](const std::string& name, const fs::path& mesh, const std::string& material) {
     return write(name, std::string("format = \"lfi-scene\"\nversion = 1\n") + kCamera +
-                           "[[object]]\nname='m'\nshape='mesh'\nfile='" + mesh.filename().string() +
-                           "'\nmaterial='" + material + "'\n" + (material == "dielectric" ? "ior=1.5\n" : ""));
+                           "[[object]]\nname='m'\nshape='mesh'\nfile='" + mesh.filename().string() + "'\nmaterial='" +
+                           material + "'\n" + (material == "dielectric" ? "ior=1.5\n" : ""));
   };
   obj("closed.obj", [&](int f) { return "f " + faces[f] + "\n"; });
   EXPECT_NO_THROW(loadSceneFile(scene("closed.toml", dir_ / "closed.obj", "dielectric")));
   EXPECT_EQ(meshClosureFault(loadMesh(dir_ / "closed.obj")), std::nullopt);
 
   obj("holed.obj", [&](int f) { return f == 7 ? std::string() : "f " + faces[f] + "\n"; });
-  EXPECT_TRUE(throwsError([&] { loadSceneFile(scene("holed.toml", dir_ / "holed.obj", "dielectric")); },
-                          Errc::Config, {"holed.toml:", "object[0].file", "holed.obj", "not closed", "a hole"}));
+  EXPECT_TRUE(throwsError([&] { loadSceneFile(scene("holed.toml", dir_ / "holed.obj", "dielectric")); }, Errc::Config,
+                          {"holed.toml:", "object[0].file", "holed.obj", "not closed", "a hole"}));
   EXPECT_NO_THROW(loadSceneFile(scene("screen.toml", dir_ / "holed.obj", "absorber")));
 
   obj("flipped.obj", [&](int f) {  // one face's vertex order reversed
@@ -65,8 +65,9 @@ TEST_F(SceneFile, ADielectricMeshMustBoundASolid) {
                           Errc::Config, {"inwards.obj", "wound inwards", "-1.33333 mm^3"}));
 
   // Every face with vertices of its own (as STL stores them): the same positions, one closed surface.
-  std::string ply = "ply\nformat ascii 1.0\nelement vertex 24\nproperty float x\nproperty float y\n"
-                    "property float z\nelement face 8\nproperty list uchar int vertex_indices\nend_header\n";
+  std::string ply =
+      "ply\nformat ascii 1.0\nelement vertex 24\nproperty float x\nproperty float y\n"
+      "property float z\nelement face 8\nproperty list uchar int vertex_indices\nend_header\n";
   const char* corner[6] = {"1 0 0", "-1 0 0", "0 1 0", "0 -1 0", "0 0 1", "0 0 -1"};
   for (const std::string& f : faces)
     for (int k = 0; k < 3; ++k) ply += std::string(corner[f[2 * k] - '1']) + "\n";
@@ -86,8 +87,8 @@ TEST_F(SceneFile, ADielectricMeshMustBoundASolid) {
   // surface there has no inside.
   auto placed = [&](const std::string& name, const char* mesh, const char* material) {
     return write(name, std::string("format = \"lfi-scene\"\nversion = 1\n") + kCamera +
-                           "[[object]]\nname='m'\nshape='mesh'\nfile='" + mesh + "'\nmaterial='" + material +
-                           "'\n" + (std::string(material) == "dielectric" ? "ior=1.5\n" : "") +
+                           "[[object]]\nname='m'\nshape='mesh'\nfile='" + mesh + "'\nmaterial='" + material + "'\n" +
+                           (std::string(material) == "dielectric" ? "ior=1.5\n" : "") +
                            "position_mm=[0.1, 0.2, 200]\n");
   };
   EXPECT_TRUE(throwsError([&] { loadSceneFile(placed("inside.toml", "closed.obj", "dielectric")); }, Errc::Config,

@@ -65,7 +65,7 @@ TEST_F(SceneFile, ADoubleSidedSheetShadesSmoothlyOnEachSide) {
   const double s = std::sin(10 * std::numbers::pi / 180), c = std::cos(10 * std::numbers::pi / 180);
   // Two unit squares hinged along x = 0 (the second turned up by 10 degrees), as 4 triangles a layer.
   write("sheet.obj", fmt::format("v -1 0 0\nv -1 1 0\nv 0 0 0\nv 0 1 0\nv {} 0 {}\nv {} 1 {}\n"
-                                 "f 1 3 4\nf 1 4 2\nf 3 5 6\nf 3 6 4\n"    // up (+z)
+                                 "f 1 3 4\nf 1 4 2\nf 3 5 6\nf 3 6 4\n"   // up (+z)
                                  "f 1 4 3\nf 1 2 4\nf 3 6 5\nf 3 4 6\n",  // down
                                  c, s, c, s));
   const TriangleMesh sheet = loadMesh(dir_ / "sheet.obj");
@@ -75,8 +75,8 @@ TEST_F(SceneFile, ADoubleSidedSheetShadesSmoothlyOnEachSide) {
   // layer (which would turn it by 90 degrees or more).
   int hinge = 0;
   for (const auto& t : sheet.triangles) {
-    const Vec3 n = (sheet.vertices[t[1]] - sheet.vertices[t[0]]).cross(sheet.vertices[t[2]] - sheet.vertices[t[0]])
-                       .normalized();
+    const Vec3 n =
+        (sheet.vertices[t[1]] - sheet.vertices[t[0]]).cross(sheet.vertices[t[2]] - sheet.vertices[t[0]]).normalized();
     for (const unsigned v : t)
       if (std::abs(sheet.vertices[v].x) < 1e-9) {
         ++hinge;
@@ -89,8 +89,9 @@ TEST_F(SceneFile, ADoubleSidedSheetShadesSmoothlyOnEachSide) {
 
 // A mesh in metres (as glTF files are) comes in at its size with scale = 1000.
 TEST_F(SceneFile, AMeshScaleGivesTheFilesUnit) {
-  write("metres.obj", "v 0.001 0 0\nv -0.001 0 0\nv 0 0.001 0\nv 0 -0.001 0\nv 0 0 0.001\nv 0 0 -0.001\n"
-                      "f 1 3 5\nf 3 2 5\nf 2 4 5\nf 4 1 5\nf 3 1 6\nf 2 3 6\nf 4 2 6\nf 1 4 6\n");
+  write("metres.obj",
+        "v 0.001 0 0\nv -0.001 0 0\nv 0 0.001 0\nv 0 -0.001 0\nv 0 0 0.001\nv 0 0 -0.001\n"
+        "f 1 3 5\nf 3 2 5\nf 2 4 5\nf 4 1 5\nf 3 1 6\nf 2 3 6\nf 4 2 6\nf 1 4 6\n");
   auto scene = [&](const std::string& name, const std::string& scale) {
     return write(name, std::string("format = \"lfi-scene\"\nversion = 1\n") + kCamera +
                            "[[object]]\nname='m'\nshape='mesh'\nfile='metres.obj'\nmaterial='dielectric'\nior=1.5\n" +
@@ -109,8 +110,9 @@ TEST_F(SceneFile, AMeshScaleGivesTheFilesUnit) {
 // flat. With smooth normals everywhere, a cube of 8 shared vertices bends a
 // ray that meets its face square on, as a lens would.
 TEST_F(SceneFile, MeshNormalsAreSharpAcrossCreases) {
-  write("octa.obj", "v 1 0 0\nv -1 0 0\nv 0 1 0\nv 0 -1 0\nv 0 0 1\nv 0 0 -1\n"
-                    "f 1 3 5\nf 3 2 5\nf 2 4 5\nf 4 1 5\nf 3 1 6\nf 2 3 6\nf 4 2 6\nf 1 4 6\n");
+  write("octa.obj",
+        "v 1 0 0\nv -1 0 0\nv 0 1 0\nv 0 -1 0\nv 0 0 1\nv 0 0 -1\n"
+        "f 1 3 5\nf 3 2 5\nf 2 4 5\nf 4 1 5\nf 3 1 6\nf 2 3 6\nf 4 2 6\nf 1 4 6\n");
   // The octahedron's face normals are 70.5 degrees apart across every edge.
   const TriangleMesh smooth = loadMesh(dir_ / "octa.obj", std::numbers::pi), sharp = loadMesh(dir_ / "octa.obj");
   EXPECT_EQ(smooth.vertices.size(), 6u);
@@ -144,9 +146,11 @@ TEST_F(SceneFile, MeshNormalsAreSharpAcrossCreases) {
     }
     faces.push_back({ring(rings - 1, k), static_cast<int>(points.size()) - 1, ring(rings - 1, k + 1)});
   }
-  std::string ply = fmt::format("ply\nformat ascii 1.0\nelement vertex {}\nproperty double x\nproperty double y\n"
-                                "property double z\nelement face {}\nproperty list uchar int vertex_indices\n"
-                                "end_header\n", points.size(), faces.size());
+  std::string ply = fmt::format(
+      "ply\nformat ascii 1.0\nelement vertex {}\nproperty double x\nproperty double y\n"
+      "property double z\nelement face {}\nproperty list uchar int vertex_indices\n"
+      "end_header\n",
+      points.size(), faces.size());
   for (const Vec3& q : points) ply += fmt::format("{} {} {}\n", q.x, q.y, q.z);
   for (const auto& f : faces) ply += fmt::format("3 {} {} {}\n", f[0], f[1], f[2]);
   write("sphere.ply", ply);
@@ -156,11 +160,12 @@ TEST_F(SceneFile, MeshNormalsAreSharpAcrossCreases) {
   for (size_t i = 0; i < points.size(); ++i) EXPECT_GT(sphere.normals[i].dot(points[i]), std::cos(0.05)) << i;
 
   // A glass cube of 8 shared vertices (corners (+-1, +-1, +-1)); a ray along +z through (0.3, 0.4).
-  write("cube.ply", "ply\nformat ascii 1.0\nelement vertex 8\nproperty float x\nproperty float y\n"
-                    "property float z\nelement face 12\nproperty list uchar int vertex_indices\nend_header\n"
-                    "-1 -1 -1\n1 -1 -1\n-1 1 -1\n1 1 -1\n-1 -1 1\n1 -1 1\n-1 1 1\n1 1 1\n"
-                    "3 0 2 3\n3 0 3 1\n3 4 5 7\n3 4 7 6\n3 0 1 5\n3 0 5 4\n3 2 6 7\n3 2 7 3\n"
-                    "3 0 4 6\n3 0 6 2\n3 1 3 7\n3 1 7 5\n");
+  write("cube.ply",
+        "ply\nformat ascii 1.0\nelement vertex 8\nproperty float x\nproperty float y\n"
+        "property float z\nelement face 12\nproperty list uchar int vertex_indices\nend_header\n"
+        "-1 -1 -1\n1 -1 -1\n-1 1 -1\n1 1 -1\n-1 -1 1\n1 -1 1\n-1 1 1\n1 1 1\n"
+        "3 0 2 3\n3 0 3 1\n3 4 5 7\n3 4 7 6\n3 0 1 5\n3 0 5 4\n3 2 6 7\n3 2 7 3\n"
+        "3 0 4 6\n3 0 6 2\n3 1 3 7\n3 1 7 5\n");
   auto exitDirection = [&](double crease) {
     const Scene scene({Object{"cube", loadMesh(dir_ / "cube.ply", crease), Rigid3{}, Dielectric{1.5, 0}}});
     const std::vector<Vec3> path = refractionPath(scene, Ray{{0.3, 0.4, -5}, {0, 0, 1}}, 8, 100);
@@ -173,8 +178,7 @@ TEST_F(SceneFile, MeshNormalsAreSharpAcrossCreases) {
   // Smoothed, the normal near the cube's edge at x = -1 leans far out of the bottom face: a ray leaving through
   // that face there (d.Ng > 0) would meet the smoothed normal from the inside (d.Ns < 0) and count as entering.
   // The hit's normal keeps the side the geometry gives.
-  const Scene smoothCube(
-      {Object{"cube", loadMesh(dir_ / "cube.ply", std::numbers::pi), Rigid3{}, Dielectric{1.5, 0}}});
+  const Scene smoothCube({Object{"cube", loadMesh(dir_ / "cube.ply", std::numbers::pi), Rigid3{}, Dielectric{1.5, 0}}});
   const Vec3 d = Vec3(0.9, 0, -0.3).normalized(), at(-0.95, 0, -1);
   const Hit hit = smoothCube.intersect(Ray{at - d * 0.05, d});
   ASSERT_TRUE(hit.valid());

@@ -125,9 +125,11 @@ TEST_F(SceneFile, CorruptPlyIsAnErrorNamingFileAndPlace) {
        {"line 5", "unknown header keyword 'eheader'"}},
       {"missing-face.ply", header + vertices, {"line 13", "face 0", "ends before"}},
       // An ASCII instance is one line: a row short of a value, or with one more, or rows past the counts.
-      {"short-row.ply", header + "0 0\n1 0 0\n0 1 0\n3 0 1 2\n",
+      {"short-row.ply",
+       header + "0 0\n1 0 0\n0 1 0\n3 0 1 2\n",
        {"line 10", "property 'z' of vertex 0", "its line ends before it"}},
-      {"long-row.ply", header + "0 0 0 5\n1 0 0\n0 1 0\n3 0 1 2\n",
+      {"long-row.ply",
+       header + "0 0 0 5\n1 0 0\n0 1 0\n3 0 1 2\n",
        {"line 10", "vertex 0: '5' is a value past the element's declared properties"}},
       {"long-face.ply", header + vertices + "3 0 1 2 2\n", {"line 13", "face 0: '2' is a value past"}},
       {"extra-rows.ply", header + vertices + "3 0 1 2\n3 0 2 1\n", {"line 14", "values after the last element"}},
@@ -146,10 +148,12 @@ TEST_F(SceneFile, CorruptPlyIsAnErrorNamingFileAndPlace) {
            std::string("\xff\xff\xff\x7f", 4),
        {"byte ", "a list of 2147483647 values does not fit"}},
       {"cut-in-body.ply", binary.substr(0, binary.size() - 17), {"byte ", "texcoord' of face 7", "ends inside"}},
-      {"long-body.ply", binary + "\n" + std::string(13, '\0'),
+      {"long-body.ply",
+       binary + "\n" + std::string(13, '\0'),
        {"14 bytes after the last element", "count in the header"}},
       // Malformed headers and values.
-      {"not-a-number.ply", header + "0 0 0\n1 zero 0\n0 1 0\n3 0 1 2\n",
+      {"not-a-number.ply",
+       header + "0 0 0\n1 zero 0\n0 1 0\n3 0 1 2\n",
        {"line 11", "property 'y' of vertex 1", "'zero'"}},
       // Fewer bytes than the declared rows need (3 values and their separators each): named before reading.
       {"short-of-rows.ply", header + "0 0 0\n1 0 0\n", {"line 3", "'vertex' declares 3 instances"}},
@@ -178,8 +182,9 @@ TEST_F(SceneFile, CorruptPlyIsAnErrorNamingFileAndPlace) {
       {"two-faces.ply",
        header.substr(0, header.size() - 11) + "element face 1\nend_header\n" + vertices + "3 0 1 2\n",
        {"line 9", "a second 'face'"}},
-      {"two-vertices.ply", "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\n"
-                           "property float z\nelement vertex 1\nproperty float w\nend_header\n0 0 0\n1\n",
+      {"two-vertices.ply",
+       "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\n"
+       "property float z\nelement vertex 1\nproperty float w\nend_header\n0 0 0\n1\n",
        {"line 7", "a second 'vertex'"}},
   };
   for (const Case& c : cases) {

@@ -38,8 +38,8 @@ radius_mm = 3
   EXPECT_FALSE(solid.contains({0, 0, 8}));  // inside the cut sphere
   EXPECT_TRUE(solid.contains({0, 8, 0}));
   // An empty list of cut-outs is none (inline, as TOML writes an empty array of tables).
-  const SceneDescription none = loadSceneFile(write("no-cut.toml", std::string("format = \"lfi-scene\"\nversion = 1\n") +
-                                                                      kCamera + R"(
+  const SceneDescription none =
+      loadSceneFile(write("no-cut.toml", std::string("format = \"lfi-scene\"\nversion = 1\n") + kCamera + R"(
 [[object]]
 name = "ball"
 shape = "sphere"
@@ -76,10 +76,11 @@ TEST_F(SceneFile, SensorInsideASolidIsAnError) {
   // A light field sensor plane through a lens.
   EXPECT_TRUE(throwsError(
       [&] {
-        loadSceneFile(write("d.toml", "format = \"lfi-scene\"\nversion = 1\n[light_field_sensor]\n"
-                                      "spatial_x = 8\nspatial_y = 8\nangular = 4\npixel_pitch_mm = 0.1\n"
-                                      "[[object]]\nname='lens'\nshape='lens'\nfront_radius_mm=100\n"
-                                      "back_radius_mm=-100\ncentre_thickness_mm=7\ndiameter_mm=50\n"));
+        loadSceneFile(write("d.toml",
+                            "format = \"lfi-scene\"\nversion = 1\n[light_field_sensor]\n"
+                            "spatial_x = 8\nspatial_y = 8\nangular = 4\npixel_pitch_mm = 0.1\n"
+                            "[[object]]\nname='lens'\nshape='lens'\nfront_radius_mm=100\n"
+                            "back_radius_mm=-100\ncentre_thickness_mm=7\ndiameter_mm=50\n"));
       },
       Errc::Config, {"d.toml:", "light_field_sensor.position_mm", "inside object 'lens'"}));
 }

@@ -2,9 +2,9 @@
 // every kind of bad input, written or seeded, is an error naming file, line
 // and key.
 
+#include "lfi/sim/scene_file.h"
 #include "lfi/core/exr_io.h"
 #include "lfi/core/image.h"
-#include "lfi/sim/scene_file.h"
 
 #include "lfi_test_support.h"
 #include "scene_file_fixture.h"
@@ -60,8 +60,8 @@ materal = "absorber"
   camera.replace(camera.find("[camera]"), 8, "[camra]");
   const fs::path table = write("table-typo.toml", std::string("format = \"lfi-scene\"\nversion = 1\n") + camera +
                                                       "[[object]]\nname = \"ball\"\nshape = \"sphere\"\n");
-  EXPECT_TRUE(throwsError([&] { loadSceneFile(table); }, Errc::Config, {table.string() + ":", "unknown key 'camra'",
-                                                                        "known here: format, version"}));
+  EXPECT_TRUE(throwsError([&] { loadSceneFile(table); }, Errc::Config,
+                          {table.string() + ":", "unknown key 'camra'", "known here: format, version"}));
 }
 
 TEST_F(SceneFile, BadValuesAreErrors) {
@@ -158,10 +158,10 @@ TEST_F(SceneFile, BadValuesAreErrors) {
                       {"object[0].position_mm", "(element 2) is outside"}));
   // Objects are named once each, and not 'display' beside a [display]; cut-outs are for solids.
   const std::string sphere = "[[object]]\nname='a'\nshape='sphere'\nradius_mm=1\n";
-  EXPECT_TRUE(refused("twice.toml", sphere + sphere,
-                      {"object[1].name", "'a' names another object too", "object[0].name"}));
-  EXPECT_TRUE(refused("unnamed.toml", "[[object]]\nname=''\nshape='sphere'\nradius_mm=1\n",
-                      {"object[0].name", "is empty"}));
+  EXPECT_TRUE(
+      refused("twice.toml", sphere + sphere, {"object[1].name", "'a' names another object too", "object[0].name"}));
+  EXPECT_TRUE(
+      refused("unnamed.toml", "[[object]]\nname=''\nshape='sphere'\nradius_mm=1\n", {"object[0].name", "is empty"}));
   EXPECT_TRUE(refused("cut-rect.toml",
                       "[[object]]\nname='r'\nshape='rectangle'\nsize_mm=[1,1]\n"
                       "[[object.cut]]\nposition_mm=[0,0,0]\nradius_mm=0.1\n",
@@ -187,14 +187,13 @@ TEST_F(SceneFile, BadValuesAreErrors) {
   const std::string part =
       head + "[[object]]\nname='lens'\nshape='sphere'\nradius_mm=5\nposition_mm=[0, 0, -30]\n[[object.cut]]\n";
   EXPECT_TRUE(throwsError(
-      [&] { loadSceneFile(write("far-cut.toml", part + "position_mm=[0, 1, -30]\nradius_mm=0.5\n")); },
-      Errc::Config, {"far-cut.toml:", "object[0].cut[0].position_mm", "does not meet the part", "[-5, -5, -5]"}));
-  EXPECT_TRUE(throwsError(
-      [&] { loadSceneFile(write("off-cut.toml", part + "position_mm=[0, 5.5, 5.5]\nradius_mm=0.5\n")); },
-      Errc::Config, {"off-cut.toml:", "does not meet the part"}));
-  EXPECT_TRUE(throwsError(
-      [&] { loadSceneFile(write("big-cut.toml", part + "position_mm=[0, 0, 0]\nradius_mm=9\n")); },
-      Errc::Config, {"big-cut.toml:", "object[0].cut[0].radius_mm", "holds the whole part"}));
+      [&] { loadSceneFile(write("far-cut.toml", part + "position_mm=[0, 1, -30]\nradius_mm=0.5\n")); }, Errc::Config,
+      {"far-cut.toml:", "object[0].cut[0].position_mm", "does not meet the part", "[-5, -5, -5]"}));
+  EXPECT_TRUE(
+      throwsError([&] { loadSceneFile(write("off-cut.toml", part + "position_mm=[0, 5.5, 5.5]\nradius_mm=0.5\n")); },
+                  Errc::Config, {"off-cut.toml:", "does not meet the part"}));
+  EXPECT_TRUE(throwsError([&] { loadSceneFile(write("big-cut.toml", part + "position_mm=[0, 0, 0]\nradius_mm=9\n")); },
+                          Errc::Config, {"big-cut.toml:", "object[0].cut[0].radius_mm", "holds the whole part"}));
   // A bubble inside, and a nick at the top of the sphere that only just reaches the box, are kept.
   EXPECT_NO_THROW(loadSceneFile(write("bubble.toml", part + "position_mm=[0, 1, 2]\nradius_mm=0.5\n")));
   EXPECT_NO_THROW(loadSceneFile(write("nick.toml", part + "position_mm=[0, 0, 5.4]\nradius_mm=0.5\n")));
@@ -206,17 +205,22 @@ TEST_F(SceneFile, BadValuesAreErrors) {
                                                     "[[object.cut]]\nposition_mm=[-3, 0, 0]\nradius_mm=7\n"));
       },
       Errc::Config, {"two-cuts.toml:", "object[0].cut[1].radius_mm", "together leave nothing"}));
-  EXPECT_NO_THROW(loadSceneFile(write("two-nicks.toml", part + "position_mm=[3, 0, 0]\nradius_mm=5\n"
-                                                               "[[object.cut]]\nposition_mm=[-3, 0, 0]\nradius_mm=5\n")));
+  EXPECT_NO_THROW(
+      loadSceneFile(write("two-nicks.toml", part + "position_mm=[3, 0, 0]\nradius_mm=5\n"
+                                                   "[[object.cut]]\nposition_mm=[-3, 0, 0]\nradius_mm=5\n")));
   // Parts thinner than the tracer can follow (its least hit distance is 1e-6 mm): at least 1 µm.
   EXPECT_TRUE(throwsError(
-      [&] { loadSceneFile(write("thin.toml", head + "[[object]]\nname='t'\nshape='lens'\nfront_radius_mm=0\n"
-                                                    "back_radius_mm=0\ncentre_thickness_mm=1e-6\ndiameter_mm=5\n")); },
+      [&] {
+        loadSceneFile(write("thin.toml", head + "[[object]]\nname='t'\nshape='lens'\nfront_radius_mm=0\n"
+                                                "back_radius_mm=0\ncentre_thickness_mm=1e-6\ndiameter_mm=5\n"));
+      },
       Errc::Config, {"thin.toml:", "object[0].centre_thickness_mm", "outside [0.001"}));
   // A biconcave lens crosses a line in up to three pieces: two cut-outs fewer than a sphere takes.
-  std::string biconcave = head + "[[object]]\nname='b'\nshape='lens'\nfront_radius_mm=-15\nback_radius_mm=15\n"
-                                 "centre_thickness_mm=1\ndiameter_mm=20\n";
-  for (int i = 0; i < 13; ++i) biconcave += fmt::format("[[object.cut]]\nposition_mm=[0, {}, 4]\nradius_mm=0.1\n", i - 6);
+  std::string biconcave = head +
+                          "[[object]]\nname='b'\nshape='lens'\nfront_radius_mm=-15\nback_radius_mm=15\n"
+                          "centre_thickness_mm=1\ndiameter_mm=20\n";
+  for (int i = 0; i < 13; ++i)
+    biconcave += fmt::format("[[object.cut]]\nposition_mm=[0, {}, 4]\nradius_mm=0.1\n", i - 6);
   EXPECT_TRUE(throwsError([&] { loadSceneFile(write("biconcave.toml", biconcave)); }, Errc::Config,
                           {"biconcave.toml:", "object[0].cut", "13 cut-outs", "at most 12 for this lens"}));
   // A camera focused so far away (b a hair past f) that its field leaves any bench: refused at image_distance_mm.
@@ -225,8 +229,8 @@ TEST_F(SceneFile, BadValuesAreErrors) {
   EXPECT_TRUE(throwsError([&] { loadSceneFile(write("far-focus.toml", far)); }, Errc::Config,
                           {"far-focus.toml:", "camera.image_distance_mm", "past 1e+06 mm"}));
   // A light field emitter is a rectangle of the light field's extent: 4 x 3 elements of 2 x 0.5 mm.
-  writeLightFieldExr(dir_ / "good.exr", LightField({.spatialX = 4, .spatialY = 3, .angular = 2, .pixelPitch_mm = 0.5,
-                                                    .distance_mm = 30}));
+  writeLightFieldExr(dir_ / "good.exr",
+                     LightField({.spatialX = 4, .spatialY = 3, .angular = 2, .pixelPitch_mm = 0.5, .distance_mm = 30}));
   auto display = [&](const std::string& shape) {
     return head + "[[object]]\nname='d'\n" + shape + "emitter='light_field'\nlight_field='good.exr'\n";
   };

@@ -1,8 +1,8 @@
 // Scene::intersect against brute force: the nearest hit over every object,
 // computed from the solids' exact intervals and the rectangles' planes.
+#include "lfi/sim/scene.h"
 #include "lfi/core/error.h"
 #include "lfi/sim/render.h"
-#include "lfi/sim/scene.h"
 #include "lfi/sim/scene_file.h"
 
 #include "lfi_test_support.h"
@@ -128,8 +128,10 @@ TEST(Scene, RaysFromTheFarthestSensorMeetWhatNearbyRaysMeet) {
   tetra.vertices = {{0, 0, 2}, {3, 0, -1}, {-2, 2.5, -1}, {-2, -2.5, -1}};
   tetra.triangles = {{0, 1, 2}, {0, 2, 3}, {0, 3, 1}, {1, 3, 2}};
   const std::vector<Object> objects = {
-      {.name = "ball", .shape = std::shared_ptr<const Solid>(Solid::sphere(10)),
-       .worldFromObject = Rigid3::translation({20, 0, -20}), .material = Dielectric{}},
+      {.name = "ball",
+       .shape = std::shared_ptr<const Solid>(Solid::sphere(10)),
+       .worldFromObject = Rigid3::translation({20, 0, -20}),
+       .material = Dielectric{}},
       {.name = "tetra", .shape = tetra, .worldFromObject = Rigid3::translation({-20, 0, 0}), .material = Absorber{}}};
   const Scene scene(objects);
   std::mt19937_64 rng(5);
@@ -167,14 +169,18 @@ TEST(Scene, PacketIntersectEqualsOneRayIntersect) {
   const auto cut = Solid::combine(Solid::Kind::Difference, Solid::sphericalLens(40, -40, 5, 16),
                                   Solid::sphere(2, Rigid3::translation({3, 0, 2})));
   std::vector<Object> objects = {
-      {.name = "lens", .shape = std::shared_ptr<const Solid>(Solid::sphericalLens(20, -30, 3, 10)),
-       .worldFromObject = Rigid3::translation({0, 0, 10}) * Rigid3::rotation({1, 0, 0}, 0.2), .material = Dielectric{}},
+      {.name = "lens",
+       .shape = std::shared_ptr<const Solid>(Solid::sphericalLens(20, -30, 3, 10)),
+       .worldFromObject = Rigid3::translation({0, 0, 10}) * Rigid3::rotation({1, 0, 0}, 0.2),
+       .material = Dielectric{}},
       {.name = "cut lens",
        .shape = std::shared_ptr<const Solid>(cut),
        .worldFromObject = Rigid3::translation({1, 0, -5}),
        .material = Dielectric{}},
       {.name = "tetra", .shape = tetra, .worldFromObject = Rigid3::translation({2, 1, 3}), .material = Dielectric{}},
-      {.name = "back", .shape = Rectangle{30, 30}, .worldFromObject = Rigid3::translation({0, 0, -20}),
+      {.name = "back",
+       .shape = Rectangle{30, 30},
+       .worldFromObject = Rigid3::translation({0, 0, -20}),
        .emission = LambertianEmission{1}},
   };
   const Scene scene(objects);
@@ -186,10 +192,10 @@ TEST(Scene, PacketIntersectEqualsOneRayIntersect) {
     const Vec3 centre(8 * u(rng), 8 * u(rng), 30);
     std::vector<Ray> rays;
     for (size_t k = 0; k < n; ++k) {
-      const Vec3 origin = coherent ? centre + Vec3(0.2 * u(rng), 0.2 * u(rng), 0)
-                                   : Vec3(10 * u(rng), 10 * u(rng), 30 * u(rng));
-      const Vec3 dir = coherent ? Vec3(0.01 * u(rng), 0.01 * u(rng), -1).normalized()
-                                : Vec3(u(rng), u(rng), u(rng)).normalized();
+      const Vec3 origin =
+          coherent ? centre + Vec3(0.2 * u(rng), 0.2 * u(rng), 0) : Vec3(10 * u(rng), 10 * u(rng), 30 * u(rng));
+      const Vec3 dir =
+          coherent ? Vec3(0.01 * u(rng), 0.01 * u(rng), -1).normalized() : Vec3(u(rng), u(rng), u(rng)).normalized();
       rays.push_back({origin, dir});
     }
     std::vector<Hit> packed(n);
@@ -291,17 +297,29 @@ namespace {
 // never isolated.
 TEST(Scene, IsolatedSolidsAnswerHintedRaysAsTheOneRayQuery) {
   std::vector<Object> objects = {
-      {.name = "lone lens", .shape = std::shared_ptr<const Solid>(Solid::sphericalLens(20, -30, 3, 10)),
-       .worldFromObject = Rigid3::translation({0, 0, 2}) * Rigid3::rotation({1, 0, 0}, 0.2), .material = Dielectric{}},
-      {.name = "lens with a slide", .shape = std::shared_ptr<const Solid>(Solid::sphericalLens(20, -30, 3, 10)),
-       .worldFromObject = Rigid3::translation({0, 0, 20}), .material = Dielectric{}},
-      {.name = "slide", .shape = Rectangle{4, 4}, .worldFromObject = Rigid3::translation({0, 0, 21.4}),
+      {.name = "lone lens",
+       .shape = std::shared_ptr<const Solid>(Solid::sphericalLens(20, -30, 3, 10)),
+       .worldFromObject = Rigid3::translation({0, 0, 2}) * Rigid3::rotation({1, 0, 0}, 0.2),
+       .material = Dielectric{}},
+      {.name = "lens with a slide",
+       .shape = std::shared_ptr<const Solid>(Solid::sphericalLens(20, -30, 3, 10)),
+       .worldFromObject = Rigid3::translation({0, 0, 20}),
+       .material = Dielectric{}},
+      {.name = "slide",
+       .shape = Rectangle{4, 4},
+       .worldFromObject = Rigid3::translation({0, 0, 21.4}),
        .material = Absorber{}},
-      {.name = "glass ball", .shape = std::shared_ptr<const Solid>(Solid::sphere(4)),
-       .worldFromObject = Rigid3::translation({15, 0, 0}), .material = Dielectric{}},
-      {.name = "bubble", .shape = std::shared_ptr<const Solid>(Solid::sphere(1)),
-       .worldFromObject = Rigid3::translation({15.5, 0, 0}), .material = Dielectric{1.0}},
-      {.name = "back", .shape = Rectangle{60, 60}, .worldFromObject = Rigid3::translation({0, 0, -20}),
+      {.name = "glass ball",
+       .shape = std::shared_ptr<const Solid>(Solid::sphere(4)),
+       .worldFromObject = Rigid3::translation({15, 0, 0}),
+       .material = Dielectric{}},
+      {.name = "bubble",
+       .shape = std::shared_ptr<const Solid>(Solid::sphere(1)),
+       .worldFromObject = Rigid3::translation({15.5, 0, 0}),
+       .material = Dielectric{1.0}},
+      {.name = "back",
+       .shape = Rectangle{60, 60},
+       .worldFromObject = Rigid3::translation({0, 0, -20}),
        .emission = LambertianEmission{1}},
   };
   const Scene scene(objects);
@@ -374,10 +392,10 @@ namespace {
 TEST(Scene, CoincidentSurfacesGoToTheLowerObjectIndex) {
   for (const bool maskFirst : {true, false}) {
     const Object mask{.name = "mask", .shape = Rectangle{40, 40}, .material = Absorber{}};
-    const Object light{.name = "light", .shape = Rectangle{40, 40}, .material = Absorber{},
-                       .emission = LambertianEmission{1.0}};
-    const Object sphere{.name = "sphere", .shape = Solid::sphere(5, Rigid3::translation({0, 0, 20})),
-                        .material = Absorber{}};
+    const Object light{
+        .name = "light", .shape = Rectangle{40, 40}, .material = Absorber{}, .emission = LambertianEmission{1.0}};
+    const Object sphere{
+        .name = "sphere", .shape = Solid::sphere(5, Rigid3::translation({0, 0, 20})), .material = Absorber{}};
     const Scene scene(maskFirst ? std::vector<Object>{mask, light, sphere} : std::vector<Object>{light, mask, sphere});
     std::vector<Ray> rays;
     for (int k = 0; k < 16; ++k)  // down onto the plane, every other one past the sphere first
@@ -404,9 +422,9 @@ TEST(Scene, RectanglesAreExactAndWatertight) {
     const double s = u(rng);
     const int kind = i % 3;
     const double eps = 1e-9;
-    const Vec3 q = kind == 0 ? Vec3(20 * s, 10 * s, 0)
-                 : kind == 1 ? Vec3(20 - eps, 10 * s, 0)
-                             : Vec3(20 * s, 10 + eps, 0);
+    const Vec3 q = kind == 0   ? Vec3(20 * s, 10 * s, 0)
+                   : kind == 1 ? Vec3(20 - eps, 10 * s, 0)
+                               : Vec3(20 * s, 10 + eps, 0);
     const Vec3 target = placed.point(q);
     const Vec3 dir = Vec3(0.2 * u(rng), 0.2 * u(rng), -1).normalized();
     const double distance = 50;
@@ -432,15 +450,22 @@ namespace {
 // that refract through lenses, reflect off them outside and inside, and a
 // sphere that is not isolated.
 TEST(Scene, RaysLeavingAConvexSolidGetTheOneRayQuerysHits) {
-  const Scene scene(std::vector<Object>{
-      {.name = "lens", .shape = std::shared_ptr<const Solid>(Solid::sphericalLens(20, -30, 3, 10)),
-       .worldFromObject = Rigid3::rotation({1, 0, 0}, 0.2), .material = Dielectric{}},
-      {.name = "ball", .shape = std::shared_ptr<const Solid>(Solid::sphere(3)),
-       .worldFromObject = Rigid3::translation({2, 0, -6}), .material = Dielectric{1.7}},
-      {.name = "slab", .shape = Rectangle{20, 20}, .worldFromObject = Rigid3::translation({0, 0, -8}),
-       .material = Absorber{}},
-      {.name = "back", .shape = Rectangle{60, 60}, .worldFromObject = Rigid3::translation({0, 0, -20}),
-       .emission = LambertianEmission{1}}});
+  const Scene scene(std::vector<Object>{{.name = "lens",
+                                         .shape = std::shared_ptr<const Solid>(Solid::sphericalLens(20, -30, 3, 10)),
+                                         .worldFromObject = Rigid3::rotation({1, 0, 0}, 0.2),
+                                         .material = Dielectric{}},
+                                        {.name = "ball",
+                                         .shape = std::shared_ptr<const Solid>(Solid::sphere(3)),
+                                         .worldFromObject = Rigid3::translation({2, 0, -6}),
+                                         .material = Dielectric{1.7}},
+                                        {.name = "slab",
+                                         .shape = Rectangle{20, 20},
+                                         .worldFromObject = Rigid3::translation({0, 0, -8}),
+                                         .material = Absorber{}},
+                                        {.name = "back",
+                                         .shape = Rectangle{60, 60},
+                                         .worldFromObject = Rigid3::translation({0, 0, -20}),
+                                         .emission = LambertianEmission{1}}});
   std::mt19937_64 rng(9);
   std::uniform_real_distribution<double> u(-1, 1);
   std::vector<Ray> rays;

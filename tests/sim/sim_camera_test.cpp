@@ -2,8 +2,8 @@
 // response and noise against the analytic model, the state machine, the frame
 // clock and reproducibility per frame id.
 
-#include "lfi/drivers/camera_registry.h"
 #include "lfi/sim/devices/sim_camera.h"
+#include "lfi/drivers/camera_registry.h"
 #include "lfi_test_support.h"
 #include "scene_text.h"
 #include "test_folder.h"
@@ -29,16 +29,20 @@ namespace fs = std::filesystem;
 
 // The camera looks straight at a Lambertian back light of radiance 1 that fills
 // its field: every pixel's radiance is exactly 1.
-const std::string kUniformScene =
-    cameraSceneText({.samplesPerPixel = 1, .seed = 3, .pixelPitch_mm = 0.5, .width_px = 64, .height_px = 64,
-                     .fullWell_e = 20000, .readNoise_e = 5, .bitDepth = 12, .electronsPerUnitPerUs = 2.0}) +
-    kBackLightObject;
+const std::string kUniformScene = cameraSceneText({.samplesPerPixel = 1,
+                                                   .seed = 3,
+                                                   .pixelPitch_mm = 0.5,
+                                                   .width_px = 64,
+                                                   .height_px = 64,
+                                                   .fullWell_e = 20000,
+                                                   .readNoise_e = 5,
+                                                   .bitDepth = 12,
+                                                   .electronsPerUnitPerUs = 2.0}) +
+                                  kBackLightObject;
 
 class SimCameraTest : public ::testing::Test {
  protected:
-  void SetUp() override {
-    scene_ = dir_.write("uniform.toml", kUniformScene);
-  }
+  void SetUp() override { scene_ = dir_.write("uniform.toml", kUniformScene); }
 
   static CameraSettings mono16(double exposure_us, double gain_dB = 0) {
     CameraSettings s;
@@ -208,8 +212,8 @@ TEST_F(SimCameraTest, StateMachine) {
   bad = s;
   bad.trigger = TriggerMode::FreeRun;
   bad.frameRate_hz = 1e-12;
-  EXPECT_TRUE(throwsError([&] { camera->configure(bad); }, Errc::InvalidArgument,
-                          {"frameRate_hz 1e-12", "0.001..1000 Hz"}));
+  EXPECT_TRUE(
+      throwsError([&] { camera->configure(bad); }, Errc::InvalidArgument, {"frameRate_hz 1e-12", "0.001..1000 Hz"}));
   for (const double rate : {-1.0, std::numeric_limits<double>::quiet_NaN()}) {
     bad = s;
     bad.trigger = TriggerMode::Software;
@@ -229,10 +233,10 @@ TEST_F(SimCameraTest, StateMachine) {
   EXPECT_TRUE(throwsError([&] { camera->setFeature("NoSuchFeature", "abc"); }, Errc::NotFound, {"NoSuchFeature"}));
   EXPECT_TRUE(throwsError([&] { camera->setFeature("PixelFormat", "Mono8"); }, Errc::InvalidArgument, {"read-only"}));
 
-  EXPECT_TRUE(throwsError([&] { openCamera("sim:" + (dir_ / "missing.toml").string()); }, Errc::NotFound,
-                          {"missing.toml"}));
-  EXPECT_TRUE(throwsError([&] { openCamera("sim:" + scene_.string() + "?spp=4"); }, Errc::Config,
-                          {"unknown key 'spp'"}));
+  EXPECT_TRUE(
+      throwsError([&] { openCamera("sim:" + (dir_ / "missing.toml").string()); }, Errc::NotFound, {"missing.toml"}));
+  EXPECT_TRUE(
+      throwsError([&] { openCamera("sim:" + scene_.string() + "?spp=4"); }, Errc::Config, {"unknown key 'spp'"}));
 }
 
 TEST_F(SimCameraTest, FramesAreReproduciblePerFrameId) {
@@ -345,7 +349,7 @@ TEST_F(SimCameraTest, FramesKeepTheExposureTheyWereTakenWith) {
   ASSERT_EQ(frame.status, FrameStatus::Complete);
   const double before = cv::mean(frame.image)[0];
   for (int i = 0; i < 3; ++i) camera->grabInto(frame, 1s);  // the rest of the old ones
-  camera->grabInto(frame, 1s);                               // exposed after the change
+  camera->grabInto(frame, 1s);                              // exposed after the change
   ASSERT_EQ(frame.status, FrameStatus::Complete);
   const double after = cv::mean(frame.image)[0];
   EXPECT_NEAR(after / before, 3.0, 0.3) << before << " DN, then " << after << " DN";

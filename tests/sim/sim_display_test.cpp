@@ -5,12 +5,12 @@
 // the same scene file seeing what the SimDisplay shows.
 
 #include "lfi/sim/devices/sim_display.h"
+#include "lfi/drivers/camera_registry.h"
 #include "lfi/drivers/display_optics.h"
 #include "lfi/drivers/display_registry.h"
-#include "lfi/drivers/camera_registry.h"
-#include "lfi/sim/render.h"
 #include "lfi/sim/devices/sim_bench.h"
 #include "lfi/sim/devices/sim_camera.h"
+#include "lfi/sim/render.h"
 #include "lfi_test_support.h"
 #include "scene_text.h"
 #include "test_folder.h"
@@ -35,7 +35,9 @@ using testing_support::TestFolder;
 using testing_support::throwsError;
 namespace fs = std::filesystem;
 
-const LenticularOptics& lenticular(const DisplayOptics& optics) { return *optics.model<LenticularOptics>(); }
+const LenticularOptics& lenticular(const DisplayOptics& optics) {
+  return *optics.model<LenticularOptics>();
+}
 
 // A telecentric camera (magnification 1, 16 mm field) looking down at a display
 // in the plane z = 0; `display` is the [display] table's body, with the optics
@@ -43,16 +45,21 @@ const LenticularOptics& lenticular(const DisplayOptics& optics) { return *optics
 // hundred pixels cover the field) unless it names others.
 std::string sceneText(const std::string& display, bool defaultOptics = false) {
   const bool lenticular = !defaultOptics && display.find("optics =") == std::string::npos;
-  return cameraSceneText({.samplesPerPixel = 16, .seed = 5, .pixelPitch_mm = 0.25, .width_px = 64, .height_px = 64,
-                          .fullWell_e = 20000, .readNoise_e = 2, .bitDepth = 12, .electronsPerUnitPerUs = 2.0}) +
+  return cameraSceneText({.samplesPerPixel = 16,
+                          .seed = 5,
+                          .pixelPitch_mm = 0.25,
+                          .width_px = 64,
+                          .height_px = 64,
+                          .fullWell_e = 20000,
+                          .readNoise_e = 2,
+                          .bitDepth = 12,
+                          .electronsPerUnitPerUs = 2.0}) +
          "[display]\n" + (lenticular ? "optics = \"lenticular\"\n" : "") + display;
 }
 
 class SimDisplayTest : public ::testing::Test {
  protected:
-  void SetUp() override {
-    registerSimBackends();
-  }
+  void SetUp() override { registerSimBackends(); }
   fs::path write(const std::string& name, const std::string& text) { return dir_.write(name, text); }
   static std::string uri(const fs::path& file) { return "sim:" + file.string(); }
   // A camera and a 400 x 300 mono display of brightness 1 on one bench.
@@ -147,8 +154,11 @@ TEST_F(SimDisplayTest, StateMachineThroughTheSimBackend) {
   EXPECT_TRUE(throwsError([&] { display->info(); }, Errc::InvalidArgument, {"info", "Closed"}));
   EXPECT_TRUE(throwsError([&] { display->show(cv::Mat(200, 320, CV_8UC1)); }, Errc::InvalidArgument, {"Closed"}));
   EXPECT_TRUE(throwsError([&] { display->blank(); }, Errc::InvalidArgument, {"Closed"}));
-  EXPECT_TRUE(throwsError([&] { display->show(LightField(LightFieldGeometry{2, 2, 4, 0.05, 30})); },
-                          Errc::InvalidArgument, {uri(file), "show(LightField)", "Closed"}));
+  EXPECT_TRUE(throwsError(
+      [&] {
+        display->show(LightField(LightFieldGeometry{2, 2, 4, 0.05, 30}));
+      },
+      Errc::InvalidArgument, {uri(file), "show(LightField)", "Closed"}));
   display->close();  // any state
   display->open();
   EXPECT_EQ(display->state(), Display::State::Open);
@@ -183,12 +193,13 @@ TEST_F(SimDisplayTest, BadUrisAndSceneFilesAreClearErrors) {
                                                            "focal_length_mm = 1\n"));
   EXPECT_TRUE(throwsError([&] { openDisplay(uri(lensKey)); }, Errc::Config, {"focal_length_mm"}));
   const fs::path badRange = write("range.toml", sceneText("brightness_min = 10\nbrightness_max = 5\n"));
-  EXPECT_TRUE(throwsError([&] { openDisplay(uri(badRange)); }, Errc::Config,
-                          {"range.toml:", "'display.brightness_max'", "brightness_max = 5 is below brightness_min = 10"}));
+  EXPECT_TRUE(
+      throwsError([&] { openDisplay(uri(badRange)); }, Errc::Config,
+                  {"range.toml:", "'display.brightness_max'", "brightness_max = 5 is below brightness_min = 10"}));
   // The [display] panel is an object named 'display': another object may not take the name.
-  const fs::path clash =
-      write("clash.toml", sceneText("") + "[[object]]\nname = \"display\"\nshape = \"sphere\"\nradius_mm = 1\n"
-                                          "position_mm = [0, 0, -50]\n");
+  const fs::path clash = write("clash.toml", sceneText("") +
+                                                 "[[object]]\nname = \"display\"\nshape = \"sphere\"\nradius_mm = 1\n"
+                                                 "position_mm = [0, 0, -50]\n");
   EXPECT_TRUE(throwsError([&] { openDisplay(uri(clash)); }, Errc::Config, {"clash.toml:", "'display' names the"}));
 }
 
@@ -285,11 +296,10 @@ TEST_F(SimDisplayTest, EncodedLightFieldIsReproducedWithinTheDisplaysResolution)
 
   // A display that is out of focus (f = 2 gap) mixes neighbouring views: the same
   // light field comes out worse. That is the crosstalk of a real lens sheet.
-  const fs::path blurred =
-      write("blurred.toml",
-            sceneText(fmt::format("optics = \"lenticular\"\npanel_width_px = 800\npanel_height_px = 500\n"
-                                  "focal_length_mm = {}\n",
-                                  2 * gap)));
+  const fs::path blurred = write(
+      "blurred.toml", sceneText(fmt::format("optics = \"lenticular\"\npanel_width_px = 800\npanel_height_px = 500\n"
+                                            "focal_length_mm = {}\n",
+                                            2 * gap)));
   auto display2 = openDisplay(uri(blurred));
   display2->show(*lightField);
   auto bench2 = SimBench::open(blurred, "test");

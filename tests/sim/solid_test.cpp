@@ -174,21 +174,21 @@ TEST(Solid, LensShapesThatCannotBeMadeAreNamed) {
 TEST(Solid, LensHoldsABallExactlyWhenItLiesInsideTheGlass) {
   // Bi-convex R = ±51.5, 5 mm, Ø25.4 (the reference bench's lens).
   EXPECT_TRUE(sphericalLensHolds(51.5, -51.5, 5, 25.4, {0, 0, 0}, 2.4));
-  EXPECT_FALSE(sphericalLensHolds(51.5, -51.5, 5, 25.4, {0, 0, 0}, 2.5));  // touches both vertices
+  EXPECT_FALSE(sphericalLensHolds(51.5, -51.5, 5, 25.4, {0, 0, 0}, 2.5));     // touches both vertices
   EXPECT_TRUE(sphericalLensHolds(51.5, -51.5, 5, 25.4, {11.5, 0, 0}, 1.0));   // 0.17 mm of glass all round
   EXPECT_FALSE(sphericalLensHolds(51.5, -51.5, 5, 25.4, {11.0, 0, 0}, 1.5));  // 11 + 1.5 < 12.7, but the faces cut it
   EXPECT_FALSE(sphericalLensHolds(51.5, -51.5, 5, 25.4, {0, 12.0, 0}, 0.8));  // through the edge cylinder
   // Plano-concave R1 = -100, 3 mm, Ø50: thinnest on the axis, 3 + 3.18 mm at the rim.
   EXPECT_TRUE(sphericalLensHolds(-100, 0, 3, 50, {0, 0, 0}, 1.4));
   EXPECT_FALSE(sphericalLensHolds(-100, 0, 3, 50, {0, 0, 0}, 1.6));
-  EXPECT_TRUE(sphericalLensHolds(-100, 0, 3, 50, {24, 0, -3}, 0.5));  // below the vertex, in the thick rim
+  EXPECT_TRUE(sphericalLensHolds(-100, 0, 3, 50, {24, 0, -3}, 0.5));     // below the vertex, in the thick rim
   EXPECT_FALSE(sphericalLensHolds(-100, 0, 3, 50, {24, 0, -4.5}, 0.5));  // through the front face
 
   std::mt19937 rng(7);
   std::uniform_real_distribution<double> u(-1, 1);
   int held = 0;
-  for (const auto& [r1, r2, tc, d] : {std::tuple{51.5, -51.5, 5.0, 25.4}, std::tuple{-100.0, 0.0, 3.0, 50.0},
-                                      std::tuple{50.0, 120.0, 6.0, 40.0}}) {
+  for (const auto& [r1, r2, tc, d] :
+       {std::tuple{51.5, -51.5, 5.0, 25.4}, std::tuple{-100.0, 0.0, 3.0, 50.0}, std::tuple{50.0, 120.0, 6.0, 40.0}}) {
     const auto lens = Solid::sphericalLens(r1, r2, tc, d);
     for (int i = 0; i < 400; ++i) {
       const Vec3 c(0.5 * d * u(rng), 0.5 * d * u(rng), 4 * u(rng));
@@ -247,8 +247,8 @@ TEST(Solid, DifferenceFlipsTheSubtractedNormals) {
 // grazing incidence). The general merge (intervals) and the convex-difference
 // kernel (nearestCrossings) agree.
 TEST(Solid, ATangentCutOutLeavesTheIntervalWhole) {
-  const auto part = Solid::combine(Solid::Kind::Difference, Solid::sphere(10),
-                                   Solid::sphere(1, Rigid3::translation({0, 1, 0})));
+  const auto part =
+      Solid::combine(Solid::Kind::Difference, Solid::sphere(10), Solid::sphere(1, Rigid3::translation({0, 1, 0})));
   const Ray ray{{-20, 0, 0}, {1, 0, 0}};  // touches the cut-out's ball at (0, 0, 0)
   IntervalList list;
   part->intervals(ray, list);
@@ -317,9 +317,9 @@ TEST(Solid, ConvexIntersectionFastPathMatchesTheGeneralMerge) {
   const auto below = Solid::halfSpace(Rigid3::translation({0, 0, 4})), above = Solid::halfSpace(flip);
   const auto fast = Solid::combine(K::Intersection, Solid::combine(K::Intersection, cyl, ball),
                                    Solid::combine(K::Intersection, below, above), Rigid3::rotation({0, 1, 0}, 0.2));
-  const auto slow = Solid::combine(K::Intersection, Solid::combine(K::Intersection, general(cyl), general(ball)),
-                                   Solid::combine(K::Intersection, general(below), general(above)),
-                                   Rigid3::rotation({0, 1, 0}, 0.2));
+  const auto slow =
+      Solid::combine(K::Intersection, Solid::combine(K::Intersection, general(cyl), general(ball)),
+                     Solid::combine(K::Intersection, general(below), general(above)), Rigid3::rotation({0, 1, 0}, 0.2));
   std::mt19937_64 rng(7);
   std::uniform_real_distribution<double> u(-1, 1);
   int hits = 0;
@@ -347,10 +347,10 @@ TEST(Solid, ConvexIntersectionFastPathMatchesTheGeneralMerge) {
 // are not written.
 TEST(Solid, NearestCrossingsAgreeWithIntervals) {
   const std::vector<std::shared_ptr<const Solid>> solids = {
-      Solid::sphericalLens(100, -100, 7, 50),                   // convex kernel
-      Solid::sphericalLens(50, 120, 6, 40),                     // concave back: general merge
+      Solid::sphericalLens(100, -100, 7, 50),  // convex kernel
+      Solid::sphericalLens(50, 120, 6, 40),    // concave back: general merge
       Solid::combine(Solid::Kind::Intersection, Solid::cylinder(8), Solid::halfSpace(Rigid3::translation({0, 0, 2})),
-                     Rigid3::rotation({0, 1, 0}, 0.4)),        // unbounded along some lines
+                     Rigid3::rotation({0, 1, 0}, 0.4)),  // unbounded along some lines
       // Differences of convex solids (cut-outs): the lane-parallel difference.
       Solid::combine(Solid::Kind::Difference, Solid::sphericalLens(100, -100, 7, 50),
                      Solid::sphere(8, Rigid3::translation({10, 0, 4}))),

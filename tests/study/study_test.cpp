@@ -1,10 +1,10 @@
 // The reference study in quick mode, end to end: what it writes, and the
 // expectations that physics (not today's numbers) guarantees.
 
+#include "lfi/study/study.h"
 #include "lfi/core/error.h"
 #include "lfi/core/exr_io.h"
 #include "lfi/study/blind_scoring.h"
-#include "lfi/study/study.h"
 
 #include "lfi_test_support.h"
 #include "toml_mutation.h"
@@ -86,7 +86,8 @@ void checkOutputs(const nlohmann::ordered_json& r, const fs::path& dir) {
       const auto& b = s["blind"][setup];
       EXPECT_EQ(b["hits"].get<int>() + b["misses"].get<int>(), static_cast<int>(names.size())) << scene << setup;
       EXPECT_EQ(b["hits"].get<int>() + b["extra_regions"].get<int>() + b["false_alarms"].get<int>(),
-                b["regions"].get<int>()) << scene << setup;
+                b["regions"].get<int>())
+          << scene << setup;
       EXPECT_EQ(b["found"].size(), b["regions"].get<size_t>()) << scene << setup;
       EXPECT_LE(b["secondary_false_alarms"].get<int>(), b["false_alarms"].get<int>()) << scene << setup;
       for (const auto& d : names)
@@ -265,15 +266,15 @@ TEST(Sweep, AnswersFollowTheDeclaredThreshold) {
     return p;
   };
   nlohmann::ordered_json sweep;
-  sweep["points"] = {point("element", 0.4, 20), point("element", 0.8, 5), point("element", 1.6, 2.9),
-                     point("element", 3.2, 9), point("angular", 2, 5), point("angular", 4, 1),
-                     point("angular", 8, 3.0), point("angular", 16, 9),
-                     point("delta_error", -2, 4), point("delta_error", -1, 6), point("delta_error", 0, 9),
-                     point("delta_error", 1, 5), point("delta_error", 2, 2), point("delta_error", 4, 9)};
+  sweep["points"] = {point("element", 0.4, 20),   point("element", 0.8, 5),   point("element", 1.6, 2.9),
+                     point("element", 3.2, 9),    point("angular", 2, 5),     point("angular", 4, 1),
+                     point("angular", 8, 3.0),    point("angular", 16, 9),    point("delta_error", -2, 4),
+                     point("delta_error", -1, 6), point("delta_error", 0, 9), point("delta_error", 1, 5),
+                     point("delta_error", 2, 2),  point("delta_error", 4, 9)};
   const auto a = lfi::study::sweepAnswers(sweep);
   EXPECT_EQ(a["d"]["nearest"]["coarsest_element_mm"], 0.8);  // 1.6 misses, so 3.2 does not count
-  EXPECT_EQ(a["d"]["nearest"]["fewest_angular"], 8);          // 4 misses, so 2 does not count
-  EXPECT_EQ(a["d"]["nearest"]["delta_tolerance_mm"], 1.0);  // +2 fails, so 4 does not count
+  EXPECT_EQ(a["d"]["nearest"]["fewest_angular"], 8);         // 4 misses, so 2 does not count
+  EXPECT_EQ(a["d"]["nearest"]["delta_tolerance_mm"], 1.0);   // +2 fails, so 4 does not count
   EXPECT_EQ(a["d"]["interpolated"]["coarsest_element_mm"], 3.2);
   EXPECT_EQ(a["d"]["interpolated"]["fewest_angular"], 2);
   EXPECT_EQ(a["d"]["interpolated"]["delta_tolerance_mm"], 4.0);
@@ -322,10 +323,12 @@ TEST(BlindScoring, HitsMissesFalseAlarmsAndFragments) {
   const lfi::study::BlindScore intact = lfi::study::scoreBlindDetection(found, {}, 0.1);
   EXPECT_EQ(intact.falseAlarms, 5);
   EXPECT_EQ(intact.hits + intact.misses + intact.extraRegions, 0);
-  EXPECT_TRUE(throwsError([&] { lfi::study::scoreBlindDetection(found, {{cv::Mat(64, 64, CV_32F), {0, 0}}}, 0.1); },
-                          Errc::InvalidArgument, {"mask"}));
-  EXPECT_TRUE(
-      throwsError([&] { lfi::study::scoreBlindDetection(found, truth, 0); }, Errc::InvalidArgument, {"pixel"}));
+  EXPECT_TRUE(throwsError(
+      [&] {
+        lfi::study::scoreBlindDetection(found, {{cv::Mat(64, 64, CV_32F), {0, 0}}}, 0.1);
+      },
+      Errc::InvalidArgument, {"mask"}));
+  EXPECT_TRUE(throwsError([&] { lfi::study::scoreBlindDetection(found, truth, 0); }, Errc::InvalidArgument, {"pixel"}));
 }
 
 TEST(Bench, MutatedValuesLoadAsConsistentBenchesOrAreNamedErrors) {
@@ -461,7 +464,6 @@ TEST(Bench, OutOfRangeAndMalformedValuesAreErrors) {
   }
   fs::remove_all(dir);
 }
-
 
 // Values each in range that together make a bench that cannot exist: a part
 // inside the lens, a defect outside it. The reference lens (R = 51.5, Ø25.4,

@@ -32,7 +32,7 @@ namespace lfi::testing_support {
 
 // Exclusive use of 127.0.0.1:3956 among cooperating processes.
 class LoopbackGigeLock {
-public:
+ public:
   // (Read-only: flock needs no write access, so the file another user created, 0644, locks as well.)
   LoopbackGigeLock() : fd_(::open("/tmp/lfi-fake-gv-camera.lock", O_RDONLY | O_CREAT | O_CLOEXEC, 0666)) {
     if (fd_ < 0 || ::flock(fd_, LOCK_EX) != 0)
@@ -42,7 +42,7 @@ public:
   LoopbackGigeLock(const LoopbackGigeLock&) = delete;
   LoopbackGigeLock& operator=(const LoopbackGigeLock&) = delete;
 
-private:
+ private:
   int fd_;
 };
 
@@ -78,11 +78,22 @@ inline bool gigeDeviceAnswers(int timeoutMs = 100, const std::string& address = 
 // acknowledged with success. (A device with no controller takes it from anyone.)
 inline bool gigeWriteRegister(std::uint32_t reg, std::uint32_t value, const std::string& address = "127.0.0.1",
                               int timeoutMs = 1000) {
-  const std::uint8_t packet[16] = {0x42, 0x01, 0x00, 0x82, 0x00, 0x08, 0x00, 0x02,
-                                   static_cast<std::uint8_t>(reg >> 24), static_cast<std::uint8_t>(reg >> 16),
-                                   static_cast<std::uint8_t>(reg >> 8), static_cast<std::uint8_t>(reg),
-                                   static_cast<std::uint8_t>(value >> 24), static_cast<std::uint8_t>(value >> 16),
-                                   static_cast<std::uint8_t>(value >> 8), static_cast<std::uint8_t>(value)};
+  const std::uint8_t packet[16] = {0x42,
+                                   0x01,
+                                   0x00,
+                                   0x82,
+                                   0x00,
+                                   0x08,
+                                   0x00,
+                                   0x02,
+                                   static_cast<std::uint8_t>(reg >> 24),
+                                   static_cast<std::uint8_t>(reg >> 16),
+                                   static_cast<std::uint8_t>(reg >> 8),
+                                   static_cast<std::uint8_t>(reg),
+                                   static_cast<std::uint8_t>(value >> 24),
+                                   static_cast<std::uint8_t>(value >> 16),
+                                   static_cast<std::uint8_t>(value >> 8),
+                                   static_cast<std::uint8_t>(value)};
   std::uint8_t reply[64];
   // WRITEREG_ACK: status 0 (success), ack 0x0083.
   return gvcpCommand(address, packet, sizeof packet, reply, sizeof reply, timeoutMs) >= 8 && reply[0] == 0 &&
@@ -105,7 +116,7 @@ constexpr std::uint32_t kHeartbeatTimeoutRegister = 0x0938;
 // destruction, and when the thread that started it dies (a crashed test must
 // not leave a device that answers the next test's GVCP requests in its place).
 class GigeDeviceProcess {
-public:
+ public:
   GigeDeviceProcess(std::vector<std::string> args, std::chrono::milliseconds startTimeout, bool quietStderr = true,
                     const std::string& address = "127.0.0.1") {
     if (gigeDeviceAnswers(100, address))
@@ -120,7 +131,7 @@ public:
     pid_ = ::fork();
     if (pid_ == 0) {  // the child: async-signal-safe calls only
       ::prctl(PR_SET_PDEATHSIG, SIGKILL);
-      if (::getppid() != parent) ::_exit(127);  // the parent died before prctl
+      if (::getppid() != parent) ::_exit(127);                     // the parent died before prctl
       const int null = ::open("/dev/null", O_WRONLY | O_CLOEXEC);  // (the dup2 copies stay open)
       if (null >= 0) {
         ::dup2(null, STDOUT_FILENO);
@@ -174,7 +185,7 @@ public:
   }
   pid_t pid() const { return pid_; }
 
-private:
+ private:
   pid_t pid_ = -1;
 };
 

@@ -16,17 +16,17 @@
 // A test that needs a tool this machine lacks skips, with `message`; where
 // LFI_NO_SKIPS is set (.ci/run, whose machine has what scripts/install-deps.sh
 // installs) it fails instead, so that a missing tool cannot leave CI green.
-#define LFI_SKIP_WITHOUT_TOOL(message)                                    \
-  do {                                                                    \
-    if (std::getenv("LFI_NO_SKIPS") != nullptr) FAIL() << message;       \
-    GTEST_SKIP() << message;                                              \
+#define LFI_SKIP_WITHOUT_TOOL(message)                             \
+  do {                                                             \
+    if (std::getenv("LFI_NO_SKIPS") != nullptr) FAIL() << message; \
+    GTEST_SKIP() << message;                                       \
   } while (0)
 
 namespace lfi::testing_support {
 
 // Passes when `f` throws lfi::Error with `code` and a message that contains every fragment.
 inline ::testing::AssertionResult throwsError(const std::function<void()>& f, Errc code,
-                                             const std::vector<std::string>& fragments) {
+                                              const std::vector<std::string>& fragments) {
   try {
     f();
   } catch (const lfi::Error& e) {

@@ -17,7 +17,9 @@ namespace lfi::testing_support {
 inline constexpr double kInspectionPixel_mm = 0.5;
 
 // The lens's camera-side face: z = t/2 - (R - sqrt(R² - r²)) at radial distance r.
-inline double inspectionLensFaceZ(double r) { return 2.5 - (51.5 - std::sqrt(51.5 * 51.5 - r * r)); }
+inline double inspectionLensFaceZ(double r) {
+  return 2.5 - (51.5 - std::sqrt(51.5 * 51.5 - r * r));
+}
 
 struct StudyPart {
   std::string name;
@@ -30,9 +32,11 @@ struct StudyPart {
 
 inline std::vector<StudyPart> studyParts() {
   const auto spheres = [](const char* material) {
-    return fmt::format("[[object]]\nname = \"centre\"\nshape = \"sphere\"\nradius_mm = 0.5\n{0}\n"
-                       "[[object]]\nname = \"rim\"\nshape = \"sphere\"\nradius_mm = 0.5\nposition_mm = [10, 0, 0]\n"
-                       "{0}\n", material);
+    return fmt::format(
+        "[[object]]\nname = \"centre\"\nshape = \"sphere\"\nradius_mm = 0.5\n{0}\n"
+        "[[object]]\nname = \"rim\"\nshape = \"sphere\"\nradius_mm = 0.5\nposition_mm = [10, 0, 0]\n"
+        "{0}\n",
+        material);
   };
   return {
       {"intact", {}, "", {}, 0, true},
@@ -40,8 +44,11 @@ inline std::vector<StudyPart> studyParts() {
       {"particles", {}, spheres("material = \"absorber\""), {{0, 0}, {10, 0}}, kInspectionPixel_mm},
       {"bubbles", {}, spheres("material = \"dielectric\"\nior = 1.0"), {{0, 0}, {10, 0}}, kInspectionPixel_mm},
       // A 2 mm sphere cut out of the camera-side face 6 mm off axis: its region's centroid inside its outline.
-      {"cut", {}, fmt::format("[[object.cut]]\nposition_mm = [6, 0, {:.6f}]\nradius_mm = 2\n", inspectionLensFaceZ(6)),
-       {{6, 0}}, 2.0},
+      {"cut",
+       {},
+       fmt::format("[[object.cut]]\nposition_mm = [6, 0, {:.6f}]\nradius_mm = 2\n", inspectionLensFaceZ(6)),
+       {{6, 0}},
+       2.0},
       // The whole part off: the index 10 % high, the lens 3 mm down the axis.
       {"index", {{"ior = 1.5168", "ior = 1.66848"}}, "", {}},
       {"moved", {{"material = \"dielectric\"", "material = \"dielectric\"\nposition_mm = [0, 0, -3]"}}, "", {}},

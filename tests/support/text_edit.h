@@ -27,7 +27,8 @@ inline void replaceOnce(std::string& text, const std::string& from, const std::s
 
 inline void replaceAll(std::string& text, const std::string& from, const std::string& to) {
   ASSERT_NE(text.find(from), std::string::npos) << from;
-  for (size_t at = 0; (at = text.find(from, at)) != std::string::npos; at += to.size()) text.replace(at, from.size(), to);
+  for (size_t at = 0; (at = text.find(from, at)) != std::string::npos; at += to.size())
+    text.replace(at, from.size(), to);
 }
 
 }  // namespace lfi::testing_support

@@ -99,8 +99,8 @@ inline std::string mutateTomlValue(const std::string& text, std::mt19937& rng, s
       break;
     }
     case 1: {
-      const std::int64_t v = pick(std::vector<std::int64_t>{0, -1, 1, 3, 1000000, 2147483647, 2147483648,
-                                                            4294967297, std::numeric_limits<std::int64_t>::max(),
+      const std::int64_t v = pick(std::vector<std::int64_t>{0, -1, 1, 3, 1000000, 2147483647, 2147483648, 4294967297,
+                                                            std::numeric_limits<std::int64_t>::max(),
                                                             std::numeric_limits<std::int64_t>::min()});
       put(p, v);
       what = fmt::format("{} = {} (integer)", p.path, v);
@@ -124,10 +124,17 @@ inline std::string mutateTomlValue(const std::string& text, std::mt19937& rng, s
     }
     case 4: {
       switch (rng() % 4) {
-        case 0: put(p, std::string("1")); break;
-        case 1: put(p, true); break;
-        case 2: put(p, toml::array{1, 2}); break;
-        default: put(p, toml::table{{"a", 1}});
+        case 0:
+          put(p, std::string("1"));
+          break;
+        case 1:
+          put(p, true);
+          break;
+        case 2:
+          put(p, toml::array{1, 2});
+          break;
+        default:
+          put(p, toml::table{{"a", 1}});
       }
       what = fmt::format("{}: another type", p.path);
       break;

@@ -18,7 +18,7 @@ namespace lfi {
 
 namespace {
 
-constexpr double kMostSaturated = 0.01;  // of the lit pixels at full scale under the all-white panel
+constexpr double kMostSaturated = 0.01;   // of the lit pixels at full scale under the all-white panel
 constexpr double kDeflectedShare = 0.01;  // of the decoded pixels beyond two panel pixels' angle: a part
 constexpr double kRegionFraction = 0.8;   // of white − black's 99th percentile: a pixel that sees the panel fully
 
@@ -73,17 +73,18 @@ LightFieldGeometry CodedCapture::geometry() const {
 }
 
 std::string CodedCapture::description() const {
-  std::string text = fmt::format("coded: Gray code patterns through the bench's display and camera (at most {} "
-                                 "rounds to {} % of the light left, then at most {} refinements to cv {})",
-                                 settings_.rounds, 100 * settings_.maxLightLeft, settings_.iterations,
-                                 settings_.targetCv);
+  std::string text = fmt::format(
+      "coded: Gray code patterns through the bench's display and camera (at most {} "
+      "rounds to {} % of the light left, then at most {} refinements to cv {})",
+      settings_.rounds, 100 * settings_.maxLightLeft, settings_.iterations, settings_.targetCv);
   const CodedCaptureReport& r = report_;
   if (r.patternFrames > 0)
-    text += fmt::format("; {} x {} panel: {} pattern frames in {} rounds and {} of the reference panel in {:.1f} s, {} of "
-                        "{} lit camera pixels decoded in the first round, {:.1f} % of the light left, {} panel "
-                        "pixels lit, cv {:.3f} → {:.3f}", r.panelWidth, r.panelHeight, r.patternFrames, r.rounds,
-                        r.refineFrames, r.seconds, r.decoded, r.lit, 100 * r.lightLeft, r.panelPixelsLit, r.cvFirst,
-                        r.cvFinal);
+    text += fmt::format(
+        "; {} x {} panel: {} pattern frames in {} rounds and {} of the reference panel in {:.1f} s, {} of "
+        "{} lit camera pixels decoded in the first round, {:.1f} % of the light left, {} panel "
+        "pixels lit, cv {:.3f} → {:.3f}",
+        r.panelWidth, r.panelHeight, r.patternFrames, r.rounds, r.refineFrames, r.seconds, r.decoded, r.lit,
+        100 * r.lightLeft, r.panelPixelsLit, r.cvFirst, r.cvFinal);
   return text;
 }
 
@@ -111,14 +112,15 @@ void requireDeflection(const calib::PanelCorrespondence& c, const DisplayOptics&
       if (std::atan2(std::hypot(d.x, d.y), d.z) > 2 * pixelAngle) ++deflected;
     }
   if (deflected <= kDeflectedShare * c.decoded)
-    fail(Errc::Device, "coded capture: every ray the camera sees leaves display '{}' within two panel pixels' angle "
+    fail(Errc::Device,
+         "coded capture: every ray the camera sees leaves display '{}' within two panel pixels' angle "
          "({:.3g} rad) of the axis: nothing deflects them, is the part missing? (allow_undeflected=1 for a part "
-         "that deflects no ray)", display, 2 * pixelAngle);
+         "that deflects no ray)",
+         display, 2 * pixelAngle);
 }
 
 // The level `fraction` of the way up the levels of the linked camera pixels in `region`.
-double linkedPercentile(const cv::Mat& image, const calib::PanelLinks& links, const cv::Mat& region,
-                        double fraction) {
+double linkedPercentile(const cv::Mat& image, const calib::PanelLinks& links, const cv::Mat& region, double fraction) {
   std::vector<float> levels;
   levels.reserve(static_cast<size_t>(links.linkedCameraPixels()));
   for (int row = 0; row < image.rows; ++row)
@@ -134,7 +136,8 @@ double linkedPercentile(const cv::Mat& image, const calib::PanelLinks& links, co
 
 LightField CodedCapture::capture(const std::function<void(double)>& progress) {
   if (!bench_)
-    fail(Errc::InvalidArgument, "coded capture: no bench to measure through (a coded: capture runs in a bench's "
+    fail(Errc::InvalidArgument,
+         "coded capture: no bench to measure through (a coded: capture runs in a bench's "
          "controller, with its display and camera)");
   const auto start = std::chrono::steady_clock::now();
   BenchProbe& bench = *bench_;
@@ -171,13 +174,17 @@ LightField CodedCapture::capture(const std::function<void(double)>& progress) {
   const cv::Mat lit = range >= decode.minLit_dn;
   const int litPixels = cv::countNonZero(lit);
   if (litPixels == 0)
-    fail(Errc::Device, "coded capture: the camera sees no change between the all-white and the all-black panel of "
+    fail(Errc::Device,
+         "coded capture: the camera sees no change between the all-white and the all-black panel of "
          "display '{}' (none of its {} pixels by {} DN): the display is not in the camera's view, or it is dark "
-         "or covered", display.deviceId, lit.total(), decode.minLit_dn);
+         "or covered",
+         display.deviceId, lit.total(), decode.minLit_dn);
   const int saturated = cv::countNonZero(lit & (whiteImage >= fullScale - 0.5));
   if (saturated > kMostSaturated * litPixels)
-    fail(Errc::Device, "coded capture: {} of the {} lit camera pixels are at the camera's full scale ({} DN) under "
-         "the all-white panel: lower the exposure or the gain", saturated, litPixels, fullScale);
+    fail(Errc::Device,
+         "coded capture: {} of the {} lit camera pixels are at the camera's full scale ({} DN) under "
+         "the all-white panel: lower the exposure or the gain",
+         saturated, litPixels, fullScale);
 
   // The region uniformity is measured over: the camera pixels that see the panel fully.
   const cv::Mat region = lit & (range >= kRegionFraction * percentile(range, 0.99));
@@ -203,10 +210,11 @@ LightField CodedCapture::capture(const std::function<void(double)>& progress) {
       report_.lit = c.lit;
       report_.decoded = c.decoded;
       if (c.decoded < settings_.minDecoded * c.lit)
-        fail(Errc::Device, "coded capture: {} of the {} camera pixels that see display '{}' decoded to a panel "
+        fail(Errc::Device,
+             "coded capture: {} of the {} camera pixels that see display '{}' decoded to a panel "
              "pixel, fewer than min_decoded = {}: the patterns blur (focus, vibration, a frame rate the panel does "
-             "not keep up with) or the camera's pixels each see many panel pixels", c.decoded, c.lit,
-             display.deviceId, settings_.minDecoded);
+             "not keep up with) or the camera's pixels each see many panel pixels",
+             c.decoded, c.lit, display.deviceId, settings_.minDecoded);
       if (!settings_.allowUndeflected) requireDeflection(c, optics, display.deviceId);
     }
     report_.rounds = round + 1;
@@ -217,8 +225,8 @@ LightField CodedCapture::capture(const std::function<void(double)>& progress) {
     levels.setTo(0, found);
     roundWhite = take(levels, "all white but the panel pixels found");
     report_.lightLeft = litLight(roundWhite, blackImage, lit) / allLight;
-    spdlog::info("coded capture: round {}: {} of {} lit camera pixels decoded, {:.1f} % of the light left",
-                 round + 1, added, c.lit, 100 * report_.lightLeft);
+    spdlog::info("coded capture: round {}: {} of {} lit camera pixels decoded, {:.1f} % of the light left", round + 1,
+                 added, c.lit, 100 * report_.lightLeft);
     if (report_.lightLeft <= settings_.maxLightLeft) break;
   }
   report_.patternFrames = taken;
@@ -248,11 +256,13 @@ LightField CodedCapture::capture(const std::function<void(double)>& progress) {
   report_.converged = bestCv <= settings_.targetCv;
   report_.panelPixelsLit = cv::countNonZero(best);
   if (!report_.converged)
-    spdlog::warn("coded capture: the intact part's image is uniform to cv {:.4f} after {} refinements, not "
-                 "the target {}", bestCv, report_.refineFrames - 1, settings_.targetCv);
+    spdlog::warn(
+        "coded capture: the intact part's image is uniform to cv {:.4f} after {} refinements, not "
+        "the target {}",
+        bestCv, report_.refineFrames - 1, settings_.targetCv);
   panel_ = best;
-  LightField lightField = decodePanelImage(panelFromLevels(best, display), optics,
-                                          codedLightFieldGeometry(display, settings_.distance_mm));
+  LightField lightField =
+      decodePanelImage(panelFromLevels(best, display), optics, codedLightFieldGeometry(display, settings_.distance_mm));
   report_.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   if (progress) progress(1);
   return lightField;
@@ -266,25 +276,24 @@ void registerControllerBackends() {
       .description = "coded:[?rounds=&max_light_left=&target_cv=&iterations=&target_percentile=&min_decoded=&"
                      "min_confidence=&second_share=&distance_mm=&allow_undeflected=]  Gray code patterns through the "
                      "bench's display and camera",
-      .factory =
-          [](const DeviceUri& uri) -> std::unique_ptr<LightFieldCapture> {
-            if (!uri.path.empty())
-              fail(Errc::Config, "light field capture URI '{}': coded: takes no path (its devices are the bench's)",
-                   uri.text);
-            constexpr const char* kind = "light field capture";
-            CodedCaptureSettings s;
-            s.rounds = uriNumber(uri, kind, "rounds", s.rounds, 1, 16);
-            s.maxLightLeft = uriNumber(uri, kind, "max_light_left", s.maxLightLeft, 0.0, 0.999);
-            s.targetCv = uriNumber(uri, kind, "target_cv", s.targetCv, 1e-6, 0.999);
-            s.iterations = uriNumber(uri, kind, "iterations", s.iterations, 0, 100);
-            s.targetPercentile = uriNumber(uri, kind, "target_percentile", s.targetPercentile, 1e-6, 0.999999);
-            s.minDecoded = uriNumber(uri, kind, "min_decoded", s.minDecoded, 1e-6, 1.0);
-            s.minConfidence = uriNumber(uri, kind, "min_confidence", s.minConfidence, 0.0, 1.0);
-            s.secondShare = uriNumber(uri, kind, "second_share", s.secondShare, 0.0, 0.499);
-            s.distance_mm = uriNumber(uri, kind, "distance_mm", s.distance_mm, 0.0, 1e6);
-            s.allowUndeflected = uriNumber(uri, kind, "allow_undeflected", 0, 0, 1) == 1;
-            return std::make_unique<CodedCapture>(s);
-          },
+      .factory = [](const DeviceUri& uri) -> std::unique_ptr<LightFieldCapture> {
+        if (!uri.path.empty())
+          fail(Errc::Config, "light field capture URI '{}': coded: takes no path (its devices are the bench's)",
+               uri.text);
+        constexpr const char* kind = "light field capture";
+        CodedCaptureSettings s;
+        s.rounds = uriNumber(uri, kind, "rounds", s.rounds, 1, 16);
+        s.maxLightLeft = uriNumber(uri, kind, "max_light_left", s.maxLightLeft, 0.0, 0.999);
+        s.targetCv = uriNumber(uri, kind, "target_cv", s.targetCv, 1e-6, 0.999);
+        s.iterations = uriNumber(uri, kind, "iterations", s.iterations, 0, 100);
+        s.targetPercentile = uriNumber(uri, kind, "target_percentile", s.targetPercentile, 1e-6, 0.999999);
+        s.minDecoded = uriNumber(uri, kind, "min_decoded", s.minDecoded, 1e-6, 1.0);
+        s.minConfidence = uriNumber(uri, kind, "min_confidence", s.minConfidence, 0.0, 1.0);
+        s.secondShare = uriNumber(uri, kind, "second_share", s.secondShare, 0.0, 0.499);
+        s.distance_mm = uriNumber(uri, kind, "distance_mm", s.distance_mm, 0.0, 1e6);
+        s.allowUndeflected = uriNumber(uri, kind, "allow_undeflected", 0, 0, 1) == 1;
+        return std::make_unique<CodedCapture>(s);
+      },
   });
 }
 

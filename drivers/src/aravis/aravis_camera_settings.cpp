@@ -13,12 +13,14 @@ namespace lfi::detail {
 
 std::vector<WireFormat> wireFormats(PixelFormat format) {
   switch (format) {
-    case PixelFormat::Mono8: return {{"Mono8", ARV_PIXEL_FORMAT_MONO_8}};
+    case PixelFormat::Mono8:
+      return {{"Mono8", ARV_PIXEL_FORMAT_MONO_8}};
     case PixelFormat::Mono12:
       return {{"Mono12", ARV_PIXEL_FORMAT_MONO_12},
               {"Mono12p", kPixelFormatMono12p},
               {"Mono12Packed", ARV_PIXEL_FORMAT_MONO_12_PACKED}};
-    case PixelFormat::Mono16: return {{"Mono16", ARV_PIXEL_FORMAT_MONO_16}};
+    case PixelFormat::Mono16:
+      return {{"Mono16", ARV_PIXEL_FORMAT_MONO_16}};
   }
   return {};
 }
@@ -134,8 +136,8 @@ void AravisCamera::checkIncrement(const char* field, int value, int increment, i
   if (value < min || value > max)
     fail(Errc::InvalidArgument, "camera '{}': {} {} is outside the device's {}..{}", name(), field, value, min, max);
   if (increment > 1 && (value - min) % increment != 0)
-    fail(Errc::InvalidArgument, "camera '{}': {} {} is not {} + a multiple of the device's increment {}", name(),
-         field, value, min, increment);
+    fail(Errc::InvalidArgument, "camera '{}': {} {} is not {} + a multiple of the device's increment {}", name(), field,
+         value, min, increment);
 }
 
 void AravisCamera::applyRegion(const CameraSettings& s) {
@@ -147,8 +149,8 @@ void AravisCamera::applyRegion(const CameraSettings& s) {
     arv_camera_set_integer(camera_, "OffsetY", 0, &error);
     check(error, name(), "setting OffsetY to 0");
   } else if (s.roiX_px != 0 || s.roiY_px != 0) {
-    fail(Errc::InvalidArgument, "camera '{}': ROI offset ({}, {}) asked, the device has no offsets", name(),
-         s.roiX_px, s.roiY_px);
+    fail(Errc::InvalidArgument, "camera '{}': ROI offset ({}, {}) asked, the device has no offsets", name(), s.roiX_px,
+         s.roiY_px);
   }
   int wMin = 0, wMax = 0, hMin = 0, hMax = 0;
   arv_camera_get_width_bounds(camera_, &wMin, &wMax, &error);
@@ -162,8 +164,8 @@ void AravisCamera::applyRegion(const CameraSettings& s) {
     hMax = std::min(hMax, info_.sensorHeight_px / s.binning);
   }
   if (s.roiX_px >= wMax || s.roiY_px >= hMax)  // (before the sizes: a width past the sensor is the offset's fault)
-    fail(Errc::InvalidArgument, "camera '{}': ROI offset ({}, {}) lies outside the {} x {} (binned) sensor",
-         name(), s.roiX_px, s.roiY_px, wMax, hMax);
+    fail(Errc::InvalidArgument, "camera '{}': ROI offset ({}, {}) lies outside the {} x {} (binned) sensor", name(),
+         s.roiX_px, s.roiY_px, wMax, hMax);
   const int width = s.roiWidth_px > 0 ? s.roiWidth_px : wMax - s.roiX_px;
   const int height = s.roiHeight_px > 0 ? s.roiHeight_px : hMax - s.roiY_px;
   checkIncrement("roiWidth_px", width, arv_camera_get_width_increment(camera_, nullptr), wMin, wMax);
@@ -205,8 +207,7 @@ void AravisCamera::applyExposureAndGain(const CameraSettings& s) {
 
   double min = 0, max = 0;
   if (!arv_camera_is_gain_available(camera_, nullptr)) {
-    if (s.gain != 0)
-      fail(Errc::InvalidArgument, "camera '{}': gain {} asked, the device has no gain", name(), s.gain);
+    if (s.gain != 0) fail(Errc::InvalidArgument, "camera '{}': gain {} asked, the device has no gain", name(), s.gain);
     return;
   }
   if (arv_camera_is_gain_auto_available(camera_, nullptr)) {

@@ -114,16 +114,19 @@ void AravisCamera::startStream(int bufferCount) {
   }
   if (width <= 0 || height <= 0 || width > info_.sensorWidth_px || height > info_.sensorHeight_px) {
     g_clear_object(&stream_);  // (nonsense: no frame would fit, or the buffers would be absurd)
-    fail(Errc::Device, "camera '{}': the device reports a {} x {} px region on its {} x {} px sensor", name(),
-         width, height, info_.sensorWidth_px, info_.sensorHeight_px);
+    fail(Errc::Device, "camera '{}': the device reports a {} x {} px region on its {} x {} px sensor", name(), width,
+         height, info_.sensorWidth_px, info_.sensorHeight_px);
   }
   // (The fewest bytes a frame of the format takes on the wire: Mono12 packed.)
-  const std::uint64_t image = static_cast<std::uint64_t>(std::max(width, 0)) * static_cast<std::uint64_t>(
-      std::max(height, 0)) * static_cast<unsigned>(significantBits(settings_.pixelFormat)) / 8;
+  const std::uint64_t image = static_cast<std::uint64_t>(std::max(width, 0)) *
+                              static_cast<std::uint64_t>(std::max(height, 0)) *
+                              static_cast<unsigned>(significantBits(settings_.pixelFormat)) / 8;
   if (const std::uint64_t most = 4 * image + (16u << 20); payload < image || payload > most) {
     g_clear_object(&stream_);
-    fail(Errc::Device, "camera '{}': the device's PayloadSize of {} bytes does not fit its {} x {} px {} image "
-         "({} to {} bytes)", name(), payload, width, height, toString(settings_.pixelFormat), image, most);
+    fail(Errc::Device,
+         "camera '{}': the device's PayloadSize of {} bytes does not fit its {} x {} px {} image "
+         "({} to {} bytes)",
+         name(), payload, width, height, toString(settings_.pixelFormat), image, most);
   }
   // Without CAP_NET_RAW (a user of the udev group, not root) Aravis reads the stream from a UDP socket whose
   // receive buffer is the system's default, 208 KiB: a stall of 2 ms at 1 Gb/s overflows it and the packets

@@ -46,8 +46,8 @@ struct GvCameraServer::Impl {
   ServedFrameFiller filler;
   ArvGvFakeCamera* gvCamera = nullptr;
   ArvFakeCamera* camera = nullptr;  // owned by gvCamera
-  std::string lastWarning;  // (Aravis's device thread only)
-  std::mutex lineMutex;     // one line edge at a time
+  std::string lastWarning;          // (Aravis's device thread only)
+  std::mutex lineMutex;             // one line edge at a time
 
   // Aravis's fill-pattern callback, on its device thread. Inside it
   // arv_buffer_get_data() reports size 0 (the buffer's parts are not set up
@@ -71,9 +71,10 @@ struct GvCameraServer::Impl {
     const auto& o = self->options;
     if (width < 1 || height < 1 || width > static_cast<std::uint64_t>(o.sensorWidth_px) ||
         height > static_cast<std::uint64_t>(o.sensorHeight_px) || size > arv_fake_camera_get_payload(self->camera)) {
-      self->warnOnce(fmt::format("a {} x {} image of {} bytes a pixel does not fit the {} x {} sensor or the "
-                                 "payload; the frame is not written", width, height, bytesPerPixel, o.sensorWidth_px,
-                                 o.sensorHeight_px));
+      self->warnOnce(
+          fmt::format("a {} x {} image of {} bytes a pixel does not fit the {} x {} sensor or the "
+                      "payload; the frame is not written",
+                      width, height, bytesPerPixel, o.sensorWidth_px, o.sensorHeight_px));
       // A black frame, not the buffer's earlier contents: Aravis sends it as complete whatever we do. (It checked
       // the buffer holds this payload before the call, on this same thread, the one that takes register writes.)
       std::memset(pixels, 0, arv_fake_camera_get_payload(self->camera));
@@ -102,14 +103,16 @@ struct GvCameraServer::Impl {
       return;
     }
     if (binningY != binning) {
-      self->warnOnce(fmt::format("binning {} x {} (horizontal x vertical) is not served, only equal ones; frames "
-                                 "are black", binning, binningY));
+      self->warnOnce(
+          fmt::format("binning {} x {} (horizontal x vertical) is not served, only equal ones; frames "
+                      "are black",
+                      binning, binningY));
       return;
     }
     try {
       cv::Mat image(request.height_px, request.width_px, type, pixels);
       self->filler(request, image);
-      self->lastWarning.clear();  // a frame as asked: the next refusal is news again
+      self->lastWarning.clear();         // a frame as asked: the next refusal is news again
     } catch (const std::exception& e) {  // (the filler refused what the client asked: every frame alike)
       std::memset(pixels, 0, static_cast<std::size_t>(size));  // (it may have written part of the image)
       self->warnOnce(fmt::format("frames go out black: {}", e.what()));
@@ -133,8 +136,8 @@ void requireIdentity(const GvCameraServerOptions& options) {
     fail(Errc::InvalidArgument, "served camera: serial '{}' must have 1..15 characters", options.serial);
   if (options.vendor.empty() || options.vendor.size() >= kNameSize || options.model.empty() ||
       options.model.size() >= kNameSize)
-    fail(Errc::InvalidArgument, "served camera: vendor '{}' and model '{}' must have 1..31 characters",
-         options.vendor, options.model);
+    fail(Errc::InvalidArgument, "served camera: vendor '{}' and model '{}' must have 1..31 characters", options.vendor,
+         options.model);
 }
 
 void requireInterface(const std::string& interfaceAddress) {

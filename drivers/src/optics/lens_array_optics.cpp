@@ -7,8 +7,10 @@ namespace lfi {
 LensArrayOptics::LensArrayOptics(const DisplayInfo& info)
     : lattice_(info.optics.packing, info.optics.arrayPitch_mm, info.optics.rotation_rad,
                {info.optics.arrayOffsetX_mm, info.optics.arrayOffsetY_mm}),
-      pinhole_(info.optics.type == OpticsType::PinholeArray), gap_(info.optics.gap_mm),
-      power_(pinhole_ ? 0 : 1 / info.optics.focalLength_mm), fill_(info.optics.fillFactor),
+      pinhole_(info.optics.type == OpticsType::PinholeArray),
+      gap_(info.optics.gap_mm),
+      power_(pinhole_ ? 0 : 1 / info.optics.focalLength_mm),
+      fill_(info.optics.fillFactor),
       radius_(0.5 * info.optics.pinholeDiameter_mm) {}
 
 bool LensArrayOptics::insideAperture(const Vec2& q, const Vec2& centre) const {
@@ -40,6 +42,8 @@ std::optional<Vec2> LensArrayOptics::sourceOfRay(const Vec2& q, const Vec3& d) c
   return q - gap_ * power_ * (q - c) - gap_ / d.z * Vec2(d.x, d.y);
 }
 
-double LensArrayOptics::viewCone_rad() const { return 2 * std::atan(lattice_.inradius_mm() / gap_); }
+double LensArrayOptics::viewCone_rad() const {
+  return 2 * std::atan(lattice_.inradius_mm() / gap_);
+}
 
 }  // namespace lfi

@@ -6,7 +6,10 @@
 namespace lfi {
 
 LensLattice::LensLattice(LensPacking packing, double pitch_mm, double rotation_rad, const Vec2& offset_mm)
-    : packing_(packing), pitch_(pitch_mm), offset_(offset_mm), cos_(std::cos(rotation_rad)),
+    : packing_(packing),
+      pitch_(pitch_mm),
+      offset_(offset_mm),
+      cos_(std::cos(rotation_rad)),
       sin_(std::sin(rotation_rad)) {
   a1_ = {pitch_, 0};
   a2_ = packing == LensPacking::Square ? Vec2(0, pitch_) : Vec2(0.5 * pitch_, 0.5 * std::sqrt(3.0) * pitch_);

@@ -10,7 +10,9 @@ namespace {
 // std::round (halves away from zero) for |x| < 2^62 without a libm call: the
 // baseline x86-64 build has no rounding instruction, and the call was a tenth
 // of encodeLightField's time.
-double roundHalfAway(double x) { return static_cast<double>(static_cast<long long>(x + (x < 0 ? -0.5 : 0.5))); }
+double roundHalfAway(double x) {
+  return static_cast<double>(static_cast<long long>(x + (x < 0 ? -0.5 : 0.5)));
+}
 
 }  // namespace
 
@@ -76,6 +78,8 @@ std::optional<Vec2> LenticularOptics::sourceOfRay(const Vec2& q, const Vec3& d) 
   return Vec2(up * axis_.x + wp * normal_.x, up * axis_.y + wp * normal_.y);
 }
 
-double LenticularOptics::viewCone_rad() const { return 2 * std::atan(0.5 * perpPitch_ / gap_); }
+double LenticularOptics::viewCone_rad() const {
+  return 2 * std::atan(0.5 * perpPitch_ / gap_);
+}
 
 }  // namespace lfi

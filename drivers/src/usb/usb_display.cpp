@@ -24,9 +24,12 @@ namespace {
 
 SubpixelLayout toLayout(proto::SubpixelCode code) {
   switch (code) {
-    case proto::SubpixelCode::RgbStripe: return SubpixelLayout::RgbStripe;
-    case proto::SubpixelCode::BgrStripe: return SubpixelLayout::BgrStripe;
-    case proto::SubpixelCode::Mono: break;
+    case proto::SubpixelCode::RgbStripe:
+      return SubpixelLayout::RgbStripe;
+    case proto::SubpixelCode::BgrStripe:
+      return SubpixelLayout::BgrStripe;
+    case proto::SubpixelCode::Mono:
+      break;
   }
   return SubpixelLayout::Mono;
 }
@@ -45,12 +48,15 @@ UsbDisplay::UsbDisplay(UsbDisplaySelector selector, UsbDisplayOptions options)
   constexpr std::chrono::milliseconds kLongest{600'000};
   if (options_.controlTimeout.count() < 1 || options_.transferTimeout.count() < 1 ||
       options_.controlTimeout > kLongest || options_.transferTimeout > kLongest || options_.stallRetries < 0)
-    fail(Errc::InvalidArgument, "{}: timeouts must be 1 .. 600000 ms and stallRetries >= 0 (control {} ms, "
-         "transfer {} ms, stallRetries {})", name_, options_.controlTimeout.count(),
-         options_.transferTimeout.count(), options_.stallRetries);
+    fail(Errc::InvalidArgument,
+         "{}: timeouts must be 1 .. 600000 ms and stallRetries >= 0 (control {} ms, "
+         "transfer {} ms, stallRetries {})",
+         name_, options_.controlTimeout.count(), options_.transferTimeout.count(), options_.stallRetries);
 }
 
-UsbDisplay::~UsbDisplay() { close(); }
+UsbDisplay::~UsbDisplay() {
+  close();
+}
 
 void UsbDisplay::open() {
   requireDisplayState(state_, {State::Closed}, "open", name_);
@@ -63,8 +69,8 @@ void UsbDisplay::open() {
     // Start from a known receive state: a host that died, or gave up, in the
     // middle of a frame left its bytes in the device.
     if (!clearHalt())
-      fail(Errc::Timeout, "{}: CLEAR_HALT of endpoint 0x{:02x} got no answer ({}): the device does not answer",
-           name_, endpoint_, clearHaltError_);
+      fail(Errc::Timeout, "{}: CLEAR_HALT of endpoint 0x{:02x} got no answer ({}): the device does not answer", name_,
+           endpoint_, clearHaltError_);
     // Open is dark at the backlight's maximum (display.h), whatever an earlier
     // host left on the panel: it may have died showing a frame.
     stallsCleared_ = 0, uncertain_ = false, lastPresented_ = 0;
@@ -83,8 +89,7 @@ void UsbDisplay::close() noexcept {
   if (handle_) {
     // The panel goes dark, as after blank() (best effort: a device that does
     // not answer keeps its frame until the next open() blanks it).
-    if (claimed_ && state_ == State::Showing)
-      control(LIBUSB_ENDPOINT_OUT, proto::Request::Blank, 0, nullptr, 0);
+    if (claimed_ && state_ == State::Showing) control(LIBUSB_ENDPOINT_OUT, proto::Request::Blank, 0, nullptr, 0);
     if (claimed_) libusb_release_interface(handle_, interface_);
     libusb_close(handle_);
   }
@@ -111,7 +116,8 @@ PresentResult UsbDisplay::show(const cv::Mat& panel) {
   if (resync_ && !clearHalt())
     return {PresentStatus::Timeout, sequence,
             fmt::format("{}: CLEAR_HALT of endpoint 0x{:02x}, sent to discard an earlier frame that failed, "
-                        "failed ({}); the next frame tries again", name_, endpoint_, clearHaltError_)};
+                        "failed ({}); the next frame tries again",
+                        name_, endpoint_, clearHaltError_)};
 
   for (int attempt = 0;; ++attempt) {
     std::size_t sent = 0;
@@ -137,14 +143,14 @@ PresentResult UsbDisplay::show(const cv::Mat& panel) {
       ++stallsCleared_;
       continue;
     }
-    fail(Errc::Device, "{}: bulk OUT of frame {} to endpoint 0x{:02x} failed ({} of {} bytes sent)", name_,
-         sequence, endpoint_, sent, frame_.size());
+    fail(Errc::Device, "{}: bulk OUT of frame {} to endpoint 0x{:02x} failed ({} of {} bytes sent)", name_, sequence,
+         endpoint_, sent, frame_.size());
   }
 
-  const int rc = control(LIBUSB_ENDPOINT_OUT, proto::Request::Present, static_cast<std::uint16_t>(sequence),
-                         nullptr, 0);
+  const int rc =
+      control(LIBUSB_ENDPOINT_OUT, proto::Request::Present, static_cast<std::uint16_t>(sequence), nullptr, 0);
   if (rc == LIBUSB_ERROR_PIPE) return {PresentStatus::Rejected, sequence, rejection(sequence)};
-  resync_ = rc < 0;  // unanswered or failed: the device may still hold the frame
+  resync_ = rc < 0;     // unanswered or failed: the device may still hold the frame
   uncertain_ = rc < 0;  // (and may show it)
   requireOk(rc, proto::Request::Present);
   state_ = State::Showing;
@@ -165,15 +171,13 @@ void UsbDisplay::setBrightness(int level) {
   if (level < info_.brightnessMin || level > info_.brightnessMax)
     fail(Errc::InvalidArgument, "{}: brightness {} is outside {}..{}", name_, level, info_.brightnessMin,
          info_.brightnessMax);
-  requireOk(control(LIBUSB_ENDPOINT_OUT, proto::Request::SetBrightness, static_cast<std::uint16_t>(level), nullptr,
-                    0),
+  requireOk(control(LIBUSB_ENDPOINT_OUT, proto::Request::SetBrightness, static_cast<std::uint16_t>(level), nullptr, 0),
             proto::Request::SetBrightness);
 }
 
 DisplayStatus UsbDisplay::status() {
   requireDisplayState(state_, {State::Open, State::Showing}, "status", name_);
-  const proto::StatusBlock s =
-      proto::decodeStatus(controlIn(proto::Request::GetStatus, 0, proto::kStatusSize), name_);
+  const proto::StatusBlock s = proto::decodeStatus(controlIn(proto::Request::GetStatus, 0, proto::kStatusSize), name_);
   // What the device says must agree with what this host did and with the device's own description.
   if (s.brightness < info_.brightnessMin || s.brightness > info_.brightnessMax)
     fail(Errc::Device, "{}: GET_STATUS says brightness {}, outside the device's own {}..{}", name_, s.brightness,
@@ -219,9 +223,9 @@ void UsbDisplay::readIdentity() {
   info.serial = block.serial;
   // The id that selects this device (display.h): by its USB serial, which
   // openDevice() matches; the info block's serial cannot select it.
-  info.deviceId = serial_.empty() ? fmt::format("{:04x}:{:04x}", selector_.vendorId, selector_.productId)
-                                  : fmt::format("{:04x}:{:04x}/{}", selector_.vendorId, selector_.productId,
-                                                serialInUri(serial_));
+  info.deviceId = serial_.empty()
+                      ? fmt::format("{:04x}:{:04x}", selector_.vendorId, selector_.productId)
+                      : fmt::format("{:04x}:{:04x}/{}", selector_.vendorId, selector_.productId, serialInUri(serial_));
   info.panelWidth_px = block.panelWidth_px;
   info.panelHeight_px = block.panelHeight_px;
   info.pixelPitch_mm = cal.pixelPitch_mm;
@@ -316,8 +320,8 @@ std::string UsbDisplay::rejection(std::uint32_t sequence) {
   const std::string name = name_;
   state_ = State::Closed;  // (close() sends nothing to a device that is gone)
   close();
-  fail(Errc::Device, "{}: the device vanished during {}; the display is closed, open() it again when it is back",
-       name, request);
+  fail(Errc::Device, "{}: the device vanished during {}; the display is closed, open() it again when it is back", name,
+       request);
 }
 
 }  // namespace detail

@@ -30,7 +30,9 @@ std::string serialOf(libusb_device_handle* handle, const libusb_device_descripto
   return n > 0 ? std::string(reinterpret_cast<char*>(text), static_cast<std::size_t>(n)) : std::string();
 }
 
-std::string serialInUri(std::string_view serial) { return percentEncodeUriPart(serial, "/"); }
+std::string serialInUri(std::string_view serial) {
+  return percentEncodeUriPart(serial, "/");
+}
 
 void UsbDisplay::openDevice() {
   libusb_device** list = nullptr;
@@ -77,9 +79,10 @@ void UsbDisplay::openDevice() {
   // other one silently could drive the wrong panel.
   if (matches.size() == 1 && unopened > 0 && selector_.serial.empty()) {
     libusb_close(matches.front().first);
-    fail(Errc::Config, "{}: {} displays match, {} of them cannot be opened ({}); name one by serial "
-         "(usb:{:04x}:{:04x}/<serial>; this one's: {})", name_, unopened + 1, unopened,
-         libusb_error_name(lastOpenError), selector_.vendorId, selector_.productId,
+    fail(Errc::Config,
+         "{}: {} displays match, {} of them cannot be opened ({}); name one by serial "
+         "(usb:{:04x}:{:04x}/<serial>; this one's: {})",
+         name_, unopened + 1, unopened, libusb_error_name(lastOpenError), selector_.vendorId, selector_.productId,
          serialInUri(matches.front().second));
   }
   if (matches.size() > 1) {
@@ -134,8 +137,8 @@ void UsbDisplay::openDevice() {
   if (altSetting != 0)  // the endpoint is in an alternate setting: select it
     if (const int rc = libusb_set_interface_alt_setting(handle_, interface_, altSetting); rc != 0) {
       if (rc == LIBUSB_ERROR_NO_DEVICE) vanished("SET_INTERFACE");
-      fail(Errc::Device, "{}: cannot select alternate setting {} of interface {}: {}", name_, altSetting,
-           interface_, libusb_error_name(rc));
+      fail(Errc::Device, "{}: cannot select alternate setting {} of interface {}: {}", name_, altSetting, interface_,
+           libusb_error_name(rc));
     }
 }
 
@@ -151,8 +154,8 @@ std::uint16_t parseHex16(std::string_view text, const char* what, const std::str
   unsigned value = 0;
   const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), value, 16);
   if (text.size() != 4 || ec != std::errc() || end != text.data() + text.size())
-    fail(Errc::Config, "display URI '{}': {} '{}' is not 4 hex digits (expected usb:<vid>:<pid>[/<serial>])", uri,
-         what, text);
+    fail(Errc::Config, "display URI '{}': {} '{}' is not 4 hex digits (expected usb:<vid>:<pid>[/<serial>])", uri, what,
+         text);
   return static_cast<std::uint16_t>(value);
 }
 
@@ -175,16 +178,18 @@ UsbDisplaySelector parseUsbDisplayPath(std::string_view path, const std::string&
   if (slash != std::string_view::npos) {
     s.serial = std::string(path.substr(slash + 1));  // (decoded with the rest of the URI: it may hold a '/')
     if (s.serial.empty() || s.serial.size() > 126)
-      fail(Errc::Config, "display URI '{}': the serial must be 1..126 bytes, not {} (write a space, '/', '%', '?', "
-           "'&', '#', '=' or a non-ASCII byte as %XX)", uri, s.serial.size());
+      fail(Errc::Config,
+           "display URI '{}': the serial must be 1..126 bytes, not {} (write a space, '/', '%', '?', "
+           "'&', '#', '=' or a non-ASCII byte as %XX)",
+           uri, s.serial.size());
   }
   return s;
 }
 
 std::vector<UsbDisplayInfo> listUsbDisplays() {
   libusb_context* ctx = nullptr;
-  if (const int rc = libusb_init(&ctx); rc != 0) fail(Errc::Device, "USB displays: libusb_init failed: {}",
-                                                      libusb_error_name(rc));
+  if (const int rc = libusb_init(&ctx); rc != 0)
+    fail(Errc::Device, "USB displays: libusb_init failed: {}", libusb_error_name(rc));
   libusb_device** list = nullptr;
   const ssize_t count = libusb_get_device_list(ctx, &list);
   if (count < 0) {

@@ -30,7 +30,7 @@ std::string serialInUri(std::string_view serial);
 enum class BulkOutcome { Ok, Stall, Timeout, NoDevice, Error };
 
 class UsbDisplay final : public Display {
-public:
+ public:
   UsbDisplay(UsbDisplaySelector selector, UsbDisplayOptions options);
   ~UsbDisplay() override;
 
@@ -45,7 +45,7 @@ public:
   void setBrightness(int level) override;
   DisplayStatus status() override;
 
-private:
+ private:
   // usb_display_discovery.cpp
   void openDevice();
 
@@ -79,9 +79,9 @@ private:
   std::uint32_t lastPresented_ = 0;  // the sequence of the last frame presented (State::Showing)
   bool uncertain_ = false;  // a PRESENT or BLANK went unanswered: the device may show either (status() trusts it)
   std::uint64_t stallsCleared_ = 0;
-  bool resync_ = false;  // a frame failed or timed out: clear the endpoint's halt before the next one
+  bool resync_ = false;         // a frame failed or timed out: clear the endpoint's halt before the next one
   std::string clearHaltError_;  // why the last CLEAR_HALT failed (libusb's error name)
-  bool wedged_ = false;  // given up with transfers libusb still owns (sendFrame's deadline)
+  bool wedged_ = false;         // given up with transfers libusb still owns (sendFrame's deadline)
   std::vector<std::uint8_t> frame_;
 };
 

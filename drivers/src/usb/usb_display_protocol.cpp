@@ -18,13 +18,17 @@ constexpr std::uint16_t kInfoVersion = 1;
 // 16-byte header and before the CRC-32: version 1 holds the first 7 (76
 // bytes), version 2 all 13 (124 bytes).
 constexpr double CalibrationBlock::*kCalibrationFields[] = {
-    &CalibrationBlock::pixelPitch_mm,   &CalibrationBlock::lensPitch_px,    &CalibrationBlock::slant_rad,
-    &CalibrationBlock::offset_px,       &CalibrationBlock::gap_mm,          &CalibrationBlock::focalLength_mm,
-    &CalibrationBlock::slitWidth_mm,    &CalibrationBlock::arrayPitch_mm,   &CalibrationBlock::rotation_rad,
-    &CalibrationBlock::arrayOffsetX_mm, &CalibrationBlock::arrayOffsetY_mm, &CalibrationBlock::fillFactor,
+    &CalibrationBlock::pixelPitch_mm,     &CalibrationBlock::lensPitch_px,    &CalibrationBlock::slant_rad,
+    &CalibrationBlock::offset_px,         &CalibrationBlock::gap_mm,          &CalibrationBlock::focalLength_mm,
+    &CalibrationBlock::slitWidth_mm,      &CalibrationBlock::arrayPitch_mm,   &CalibrationBlock::rotation_rad,
+    &CalibrationBlock::arrayOffsetX_mm,   &CalibrationBlock::arrayOffsetY_mm, &CalibrationBlock::fillFactor,
     &CalibrationBlock::pinholeDiameter_mm};
-constexpr std::size_t fieldsOf(std::uint16_t version) { return version == kCalibrationVersion1 ? 7 : 13; }
-constexpr std::size_t calibrationSize(std::uint16_t version) { return 16 + 8 * fieldsOf(version) + 4; }
+constexpr std::size_t fieldsOf(std::uint16_t version) {
+  return version == kCalibrationVersion1 ? 7 : 13;
+}
+constexpr std::size_t calibrationSize(std::uint16_t version) {
+  return 16 + 8 * fieldsOf(version) + 4;
+}
 constexpr std::size_t kCalibrationSize = calibrationSize(kCalibrationVersion1);
 static_assert(kCalibrationSize == 76 && calibrationSize(kCalibrationVersion2) == 124);
 constexpr std::size_t kNameField = 32;
@@ -59,32 +63,52 @@ void requireRange(double value, double lo, double hi, const char* field, const c
 
 const char* toString(Request request) {
   switch (request) {
-    case Request::GetProtocolVersion: return "GET_PROTOCOL_VERSION";
-    case Request::GetDeviceInfo: return "GET_DEVICE_INFO";
-    case Request::GetCalibration: return "GET_CALIBRATION";
-    case Request::SetBrightness: return "SET_BRIGHTNESS";
-    case Request::Present: return "PRESENT";
-    case Request::Blank: return "BLANK";
-    case Request::GetStatus: return "GET_STATUS";
-    case Request::GetLastError: return "GET_LAST_ERROR";
+    case Request::GetProtocolVersion:
+      return "GET_PROTOCOL_VERSION";
+    case Request::GetDeviceInfo:
+      return "GET_DEVICE_INFO";
+    case Request::GetCalibration:
+      return "GET_CALIBRATION";
+    case Request::SetBrightness:
+      return "SET_BRIGHTNESS";
+    case Request::Present:
+      return "PRESENT";
+    case Request::Blank:
+      return "BLANK";
+    case Request::GetStatus:
+      return "GET_STATUS";
+    case Request::GetLastError:
+      return "GET_LAST_ERROR";
   }
   return "unknown request";
 }
 
 const char* toString(DeviceError error) {
   switch (error) {
-    case DeviceError::None: return "no error";
-    case DeviceError::BadMagic: return "bad frame magic";
-    case DeviceError::BadVersion: return "unsupported frame header version";
-    case DeviceError::BadHeaderCrc: return "frame header CRC mismatch";
-    case DeviceError::BadFormat: return "unsupported pixel format";
-    case DeviceError::BadSize: return "frame size does not match the panel";
-    case DeviceError::PayloadCrc: return "payload CRC mismatch";
-    case DeviceError::Truncated: return "truncated frame";
-    case DeviceError::SequenceMismatch: return "PRESENT sequence does not match the received frame";
-    case DeviceError::Overflow: return "more bytes than the header announced";
-    case DeviceError::NoFrame: return "no complete frame to present";
-    case DeviceError::BadRequest: return "malformed request";
+    case DeviceError::None:
+      return "no error";
+    case DeviceError::BadMagic:
+      return "bad frame magic";
+    case DeviceError::BadVersion:
+      return "unsupported frame header version";
+    case DeviceError::BadHeaderCrc:
+      return "frame header CRC mismatch";
+    case DeviceError::BadFormat:
+      return "unsupported pixel format";
+    case DeviceError::BadSize:
+      return "frame size does not match the panel";
+    case DeviceError::PayloadCrc:
+      return "payload CRC mismatch";
+    case DeviceError::Truncated:
+      return "truncated frame";
+    case DeviceError::SequenceMismatch:
+      return "PRESENT sequence does not match the received frame";
+    case DeviceError::Overflow:
+      return "more bytes than the header announced";
+    case DeviceError::NoFrame:
+      return "no complete frame to present";
+    case DeviceError::BadRequest:
+      return "malformed request";
   }
   return "unknown device error";
 }
@@ -101,7 +125,9 @@ std::uint32_t crc32Of(std::span<const std::uint8_t> bytes) {
   return static_cast<std::uint32_t>(crc);
 }
 
-std::uint32_t bytesPerPixel(Format format) { return format == Format::Rgb888 ? 3 : 1; }
+std::uint32_t bytesPerPixel(Format format) {
+  return format == Format::Rgb888 ? 3 : 1;
+}
 
 void putU16(std::vector<std::uint8_t>& out, std::uint16_t v) {
   out.push_back(static_cast<std::uint8_t>(v));
@@ -114,7 +140,9 @@ void putF64(std::vector<std::uint8_t>& out, double v) {
   const auto bits = std::bit_cast<std::uint64_t>(v);
   for (int i = 0; i < 8; ++i) out.push_back(static_cast<std::uint8_t>(bits >> (8 * i)));
 }
-std::uint16_t getU16(const std::uint8_t* p) { return static_cast<std::uint16_t>(p[0] | (p[1] << 8)); }
+std::uint16_t getU16(const std::uint8_t* p) {
+  return static_cast<std::uint16_t>(p[0] | (p[1] << 8));
+}
 std::uint32_t getU32(const std::uint8_t* p) {
   return static_cast<std::uint32_t>(p[0]) | (static_cast<std::uint32_t>(p[1]) << 8) |
          (static_cast<std::uint32_t>(p[2]) << 16) | (static_cast<std::uint32_t>(p[3]) << 24);
@@ -151,8 +179,7 @@ DeviceInfoBlock decodeDeviceInfo(std::span<const std::uint8_t> bytes, const std:
     fail(Errc::Device, "{}: GET_DEVICE_INFO returned {} bytes, expected {}", device, bytes.size(), kDeviceInfoSize);
   const std::uint8_t* p = bytes.data();
   if (getU16(p) != kInfoVersion)
-    fail(Errc::Device, "{}: GET_DEVICE_INFO has version {}, this host understands {}", device, getU16(p),
-         kInfoVersion);
+    fail(Errc::Device, "{}: GET_DEVICE_INFO has version {}, this host understands {}", device, getU16(p), kInfoVersion);
   if (getU16(p + 2) != kDeviceInfoSize)
     fail(Errc::Device, "{}: GET_DEVICE_INFO declares a size of {} bytes, expected {}", device, getU16(p + 2),
          kDeviceInfoSize);
@@ -227,8 +254,7 @@ CalibrationBlock decodeCalibration(std::span<const std::uint8_t> bytes, const st
   CalibrationBlock c;
   c.version = getU16(p + 4);
   if (c.version != kCalibrationVersion1 && c.version != kCalibrationVersion2)
-    fail(Errc::Device, "{}: calibration blob version {} is not supported (this host reads 1 and 2)", device,
-         c.version);
+    fail(Errc::Device, "{}: calibration blob version {} is not supported (this host reads 1 and 2)", device, c.version);
   const bool v1 = c.version == kCalibrationVersion1;
   const std::size_t expected = calibrationSize(c.version);
   const std::size_t size = getU16(p + 6);
@@ -247,7 +273,8 @@ CalibrationBlock decodeCalibration(std::span<const std::uint8_t> bytes, const st
          device, p[8], c.version, v1 ? "" : ", 2 lenslet array, 3 pinhole array");
   c.optics = static_cast<OpticsCode>(p[8]);
   if (!v1) {
-    if (p[9] > 1) fail(Errc::Device, "{}: calibration packing code {} is unknown (0 square, 1 hexagonal)", device, p[9]);
+    if (p[9] > 1)
+      fail(Errc::Device, "{}: calibration packing code {} is unknown (0 square, 1 hexagonal)", device, p[9]);
     c.packing = static_cast<PackingCode>(p[9]);
   }
   for (std::size_t i = 0; i < fieldsOf(c.version); ++i) c.*kCalibrationFields[i] = getF64(p + 16 + 8 * i);
@@ -395,8 +422,8 @@ std::vector<std::uint8_t> encodeLastError(DeviceError code, std::uint32_t sequen
   std::vector<std::uint8_t> out;
   putU32(out, static_cast<std::uint32_t>(code));
   putU32(out, sequence);
-  out.insert(out.end(), message.begin(), message.begin() + static_cast<std::ptrdiff_t>(
-                                                                 std::min(message.size(), kMaxErrorText)));
+  out.insert(out.end(), message.begin(),
+             message.begin() + static_cast<std::ptrdiff_t>(std::min(message.size(), kMaxErrorText)));
   return out;
 }
 

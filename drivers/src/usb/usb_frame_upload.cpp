@@ -64,9 +64,8 @@ BulkOutcome UsbDisplay::sendFrame(std::size_t& sent) {
   bool outOfMemory = false;  // reported once the transfers in flight are drained, not while libusb holds `chunks`
   std::size_t next = 0, inFlight = 0;
   // A guard above libusb's own per-transfer timeouts, in case a cancellation never completes.
-  auto deadline =
-      Clock::now() + options_.transferTimeout * static_cast<int>(count + options_.transfersInFlight + 1) +
-      std::chrono::seconds(2);
+  auto deadline = Clock::now() + options_.transferTimeout * static_cast<int>(count + options_.transfersInFlight + 1) +
+                  std::chrono::seconds(2);
   auto record = [&](BulkOutcome o) {
     if (outcome == BulkOutcome::Ok || o == BulkOutcome::NoDevice) outcome = o;
   };
@@ -84,14 +83,15 @@ BulkOutcome UsbDisplay::sendFrame(std::size_t& sent) {
       // libusb times a transfer from its submission, and the device takes the queued ones in turn: a chunk
       // gets transferTimeout for itself and for each one queued before it.
       const auto timeout = options_.transferTimeout * static_cast<int>(inFlight + 1);
-      libusb_fill_bulk_transfer(c.transfer, handle_, endpoint_, frame_.data() + next * size, c.length, onChunkDone,
-                                &c, static_cast<unsigned>(timeout.count()));
+      libusb_fill_bulk_transfer(c.transfer, handle_, endpoint_, frame_.data() + next * size, c.length, onChunkDone, &c,
+                                static_cast<unsigned>(timeout.count()));
       const int rc = libusb_submit_transfer(c.transfer);
       ++next;
       if (rc != 0) {
         c.done = true;
         record(rc == LIBUSB_ERROR_NO_DEVICE ? BulkOutcome::NoDevice
-                                            : rc == LIBUSB_ERROR_PIPE ? BulkOutcome::Stall : BulkOutcome::Error);
+               : rc == LIBUSB_ERROR_PIPE    ? BulkOutcome::Stall
+                                            : BulkOutcome::Error);
         break;
       }
       c.submitted = true;
@@ -110,13 +110,21 @@ BulkOutcome UsbDisplay::sendFrame(std::size_t& sent) {
         continue;
       }
       switch (c.status) {
-        case LIBUSB_TRANSFER_STALL: record(BulkOutcome::Stall); break;
-        case LIBUSB_TRANSFER_TIMED_OUT: record(BulkOutcome::Timeout); break;
-        case LIBUSB_TRANSFER_NO_DEVICE: record(BulkOutcome::NoDevice); break;
-        case LIBUSB_TRANSFER_CANCELLED:  // we cancelled it after another one failed, or the system did
+        case LIBUSB_TRANSFER_STALL:
+          record(BulkOutcome::Stall);
+          break;
+        case LIBUSB_TRANSFER_TIMED_OUT:
+          record(BulkOutcome::Timeout);
+          break;
+        case LIBUSB_TRANSFER_NO_DEVICE:
+          record(BulkOutcome::NoDevice);
+          break;
+        case LIBUSB_TRANSFER_CANCELLED:                  // we cancelled it after another one failed, or the system did
           if (!c.cancelled) record(BulkOutcome::Error);  // (a hole in the frame: never PRESENT it)
           break;
-        default: record(BulkOutcome::Error); break;
+        default:
+          record(BulkOutcome::Error);
+          break;
       }
     }
     if (outcome != BulkOutcome::Ok && inFlight > 0) {
@@ -144,8 +152,10 @@ BulkOutcome UsbDisplay::sendFrame(std::size_t& sent) {
         claimed_ = false;
         wedged_ = true;
         state_ = State::Closed;
-        fail(Errc::Device, "{}: bulk OUT transfers neither completed nor cancelled within the deadline; the "
-                           "display is closed", name_);
+        fail(Errc::Device,
+             "{}: bulk OUT transfers neither completed nor cancelled within the deadline; the "
+             "display is closed",
+             name_);
       }
       break;
     }

@@ -24,9 +24,12 @@ namespace {
 
 proto::SubpixelCode subpixelCode(SubpixelLayout layout) {
   switch (layout) {
-    case SubpixelLayout::RgbStripe: return proto::SubpixelCode::RgbStripe;
-    case SubpixelLayout::BgrStripe: return proto::SubpixelCode::BgrStripe;
-    case SubpixelLayout::Mono: break;
+    case SubpixelLayout::RgbStripe:
+      return proto::SubpixelCode::RgbStripe;
+    case SubpixelLayout::BgrStripe:
+      return proto::SubpixelCode::BgrStripe;
+    case SubpixelLayout::Mono:
+      break;
   }
   return proto::SubpixelCode::Mono;
 }
@@ -39,9 +42,10 @@ EmulatedDisplayConfig displayConfig(const sim::SimBench& bench, EmulatedDisplayC
   const DisplayInfo& info = bench.description().display->info;
   constexpr int kMaxU16 = 0xffff;
   if (info.panelWidth_px > kMaxU16 || info.panelHeight_px > kMaxU16 || info.brightnessMax > kMaxU16)
-    fail(Errc::Config, "simulated bench '{}': a {} x {} panel with brightness_max {} does not fit the USB display "
-         "protocol's 16-bit fields", bench.sceneFile().string(), info.panelWidth_px, info.panelHeight_px,
-         info.brightnessMax);
+    fail(Errc::Config,
+         "simulated bench '{}': a {} x {} panel with brightness_max {} does not fit the USB display "
+         "protocol's 16-bit fields",
+         bench.sceneFile().string(), info.panelWidth_px, info.panelHeight_px, info.brightnessMax);
   config.vendor = info.vendor;
   config.model = info.model;
   config.panelWidth_px = info.panelWidth_px;
@@ -83,8 +87,10 @@ struct ServedBench::Impl {
   // Applies the display's state to `bench` (under displayMutex).
   void replay(sim::SimBench& bench) const {
     bench.setBacklight(backlight);
-    if (lit) bench.showPanel(panel);
-    else bench.blankPanel();
+    if (lit)
+      bench.showPanel(panel);
+    else
+      bench.blankPanel();
   }
 
   sim::SimBench& bench() const {
@@ -112,9 +118,8 @@ struct ServedBench::Impl {
     GvCameraServerOptions o = options.camera;
     o.sensorWidth_px = camera0.width;
     o.sensorHeight_px = camera0.height;
-    camera = std::make_unique<GvCameraServer>(o, [this](const ServedFrameRequest& r, cv::Mat& image) {
-      fill(r, image);
-    });
+    camera =
+        std::make_unique<GvCameraServer>(o, [this](const ServedFrameRequest& r, cv::Mat& image) { fill(r, image); });
     if (packetLoss > 0) camera->setPacketLoss(packetLoss);
   }
 
@@ -184,17 +189,20 @@ bool ServedBench::putPart(const fs::path& scene) {
   imager->setRenderOptions(d.options.renderThreads, {});
   const sim::TelecentricCamera &ours = d.camera0, &theirs = imager->camera();
   if (theirs.width != ours.width || theirs.height != ours.height || theirs.pixelPitch_mm != ours.pixelPitch_mm)
-    fail(Errc::Config, "part '{}': its camera ({} x {} pixels of {} mm) is not the bench's ({} x {} of {} mm); a "
-         "part's scene is the bench's with another part in place", scene.string(), theirs.width, theirs.height,
-         theirs.pixelPitch_mm, ours.width, ours.height, ours.pixelPitch_mm);
+    fail(Errc::Config,
+         "part '{}': its camera ({} x {} pixels of {} mm) is not the bench's ({} x {} of {} mm); a "
+         "part's scene is the bench's with another part in place",
+         scene.string(), theirs.width, theirs.height, theirs.pixelPitch_mm, ours.width, ours.height,
+         ours.pixelPitch_mm);
   const DisplayInfo& panel = d.displayInfo;
   const sim::SimBench& bench = imager->bench();
   const DisplayInfo* other = bench.hasDisplay() ? &bench.description().display->info : nullptr;
   if (!other || other->panelWidth_px != panel.panelWidth_px || other->panelHeight_px != panel.panelHeight_px ||
       other->pixelPitch_mm != panel.pixelPitch_mm || other->subpixels != panel.subpixels)
-    fail(Errc::Config, "part '{}': its [display] panel is not the bench's ({} x {} pixels of {} mm); a part's scene "
-         "is the bench's with another part in place", scene.string(), panel.panelWidth_px, panel.panelHeight_px,
-         panel.pixelPitch_mm);
+    fail(Errc::Config,
+         "part '{}': its [display] panel is not the bench's ({} x {} pixels of {} mm); a part's scene "
+         "is the bench's with another part in place",
+         scene.string(), panel.panelWidth_px, panel.panelHeight_px, panel.pixelPitch_mm);
   {
     std::lock_guard lock(d.displayMutex);
     d.replay(imager->bench());
@@ -264,9 +272,13 @@ void ServedBench::plugDisplay() {
   ++d.counters.displayReplugs;
 }
 
-bool ServedBench::displayPlugged() const { return impl_->display->state().plugged; }
+bool ServedBench::displayPlugged() const {
+  return impl_->display->state().plugged;
+}
 
-EmulatedUsbDisplay& ServedBench::display() { return *impl_->display; }
+EmulatedUsbDisplay& ServedBench::display() {
+  return *impl_->display;
+}
 
 ServedBenchCounters ServedBench::counters() const {
   std::lock_guard lock(impl_->countersMutex);

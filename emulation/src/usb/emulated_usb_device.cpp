@@ -143,23 +143,31 @@ void EmulatedUsbDisplay::Impl::control(std::uint8_t* bytes, int length, Urb& u) 
   bool stall = false;
   if (type == 0x80 && request == 6 && (value >> 8) == 3) {  // GET_DESCRIPTOR(string)
     const int index = value & 0xff;
-    if (index == 0) reply = {4, 3, 0x09, 0x04};
-    else if (index == 1) reply = utf16Descriptor(config.vendor);
-    else if (index == 2) reply = utf16Descriptor(config.model);
-    else if (index == 3 && config.serialDescriptor) reply = utf16Descriptor(config.serial);
-    else stall = true;
+    if (index == 0)
+      reply = {4, 3, 0x09, 0x04};
+    else if (index == 1)
+      reply = utf16Descriptor(config.vendor);
+    else if (index == 2)
+      reply = utf16Descriptor(config.model);
+    else if (index == 3 && config.serialDescriptor)
+      reply = utf16Descriptor(config.serial);
+    else
+      stall = true;
   } else if (type == proto::kRequestTypeIn) {
     switch (static_cast<proto::Request>(request)) {
       case proto::Request::GetProtocolVersion:
         proto::putU16(reply, proto::kProtocolMajor);
         proto::putU16(reply, proto::kProtocolMinor);
         break;
-      case proto::Request::GetDeviceInfo: reply = deviceInfo(); break;
+      case proto::Request::GetDeviceInfo:
+        reply = deviceInfo();
+        break;
       case proto::Request::GetCalibration: {
         std::vector<std::uint8_t> blob = proto::encodeCalibration(config.calibration);
         if (badCalibrationCrc) blob[20] ^= 0xff;
         const std::size_t offset = static_cast<std::size_t>(value) * proto::kCalibrationChunk;
-        if (offset >= blob.size()) stall = true;
+        if (offset >= blob.size())
+          stall = true;
         else
           reply.assign(
               blob.begin() + static_cast<std::ptrdiff_t>(offset),
@@ -183,7 +191,8 @@ void EmulatedUsbDisplay::Impl::control(std::uint8_t* bytes, int length, Urb& u) 
         reply = forgetErrors ? proto::encodeLastError(proto::DeviceError::None, 0, "")
                              : proto::encodeLastError(state.lastError, lastErrorSequence, lastErrorText);
         break;
-      default: stall = true;
+      default:
+        stall = true;
     }
   } else if (type == proto::kRequestTypeOut) {
     switch (static_cast<proto::Request>(request)) {
@@ -196,12 +205,15 @@ void EmulatedUsbDisplay::Impl::control(std::uint8_t* bytes, int length, Urb& u) 
           if (observer.brightness) observer.brightness(value);
         }
         break;
-      case proto::Request::Present: stall = present(value) != proto::DeviceError::None; break;
+      case proto::Request::Present:
+        stall = present(value) != proto::DeviceError::None;
+        break;
       case proto::Request::Blank:
         state.showing = false;
         if (observer.blanked) observer.blanked();
         break;
-      default: stall = true;
+      default:
+        stall = true;
     }
   } else {
     stall = true;
@@ -232,7 +244,7 @@ std::vector<std::uint8_t> EmulatedUsbDisplay::Impl::deviceInfo() const {
   info.calibrationSize =
       absurdInfo ? 0xffffffffu : static_cast<std::uint32_t>(proto::encodeCalibration(config.calibration).size());
   info.maxPayloadSize = static_cast<std::uint32_t>(config.panelWidth_px * config.panelHeight_px *
-                                                    (config.subpixels == proto::SubpixelCode::Mono ? 1 : 3));
+                                                   (config.subpixels == proto::SubpixelCode::Mono ? 1 : 3));
   return proto::encodeDeviceInfo(info);
 }
 

@@ -109,7 +109,9 @@ void EmulatedUsbDisplay::unplug() {
   d.removeFromTestbed();
 }
 
-void EmulatedUsbDisplay::loseNode() { impl_->removeNode(); }
+void EmulatedUsbDisplay::loseNode() {
+  impl_->removeNode();
+}
 
 void EmulatedUsbDisplay::stallNextFrame(int urb) {
   std::lock_guard lock(impl_->mutex);
@@ -197,7 +199,9 @@ void EmulatedUsbDisplay::observePanel(PanelObserver observer) {
   impl_->observer = std::move(observer);
 }
 
-std::string EmulatedUsbDisplay::syspath() const { return impl_->syspath; }
+std::string EmulatedUsbDisplay::syspath() const {
+  return impl_->syspath;
+}
 
 void usePrivateTmpDir() {
   // Never destroyed: the atexit handler below runs after static destructors.

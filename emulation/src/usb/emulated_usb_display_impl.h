@@ -55,20 +55,20 @@ struct EmulatedUsbDisplay::Impl {
 
   mutable std::mutex mutex;
   EmulatedDisplayState state;
-  std::deque<Urb> done;     // completed, waiting to be reaped
-  std::deque<Urb> held;     // accepted but never completed (silent device)
+  std::deque<Urb> done;  // completed, waiting to be reaped
+  std::deque<Urb> held;  // accepted but never completed (silent device)
   std::uint32_t inFlight = 0;
   bool unplugged = true;
   bool halted = false;
   // faults
   bool stallAll = false, corruptNext = false, unplugNext = false, silent = false;
-  int stallNextAt = -1;                  // the next frame's bulk URB that halts the endpoint; -1: none
-  int shortNextAt = -1;                  // the next frame's bulk URB the device takes only part of; -1: none
-  int shortNextBy = 0;                   // and how many of its bytes it leaves
-  int unplugAtRequest = -1;              // the vendor request at which the device vanishes; -1: none
-  int claimErrno = 0;                    // CLAIMINTERFACE fails with this errno (0: it succeeds)
+  int stallNextAt = -1;      // the next frame's bulk URB that halts the endpoint; -1: none
+  int shortNextAt = -1;      // the next frame's bulk URB the device takes only part of; -1: none
+  int shortNextBy = 0;       // and how many of its bytes it leaves
+  int unplugAtRequest = -1;  // the vendor request at which the device vanishes; -1: none
+  int claimErrno = 0;        // CLAIMINTERFACE fails with this errno (0: it succeeds)
   bool absurdInfo = false, badCalibrationCrc = false, forgetErrors = false;
-  int statusBrightness = -1;              // GET_STATUS's brightness, -1: the true one
+  int statusBrightness = -1;                  // GET_STATUS's brightness, -1: the true one
   std::int64_t statusPresentedSequence = -1;  // and its presented sequence
   std::size_t truncateNext = 0;
   int silentAfterUrbs = -1;  // bulk URBs to take before turning silent; -1: never

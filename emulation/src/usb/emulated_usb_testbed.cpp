@@ -75,8 +75,8 @@ void EmulatedUsbDisplay::Impl::runOnHandlerThread(const std::function<void()>& f
 
 void EmulatedUsbDisplay::Impl::attachHandler() {
   handler = UMOCKDEV_IOCTL_BASE(g_object_new(UMOCKDEV_TYPE_IOCTL_BASE, nullptr));
-  g_signal_connect(handler, "handle-ioctl", G_CALLBACK(+[](UMockdevIoctlBase*, UMockdevIoctlClient* client,
-                                                           gpointer self) -> gboolean {
+  g_signal_connect(handler, "handle-ioctl",
+                   G_CALLBACK(+[](UMockdevIoctlBase*, UMockdevIoctlClient* client, gpointer self) -> gboolean {
                      return static_cast<Impl*>(self)->onIoctl(client);
                    }),
                    this);
@@ -158,9 +158,9 @@ std::string EmulatedUsbDisplay::Impl::description() const {
       "A: serial={}\\n\n"
       "A: dev=189:{}\\n\n"
       "H: descriptors={}\n",
-      config.busNumber, config.deviceNumber, node, devnode, config.vendorId, config.productId, config.busNumber, config.deviceNumber,
-      config.busNumber, config.deviceNumber, config.vendorId, config.productId, config.vendor, config.model,
-      config.serial, (config.busNumber - 1) * 128 + config.deviceNumber - 1, hex(d));
+      config.busNumber, config.deviceNumber, node, devnode, config.vendorId, config.productId, config.busNumber,
+      config.deviceNumber, config.busNumber, config.deviceNumber, config.vendorId, config.productId, config.vendor,
+      config.model, config.serial, (config.busNumber - 1) * 128 + config.deviceNumber - 1, hex(d));
 }
 
 // ---- device side, on the handler thread, under `mutex` ----

@@ -8,17 +8,17 @@
 
 #include "lfi/core/error.h"
 #include "lfi/drivers/camera_registry.h"
-#include "lfi/sim/render.h"
-#include "lfi/sim/scene.h"
 #include "lfi/sim/devices/sim_bench.h"
 #include "lfi/sim/devices/sim_display.h"
+#include "lfi/sim/render.h"
+#include "lfi/sim/scene.h"
 
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <algorithm>
 #include <deque>
 #include <mutex>
 #include <thread>
@@ -60,8 +60,7 @@ CameraSettings SimImager::resolve(const CameraSettings& s, const std::string& de
   if (!(s.gain >= limits.minGain_dB && s.gain <= limits.maxGain_dB))
     fail(Errc::InvalidArgument, "camera '{}': gain {} is outside {}..{} dB", device, s.gain, limits.minGain_dB,
          limits.maxGain_dB);
-  if (s.binning < 1 || s.binning > limits.maxBinning || camera_.width / s.binning < 1 ||
-      camera_.height / s.binning < 1)
+  if (s.binning < 1 || s.binning > limits.maxBinning || camera_.width / s.binning < 1 || camera_.height / s.binning < 1)
     fail(Errc::InvalidArgument, "camera '{}': binning {} is outside 1..{} (sensor {} x {})", device, s.binning,
          limits.maxBinning, camera_.width, camera_.height);
   const int width = camera_.width / s.binning, height = camera_.height / s.binning;
@@ -72,8 +71,10 @@ CameraSettings SimImager::resolve(const CameraSettings& s, const std::string& de
     fail(Errc::InvalidArgument, "camera '{}': ROI ({}, {}, {} x {}) does not fit the {} x {} (binned) sensor", device,
          s.roiX_px, s.roiY_px, r.roiWidth_px, r.roiHeight_px, width, height);
   if (s.trigger == TriggerMode::Line)
-    fail(Errc::InvalidArgument, "camera '{}': TriggerMode::Line asked, the sim camera has no trigger lines "
-         "(FreeRun, Software)", device);
+    fail(Errc::InvalidArgument,
+         "camera '{}': TriggerMode::Line asked, the sim camera has no trigger lines "
+         "(FreeRun, Software)",
+         device);
   if (s.trigger == TriggerMode::FreeRun) {
     if (s.frameRate_hz == 0) r.frameRate_hz = limits.defaultFrameRate_hz;
     if (!(r.frameRate_hz >= limits.minFrameRate_hz && r.frameRate_hz <= limits.maxFrameRate_hz))
@@ -105,9 +106,8 @@ const cv::Mat& SimImager::radiance(int binning, const SimBench::DisplayState* di
   std::uint64_t kept = 0;
   for (const auto& [k, image] : radiance_)
     if (k.first != display->version) kept = std::max(kept, k.first);
-  std::erase_if(radiance_, [&](const auto& entry) {
-    return entry.first.first != display->version && entry.first.first != kept;
-  });
+  std::erase_if(radiance_,
+                [&](const auto& entry) { return entry.first.first != display->version && entry.first.first != kept; });
   SimBench::applyDisplay(*scene_, description_.displayObject, *display);
   const TelecentricCamera binned = camera_.binned(binning);
   RenderOptions options = description_.render;
@@ -425,7 +425,7 @@ class SimCamera final : public Camera {
   std::uint64_t nextFrameId_ = 1;
   std::uint64_t produced_ = 0;  // free-running frames produced since start()
   Clock::time_point start_;
-  bool freeRun_ = false;      // settings_ at start(), for the listener
+  bool freeRun_ = false;  // settings_ at start(), for the listener
   double frameRate_hz_ = 25;
   std::shared_ptr<void> displayChanges_;  // the bench's change listener while streaming
   bool listening_ = false;                // the stream has started: the listener produces its due frames

@@ -32,8 +32,10 @@ class SimDisplay final : public Display {
     if (!bench->hasDisplay())
       fail(Errc::Config, "display '{}': the scene file has no [display] table (docs/scene-files.md)", name_);
     if (!bench->claimDisplay())
-      fail(Errc::Device, "display '{}': already open in this process (one display drives a scene file's panel; "
-           "close the other first)", name_);
+      fail(Errc::Device,
+           "display '{}': already open in this process (one display drives a scene file's panel; "
+           "close the other first)",
+           name_);
     bench_ = std::move(bench);  // (holds the claim: close() releases it)
     try {
       info_ = bench_->description().display->info;

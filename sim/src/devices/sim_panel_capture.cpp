@@ -26,8 +26,10 @@ cv::Mat capturePanelReference(const std::filesystem::path& sceneFile, const SimC
   const DisplayInfo& info = optics.info();
   const DisplayOpticsParams& o = info.optics;
   if (!fullParallax(o.type))
-    fail(Errc::Config, "'{}': [display]: a panel reference is traced through a lenslet or pinhole array; {} optics "
-         "are not supported", sceneFile.string(), toString(o.type));
+    fail(Errc::Config,
+         "'{}': [display]: a panel reference is traced through a lenslet or pinhole array; {} optics "
+         "are not supported",
+         sceneFile.string(), toString(o.type));
   if (settings.samplesPerPixel < 1 || settings.samplesPerPixel > kMostSamplesPerPixel)
     fail(Errc::InvalidArgument, "panel reference of '{}': spp = {} is outside 1 .. 2^20", sceneFile.string(),
          settings.samplesPerPixel);

@@ -49,8 +49,8 @@ std::vector<unsigned> weldVertices(const TriangleMesh& mesh, double tolerance, b
       if (used[v]) order.emplace_back(cellOf(mesh.vertices[v]), static_cast<unsigned>(v));
     std::sort(order.begin(), order.end());
     for (size_t i = 0; i < order.size(); ++i)
-      welded[order[i].second] = i > 0 && order[i].first == order[i - 1].first ? welded[order[i - 1].second]
-                                                                              : order[i].second;
+      welded[order[i].second] =
+          i > 0 && order[i].first == order[i - 1].first ? welded[order[i - 1].second] : order[i].second;
     return welded;
   }
   struct CellHash {
@@ -186,8 +186,8 @@ std::optional<std::string> partWindingFault(const TriangleMesh& mesh, const std:
       for (const unsigned i : triangles[other]) inside ^= parityRayCrosses(mesh, mesh.triangles[i], p);
       around += inside;
     };
-    for (const unsigned other : cells[(static_cast<size_t>(cellOf(p.x, 0)) * side + cellOf(p.y, 1)) * side +
-                                      cellOf(p.z, 2)])
+    for (const unsigned other :
+         cells[(static_cast<size_t>(cellOf(p.x, 0)) * side + cellOf(p.y, 1)) * side + cellOf(p.z, 2)])
       test(other);
     for (const unsigned other : large) test(other);
     return around;
@@ -208,11 +208,12 @@ std::optional<std::string> partWindingFault(const TriangleMesh& mesh, const std:
         const Vec3& q = mesh.vertices[v];
         return fmt::format("({:g}, {:g}, {:g})", q.x, q.y, q.z);
       };
-      return fmt::format("a part wound the wrong way: the closed surface through triangle {} (counting from 0; "
-                         "corners {}, {}, {}) encloses {:.6g} mm^3 and lies inside {} of the mesh's other {} parts: "
-                         "{} (reverse its triangles' vertex order)", list.front(), at(t[0]), at(t[1]), at(t[2]),
-                         volume6[k] / 6, around, triangles.size() - 1,
-                         around % 2 ? "a cavity must be wound inwards" : "a solid must be wound outwards");
+      return fmt::format(
+          "a part wound the wrong way: the closed surface through triangle {} (counting from 0; "
+          "corners {}, {}, {}) encloses {:.6g} mm^3 and lies inside {} of the mesh's other {} parts: "
+          "{} (reverse its triangles' vertex order)",
+          list.front(), at(t[0]), at(t[1]), at(t[2]), volume6[k] / 6, around, triangles.size() - 1,
+          around % 2 ? "a cavity must be wound inwards" : "a solid must be wound outwards");
     }
   }
   return std::nullopt;
@@ -256,8 +257,8 @@ std::optional<ClosureFault> closureFault(const TriangleMesh& mesh, const std::ve
         const Vec3& p = mesh.vertices[v];
         return fmt::format("({:g}, {:g}, {:g})", p.x, p.y, p.z);
       };
-      const std::string which = fmt::format("the edge from {} to {} (triangle {}, counting from 0)",
-                                            at(tri[c.corner]), at(tri[(c.corner + 1) % 3]), c.triangle);
+      const std::string which = fmt::format("the edge from {} to {} (triangle {}, counting from 0)", at(tri[c.corner]),
+                                            at(tri[(c.corner + 1) % 3]), c.triangle);
       const size_t thisWay = c.forward ? forward : backward, otherWay = j - i - thisWay;
       if (j - i == 1)
         return ClosureFault{true, fmt::format("not closed: {} borders no other triangle (a hole)", which)};
@@ -269,7 +270,8 @@ std::optional<ClosureFault> closureFault(const TriangleMesh& mesh, const std::ve
   }
   if (!(volume6 > 0))
     return ClosureFault{false, fmt::format("wound inwards: its enclosed volume is {:.6g} mm^3 (reverse every "
-                                           "triangle's vertex order)", volume6 / 6)};
+                                           "triangle's vertex order)",
+                                           volume6 / 6)};
   if (auto fault = partWindingFault(mesh, crossings)) return ClosureFault{false, std::move(*fault)};
   return std::nullopt;
 }

@@ -8,9 +8,9 @@
 #include "lfi/core/input_file.h"
 
 #include <assimp/DefaultIOSystem.h>
-#include <assimp/Importer.hpp>
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
+#include <assimp/Importer.hpp>
 
 #include "ply_mesh.h"
 #include "scene_file_internal.h"
@@ -34,7 +34,7 @@ namespace {
 // there fails instead of blocking the load.
 // (DefaultIOSystem's Exists() opens the file too, and would block on a FIFO.)
 class RegularFilesOnly final : public Assimp::DefaultIOSystem {
-public:
+ public:
   bool Exists(const char* file) const override {
     std::error_code ec;
     return fs::is_regular_file(file, ec);
@@ -50,9 +50,10 @@ public:
 TriangleMesh importMesh(const fs::path& path, const std::string& extension) {
   Assimp::Importer importer;
   if (extension.empty() || !importer.IsExtensionSupported(extension))
-    fail(Errc::InvalidFile, "'{}': not a mesh format lfi reads ({}): name the file by its format: .ply (lfi's own "
-         "reader), or .obj, .stl, .gltf, .glb or another extension Assimp reads", path.string(),
-         extension.empty() ? std::string("no extension") : "'" + extension + "'");
+    fail(Errc::InvalidFile,
+         "'{}': not a mesh format lfi reads ({}): name the file by its format: .ply (lfi's own "
+         "reader), or .obj, .stl, .gltf, .glb or another extension Assimp reads",
+         path.string(), extension.empty() ? std::string("no extension") : "'" + extension + "'");
   importer.SetIOHandler(new RegularFilesOnly);  // (the importer owns it)
   // Triangles with shared vertices; the data structure is checked (indices in
   // range, no empty meshes) before anything reads it.
@@ -116,7 +117,7 @@ void smoothNormals(TriangleMesh& mesh, double creaseAngle) {
   for (size_t t = 0; t < nt; ++t)
     for (const unsigned v : mesh.triangles[t]) around[fill[v]++] = static_cast<unsigned>(t);
   const double cosCrease = std::cos(creaseAngle);
-  mesh.normals.assign(nv, Vec3(0, 0, 1));  // (for a vertex no face uses)
+  mesh.normals.assign(nv, Vec3(0, 0, 1));            // (for a vertex no face uses)
   std::vector<std::pair<unsigned, unsigned>> edges;  // (the edge's other end, the face's slot around v)
   std::vector<unsigned> group, copyOf;
   std::vector<Vec3> sum;
@@ -211,9 +212,10 @@ TriangleMesh loadMesh(const fs::path& path, double creaseAngle_rad, double scale
     if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
       fail(Errc::InvalidFile, "'{}': vertex {} (counting from 0) is not finite", path.string(), v);
     if (std::max({std::abs(p.x), std::abs(p.y), std::abs(p.z)}) > kFarthest_mm)
-      fail(Errc::InvalidFile, "'{}': vertex {} (counting from 0) at ({:g}, {:g}, {:g}) mm is more than {:g} mm from "
-           "the origin: not a part of a bench (wrong units? the scale is {:g})", path.string(), v, p.x, p.y, p.z,
-           kFarthest_mm, scale);
+      fail(Errc::InvalidFile,
+           "'{}': vertex {} (counting from 0) at ({:g}, {:g}, {:g}) mm is more than {:g} mm from "
+           "the origin: not a part of a bench (wrong units? the scale is {:g})",
+           path.string(), v, p.x, p.y, p.z, kFarthest_mm, scale);
   }
   if (mesh.triangles.empty()) fail(Errc::InvalidFile, "'{}': the mesh has no faces", path.string());
   if (std::none_of(mesh.triangles.begin(), mesh.triangles.end(), [&](const auto& f) {

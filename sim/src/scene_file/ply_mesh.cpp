@@ -131,9 +131,10 @@ class BodyReader {
     if (i == body_.size() || body_[i] == '\n') return;
     size_t end = i;
     while (end < body_.size() && !std::isspace(static_cast<unsigned char>(body_[end]))) ++end;
-    lfi::fail(Errc::InvalidFile, "'{}': line {}: {} {}: '{}' is a value past the element's declared properties "
-              "(a line holds one instance)", path_.string(), line_, shown(element_->name), instance_,
-              shown(body_.substr(i, end - i)));
+    lfi::fail(Errc::InvalidFile,
+              "'{}': line {}: {} {}: '{}' is a value past the element's declared properties "
+              "(a line holds one instance)",
+              path_.string(), line_, shown(element_->name), instance_, shown(body_.substr(i, end - i)));
   }
   // Anything but white space after the last element is an error (a count
   // short of the rows or faces that follow; a binary file may end with a
@@ -142,16 +143,20 @@ class BodyReader {
     if (!ascii()) {
       const auto rest = body_.substr(at_);
       if (rest.find_first_not_of(" \t\r\n") != std::string_view::npos)
-        lfi::fail(Errc::InvalidFile, "'{}': byte {}: {} bytes after the last element's declared instances (a count "
-                  "in the header is short)", path_.string(), offset_ + at_, remaining());
+        lfi::fail(Errc::InvalidFile,
+                  "'{}': byte {}: {} bytes after the last element's declared instances (a count "
+                  "in the header is short)",
+                  path_.string(), offset_ + at_, remaining());
       return;
     }
     rowLine_ = -1;
     while (at_ < body_.size() && std::isspace(static_cast<unsigned char>(body_[at_])))
       if (body_[at_++] == '\n') ++line_;
     if (at_ < body_.size())
-      lfi::fail(Errc::InvalidFile, "'{}': line {}: values after the last element's declared instances (a "
-                "count in the header is short)", path_.string(), line_);
+      lfi::fail(Errc::InvalidFile,
+                "'{}': line {}: values after the last element's declared instances (a "
+                "count in the header is short)",
+                path_.string(), line_);
   }
 
   double real(Type t) {
@@ -279,8 +284,8 @@ class BodyReader {
   std::uint64_t instance_ = 0;
   const Property* property_ = nullptr;
   size_t at_ = 0;
-  size_t offset_;  // of the body in the file
-  int line_;       // ASCII: the current line
+  size_t offset_;     // of the body in the file
+  int line_;          // ASCII: the current line
   int rowLine_ = -1;  // ASCII: the line of the current instance's first value (-1: none read yet)
   Format format_;
 };

@@ -58,8 +58,9 @@ DisplayParameters readDisplay(ConfigTable& t) {
   info.panelHeight_px = t.integer("panel_height_px", defaults.panelHeight_px, 1, 16384);
   info.pixelPitch_mm = t.number("pixel_pitch_mm", defaults.pixelPitch_mm, 1e-4, 10);
   const std::string sub = t.string("subpixels", "rgb", {"mono", "rgb", "bgr"});
-  info.subpixels = sub == "mono" ? SubpixelLayout::Mono : sub == "rgb" ? SubpixelLayout::RgbStripe
-                                                                        : SubpixelLayout::BgrStripe;
+  info.subpixels = sub == "mono"  ? SubpixelLayout::Mono
+                   : sub == "rgb" ? SubpixelLayout::RgbStripe
+                                  : SubpixelLayout::BgrStripe;
   info.optics = readDisplayOpticsTable(t, defaults.optics);
   info.viewCount = t.integer("view_count", defaults.viewCount, 1, 1 << 20);
   info.brightnessMin = t.integer("brightness_min", defaults.brightnessMin, 0, 1 << 20);
@@ -117,9 +118,10 @@ void requireOutsideSolids(const std::vector<Object>& objects, const Rigid3& worl
           const double a = 2 * std::numbers::pi * k / kDirections, r = k == 0 ? 0.0 : reach;
           const Vec3 p = worldFromPlane.point({x + r * std::cos(a), y + r * std::sin(a), 0});
           if (contains(objectFromWorld.point(p)))
-            fail(Errc::Config, "{}: the sensor's rays would start inside object '{}' (at ({:.4g}, {:.4g}, {:.4g}) "
-                 "mm); the tracer starts them in air: move the sensor or the object", where, object.name, p.x, p.y,
-                 p.z);
+            fail(Errc::Config,
+                 "{}: the sensor's rays would start inside object '{}' (at ({:.4g}, {:.4g}, {:.4g}) "
+                 "mm); the tracer starts them in air: move the sensor or the object",
+                 where, object.name, p.x, p.y, p.z);
         }
       }
   }
@@ -159,8 +161,10 @@ SceneDescription loadSceneFile(const fs::path& path) {
     cam.width = c.integer("width", std::nullopt, 1, 65536);
     cam.height = c.integer("height", std::nullopt, 1, 65536);
     if (static_cast<std::int64_t>(cam.width) * cam.height > kMaxExrPixels)
-      fail(Errc::Config, "{}: {} x {} pixels is more than a radiance EXR holds (2^30): the render could not be "
-           "written", c.where("height"), cam.width, cam.height);
+      fail(Errc::Config,
+           "{}: {} x {} pixels is more than a radiance EXR holds (2^30): the render could not be "
+           "written",
+           c.where("height"), cam.width, cam.height);
     cam.worldFromCamera = detail::readPlacement(c);
     sensorWhere = c.where("position_mm");
     c.finish();
@@ -196,9 +200,11 @@ SceneDescription loadSceneFile(const fs::path& path) {
     }
     if (const double reach = std::max(lfs.geometry.extentX_mm(), lfs.geometry.extentY_mm()) / 2;
         !(reach <= kFarthest_mm))
-      fail(Errc::Config, "{} = {}: with spatial_x = {}, spatial_y = {} and angular = {}, the sensor reaches {:g} mm "
-           "from its centre, past {:g} mm", c.where("pixel_pitch_mm"), lfs.geometry.pixelPitch_mm,
-           lfs.geometry.spatialX, lfs.geometry.spatialY, lfs.geometry.angular, reach, kFarthest_mm);
+      fail(Errc::Config,
+           "{} = {}: with spatial_x = {}, spatial_y = {} and angular = {}, the sensor reaches {:g} mm "
+           "from its centre, past {:g} mm",
+           c.where("pixel_pitch_mm"), lfs.geometry.pixelPitch_mm, lfs.geometry.spatialX, lfs.geometry.spatialY,
+           lfs.geometry.angular, reach, kFarthest_mm);
     d.sensor = lfs;
   }
   if (root.has("camera_sensor")) {

@@ -21,11 +21,16 @@ namespace fs = std::filesystem;
 
 const char* lensKey(LensFault::Part part) {
   switch (part) {
-    case LensFault::Part::Thickness: return "centre_thickness_mm";
-    case LensFault::Part::Diameter: return "diameter_mm";
-    case LensFault::Part::FrontRadius: return "front_radius_mm";
-    case LensFault::Part::BackRadius: return "back_radius_mm";
-    case LensFault::Part::Edge: return "centre_thickness_mm";
+    case LensFault::Part::Thickness:
+      return "centre_thickness_mm";
+    case LensFault::Part::Diameter:
+      return "diameter_mm";
+    case LensFault::Part::FrontRadius:
+      return "front_radius_mm";
+    case LensFault::Part::BackRadius:
+      return "back_radius_mm";
+    case LensFault::Part::Edge:
+      return "centre_thickness_mm";
   }
   return "diameter_mm";
 }
@@ -123,11 +128,12 @@ Object readObject(ConfigTable& t) {
     // one more per concave face of a lens (each is a sphere taken away).
     auto cuts = t.tables("cut");
     int pieces = 1;
-    if (kind == "lens")
-      pieces += (t.number("front_radius_mm") < 0 ? 1 : 0) + (t.number("back_radius_mm") > 0 ? 1 : 0);
+    if (kind == "lens") pieces += (t.number("front_radius_mm") < 0 ? 1 : 0) + (t.number("back_radius_mm") > 0 ? 1 : 0);
     if (const auto maxCuts = static_cast<size_t>(IntervalList::kCapacity - 1 - pieces); cuts.size() > maxCuts)
-      fail(Errc::Config, "{}: {} cut-outs; at most {} for this {} (a ray through all of them would cross more "
-           "pieces than the tracer follows): make the part a mesh", t.where("cut"), cuts.size(), maxCuts, kind);
+      fail(Errc::Config,
+           "{}: {} cut-outs; at most {} for this {} (a ray through all of them would cross more "
+           "pieces than the tracer follows): make the part a mesh",
+           t.where("cut"), cuts.size(), maxCuts, kind);
     // A cut that misses the part's box changes nothing, and one holding the
     // whole box leaves nothing: both are a wrong position, radius or unit.
     const Bounds box = solid->bounds();  // (conservative: a box around the part)
@@ -136,44 +142,52 @@ Object readObject(ConfigTable& t) {
       const double r = cut.number("radius_mm", std::nullopt, kSmallest_mm, 1e6);
       const Bounds::Ball fit = box.ball({c[0], c[1], c[2]}, r);
       if (fit == Bounds::Ball::Clear)
-        fail(Errc::Config, "{}: the cut-out (radius {:g} mm) does not meet the part, which lies within {} in the "
-             "object's frame: position_mm is in the object's frame, in millimetres", cut.where("position_mm"), r,
-             box.text());
+        fail(Errc::Config,
+             "{}: the cut-out (radius {:g} mm) does not meet the part, which lies within {} in the "
+             "object's frame: position_mm is in the object's frame, in millimetres",
+             cut.where("position_mm"), r, box.text());
       if (fit == Bounds::Ball::HoldsAll)
-        fail(Errc::Config, "{}: the cut-out (radius {:g} mm) holds the whole part ({} in the object's frame): "
-             "nothing would be left", cut.where("radius_mm"), r, box.text());
+        fail(Errc::Config,
+             "{}: the cut-out (radius {:g} mm) holds the whole part ({} in the object's frame): "
+             "nothing would be left",
+             cut.where("radius_mm"), r, box.text());
       solid = Solid::combine(Solid::Kind::Difference, solid, Solid::sphere(r, Rigid3::translation({c[0], c[1], c[2]})));
       cut.finish();
     }
     if (!cuts.empty() && !meetsLines(*solid, box))
-      fail(Errc::Config, "{}: the cut-outs together leave nothing of the part ({} in the object's frame; no line of "
-           "a {} x {} grid across it along x, y or z meets what is left)", cuts.back().where("radius_mm"),
-           box.text(), kGridLines, kGridLines);
+      fail(Errc::Config,
+           "{}: the cut-outs together leave nothing of the part ({} in the object's frame; no line of "
+           "a {} x {} grid across it along x, y or z meets what is left)",
+           cuts.back().where("radius_mm"), box.text(), kGridLines, kGridLines);
     obj.shape = solid;
   }
   const std::string material = t.string("material", "absorber", {"dielectric", "absorber", "diffuse"});
   if (material != "absorber" && t.has("emitter"))  // (its ior, absorption or albedo would be read and not used)
-    fail(Errc::Config, "{}: an emitting object is opaque, its material unused: leave out material = '{}' (or the "
-         "emitter)", t.where("material"), material);
+    fail(Errc::Config,
+         "{}: an emitting object is opaque, its material unused: leave out material = '{}' (or the "
+         "emitter)",
+         t.where("material"), material);
   if (material == "dielectric") {
     if (std::holds_alternative<Rectangle>(obj.shape))  // a path would enter it and never leave
-      fail(Errc::Config, "{}: a rectangle has no inside: it cannot be a dielectric (make it a thin box, a solid or "
-           "a closed mesh)", t.where("material"));
+      fail(Errc::Config,
+           "{}: a rectangle has no inside: it cannot be a dielectric (make it a thin box, a solid or "
+           "a closed mesh)",
+           t.where("material"));
     obj.material = Dielectric{t.number("ior", std::nullopt, 1.0, 5.0), t.number("absorption_per_mm", 0.0, 0, 1e3)};
     if (const auto* mesh = std::get_if<TriangleMesh>(&obj.shape))  // rays enter and leave it: it must be closed
       if (const auto fault = meshClosureFault(*mesh))
         fail(Errc::Config, "{}: a dielectric mesh must bound a solid; '{}' is {}", t.where("file"), t.string("file"),
              *fault);
-  }
-  else if (material == "diffuse")
+  } else if (material == "diffuse")
     obj.material = Diffuse{t.number("albedo", 0.8, 0, 1)};
   else
     obj.material = Absorber{};
   if (t.has("emitter")) {
     const std::string e = t.string("emitter", std::nullopt, {"parallel", "lambertian", "light_field"});
     if (e == "parallel") {
-      obj.emission = ParallelEmission{t.number("radiance", 1.0, 0, 1e12),
-                                      t.number("half_angle_rad", std::nullopt, kNarrowestCone_rad, std::numbers::pi / 2)};
+      obj.emission =
+          ParallelEmission{t.number("radiance", 1.0, 0, 1e12),
+                           t.number("half_angle_rad", std::nullopt, kNarrowestCone_rad, std::numbers::pi / 2)};
     } else if (e == "lambertian") {
       obj.emission = LambertianEmission{t.number("radiance", 1.0, 0, 1e12)};
     } else {

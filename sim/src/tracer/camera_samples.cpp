@@ -68,7 +68,7 @@ LFI_SIMD_CLONES std::uint64_t makeCameraSamples(const TelecentricCamera::RayMap&
 }
 
 LFI_SIMD_CLONES std::uint64_t makeLightFieldSamples(const LightFieldSensor& sensor, std::uint64_t seed, int side, int n,
-                                                   CameraSampleBatch& b) {
+                                                    CameraSampleBatch& b) {
   constexpr std::uint64_t kGolden = 0x9e3779b97f4a7c15ull;  // Sampler's increment
   const std::uint64_t seedHash = splitMix64(seed);
   const auto strata = static_cast<std::uint32_t>(side * side);
@@ -100,7 +100,7 @@ LFI_SIMD_CLONES std::uint64_t makeLightFieldSamples(const LightFieldSensor& sens
     b.oy[k] = r[3] * qx + r[4] * qy + r[5] * qz + shift.y;
     b.oz[k] = r[6] * qx + r[7] * qy + r[8] * qz + shift.z;
     const double dx = -px, dy = -py, dz = std::sqrt(std::max(0.0, 1 - r2));  // LightField::directionFromDisc
-    b.dx[k] = r[0] * dx + r[1] * dy + r[2] * dz;                                // Rigid3::vector
+    b.dx[k] = r[0] * dx + r[1] * dy + r[2] * dz;                             // Rigid3::vector
     b.dy[k] = r[3] * dx + r[4] * dy + r[5] * dz;
     b.dz[k] = r[6] * dx + r[7] * dy + r[8] * dz;
   }

@@ -33,7 +33,9 @@ inline double fresnelFromCosines(double cosI, double cosT, double n1, double n2)
 // and reflection of unit vectors give unit vectors but for rounding; this
 // keeps the rounding from adding up along a path, without a root and a
 // division on every bounce (they set a path's latency).
-inline Vec3 renormalised(const Vec3& v) { return v * (1.5 - 0.5 * v.dot(v)); }
+inline Vec3 renormalised(const Vec3& v) {
+  return v * (1.5 - 0.5 * v.dot(v));
+}
 
 // A ray with unit direction d meets an interface with unit normal n (either
 // side) from index n1 into index n2. In components and selects rather than
@@ -71,11 +73,11 @@ inline FresnelEvent fresnelEvent(const Vec3& d, const Vec3& n, double n1, double
 // n1[k] into n2[k]. Also gives the hit points, rays.ray(k).at(hits.t[k]).
 struct FresnelLanes {
   static constexpr int kSize = static_cast<int>(Scene::kPacket);
-  alignas(64) double n1[kSize], n2[kSize];                   // in
-  alignas(64) double px[kSize], py[kSize], pz[kSize];        // out: the hit points
-  alignas(64) double cosT[kSize], reflectance[kSize];        // out: as FresnelEvent
-  alignas(64) double rx[kSize], ry[kSize], rz[kSize];        // out: reflected
-  alignas(64) double tx[kSize], ty[kSize], tz[kSize];        // out: refracted
+  alignas(64) double n1[kSize], n2[kSize];             // in
+  alignas(64) double px[kSize], py[kSize], pz[kSize];  // out: the hit points
+  alignas(64) double cosT[kSize], reflectance[kSize];  // out: as FresnelEvent
+  alignas(64) double rx[kSize], ry[kSize], rz[kSize];  // out: reflected
+  alignas(64) double tx[kSize], ty[kSize], tz[kSize];  // out: refracted
 };
 void fresnelLanes(const RayLanes& rays, const Scene::HitPacket& hits, FresnelLanes& out);
 

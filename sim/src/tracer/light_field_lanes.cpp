@@ -13,7 +13,7 @@ LFI_SIMD_CLONES void mapToLightField(const RayLanes& __restrict rays, const doub
   const auto& r = objectFromWorld.r;
   const Vec3 shift = objectFromWorld.t;
   const double e = g.elementPitch_mm(), halfX = 0.5 * g.spatialX, halfY = 0.5 * g.spatialY;
-  constexpr double kTiny = 2 * std::numeric_limits<double>::min();  // below it Imath's length() rescales
+  constexpr double kTiny = 2 * std::numeric_limits<double>::min();   // below it Imath's length() rescales
   constexpr double kHuge = std::numeric_limits<double>::infinity();  // (discFromDirection refuses it)
   for (int k = 0; k < LightFieldMapping::kSize; ++k) {
     const double dx = rays.dx[k], dy = rays.dy[k], dz = rays.dz[k];

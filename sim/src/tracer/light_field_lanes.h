@@ -16,7 +16,7 @@ struct LightFieldMapping {
   static constexpr int kSize = RayLanes::kSize;
   alignas(64) double sx[kSize], sy[kSize];        // spatial coordinates, elements (LightField::radianceAt)
   alignas(64) double discX[kSize], discY[kSize];  // disc position of the direction back towards the sensor
-  alignas(64) int seen[kSize];     // 1: the direction points into the disc (else the radiance is 0)
+  alignas(64) int seen[kSize];                    // 1: the direction points into the disc (else the radiance is 0)
   alignas(64) int oneByOne[kSize];  // 1: a direction of length below 2 DBL_MIN, left to the one-ray emitter
 };
 

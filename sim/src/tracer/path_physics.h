@@ -52,7 +52,7 @@ inline double uniformRadiance(const Surface& surface, double cosTheta) {
 
 // The dielectric objects a path is inside, innermost last.
 class MediumStack {
-public:
+ public:
   static constexpr int kDepth = 8;
   int size() const { return size_; }
   int top() const { return items_[size_ - 1]; }
@@ -87,11 +87,12 @@ public:
     return scene.surface(object).ior;
   }
 
-private:
+ private:
   [[noreturn, gnu::cold, gnu::noinline]] void tooDeep(const Scene& scene, int object) const {
     std::string inside;
     for (int i = 0; i < size_; ++i) inside += fmt::format("{}'{}'", i ? ", " : "", scene.object(items_[i]).name);
-    fail(Errc::Config, "a path entering dielectric '{}' is already inside {} nested dielectrics ({}); the tracer "
+    fail(Errc::Config,
+         "a path entering dielectric '{}' is already inside {} nested dielectrics ({}); the tracer "
          "follows at most {}: nest fewer, or make the overlapping objects one solid",
          scene.object(object).name, size_, inside, kDepth);
   }

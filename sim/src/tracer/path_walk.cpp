@@ -33,7 +33,9 @@ bool refract(const Vec3& d, const Vec3& n, double eta, Vec3& out) {
   return true;
 }
 
-Vec3 reflect(const Vec3& d, const Vec3& n) { return detail::renormalised(d - n * (2 * d.dot(n))); }
+Vec3 reflect(const Vec3& d, const Vec3& n) {
+  return detail::renormalised(d - n * (2 * d.dot(n)));
+}
 
 namespace {
 

@@ -37,12 +37,14 @@ struct AnalyticGeometry {
 // World bounds of an object's local bounds, padded so that Embree's float
 // traversal never culls a real hit.
 // A rectangle's box in its own frame: centred, in the xy plane.
-Bounds rectangleBounds(const Rectangle& r) { return {{-r.sizeX / 2, -r.sizeY / 2, 0}, {r.sizeX / 2, r.sizeY / 2, 0}}; }
+Bounds rectangleBounds(const Rectangle& r) {
+  return {{-r.sizeX / 2, -r.sizeY / 2, 0}, {r.sizeX / 2, r.sizeY / 2, 0}};
+}
 
 Bounds paddedWorldBounds(const Bounds& local, const Rigid3& worldFromObject) {
   Bounds b = local.transformed(worldFromObject);
-  const double pad = 1e-3 + 1e-6 * std::max({std::abs(b.lo.x), std::abs(b.lo.y), std::abs(b.lo.z),
-                                             std::abs(b.hi.x), std::abs(b.hi.y), std::abs(b.hi.z)});
+  const double pad = 1e-3 + 1e-6 * std::max({std::abs(b.lo.x), std::abs(b.lo.y), std::abs(b.lo.z), std::abs(b.hi.x),
+                                             std::abs(b.hi.y), std::abs(b.hi.z)});
   b.lo = b.lo - Vec3(pad), b.hi = b.hi + Vec3(pad);
   return b;
 }
@@ -75,8 +77,8 @@ LFI_SIMD_CLONES void rectangleLanes(const WorldRectangle& r, const RayLanes& __r
     crossing[k] = hit ? t : kInf;
   }
   for (int k = 0; k < RayLanes::kSize; ++k) {
-    const bool nearer = (lanes >> k & 1) != 0 && (crossing[k] < best.t[k] || (crossing[k] == best.t[k] &&
-                                                                             object < best.object[k]));
+    const bool nearer =
+        (lanes >> k & 1) != 0 && (crossing[k] < best.t[k] || (crossing[k] == best.t[k] && object < best.object[k]));
     best.t[k] = nearer ? crossing[k] : best.t[k];
     best.nx[k] = nearer ? n.x : best.nx[k];
     best.ny[k] = nearer ? n.y : best.ny[k];
@@ -95,7 +97,7 @@ struct HitContext {
   RTCIntersectContext embree;
   const RayLanes* rays;  // world frame
   double tMin;
-  Scene::HitPacket* best;  // the nearest analytic crossing so far, per lane
+  Scene::HitPacket* best;               // the nearest analytic crossing so far, per lane
   const AnalyticGeometry* const* skip;  // per lane: a solid the ray cannot cross, or null
   // The objects met so far, each with the lanes that may cross it.
   static constexpr int kObjects = 8;
@@ -208,8 +210,8 @@ LFI_SIMD_CLONES void embreePacket(const RayLanes& __restrict r, std::uint32_t tr
     rh.ray.dir_y[k] = static_cast<float>(r.dy[k]);
     rh.ray.dir_z[k] = static_cast<float>(r.dz[k]);
     rh.ray.tnear[k] = static_cast<float>(std::max(tMin - t0, 0.0));
-    rh.ray.tfar[k] = (traced >> k & 1) != 0 ? std::numeric_limits<float>::infinity()
-                                            : -std::numeric_limits<float>::infinity();
+    rh.ray.tfar[k] =
+        (traced >> k & 1) != 0 ? std::numeric_limits<float>::infinity() : -std::numeric_limits<float>::infinity();
     rh.ray.time[k] = 0;
     rh.ray.mask[k] = 0xffffffffu;
     rh.ray.id[k] = static_cast<unsigned>(k);
@@ -316,9 +318,8 @@ Scene::Scene(std::vector<Object> objects, double ambientIor)
   // Robust (watertight, conservative) traversal matters for meshes only: rays
   // must not slip between their triangles. The analytic objects' boxes are
   // padded far beyond the fast traversal's rounding.
-  const bool meshes = std::ranges::any_of(objects_, [](const Object& o) {
-    return std::holds_alternative<TriangleMesh>(o.shape);
-  });
+  const bool meshes =
+      std::ranges::any_of(objects_, [](const Object& o) { return std::holds_alternative<TriangleMesh>(o.shape); });
   rtcSetSceneFlags(impl_->scene, meshes ? RTC_SCENE_FLAG_ROBUST : RTC_SCENE_FLAG_NONE);
   impl_->meshes = meshes;
   rtcSetSceneBuildQuality(impl_->scene, RTC_BUILD_QUALITY_HIGH);
@@ -344,12 +345,15 @@ Scene::Scene(std::vector<Object> objects, double ambientIor)
       }
       WorldRectangle world;
       if (rect)
-        world = {obj.worldFromObject.t, obj.worldFromObject.vector({1, 0, 0}), obj.worldFromObject.vector({0, 1, 0}),
-                 obj.worldFromObject.vector({0, 0, 1}), rect->sizeX / 2, rect->sizeY / 2};
+        world = {obj.worldFromObject.t,
+                 obj.worldFromObject.vector({1, 0, 0}),
+                 obj.worldFromObject.vector({0, 1, 0}),
+                 obj.worldFromObject.vector({0, 0, 1}),
+                 rect->sizeX / 2,
+                 rect->sizeY / 2};
       auto data = std::make_unique<AnalyticGeometry>(AnalyticGeometry{
-          solid ? solid->get() : nullptr, world, obj.worldFromObject,
-          obj.worldFromObject.inverse(), static_cast<int>(i), !obj.worldFromObject.isIdentity(),
-          paddedWorldBounds(local, obj.worldFromObject)});
+          solid ? solid->get() : nullptr, world, obj.worldFromObject, obj.worldFromObject.inverse(),
+          static_cast<int>(i), !obj.worldFromObject.isIdentity(), paddedWorldBounds(local, obj.worldFromObject)});
       geom = rtcNewGeometry(impl_->device, RTC_GEOMETRY_TYPE_USER);
       rtcSetGeometryUserPrimitiveCount(geom, 1);
       rtcSetGeometryUserData(geom, data.get());
@@ -546,9 +550,13 @@ void Scene::meshHit(int k, const Vec3& direction, unsigned geomID, unsigned prim
   keepNearest(hits, k, tfar, normal, static_cast<int>(geomID));
 }
 
-bool Scene::isolated(int index) const { return impl_->isolated[static_cast<size_t>(index)] != nullptr; }
+bool Scene::isolated(int index) const {
+  return impl_->isolated[static_cast<size_t>(index)] != nullptr;
+}
 
-const Rigid3& Scene::objectFromWorld(int index) const { return impl_->objectFromWorld[static_cast<size_t>(index)]; }
+const Rigid3& Scene::objectFromWorld(int index) const {
+  return impl_->objectFromWorld[static_cast<size_t>(index)];
+}
 
 }  // namespace lfi::sim
 

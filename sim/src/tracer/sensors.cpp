@@ -18,12 +18,15 @@ void TelecentricCamera::validate() const {
   positive(stopDiameter_mm, "stopDiameter_mm");
   positive(pixelPitch_mm, "pixelPitch_mm");
   if (imageDistance_mm <= focalLength_mm)
-    fail(Errc::InvalidArgument, "telecentric camera: imageDistance_mm = {} must exceed focalLength_mm = {} "
-         "(otherwise no real object is in focus)", imageDistance_mm, focalLength_mm);
-  if (width < 1 || height < 1 || width > 65536 || height > 65536 ||
-      static_cast<long>(width) * height > kMaxExrPixels)
-    fail(Errc::InvalidArgument, "telecentric camera: size {}x{} is out of range (1..65536 a side, at most 2^30 "
-         "pixels: what a radiance EXR holds)", width, height);
+    fail(Errc::InvalidArgument,
+         "telecentric camera: imageDistance_mm = {} must exceed focalLength_mm = {} "
+         "(otherwise no real object is in focus)",
+         imageDistance_mm, focalLength_mm);
+  if (width < 1 || height < 1 || width > 65536 || height > 65536 || static_cast<long>(width) * height > kMaxExrPixels)
+    fail(Errc::InvalidArgument,
+         "telecentric camera: size {}x{} is out of range (1..65536 a side, at most 2^30 "
+         "pixels: what a radiance EXR holds)",
+         width, height);
   if (knifeEdge && !(*knifeEdge >= -1 && *knifeEdge <= 1))
     fail(Errc::InvalidArgument, "telecentric camera: knifeEdge = {} is outside [-1, 1] (units of the stop's radius)",
          *knifeEdge);

@@ -14,8 +14,8 @@
 // render ran 1.65x slower than a plain build (measured; plain: same speed).
 
 // (Not with clang, the fuzz build's compiler: it takes no target_clones on templates.)
-#if defined(__x86_64__) && !defined(__SANITIZE_ADDRESS__) && !defined(__SANITIZE_THREAD__) && !defined(__AVX2__) \
-    && !defined(__clang__)
+#if defined(__x86_64__) && !defined(__SANITIZE_ADDRESS__) && !defined(__SANITIZE_THREAD__) && !defined(__AVX2__) && \
+    !defined(__clang__)
 #define LFI_SIMD_CLONES __attribute__((target_clones("arch=x86-64-v4", "avx2", "default")))
 #else
 #define LFI_SIMD_CLONES

@@ -84,8 +84,11 @@ Bounds Bounds::unite(const Bounds& o) const {
 }
 
 Solid::Solid(Kind kind, double radius, const Rigid3& parentFromLocal)
-    : kind_(kind), radius_(radius), parentFromLocal_(parentFromLocal),
-      localFromParent_(parentFromLocal.inverse()), identity_(parentFromLocal.isIdentity()) {}
+    : kind_(kind),
+      radius_(radius),
+      parentFromLocal_(parentFromLocal),
+      localFromParent_(parentFromLocal.inverse()),
+      identity_(parentFromLocal.isIdentity()) {}
 
 std::shared_ptr<Solid> Solid::sphere(double radius, const Rigid3& parentFromLocal) {
   if (!(radius > 0) || !std::isfinite(radius)) fail(Errc::InvalidArgument, "sphere radius {} must be > 0", radius);
@@ -129,21 +132,41 @@ std::shared_ptr<Solid> Solid::combine(Kind op, std::shared_ptr<const Solid> a, s
 
 Solid::ConvexPart Solid::ConvexPart::make(Kind kind, double radius, const Rigid3& localFromPart) {
   const double invRadius = kind == Kind::HalfSpace ? 0.0 : 1 / radius;
-  return {kind, radius, localFromPart, localFromPart.inverse(), localFromPart.isIdentity(),
-          localFromPart.t, localFromPart.vector({0, 0, 1}), invRadius};
+  return {kind,
+          radius,
+          localFromPart,
+          localFromPart.inverse(),
+          localFromPart.isIdentity(),
+          localFromPart.t,
+          localFromPart.vector({0, 0, 1}),
+          invRadius};
 }
 
-bool Solid::convex() const { return isPrimitive(kind_) || !convex_.empty(); }
+bool Solid::convex() const {
+  return isPrimitive(kind_) || !convex_.empty();
+}
 
 Bounds Solid::bounds() const {
   Bounds local;
   switch (kind_) {
-    case Kind::Sphere: local = {Vec3(-radius_), Vec3(radius_)}; break;
-    case Kind::Cylinder: local = {{-radius_, -radius_, -kInf}, {radius_, radius_, kInf}}; break;
-    case Kind::HalfSpace: local = {Vec3(-kInf), {kInf, kInf, 0}}; break;
-    case Kind::Union: local = a_->bounds().unite(b_->bounds()); break;
-    case Kind::Intersection: local = a_->bounds().intersect(b_->bounds()); break;
-    case Kind::Difference: local = a_->bounds(); break;
+    case Kind::Sphere:
+      local = {Vec3(-radius_), Vec3(radius_)};
+      break;
+    case Kind::Cylinder:
+      local = {{-radius_, -radius_, -kInf}, {radius_, radius_, kInf}};
+      break;
+    case Kind::HalfSpace:
+      local = {Vec3(-kInf), {kInf, kInf, 0}};
+      break;
+    case Kind::Union:
+      local = a_->bounds().unite(b_->bounds());
+      break;
+    case Kind::Intersection:
+      local = a_->bounds().intersect(b_->bounds());
+      break;
+    case Kind::Difference:
+      local = a_->bounds();
+      break;
   }
   return local.transformed(parentFromLocal_);
 }
@@ -151,12 +174,18 @@ Bounds Solid::bounds() const {
 bool Solid::contains(const Vec3& parentPoint) const {
   const Vec3 p = identity_ ? parentPoint : localFromParent_.point(parentPoint);
   switch (kind_) {
-    case Kind::Sphere: return p.dot(p) <= radius_ * radius_;
-    case Kind::Cylinder: return p.x * p.x + p.y * p.y <= radius_ * radius_;
-    case Kind::HalfSpace: return p.z <= 0;
-    case Kind::Union: return a_->contains(p) || b_->contains(p);
-    case Kind::Intersection: return a_->contains(p) && b_->contains(p);
-    case Kind::Difference: return a_->contains(p) && !b_->contains(p);
+    case Kind::Sphere:
+      return p.dot(p) <= radius_ * radius_;
+    case Kind::Cylinder:
+      return p.x * p.x + p.y * p.y <= radius_ * radius_;
+    case Kind::HalfSpace:
+      return p.z <= 0;
+    case Kind::Union:
+      return a_->contains(p) || b_->contains(p);
+    case Kind::Intersection:
+      return a_->contains(p) && b_->contains(p);
+    case Kind::Difference:
+      return a_->contains(p) && !b_->contains(p);
   }
   return false;
 }

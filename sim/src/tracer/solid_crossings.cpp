@@ -84,7 +84,8 @@ bool primitiveSpan(Solid::Kind kind, double radius, const Ray& ray, double& t0, 
       t1 = d.z > 0 ? t : kInf;
       return true;
     }
-    default: return false;
+    default:
+      return false;
   }
 }
 
@@ -94,12 +95,14 @@ bool primitiveSpan(Solid::Kind kind, double radius, const Ray& ray, double& t0, 
 Vec3 primitiveNormal(Solid::Kind kind, double radius, const Ray& ray, double t, bool entering) {
   if (!std::isfinite(t)) return {0, 0, entering ? -1.0 : 1.0};
   switch (kind) {
-    case Solid::Kind::Sphere: return ray.at(t) / radius;
+    case Solid::Kind::Sphere:
+      return ray.at(t) / radius;
     case Solid::Kind::Cylinder: {
       const Vec3 p = ray.at(t);
       return Vec3(p.x, p.y, 0) / radius;
     }
-    default: return {0, 0, 1};
+    default:
+      return {0, 0, 1};
   }
 }
 
@@ -128,9 +131,12 @@ void Solid::intervals(const Ray& ray, IntervalList& out) const {
   if (!std::isfinite(t)) return axis * (entering ? -1.0 : 1.0);
   const Vec3 p = ray.at(t) - origin;
   switch (kind) {
-    case Kind::Sphere: return p * invRadius;
-    case Kind::Cylinder: return (p - axis * p.dot(axis)) * invRadius;
-    default: return axis;
+    case Kind::Sphere:
+      return p * invRadius;
+    case Kind::Cylinder:
+      return (p - axis * p.dot(axis)) * invRadius;
+    default:
+      return axis;
   }
 }
 
@@ -172,8 +178,7 @@ LFI_SIMD_CLONES void transformLanes(const Rigid3& x, const RayLanes& __restrict 
 // branch-free; a miss is the empty span [inf, -inf]), folded into the running
 // intersection [enter, exit].
 LFI_SIMD_CLONES void foldSpan(Solid::Kind kind, double radius, const RayLanes& __restrict l, double* __restrict t0,
-                              double* __restrict t1,
-                              double* __restrict enter, double* __restrict exit) {
+                              double* __restrict t1, double* __restrict enter, double* __restrict exit) {
   switch (kind) {
     case Solid::Kind::Sphere:
       for (int k = 0; k < kLanes; ++k) {
@@ -222,7 +227,9 @@ LFI_SIMD_CLONES void foldSpan(Solid::Kind kind, double radius, const RayLanes& _
 
 }  // namespace
 
-void transformRays(const Rigid3& x, const RayLanes& in, RayLanes& out) { transformLanes(x, in, out); }
+void transformRays(const Rigid3& x, const RayLanes& in, RayLanes& out) {
+  transformLanes(x, in, out);
+}
 
 void Solid::nearestCrossings(int n, const Ray* rays, double tMin, double* t, Vec3* normal) const {
   if (n < 0 || n > kBatch) fail(Errc::InvalidArgument, "Solid::nearestCrossings: {} rays (at most {})", n, kBatch);
@@ -314,8 +321,7 @@ void Solid::nearestCrossings(const RayLanes& rays, std::uint32_t lanes, double t
   }
 }
 
-void Solid::differenceCrossings(const RayLanes& rays, std::uint32_t lanes, double tMin, double* t,
-                                Vec3* normal) const {
+void Solid::differenceCrossings(const RayLanes& rays, std::uint32_t lanes, double tMin, double* t, Vec3* normal) const {
   RayLanes transformed;
   if (!identity_) transformLanes(localFromParent_, rays, transformed);
   const RayLanes& local = identity_ ? rays : transformed;
@@ -357,8 +363,8 @@ void Solid::differenceCrossings(const RayLanes& rays, std::uint32_t lanes, doubl
                                                                   : nullptr;
       if (!end) continue;
       // B's surface faces the other way in the result.
-      const Vec3 n1 = end->fromA ? a_->spanNormal(a, k, end->t, end->entering)
-                                 : -b_->spanNormal(b, k, end->t, end->entering);
+      const Vec3 n1 =
+          end->fromA ? a_->spanNormal(a, k, end->t, end->entering) : -b_->spanNormal(b, k, end->t, end->entering);
       t[k] = end->t;
       normal[k] = identity_ ? n1 : parentFromLocal_.vector(n1);
       break;
@@ -381,7 +387,8 @@ void Solid::localIntervals(const Ray& ray, IntervalList& out) const {
   switch (kind_) {
     case Kind::Sphere:
     case Kind::Cylinder:
-    case Kind::HalfSpace: return;
+    case Kind::HalfSpace:
+      return;
     case Kind::Union:
     case Kind::Intersection:
     case Kind::Difference: {

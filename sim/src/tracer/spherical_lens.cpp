@@ -47,8 +47,8 @@ std::optional<LensFault> sphericalLensFault(double r1, double r2, double tc, dou
   for (const auto& [r, part] : {std::pair{r1, Part::FrontRadius}, std::pair{r2, Part::BackRadius}}) {
     if (!std::isfinite(r)) return LensFault{part, fmt::format("radius {} must be finite (0 for a flat face)", r)};
     if (r != 0 && std::abs(r) < semi)
-      return LensFault{part, fmt::format("|radius| {} is smaller than the semi-diameter {} (0 for a flat face)",
-                                         std::abs(r), semi)};
+      return LensFault{
+          part, fmt::format("|radius| {} is smaller than the semi-diameter {} (0 for a flat face)", std::abs(r), semi)};
   }
   if (const double edge = sphericalFaceZ(r2, tc / 2, semi) - sphericalFaceZ(r1, -tc / 2, semi); edge < 0)
     return LensFault{Part::Edge, fmt::format("the faces meet inside the diameter {}: the edge would be {:.4g} mm "
@@ -93,11 +93,11 @@ std::shared_ptr<Solid> Solid::sphericalLens(double r1, double r2, double tc, dou
     const bool convex = glassTowardsPlusZ ? radius > 0 : radius < 0;
     const double sag = std::abs(radius) - std::sqrt(radius * radius - diameter * diameter / 4);
     if (convex) {  // (a ball that would cut the glass from behind is joined with the space beyond its rim)
-      body = combine(Kind::Intersection, body,
-                     farSideCutsGlass(r1, r2, tc, diameter / 2, glassTowardsPlusZ)
-                         ? combine(Kind::Union, ball, glassSide(glassTowardsPlusZ ? z0 + sag : z0 - sag,
-                                                               glassTowardsPlusZ))
-                         : ball);
+      body = combine(
+          Kind::Intersection, body,
+          farSideCutsGlass(r1, r2, tc, diameter / 2, glassTowardsPlusZ)
+              ? combine(Kind::Union, ball, glassSide(glassTowardsPlusZ ? z0 + sag : z0 - sag, glassTowardsPlusZ))
+              : ball);
       return;
     }
     // Concave: the glass is outside the ball, bounded by the plane of the rim.

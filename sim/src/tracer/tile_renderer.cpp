@@ -23,8 +23,8 @@ namespace {
 // A pixel whose samples are being traced: its sample plan and their results.
 struct PixelWork {
   int i = 0, j = 0;
-  int issued = 0;    // samples started
-  int inFlight = 0;  // samples started and not yet ended
+  int issued = 0;              // samples started
+  int inFlight = 0;            // samples started and not yet ended
   std::vector<double> values;  // each sample's radiance, summed in sample order at the end
   std::uint64_t streams = 0;   // sample s's random stream is streams ^ s
   std::uint32_t stopKey = 0;   // permutes the stop strata against the pixel-area strata
@@ -54,8 +54,8 @@ struct Lanes {
   double radiance[kLanes];        // the sample's sum so far
   std::uint64_t sampler[kLanes];  // Sampler::state
   int depth[kLanes];
-  int pixel[kLanes];   // index into the tile's PixelWork slots
-  int sample[kLanes];  // index in the pixel
+  int pixel[kLanes];    // index into the tile's PixelWork slots
+  int sample[kLanes];   // index in the pixel
   int waiting[kLanes];  // branches waiting on the lane's stack (TileRenderer::branches_)
   std::array<StratifiedChoices, kLanes> choices;
   std::array<MediumStack, kLanes> media;
@@ -65,9 +65,12 @@ struct Lanes {
 // paths through Embree, refilled as samples end, so that the packet stays
 // full and coherent (neighbouring samples of one or two pixels).
 class TileRenderer {
-public:
+ public:
   TileRenderer(const Scene& scene, const Sensor& sensor, const RenderOptions& options)
-      : scene_(scene), sensor_(sensor), options_(options), width_(sensorWidth(sensor)),
+      : scene_(scene),
+        sensor_(sensor),
+        options_(options),
+        width_(sensorWidth(sensor)),
         cameraRays_(std::holds_alternative<TelecentricCamera>(sensor)
                         ? std::optional(TelecentricCamera::RayMap(std::get<TelecentricCamera>(sensor)))
                         : std::nullopt),
@@ -105,7 +108,7 @@ public:
     }
   }
 
-private:
+ private:
   // Sets lane k's innermost medium from its media stack: the packet query's
   // hint, and whether the lane is inside an isolated solid.
   void setInside(int k) {
@@ -508,7 +511,7 @@ private:
   LaneMask insideIsolated_ = 0;  // lanes whose innermost medium is an isolated solid (Scene::isolated)
   std::vector<char> isolated_;   // Scene::isolated of object i at i + 1 (0: the ambient medium, false)
   bool absorbing_ = false;       // any medium absorbs (else every transmittance is 1)
-  Scene::HitPacket hits_{};  // (lanes without a hit are read by the lane-parallel passes, their results dropped)
+  Scene::HitPacket hits_{};      // (lanes without a hit are read by the lane-parallel passes, their results dropped)
   detail::FresnelLanes fresnel_;
   detail::LightFieldMapping lightFieldMapping_;
   // Per lane, its waiting split branches, at most one per split depth.

@@ -17,8 +17,8 @@ int main(int argc, char** argv) try {
   }
   lfi::sim::registerSimBackends();
   auto camera = lfi::openCamera(std::string("sim:") + argv[1]);
-  camera->configure(lfi::CameraSettings{.exposure_us = 1000, .pixelFormat = lfi::PixelFormat::Mono12,
-                                        .trigger = lfi::TriggerMode::Software});
+  camera->configure(lfi::CameraSettings{
+      .exposure_us = 1000, .pixelFormat = lfi::PixelFormat::Mono12, .trigger = lfi::TriggerMode::Software});
   camera->start(2);
   camera->softwareTrigger();
   const lfi::Frame frame = camera->grab(std::chrono::seconds(60));

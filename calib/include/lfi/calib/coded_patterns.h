@@ -104,8 +104,8 @@ struct DecodeSettings {
 
 // Per camera pixel, the panel pixel whose light reaches it.
 struct PanelCorrespondence {
-  cv::Mat panel;       // CV_32SC2, camera size: (x, y) of the panel pixel, (-1, -1) where undecoded
-                       // (with two sources: of the brighter column and the brighter row)
+  cv::Mat panel;  // CV_32SC2, camera size: (x, y) of the panel pixel, (-1, -1) where undecoded
+                  // (with two sources: of the brighter column and the brighter row)
   // With two sources (secondShare > 0; else empty):
   cv::Mat second;      // CV_32SC2: the second source's column and row, -1 for an axis with one source
   cv::Mat share;       // CV_32FC2: the share of the light from `panel`'s column and row (1 with one source)

@@ -33,7 +33,7 @@
 namespace lfi::calib {
 
 class PanelLinks {
-public:
+ public:
   struct Link {
     int camera = 0;  // row · camera width + column
     int panel = 0;   // y · panel width + x
@@ -57,7 +57,7 @@ public:
   int linkedCameraPixels() const { return linkedCount_; }
   bool linked(int row, int col) const { return linked_[static_cast<size_t>(row * camera_.width + col)] != 0; }
 
-private:
+ private:
   cv::Size camera_, panel_;
   std::vector<Link> links_;
   std::vector<unsigned char> linked_;
@@ -83,7 +83,7 @@ Uniformity uniformity(const cv::Mat& image, const PanelLinks& links, const cv::M
 // (CV_8U, CV_16U or CV_32F, camera size).
 // Errc::InvalidArgument for inputs that do not match or a target or gain out
 // of range (target > 0, gain in (0, 1]).
-cv::Mat refinePanelWeights(const cv::Mat& weights, const PanelLinks& links, const cv::Mat& image,
-                           const cv::Mat& mask, double target_dn, double gain = 1.0);
+cv::Mat refinePanelWeights(const cv::Mat& weights, const PanelLinks& links, const cv::Mat& image, const cv::Mat& mask,
+                           double target_dn, double gain = 1.0);
 
 }  // namespace lfi::calib

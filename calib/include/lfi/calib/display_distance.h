@@ -42,12 +42,12 @@ struct DisplayDistanceScan {
   std::vector<double> candidates_mm;  // the ε tried
   std::vector<double> brightness;     // figure of merit per candidate
   double dark = 0;                    // the same with the display dark (a light field of zeros)
-  double noise = 0;  // the frame-to-frame noise of a mean over the region: the larger from two dark images and
-                     // from the brightest candidate's two images
-  double darkNoise = 0;  // the same from the two dark images alone, without the caller's floor
-  double level = 0;                   // the brightness at which the peak's flanks are located
-  double estimate_mm = 0;             // ε at the centre of the peak
-  double width_mm = 0;                // the peak's width at `level`
+  double noise = 0;        // the frame-to-frame noise of a mean over the region: the larger from two dark images and
+                           // from the brightest candidate's two images
+  double darkNoise = 0;    // the same from the two dark images alone, without the caller's floor
+  double level = 0;        // the brightness at which the peak's flanks are located
+  double estimate_mm = 0;  // ε at the centre of the peak
+  double width_mm = 0;     // the peak's width at `level`
 };
 
 // Scans the candidate errors and returns the estimate. `roi` selects the

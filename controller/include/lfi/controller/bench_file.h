@@ -22,13 +22,14 @@
 //                  retries                -      3           bad or late frames tolerated per image
 //   [display]      uri                    -      required    usb:<vid>:<pid>[/<serial>], sim:<scene-file>
 //                  settle_ms              ms     0           the panel's response time after a show
-//                  white                  -      0           radiance at full drive; 0 = the reference's 99.9th percentile
+//                  white                  -      0           radiance at full drive; 0 = the reference's 99.9th
+//                  percentile
 //   [display.optics]  optics, ...          mm/rad none        the display's optics as calibrated (`lfi calibrate
 //                                                             display`), in place of what the device states: the
 //                                                             keys of display_calibration_file.h, the class and
 //                                                             every value it needs
-//   [capture]      uri  | light_field     -      one of      the reference's capture (sim:, coded:), or a light field file
-//   [geometry]     distance_mm            mm     required    Δ: display plane to the part's reference plane
+//   [capture]      uri  | light_field     -      one of      the reference's capture (sim:, coded:), or a light field
+//   file [geometry]     distance_mm            mm     required    Δ: display plane to the part's reference plane
 //                  part_centre_px         px     centre      [column, row] of the part's origin on the image
 //                  display_per_pixel_mm   mm/px  none        [a, b, c, d]: the display point a camera pixel sees,
 //                                                             (x, y) = [[a, b], [c, d]] (u - u0, v - v0) + the
@@ -38,7 +39,8 @@
 //   [reference]    folder                 path   required    the reference package (reference_package.h)
 //                  frames                 -      16          frames of the intact part the golden model starts from
 //                  mask_radius_mm         mm     none        the part: a disc around part_centre_px (none: whole image)
-//                  mask_lit_fraction      -      0.25        ... and lit at least this fraction of the ideal's 99th percentile
+//                  mask_lit_fraction      -      0.25        ... and lit at least this fraction of the ideal's 99th
+//                  percentile
 //   [inspection]   frames                 -      1           frames averaged per part
 //                  absolute_dn            DN     0           a: the least difference that counts
 //                  relative               -      6           b: the threshold in units of the variation
@@ -91,7 +93,7 @@ struct BenchFile {
   std::filesystem::path lightFieldFile;
   // [geometry]
   double distance_mm = 0;
-  std::optional<Vec2> partCentre_px;  // none: the image's centre
+  std::optional<Vec2> partCentre_px;                // none: the image's centre
   std::optional<calib::CameraMap> cameraOnDisplay;  // where the camera looks on the display
   // [reference]
   std::filesystem::path referenceFolder;

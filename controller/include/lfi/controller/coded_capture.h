@@ -87,20 +87,20 @@ struct CodedCaptureSettings {
 // What the last capture did.
 struct CodedCaptureReport {
   int panelWidth = 0, panelHeight = 0;
-  int patternFrames = 0;  // white, black and every round's patterns and light-left frame
-  int refineFrames = 0;   // reference panels shown and taken (the first and its refinements)
-  double seconds = 0;     // the whole capture
-  int rounds = 0;             // of patterns
-  double lightLeft = 1;       // of the lit pixels' light, after the last round that found any
-  int lit = 0, decoded = 0;  // camera pixels, in the first round
-  int panelPixelsLit = 0;    // in the reference panel
+  int patternFrames = 0;            // white, black and every round's patterns and light-left frame
+  int refineFrames = 0;             // reference panels shown and taken (the first and its refinements)
+  double seconds = 0;               // the whole capture
+  int rounds = 0;                   // of patterns
+  double lightLeft = 1;             // of the lit pixels' light, after the last round that found any
+  int lit = 0, decoded = 0;         // camera pixels, in the first round
+  int panelPixelsLit = 0;           // in the reference panel
   double cvFirst = 0, cvFinal = 0;  // uniformity under the first and the final reference panel
   double target_dn = 0;
   bool converged = false;  // cvFinal <= target_cv
 };
 
 class CodedCapture final : public LightFieldCapture {
-public:
+ public:
   // Throws Errc::InvalidArgument naming a setting out of range.
   explicit CodedCapture(CodedCaptureSettings settings);
 
@@ -115,7 +115,7 @@ public:
 
   const CodedCaptureReport& report() const { return report_; }
 
-private:
+ private:
   CodedCaptureSettings settings_;
   BenchProbe* bench_ = nullptr;
   cv::Mat panel_;

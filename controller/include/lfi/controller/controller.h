@@ -43,7 +43,7 @@ struct ControllerOptions {
 };
 
 class Controller {
-public:
+ public:
   // Progress of the whole cycle: a step label and the fraction done.
   using Progress = std::function<void(const char* step, double fraction)>;
 
@@ -106,7 +106,7 @@ public:
   // level (1 after showPanel(): the levels are the drive).
   double white() const { return white_; }
 
-private:
+ private:
   class Probe;
   // Throws Errc::Device unless `result` is Presented; returns its sequence.
   std::uint32_t shown(const PresentResult& result, const char* what);
@@ -115,12 +115,12 @@ private:
   Camera& camera_;
   ControllerOptions options_;
   bool startedCamera_ = false;
-  bool staleFrames_ = false;  // the display changed since the stream inspect() last used started
-  bool ownStream_ = false;    // the camera's stream is one inspect() started
-  bool ownSoftware_ = false;  // ... software-triggered
-  int pendingFrames_ = 0;     // software triggers on it that no frame has answered yet
+  bool staleFrames_ = false;                     // the display changed since the stream inspect() last used started
+  bool ownStream_ = false;                       // the camera's stream is one inspect() started
+  bool ownSoftware_ = false;                     // ... software-triggered
+  int pendingFrames_ = 0;                        // software triggers on it that no frame has answered yet
   std::chrono::steady_clock::time_point shown_;  // when the last emit() returned
-  std::optional<std::uint32_t> shownSequence_;    // and the frame it showed
+  std::optional<std::uint32_t> shownSequence_;   // and the frame it showed
   double white_ = 0;
   cv::Mat referencePanel_;
   std::unique_ptr<Probe> probe_;

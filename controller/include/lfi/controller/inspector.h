@@ -20,13 +20,13 @@
 namespace lfi {
 
 struct PartInspection {
-  cv::Mat image;             // CV_32FC1, DN: the mean of the frames
+  cv::Mat image;  // CV_32FC1, DN: the mean of the frames
   PartVerdict verdict;
-  double analysis_ms = 0;    // from the image in hand to the verdict
+  double analysis_ms = 0;  // from the image in hand to the verdict
 };
 
 class Inspector {
-public:
+ public:
   // The devices stay the caller's; the camera must be Configured or Streaming.
   // Errc::Config when the package's panel image does not fit the display's panel.
   Inspector(const BenchFile& bench, const ReferencePackage& package, Display& display, Camera& camera);
@@ -46,13 +46,13 @@ public:
 
   const cv::Mat& mask() const { return mask_; }
 
-private:
+ private:
   const BenchFile& bench_;
   double white_;
   cv::Mat mask_;
   PartFrame frame_;
   DefectFinder finder_;
-  cv::Mat panel_;                                 // the package's panel image, or empty
+  cv::Mat panel_;                                // the package's panel image, or empty
   std::unique_ptr<StoredLightField> reference_;  // else its light field (also the controller's capture)
   Controller controller_;
 };

@@ -44,7 +44,7 @@ struct ReferenceInfo {
   double exposure_us = 0;
   double gain = 0;
   std::string pixelFormat;
-  double white = 0;         // radiance at full drive level the light field was shown with
+  double white = 0;  // radiance at full drive level the light field was shown with
 };
 
 struct ReferencePackage {

@@ -17,12 +17,12 @@
 namespace lfi {
 
 class ConfigTable {
-public:
+ public:
   // Parses a file; throws Errc::NotFound or Errc::Config (with line and column).
   static ConfigTable parseFile(const std::filesystem::path& path);
 
-  double number(const std::string& key, std::optional<double> fallback = std::nullopt,
-                double min = -1e300, double max = 1e300);
+  double number(const std::string& key, std::optional<double> fallback = std::nullopt, double min = -1e300,
+                double max = 1e300);
   int integer(const std::string& key, std::optional<int> fallback = std::nullopt, int min = -(1 << 30),
               int max = 1 << 30);
   // The same for TOML's whole range of integers (64-bit signed).
@@ -51,7 +51,7 @@ public:
   const std::string& file() const { return file_; }
   std::string where(const std::string& key) const;  // "file:line: key 'a.b'"
 
-private:
+ private:
   ConfigTable(std::shared_ptr<const toml::table> root, const toml::table* table, std::string file, std::string path);
   const toml::node* node(const std::string& key);
 

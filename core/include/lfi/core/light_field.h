@@ -54,7 +54,7 @@ enum class LightFieldLookup {
 };
 
 class LightField {
-public:
+ public:
   LightField() = default;
   // A zero light field with the given geometry (validated).
   explicit LightField(const LightFieldGeometry& geometry);
@@ -100,7 +100,7 @@ public:
   // the unit disc. 0 outside the plane. For callers that map many rays at once.
   double radianceAt(double sx, double sy, const Vec2& disc, LightFieldLookup mode) const;
 
-private:
+ private:
   double nearestSample(int ex, int ey, const Vec2& disc) const;
 
   LightFieldGeometry geometry_;

@@ -83,7 +83,7 @@ struct DeviceBackend {
 
 template <typename Device>
 class BackendRegistry {
-public:
+ public:
   // kind: "camera", "display", ...; example: a URI for the no-scheme message;
   // builtinCall: the function that registers the built-in backends, named when
   // nothing is registered.
@@ -148,7 +148,7 @@ public:
     return backend.factory(uri);
   }
 
-private:
+ private:
   void check(const DeviceBackend<Device>& backend) const {
     if (!validDeviceScheme(backend.scheme))
       fail(Errc::InvalidArgument, "{} backend scheme '{}' must be non-empty and use only [a-z0-9+.-]", kind_,

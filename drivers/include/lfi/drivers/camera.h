@@ -75,27 +75,27 @@ enum class FrameStatus { Complete, Incomplete, Timeout };
 const char* toString(FrameStatus status);
 
 struct Frame {
-  cv::Mat image;                  // CV_8UC1 or CV_16UC1, see PixelFormat
-  std::uint64_t timestamp_ns = 0; // device clock when the device has one, else host clock at arrival
-  std::uint64_t frameId = 0;      // device's frame (block) counter; consecutive frames differ by 1
+  cv::Mat image;                   // CV_8UC1 or CV_16UC1, see PixelFormat
+  std::uint64_t timestamp_ns = 0;  // device clock when the device has one, else host clock at arrival
+  std::uint64_t frameId = 0;       // device's frame (block) counter; consecutive frames differ by 1
   FrameStatus status = FrameStatus::Timeout;
 };
 
 // Counters since the last start(); kept after stop() until the next start().
 struct StreamStatistics {
-  std::uint64_t completed = 0;      // frames delivered complete
-  std::uint64_t failed = 0;         // frames delivered incomplete or dropped by the transport
+  std::uint64_t completed = 0;  // frames delivered complete
+  std::uint64_t failed = 0;     // frames delivered incomplete or dropped by the transport
   // Lost because no buffer was free (the caller grabbed too slowly, or buffers held frames waiting for
   // resends): frames for sim:, packets for aravis: (Aravis counts each packet of a frame it had no buffer for).
   std::uint64_t underruns = 0;
-  std::uint64_t resentPackets = 0;  // packets recovered by resend requests (GigE Vision)
-  std::uint64_t missingPackets = 0; // packets never recovered (GigE Vision)
+  std::uint64_t resentPackets = 0;   // packets recovered by resend requests (GigE Vision)
+  std::uint64_t missingPackets = 0;  // packets never recovered (GigE Vision)
 };
 
 // A camera device. Non-copyable, non-movable: one object owns one device.
 // Methods are not thread-safe; drive a camera from one thread.
 class Camera {
-public:
+ public:
   enum class State { Closed, Open, Configured, Streaming };
 
   Camera() = default;

@@ -68,9 +68,9 @@ struct DisplayOpticsParams {
   double offset_px = 0;     // x of lens 0's axis on the panel's centre row, from the panel centre, in pixels
   // Lenslet and pinhole arrays.
   LensPacking packing = LensPacking::Square;
-  double arrayPitch_mm = 0;       // centre distance of neighbouring lenses (pinholes) along a lattice row
-  double rotation_rad = 0;        // the lattice rows' angle from the panel rows (+x towards +y)
-  double arrayOffsetX_mm = 0;     // centre of lens (0, 0) from the panel centre
+  double arrayPitch_mm = 0;    // centre distance of neighbouring lenses (pinholes) along a lattice row
+  double rotation_rad = 0;     // the lattice rows' angle from the panel rows (+x towards +y)
+  double arrayOffsetX_mm = 0;  // centre of lens (0, 0) from the panel centre
   double arrayOffsetY_mm = 0;
   double fillFactor = 1;          // lenslet array: the clear aperture, as a linear fraction of a lens's cell
   double pinholeDiameter_mm = 0;  // pinhole array
@@ -125,14 +125,14 @@ struct DisplayStatus {
   std::uint64_t framesPresented = 0;    // device counters since power-up
   std::uint64_t framesRejected = 0;
   int brightness = 0;
-  std::string lastError;        // the device's last error in words, empty if none
+  std::string lastError;            // the device's last error in words, empty if none
   std::uint64_t stallsCleared = 0;  // host side: endpoint halts cleared and frames resent since open()
 };
 
 // A display device. Non-copyable, non-movable: one object owns one device.
 // Methods are not thread-safe; drive a display from one thread.
 class Display {
-public:
+ public:
   enum class State { Closed, Open, Showing };
 
   Display() = default;

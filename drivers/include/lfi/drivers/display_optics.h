@@ -32,7 +32,7 @@
 namespace lfi {
 
 class DisplayOptics {
-public:
+ public:
   // Validates `info` (throws Errc::InvalidArgument naming the field).
   explicit DisplayOptics(const DisplayInfo& info);
 
@@ -77,7 +77,7 @@ public:
     return std::get_if<Model>(&model_);
   }
 
-private:
+ private:
   DisplayInfo info_;
   PanelGrid grid_;
   std::variant<LenticularOptics, LensArrayOptics> model_;

@@ -35,7 +35,7 @@ namespace lfi {
 // The bench as a capture through it sees it: its display, and the camera's
 // image of the part under a panel image.
 class BenchProbe {
-public:
+ public:
   virtual ~BenchProbe() = default;
   // The display's info (panel size, optics).
   virtual DisplayInfo display() const = 0;
@@ -49,7 +49,7 @@ public:
 };
 
 class LightFieldCapture {
-public:
+ public:
   LightFieldCapture() = default;
   LightFieldCapture(const LightFieldCapture&) = delete;
   LightFieldCapture& operator=(const LightFieldCapture&) = delete;

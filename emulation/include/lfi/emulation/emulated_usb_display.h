@@ -63,7 +63,7 @@ struct EmulatedDisplayState {
 };
 
 class EmulatedUsbDisplay {
-public:
+ public:
   explicit EmulatedUsbDisplay(EmulatedDisplayConfig config = {});
   ~EmulatedUsbDisplay();
   EmulatedUsbDisplay(const EmulatedUsbDisplay&) = delete;
@@ -79,26 +79,26 @@ public:
   void loseNode();
 
   // Faults, each for the next frame only unless said otherwise.
-  void stallNextFrame(int urb = 0);       // bulk URB `urb` (0: the first) of the next frame halts the endpoint
+  void stallNextFrame(int urb = 0);           // bulk URB `urb` (0: the first) of the next frame halts the endpoint
   void shortenNextFrame(int urb, int bytes);  // bulk URB `urb` of the next frame completes with `bytes` fewer taken
-  void stallAlways(bool on);              // every bulk URB halts the endpoint (clear halt does not help)
-  void corruptNextFrame();                // a payload byte flips on arrival → payload CRC mismatch
+  void stallAlways(bool on);                  // every bulk URB halts the endpoint (clear halt does not help)
+  void corruptNextFrame();                    // a payload byte flips on arrival → payload CRC mismatch
   void truncateNextFrame(std::size_t bytes);  // the device loses the last `bytes` of the next frame
-  void unplugDuringNextFrame();           // the device vanishes after the first bulk URB of the next frame
-  void unplugAfterBulkUrbs(int urbs);     // take `urbs` more bulk URBs, then vanish at the next (as unplugAtRequest)
-  void setSilent(bool on);                // accept URBs but never complete them (a hung device)
-  void silentAfterBulkUrbs(int urbs);     // take `urbs` more bulk URBs, then be silent (hangs mid-frame)
-  void silentAtNextPresent();             // be silent from the next PRESENT request on (the frame stays held)
-  void failClearHalt(int errnoValue);     // CLEAR_HALT fails with this errno until set to 0 (the frame stays held)
-  void setAbsurdDeviceInfo(bool on);      // GET_DEVICE_INFO announces a 4 GiB calibration blob
-  void setBadCalibrationCrc(bool on);     // the calibration blob's CRC does not match
+  void unplugDuringNextFrame();               // the device vanishes after the first bulk URB of the next frame
+  void unplugAfterBulkUrbs(int urbs);  // take `urbs` more bulk URBs, then vanish at the next (as unplugAtRequest)
+  void setSilent(bool on);             // accept URBs but never complete them (a hung device)
+  void silentAfterBulkUrbs(int urbs);  // take `urbs` more bulk URBs, then be silent (hangs mid-frame)
+  void silentAtNextPresent();          // be silent from the next PRESENT request on (the frame stays held)
+  void failClearHalt(int errnoValue);  // CLEAR_HALT fails with this errno until set to 0 (the frame stays held)
+  void setAbsurdDeviceInfo(bool on);   // GET_DEVICE_INFO announces a 4 GiB calibration blob
+  void setBadCalibrationCrc(bool on);  // the calibration blob's CRC does not match
   void lieInStatus(int brightness, std::int64_t presentedSequence);  // GET_STATUS says these (-1: the truth)
-  void forgetErrors(bool on);             // GET_LAST_ERROR says "no error" whatever happened
+  void forgetErrors(bool on);                                        // GET_LAST_ERROR says "no error" whatever happened
   // The device vanishes when vendor request `request` arrives: it and every
   // pending URB fail with -ESHUTDOWN, all else with ENODEV, as after an unplug
   // (unplug() then removes its node).
   void unplugAtRequest(usbdisplay::Request request);
-  void failClaim(int errnoValue);         // CLAIMINTERFACE fails with this errno until set to 0 (EBUSY: held elsewhere)
+  void failClaim(int errnoValue);  // CLAIMINTERFACE fails with this errno until set to 0 (EBUSY: held elsewhere)
 
   const EmulatedDisplayConfig& config() const { return config_; }
   EmulatedDisplayState state() const;
@@ -120,7 +120,7 @@ public:
 
   struct Impl;
 
-private:
+ private:
   EmulatedDisplayConfig config_;
   std::unique_ptr<Impl> impl_;
 };

@@ -41,10 +41,10 @@
 namespace lfi::emulation {
 
 struct ServedBenchOptions {
-  std::filesystem::path scene;        // the bench with its intact part: [camera], [display] and the part
-  GvCameraServerOptions camera;       // interface and identity; the sensor size is the scene's
-  EmulatedDisplayConfig display;      // USB identity and bus position; panel, optics and brightness the scene's
-  int renderThreads = 0;              // 0: all cores
+  std::filesystem::path scene;    // the bench with its intact part: [camera], [display] and the part
+  GvCameraServerOptions camera;   // interface and identity; the sensor size is the scene's
+  EmulatedDisplayConfig display;  // USB identity and bus position; panel, optics and brightness the scene's
+  int renderThreads = 0;          // 0: all cores
 };
 
 // What the bench has done since it started.

@@ -58,7 +58,7 @@ struct Defect {
 // Errc::InvalidArgument for a model or mask that do not match or a setting
 // out of range.
 class DefectFinder {
-public:
+ public:
   DefectFinder(const GoldenModel& model, const cv::Mat& mask, const DetectionSettings& settings);
   // The defects of `image`, largest first. Throws Errc::InvalidArgument naming
   // the sizes or types for an image that does not match the model.
@@ -66,7 +66,7 @@ public:
   // σ per pixel (DN, CV_32FC1).
   const cv::Mat& sigma() const { return threshold_.variation; }
 
-private:
+ private:
   GoldenModel threshold_;  // the ideal, and σ in place of the variation
   cv::Mat mask_;
   DetectionSettings settings_;

@@ -35,7 +35,7 @@ struct GoldenModel {
 };
 
 class GoldenModelTrainer {
-public:
+ public:
   GoldenModelTrainer() = default;
   // Copies train on independently (the sums are cloned, not shared as cv::Mat copies are).
   GoldenModelTrainer(const GoldenModelTrainer& other);
@@ -62,7 +62,7 @@ public:
   // images that do not match, negative spreads or a count below 1.
   static GoldenModelTrainer resume(const cv::Mat& mean, const cv::Mat& spread, int count, int imageType);
 
-private:
+ private:
   cv::Mat sum_, sumOfSquares_;  // CV_64FC1: exact enough for millions of 16-bit images
   int type_ = -1;
   int count_ = 0;

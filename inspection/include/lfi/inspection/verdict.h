@@ -38,8 +38,8 @@ struct PassRules {
 };
 
 struct PartDefect {
-  Defect image;         // in camera pixels
-  Vec2 centroid_mm;     // in the part's frame
+  Defect image;      // in camera pixels
+  Vec2 centroid_mm;  // in the part's frame
   double area_mm2 = 0;
 };
 

@@ -23,14 +23,14 @@ namespace lfi::sim {
 struct RenderOptions {
   int samplesPerPixel = 16;
   std::uint64_t seed = 1;
-  int maxDepth = 64;   // interactions per path; longer paths contribute 0
+  int maxDepth = 64;  // interactions per path; longer paths contribute 0
   // Fresnel events among the first splitDepth interactions are split (both
   // branches traced, weighted F and 1 - F) rather than sampled: same mean, far
   // less noise for the few interfaces of a lens. 0 = pure sampling; at most
   // kMaxSplitDepth (each split doubles a sample's paths).
   static constexpr int kMaxSplitDepth = 12;
   int splitDepth = 4;
-  int threads = 0;     // 0 = all cores
+  int threads = 0;  // 0 = all cores
   int tileSize = 16;
   // Called from worker threads with the fraction done (0..1), at most once per tile.
   std::function<void(double)> progress;

@@ -76,7 +76,7 @@ struct LightFieldEmission {
 // zones of a real display). Finite angular resolution (a subpixel spans
 // ≈ pitch / gap), defocus blur, crosstalk and barrier loss follow from this geometry.
 class PanelOptics {
-public:
+ public:
   // Validates `info` (Errc::InvalidArgument naming the field).
   explicit PanelOptics(const DisplayInfo& info) : optics_(info) {}
   const DisplayInfo& info() const { return optics_.info(); }
@@ -85,7 +85,7 @@ public:
   // array blocks it, d points backwards or the pixel is off the panel.
   bool subpixelOfRay(const Vec2& q, const Vec3& d, int& column, int& row) const;
 
-private:
+ private:
   DisplayOptics optics_;
 };
 
@@ -142,7 +142,7 @@ struct Surface {
   bool exact = true;           // a solid or a rectangle (double precision); meshes are float
   double ior = 1;              // Dielectric
   double absorption_per_mm = 0;
-  double albedo = 0;           // Diffuse
+  double albedo = 0;  // Diffuse
   // Parallel and Lambertian emission, worked out once: `radiance` into the
   // directions with cos θ >= cosHalfAngle (θ from the normal; Lambertian: the
   // open hemisphere, cosHalfAngle the least double above 0).
@@ -156,12 +156,12 @@ struct Hit {
   int object = -1;
   double t = 0;
   Vec3 point;
-  Vec3 normal;        // outward (for solids and meshes) or +z local (rectangles), world frame, unit
+  Vec3 normal;  // outward (for solids and meshes) or +z local (rectangles), world frame, unit
   bool valid() const { return object >= 0; }
 };
 
 class Scene {
-public:
+ public:
   explicit Scene(std::vector<Object> objects, double ambientIor = 1.0);
   ~Scene();
   Scene(const Scene&) = delete;
@@ -199,7 +199,7 @@ public:
   struct HitPacket {
     alignas(64) double t[kPacket];
     alignas(64) double nx[kPacket], ny[kPacket], nz[kPacket];  // as Hit::normal
-    int object[kPacket];  // -1: no hit
+    int object[kPacket];                                       // -1: no hit
     Vec3 normal(int k) const { return {nx[k], ny[k], nz[k]}; }
   };
   void intersect(const RayPacket& rays, std::uint32_t lanes, HitPacket& hits, double tMin = kTMin) const;
@@ -219,7 +219,7 @@ public:
   // start in this medium: sensors sit outside the parts.
   double ambientIor() const { return ambientIor_; }
 
-private:
+ private:
   // A mesh's hit (Embree's; `tfar` from the ray's own origin: Embree's float t
   // plus where its copy of the ray started) of a ray along `direction` where it
   // is nearer than the analytic objects' in `hits`.

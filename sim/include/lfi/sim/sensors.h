@@ -86,7 +86,7 @@ struct TelecentricCamera {
       dx = r[0] * ex + r[1] * ey + r[2] * inv, dy = r[3] * ex + r[4] * ey + r[5] * inv;
       dz = r[6] * ex + r[7] * ey + r[8] * inv;
     }
-    Rigid3 world;  // worldFromCamera
+    Rigid3 world;                             // worldFromCamera
     double pixel, stop, slope, halfW, halfH;  // P, Q, Q / wz, W/2, H/2
     double edge;  // the knife edge (+infinity without one): stop samples with ax > edge are blocked
   };
@@ -113,16 +113,24 @@ struct LightFieldSensor {
 using Sensor = std::variant<TelecentricCamera, LightFieldSensor>;
 
 inline int sensorWidth(const Sensor& s) {
-  return std::visit([](const auto& x) {
-    if constexpr (std::is_same_v<std::decay_t<decltype(x)>, TelecentricCamera>) return x.width;
-    else return x.geometry.width();
-  }, s);
+  return std::visit(
+      [](const auto& x) {
+        if constexpr (std::is_same_v<std::decay_t<decltype(x)>, TelecentricCamera>)
+          return x.width;
+        else
+          return x.geometry.width();
+      },
+      s);
 }
 inline int sensorHeight(const Sensor& s) {
-  return std::visit([](const auto& x) {
-    if constexpr (std::is_same_v<std::decay_t<decltype(x)>, TelecentricCamera>) return x.height;
-    else return x.geometry.height();
-  }, s);
+  return std::visit(
+      [](const auto& x) {
+        if constexpr (std::is_same_v<std::decay_t<decltype(x)>, TelecentricCamera>)
+          return x.height;
+        else
+          return x.geometry.height();
+      },
+      s);
 }
 
 }  // namespace lfi::sim

@@ -16,7 +16,6 @@
 
 #include <array>
 #include <cstdint>
-#include <string>
 #include <limits>
 #include <memory>
 #include <optional>
@@ -84,7 +83,7 @@ struct Interval {
 // Fixed-capacity interval list: no allocation on the hot path. Shapes in this
 // project produce at most a handful of intervals per line.
 class IntervalList {
-public:
+ public:
   static constexpr int kCapacity = 16;
   int size() const { return size_; }
   const Interval& operator[](int i) const { return items_[i]; }
@@ -92,7 +91,7 @@ public:
   void push(const Interval& interval);  // throws if the capacity is exceeded
   void clear() { size_ = 0; }
 
-private:
+ private:
   std::array<Interval, kCapacity> items_;
   int size_ = 0;
 };
@@ -113,7 +112,7 @@ struct Bounds {
 };
 
 class Solid {
-public:
+ public:
   enum class Kind { Sphere, Cylinder, HalfSpace, Union, Intersection, Difference };
 
   static std::shared_ptr<Solid> sphere(double radius, const Rigid3& parentFromLocal = {});
@@ -142,14 +141,14 @@ public:
   // The same for the lanes of `rays` whose bits are set in `lanes`: t[k] and
   // normal[k] for lane k; other lanes' results are not written.
   void nearestCrossings(const RayLanes& rays, std::uint32_t lanes, double tMin, double* t, Vec3* normal) const;
-  Bounds bounds() const;  // in the parent frame
+  Bounds bounds() const;                   // in the parent frame
   bool contains(const Vec3& point) const;  // in the parent frame
   Kind kind() const { return kind_; }
   // Convex (a sphere, a cylinder, a half space or an intersection of them): a
   // line meets it in one interval, so a ray leaving it does not meet it again.
   bool convex() const;
 
-private:
+ private:
   Solid(Kind kind, double radius, const Rigid3& parentFromLocal);
   void localIntervals(const Ray& local, IntervalList& out) const;
 
@@ -201,7 +200,7 @@ private:
   bool identity_ = true;
   std::shared_ptr<const Solid> a_, b_;
   std::vector<ConvexPart> convex_;  // empty unless the node is such an intersection
-  bool convexDifference_ = false;    // a difference of two convex solids
+  bool convexDifference_ = false;   // a difference of two convex solids
 };
 
 }  // namespace lfi::sim

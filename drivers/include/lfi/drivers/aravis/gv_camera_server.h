@@ -38,7 +38,7 @@ struct ServedFrameRequest {
   int offsetY_px = 0;
   int width_px = 0;
   int height_px = 0;
-  int binning = 1;  // BinningHorizontal (BinningVertical is expected equal)
+  int binning = 1;                         // BinningHorizontal (BinningVertical is expected equal)
   std::optional<PixelFormat> pixelFormat;  // unset for a format we do not serve
   double exposure_us = 0;
   double gain = 0;  // GainRaw
@@ -60,7 +60,7 @@ using ServedFrameFiller = std::function<void(const ServedFrameRequest& request, 
 
 struct GvCameraServerOptions {
   std::string interfaceAddress = "127.0.0.1";  // IPv4 address or interface name to serve on
-  std::string serial = "LFISIM01";            // < 16 characters
+  std::string serial = "LFISIM01";             // < 16 characters
   std::string vendor = "lfi";                  // < 32 characters
   std::string model = "SimCamera";             // < 32 characters
   int sensorWidth_px = 512;

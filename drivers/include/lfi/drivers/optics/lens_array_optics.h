@@ -78,7 +78,7 @@
 namespace lfi {
 
 class LensArrayOptics {
-public:
+ public:
   // `info` validated; its optics are a LensletArray or a PinholeArray.
   explicit LensArrayOptics(const DisplayInfo& info);
 
@@ -96,9 +96,7 @@ public:
   Vec2 apertureCentre(const Vec2& q) const { return lattice_.nearestCentre(q); }
   // Whether two points of the panel or lens plane lie in the same lens's cell
   // (points on the border between two cells are in both).
-  bool sameAperture(const Vec2& a, const Vec2& b) const {
-    return lattice_.insideCell(b, lattice_.nearestCentre(a), 1);
-  }
+  bool sameAperture(const Vec2& a, const Vec2& b) const { return lattice_.insideCell(b, lattice_.nearestCentre(a), 1); }
   // Whether q lies in the clear aperture of the lens (pinhole) at `centre`.
   bool insideAperture(const Vec2& q, const Vec2& centre) const;
   // The farthest a point of a clear aperture lies from its centre, mm.
@@ -108,7 +106,7 @@ public:
   double viewCone_rad() const;
   const LensLattice& lattice() const { return lattice_; }
 
-private:
+ private:
   LensLattice lattice_;
   bool pinhole_;
   double gap_, power_, fill_, radius_;

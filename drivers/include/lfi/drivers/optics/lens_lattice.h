@@ -13,7 +13,7 @@
 namespace lfi {
 
 class LensLattice {
-public:
+ public:
   LensLattice(LensPacking packing, double pitch_mm, double rotation_rad, const Vec2& offset_mm);
 
   // The centre of the lens whose cell holds `p` (ties: any of the nearest).
@@ -29,7 +29,7 @@ public:
   double inradius_mm() const { return 0.5 * pitch_; }
   double circumradius_mm() const;
 
-private:
+ private:
   LensPacking packing_;
   double pitch_;
   Vec2 offset_;

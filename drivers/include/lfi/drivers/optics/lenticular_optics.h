@@ -41,7 +41,7 @@
 namespace lfi {
 
 class LenticularOptics {
-public:
+ public:
   // `info` validated; its optics are Lenticular or LineBarrier.
   explicit LenticularOptics(const DisplayInfo& info);
 
@@ -67,7 +67,7 @@ public:
   Vec2 lensNormal() const { return normal_; }
   double viewCone_rad() const;
 
-private:
+ private:
   double lensIndex(const Vec2& p) const;
 
   bool barrier_;

@@ -28,9 +28,11 @@ struct PanelSample {
 };
 
 class PanelGrid {
-public:
+ public:
   explicit PanelGrid(const DisplayInfo& info)
-      : pitch_(info.pixelPitch_mm), width_(info.panelWidth_px), height_(info.panelHeight_px),
+      : pitch_(info.pixelPitch_mm),
+        width_(info.panelWidth_px),
+        height_(info.panelHeight_px),
         subpixels_(info.subpixelsPerPixel()) {}
 
   Vec2 subpixelCentre(int col, int row, int subpixel) const {
@@ -44,7 +46,7 @@ public:
   int subpixels() const { return subpixels_; }
   double pitch_mm() const { return pitch_; }
 
-private:
+ private:
   double pitch_;
   int width_, height_, subpixels_;
 };

@@ -21,9 +21,9 @@
 #include "lfi/drivers/display.h"
 
 #include <chrono>
-#include <filesystem>
 #include <cstddef>
 #include <cstdint>
+#include <filesystem>
 #include <memory>
 #include <string>
 #include <string_view>
@@ -61,7 +61,7 @@ struct UsbDisplayInfo {
   UsbDisplaySelector selector;  // selector.uri() opens it ("usb:<vid>:<pid>/<serial>")
   int bus = 0;                  // USB bus number and device address
   int address = 0;
-  std::string problem;          // why its serial could not be read (e.g. permission denied), or empty
+  std::string problem;  // why its serial could not be read (e.g. permission denied), or empty
 };
 
 // Lists the displays on the USB buses (a fresh libusb context; opens each one

@@ -35,8 +35,8 @@
 
 #include "lfi/drivers/camera.h"
 #include "lfi/sim/devices/camera_sensor_model.h"
-#include "lfi/sim/scene_file.h"
 #include "lfi/sim/devices/sim_bench.h"
+#include "lfi/sim/scene_file.h"
 
 #include <opencv2/core.hpp>
 
