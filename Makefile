@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 # Thin wrapper around CMake (the presets in CMakePresets.json hold the details).
 #   make study       install dependencies if missing, build (Release), run the reference study
 #   make check       same set-up, then build and run every test

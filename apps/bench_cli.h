@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // What the subcommands that take a bench file share (capture, train, inspect,
 // run, emit, devices): the BENCH argument, the simulated part to inspect, the

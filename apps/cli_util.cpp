@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Helpers shared by several lfi subcommands: the progress display, whole-number
 // option checks, and the checks on output paths made before any work.
 

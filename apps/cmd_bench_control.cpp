@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // lfi bench-control REQUEST...: one request to a running `lfi sim-bench`
 // (sim_bench_control.h): put another part under the camera, inject a fault,
 // or ask its status. Prints the reply; exits 0 for "ok", 1 for an error.

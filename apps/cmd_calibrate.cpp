@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // lfi calibrate display|part|camera BENCH: the display's lens array and the
 // camera's scale (nothing in view), Δ, the part's place and the display's gap
 // (through the intact part, against its model), or the camera's scale on a

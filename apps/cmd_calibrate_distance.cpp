@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // lfi calibrate-distance BENCH: the display-to-part distance scan with the
 // bench's devices (docs/calibration.md), its table on stdout and its result
 // file (JSON).

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // lfi capture BENCH: the reference package (reference_package.h) of a bench:
 // the reference light field captured (or read), shown with the display, and
 // the golden model of the intact part trained from the bench's reference frames.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // lfi devices [BENCH]: what a bench file names, whether each device is there
 // and in what state; then the USB displays and GenICam cameras attached, with
 // their URIs.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // lfi emit BENCH: the bench's display shows the reference package's
 // reference (its panel image, or its light field at the package's drive
 // scale) or a given light field, until stopped.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // lfi inspect BENCH: one part inspected against the bench's reference package,
 // blind (no ground truth): its record, image and overlay in a folder of their
 // own under the bench's output folder, and the verdict as the exit status.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // lfi lf-info: a light field EXR validated and its parametrisation printed.
 
 #include "commands.h"

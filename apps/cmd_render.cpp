@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // lfi render: a scene file rendered to a camera image (EXR and PNG) or a light
 // field (EXR); Ctrl-C cancels the render between tiles.
 

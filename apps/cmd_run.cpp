@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // lfi run BENCH: parts inspected one after another, one per image, until
 // stopped (SIGINT or SIGTERM, a part count, or a time): one JSON Lines record
 // per part, each flushed to the disk before the next part; a summary page

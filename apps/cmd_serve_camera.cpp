@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // lfi serve-camera: the ray-traced camera of a scene file served as a GigE
 // Vision device until SIGINT or SIGTERM.
 

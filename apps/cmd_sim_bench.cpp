@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // lfi sim-bench BENCH [-- COMMAND ...]: the simulated bench of a bench file
 // behind the real drivers (served_bench.h): its camera as a GigE Vision device,
 // its display as an emulated lfi USB display, and a control socket that puts

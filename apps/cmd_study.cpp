@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // lfi study: the reference study on the simulated bench (docs/study.md).
 
 #include "cli_util.h"

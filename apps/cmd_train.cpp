@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // lfi train BENCH: more good parts (or more frames of one) into the golden
 // model of the bench's reference package; the package is rewritten atomically.
 

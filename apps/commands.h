@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The interface every lfi subcommand implements: cmd_<name>.cpp defines
 // add<Name>Command, which adds the subcommand and its options to the app and

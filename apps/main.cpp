@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // lfi: the command line front end. Every subcommand reports progress on long
 // work to stderr, prints results to stdout, and exits non-zero with one clear
 // message on error. Each subcommand is one cmd_<name>.cpp (commands.h).

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "part_output.h"
 
 #include "lfi/core/exr_io.h"

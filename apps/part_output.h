@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // What `lfi inspect` and `lfi run` keep of a part: its record and, by the
 // bench's [output] save_images, its image (EXR, DN) and overlay (PNG).

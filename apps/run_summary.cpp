@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "run_summary.h"
 
 #include "lfi/controller/inspection_record.h"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The summary page of an `lfi run`, rebuilt from its records file (JSON Lines),
 // so that it never says more or less than the records: counts, yield, the

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "sim_bench_control.h"
 
 #include "lfi/core/error.h"

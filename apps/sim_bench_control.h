@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The control socket of `lfi sim-bench` (docs/hardware-in-the-loop.md): a Unix
 // stream socket that takes one command per connection, one line each way.

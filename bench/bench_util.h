@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Timing for the benchmarks: the best of several runs (the least disturbed by
 // whatever else the machine does) for speeds, and the median of ratios taken

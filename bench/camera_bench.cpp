@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // lfi-camera-bench: the simulated GigE Vision camera (`lfi serve-camera` on
 // loopback) streamed through our Aravis backend, next to a plain Aravis client
 // (arv_camera / arv_stream C API, no copy) streaming the same device in the

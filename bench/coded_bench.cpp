@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // lfi-coded-bench: decoding a full Gray code pattern set (calib::decodeGrayCode)
 // for a 5-megapixel camera, Mono8 and Mono12, next to a bound measured in the
 // same turns.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // lfi-cycle-bench: the controller's capture → emit → inspect cycle on the
 // simulated bench (sim: camera, display and light field capture on one scene
 // file), step by step, next to the simulation's own work measured in the same

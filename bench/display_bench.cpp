@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // lfi-display-bench: light field → panel image encoding (encodeLightField, the
 // display's optics model) for a 3840 x 2160 panel, next to a memcpy of the same
 // number of bytes measured in the same run.

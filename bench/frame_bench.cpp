@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // lfi-frame-bench: the per-frame steps outside the ray tracer and the drivers'
 // transfers, each next to a bound measured in the same run.
 //

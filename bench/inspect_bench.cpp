@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // lfi-inspect-bench: the inspection's latency, frame arrival → verdict
 // (DefectFinder::find against a trained golden model), for 5-megapixel Mono8
 // and Mono12 frames, next to a bound measured in the same turns.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // lfi-bench: the ray tracer's throughput on the reference scene, next to the
 // raw Embree bound measured in the same run.
 //

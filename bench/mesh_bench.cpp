@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // lfi-mesh-bench: loading a triangle mesh (sim::loadMesh: the file read, the
 // vertices welded, the smooth normals with creases) next to bounds measured in
 // the same run, in one process:

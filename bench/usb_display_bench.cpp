@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // lfi-usb-display-bench: host-side upload throughput of the usb: display
 // backend (libusb, asynchronous bulk transfers) into the emulated USB display
 // (umockdev), 1 transfer in flight against 4, next to the memcpy time of the

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 # Every dependency is a Debian 12 package (scripts/install-deps.sh) found here.
 find_package(PkgConfig REQUIRED)
 find_package(Threads REQUIRED)

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 # `cmake --install`: the libraries and their public headers (lfi_library), the
 # lfi CMake package and pkg-config file, the `lfi` tool with its data, and the
 # udev rules. Everything goes under CMAKE_INSTALL_PREFIX except the udev rules,
@@ -8,7 +9,8 @@ include(CMakePackageConfigHelpers)
 set(LFI_CMAKE_DIR ${CMAKE_INSTALL_LIBDIR}/cmake/lfi)
 install(EXPORT lfiTargets NAMESPACE lfi:: DESTINATION ${LFI_CMAKE_DIR})
 configure_package_config_file(cmake/lfiConfig.cmake.in ${PROJECT_BINARY_DIR}/lfiConfig.cmake
-                              INSTALL_DESTINATION ${LFI_CMAKE_DIR})
+                              INSTALL_DESTINATION ${LFI_CMAKE_DIR} PATH_VARS CMAKE_INSTALL_DOCDIR)
+install(FILES LICENSE DESTINATION ${CMAKE_INSTALL_DOCDIR})
 write_basic_package_version_file(${PROJECT_BINARY_DIR}/lfiConfigVersion.cmake COMPATIBILITY SameMinorVersion)
 install(FILES ${PROJECT_BINARY_DIR}/lfiConfig.cmake ${PROJECT_BINARY_DIR}/lfiConfigVersion.cmake
         DESTINATION ${LFI_CMAKE_DIR})

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 # Compiler flags shared by every lfi target. Linked as a build-only dependency:
 # an installed lfi library does not impose them on its users.
 add_library(lfi_options INTERFACE)

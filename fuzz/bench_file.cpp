@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The inspection bench file reader (controller/bench_file.h) on any text.
 #include "fuzz_input.h"
 

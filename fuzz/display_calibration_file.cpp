@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The display calibration file reader (drivers/display_calibration_file.h) on any text, over a display of each
 // optics class.
 #include "fuzz_input.h"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // What the fuzz targets share. Each target hands libFuzzer's bytes to one of
 // lfi's readers of outside input, as a file where the reader takes a path (in

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // A received GigE Vision buffer's image as the Aravis backend checks it (drivers/src/aravis/image_payload.h): the
 // first 8 bytes are what the GVSP leader would say (the configured format, the image's width and height against
 // the stream's, its wire pixel format and line padding), the rest is the payload. An image taken must be the

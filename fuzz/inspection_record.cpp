@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // A run's records read back for its summary (controller/inspection_record.h): any text, one JSON record a line.
 #include "fuzz_input.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The light field EXR reader (core/exr_io.h) on any bytes.
 #include "fuzz_input.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // lfi's PLY reader (sim/src/scene_file/ply_mesh.h, which keeps PLY files from Assimp) on any bytes.
 #include "fuzz_input.h"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The reference package's reader (controller/reference_package.h) on any reference.json beside intact images:
 // the record that names the package's files, their checksums, the bench and the devices. (The images' own
 // readers have targets of their own: light_field_exr, radiance_exr.)

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // A fuzz target's inputs run once each, without libFuzzer: built with the test
 // suite (tests/CMakeLists.txt) against every target, so that the seed corpora
 // and the inputs fuzzing found (fuzz/corpus/<target>/) are rerun by `make

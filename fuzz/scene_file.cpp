@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The scene file reader (sim/scene_file.h) on any text; the files a scene names are looked for beside it, where
 // there are none.
 #include "fuzz_input.h"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The USB display's replies as the host decodes them (drivers/usb/usb_display_protocol.h): the first byte picks
 // the reply (device info, calibration, status, last error), the rest is the reply's bytes.
 #include "fuzz_input.h"

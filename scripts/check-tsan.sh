@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # The threaded parts' tests under ThreadSanitizer (build/tsan, cmake --preset
 # tsan): the tile renderer's and the camera sensor model's parallel loops
 # (on std::threads in this build: sim/src/parallel_for.h), the sim: camera's

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # lfi against Blender Cycles (CPU) on lfi's reference scene, on this machine.
 #   scripts/compare-cycles.sh speed [spp=16] [res=512] [threads=nproc]
 #       throughput of both renderers (M samples/s)

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # Installs lfi's build, run and test dependencies from Debian 12 packages.
 # Idempotent: packages already installed are left alone and apt is not
 # touched at all when nothing is missing. Needs root or sudo for apt-get.

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # Mesh loading, lfi's PLY reader against Assimp (OBJ), on this machine.
 #   scripts/mesh-load-bench.sh [segments=1000]
 # Writes a sphere of 2 x segments x segments/2 triangles (radius 5 mm) as binary

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # Runs each libFuzzer target of build/fuzz (cmake --preset fuzz) for SECONDS on
 # its seed corpus (fuzz/corpus/<target>/, read only) and its working corpus
 # (build/fuzz/corpus/<target>/, where new inputs go), then prints a table of

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "lfi/calib/lattice_fit.h"
 
 #include "lfi/core/error.h"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "lfi/controller/bench_file_edit.h"
 
 #include "lfi/controller/bench_file.h"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "lfi/controller/inspector.h"
 
 #include "lfi/controller/bench_devices.h"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "lfi/controller/reference_package.h"
 
 #include "lfi/controller/bench_file.h"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "lfi/drivers/backend_registry.h"
 
 #include "lfi/drivers/aravis/aravis_camera.h"

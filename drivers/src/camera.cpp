@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "lfi/drivers/camera.h"
 
 #include "lfi/core/error.h"

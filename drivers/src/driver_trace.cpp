@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The driver trace (driver_trace.h): its file, and the Camera and Display
 // wrappers that trace interface calls.
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The regions of the off pixels (defect_regions.h).
 
 #include "defect_regions.h"

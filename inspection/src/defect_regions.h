@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The regions of the off pixels that the banded pass of defects.cpp found:
 // grouping, closing, masking and labelling in small windows around them.

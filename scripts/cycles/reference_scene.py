@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 # Blender (Cycles, CPU) version of lfi's reference scene (data/scenes/reference.toml),
 # for the speed comparison in docs/performance.md. Run through
 # scripts/compare-cycles.sh, or:

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The simulator's parallel loops (the tile renderer, the camera sensor model):
 // body(i) for every i in [0, count), on `threads` threads (0: as many as TBB

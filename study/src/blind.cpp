@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The blind detector in the study (docs/study.md, "Blind detector"): the
 // golden model of the intact lens under one illumination, the declared
 // detection settings, and what the defect finder finds in each scene's frame,

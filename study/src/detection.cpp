@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Detection: where each defect is on the camera (ground truth from the
 // geometry), and the declared criterion that judges a scene's frame against
 // the intact lens's (contrast-to-noise per defect, verdicts, flagged regions).

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The detection limits: one defect of each kind at a ladder of sizes, judged
 // in every setup by the declared criterion; the smallest size each setup
 // detects.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The study's report: each scene's camera frame and difference image (EXR,
 // PNG), study.json, report.html with its sweep charts, and the verdict table
 // for the terminal.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The study's scenes and illuminations, built from the bench: the intact lens
 // and its six defect scenes, the back lights, the light field the inverse
 // schlieren display shows (captured through the intact lens), and the

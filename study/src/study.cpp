@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The study driver: the five setups over the seven scenes, then the
 // detection limits, the display-quality sweep and the display classes, each
 // step's results gathered into study.json and the report as it goes.

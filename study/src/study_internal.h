@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Internal to lfi_study: what its parts share — the declared detection
 // criterion, the scenes and illuminations, one evaluation of them, the blind

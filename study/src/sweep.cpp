@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The display-quality sweep: its default points, the light field variant of
 // each point (checked before the study starts), and the answers drawn from
 // the variants' results.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // `lfi calibrate display|part|camera BENCH` as a user runs them, on the simulated
 // inspection bench whose display's lens array is not where the bench file
 // says (the bench states the nominal 1 mm square array at no rotation and no

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The `lfi` command line tool as a user runs it: `lfi render` writes its
 // images, keeps them unless asked, gives the same image for any thread count,
 // and answers bad arguments and bad scene files with messages that name them.

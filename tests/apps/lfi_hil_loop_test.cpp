@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The inspection loop over the real drivers gives the answers it gives in
 // process: capture → emit → inspect on the study's defect parts, once with the
 // sim: devices in the `lfi` process (data/benches/inspection_sim.toml and

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The inspection loop as a bench user runs it, on the simulated bench
 // (data/benches/inspection_sim.toml): `lfi capture` takes the reference
 // package, `lfi inspect` finds every defect of the study blind and places it

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // `lfi run` when the camera drops out mid-run, through the real Aravis backend
 // against `lfi serve-camera` (the ray-traced camera as a GigE Vision device on
 // loopback), killed and started again while the run goes on: the part in hand

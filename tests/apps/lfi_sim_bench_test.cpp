@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // `lfi sim-bench` and `lfi bench-control` as a bench user runs them: a run of
 // 50 parts through the real drivers with the camera taken off the network 5
 // times and the display unplugged 5 times, which records each fault against

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The chessboard target's corners found with OpenCV's calib3d on images of
 // known answer: a board drawn under a known affine camera (each pixel the
 // share of its area that is white, as a sensor integrates it), with and

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Gray code patterns and their decoding: OpenCV's patterns as documented,
 // exact decoding of the patterns themselves, a synthetic camera that sees the
 // panel through a known map with blur and noise, OpenCV's own decoder on the

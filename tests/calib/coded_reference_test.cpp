@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The coded reference's panel weights from decoded correspondences and their
 // closed-loop refinement, on a synthetic bench with a known linear light
 // transport: the loop makes an unevenly transmitting part look uniform.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Display distance calibration: light field propagation against an analytic
 // light field, and the full calibration against the ray-traced bench.
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The lens array fit and the camera scale fit on points of known answer:
 // exact lattices and cameras, the same quantised to a panel pixel or with
 // noise, outliers, and the refusals.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Editing a bench file's values in place (what the calibrations write), the
 // [display.optics] table it adds, and publishing a calibration: the file
 // replaced atomically with its previous text and a record kept beside it,

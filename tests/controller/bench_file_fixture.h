@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The bench file tests' fixture: a bench whose devices are never opened, and
 // the helpers that edit it, read it, and check the errors it gives.

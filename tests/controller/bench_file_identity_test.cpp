@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The inspection bench file's derived values: what the reference hash depends
 // on (and what it does not), the detection settings in camera pixels and the
 // part's frame. No device is opened.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The inspection bench file (controller/include/lfi/controller/bench_file.h):
 // the shipped simulated bench, every kind of mistake a hand edit makes (named
 // by file, line and key), relative paths and the defaults. No device is opened.

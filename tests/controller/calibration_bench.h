@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The ray-traced bench the calibration tests measure through: the camera of
 // data/scenes/inspection_bench.toml (56 x 56 Mono12 pixels of 0.1215 mm at

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The camera's scale measured on a chessboard target through the ray-traced
 // bench, camera noise on, against the truth the scene gives (the camera's
 // magnification): trials over the camera's scale (±2 %), the board's turn

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The coded reference capture (coded:) on the ray-traced bench: the study's
 // lens over a full-parallax lenslet display, seen by the telecentric camera
 // with its noise on. What it measures is checked against what the camera

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The controller on the ray-traced bench: capture -> emit -> inspect through
 // the same sim: URIs a user would give, and the errors it reports.
 

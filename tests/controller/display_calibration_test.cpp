@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The display's lens array and the camera's scale measured through the
 // ray-traced bench, camera noise on, against the truth the scene gives: the
 // array's pitch, rotation and offset, the camera's magnification and where it

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // A run's records read back for its summary (readRecordSummary): the keys it
 // needs, and records it must refuse by name rather than read wrongly.
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The inspection loop with one device behind its real driver and the other
 // simulated, in one process: the served bench (emulation/served_bench.h) puts
 // the ray-traced camera on the network and the display on the emulated USB

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Δ, the part's lateral position and the display's gap measured through the
 // intact part on the ray-traced bench, camera noise on, against the truth the
 // scene gives: the display's height below the lens, the lens's place across

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The reference package (controller/include/lfi/controller/reference_package.h):
 // a round trip of every file, training resumed from a package, the atomic
 // folder write, every kind of damage a package can suffer (each named by

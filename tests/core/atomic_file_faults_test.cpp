@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The atomic writer (core/atomic_file.h) under faults repeated until they are
 // boring: a writer killed at random moments, by SIGKILL (nothing can run after
 // it) and by SIGTERM (its cleanup runs), while it replaces a file or a folder

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "lfi/core/atomic_file.h"
 
 #include "lfi/core/error.h"

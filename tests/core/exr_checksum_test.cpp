@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The lfi.checksum of EXR files: CRC-32 of the canonical lfi attributes, then the pixels;
 // a changed pixel or attribute fails it, and version 1 files carry the pixels' CRC alone.
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // EXR files lfi must refuse, naming them: truncated, damaged or mutated bytes, sizes that
 // would make OpenEXR allocate gigabytes, other OpenEXR layouts, and what is not an EXR file.
 

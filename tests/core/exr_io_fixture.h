@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The ExrIo fixture (a fresh directory per test) and the helpers the EXR tests share:
 // random and special pixels, bit-exact comparison, and EXR files written with the

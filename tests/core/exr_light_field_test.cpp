@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Light field EXR files: bit-exact round trips, and files whose attributes are missing,
 // mistyped, out of range, in another parametrisation or at odds with the image.
 

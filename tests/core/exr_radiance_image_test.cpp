@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Radiance image EXR files: bit-exact round trips with their info, the kind that tells them
 // from light field files, and files in another convention.
 

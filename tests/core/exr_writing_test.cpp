@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // What both EXR writers share: existing files kept unless overwriting is allowed, images
 // refused before anything is written, and the thread count OpenEXR runs with.
 

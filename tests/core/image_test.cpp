@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Image helpers: percentile by nearest rank, PNG written atomically.
 
 #include "lfi/core/image.h"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The fixture of the Aravis backend's tests (aravis_*_test.cpp): Aravis's own
 // simulated GigE Vision camera (arv-fake-gv-camera-0.8, Debian package

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The Aravis backend's configuration (aravis_camera_fixture.h): the state machine,
 // settings applied and read back or refused, devices whose GenICam description
 // lacks or bounds features, and generic feature access.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The Aravis backend's faults (aravis_camera_fixture.h): a device killed, gone at
 // any request or stalled past its heartbeat timeout closes the camera and reopens;
 // lost packets give incomplete frames.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The Aravis backend's discovery and device ids (aravis_camera_fixture.h): the fake
 // camera found by discovery, opened by id, by address and as "the first camera
 // found", a wrong id, and a device at another of this host's own addresses.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The Aravis backend's stream (aravis_camera_fixture.h): continuous and triggered
 // frames, underruns, and frames refused for another pixel format or region.
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The display optics model against analytic geometry (display_optics.h).
 
 #include "lfi_test_support.h"

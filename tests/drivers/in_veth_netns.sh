@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # Runs COMMAND in a network namespace of its own whose interfaces are the
 # loopback and one end of a veth pair at 192.0.2.77/24 (TEST-NET-1, RFC 5737):
 # a host with an IPv4 address outside 127/8, whatever the host itself has.

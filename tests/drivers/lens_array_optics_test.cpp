@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The full-parallax display classes (lenslet and pinhole arrays, optics/*.h)
 // against analytic geometry: the lattice, chief rays and their inverse over
 // whole panels, the thin-lens back trace, encoding and decoding, bad input.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // 12-bit packed wire formats against hand-packed bytes (pixel_unpack.h table).
 
 #include "lfi/drivers/pixel_unpack.h"

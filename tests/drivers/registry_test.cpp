@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The camera URI grammar and the backend registry (no device needed).
 
 #include "lfi/drivers/camera_registry.h"

@@ -1,4 +1,5 @@
 #!/bin/sh
+# SPDX-License-Identifier: Apache-2.0
 # Runs a test binary with umockdev's preload library (so libusb sees the emulated
 # devices of the testbed), a private TMPDIR per run, and ASan told that the preload
 # library comes first on purpose.

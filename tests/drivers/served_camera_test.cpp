@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The Aravis backend against `lfi serve-camera` on loopback: the real driver
 // code path (GVCP control, GVSP streaming over UDP) receiving ray-traced,
 // sensor-modelled frames, compared pixel for pixel with what SimImager renders

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The fixture of the usb: display backend's tests against the emulated device: each test
 // checks that umockdev's preload library is active (the process has a private TMPDIR for

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The `usb:` display backend finding and opening the emulated device (emulated_usb_display.h):
 // its info and calibration, serials and URIs, the listing, and devices that cannot be opened.
 // Runs under umockdev's preload library (CTest starts it through tests/drivers/run_with_umockdev.sh).

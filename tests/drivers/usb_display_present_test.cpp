@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The `usb:` display backend showing frames on the emulated device (emulated_usb_display.h): the
 // state machine, brightness, frames that arrive byte-exact, and frames or statuses the device refuses.
 // Runs under umockdev's preload library (CTest starts it through tests/drivers/run_with_umockdev.sh).

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The `usb:` display backend recovering from the emulated device's faults (emulated_usb_display.h):
 // stalls, short transfers, timeouts, failed CLEAR_HALTs and a device that vanishes and comes back.
 // Runs under umockdev's preload library (CTest starts it through tests/drivers/run_with_umockdev.sh).

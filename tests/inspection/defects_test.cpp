@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The golden model and the blind defect finder (lfi/inspection/) on synthetic
 // frames with known defects: a flat part of 1000 DN under Gaussian noise of
 // 10 DN, trained from 20 good frames.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // A part's verdict from its defects: positions and areas in the part's frame,
 // pass/fail by each rule; and a stored golden model that training goes on from.
 

@@ -1,9 +1,11 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # install_test.sh <build-dir> <source-dir>: installs the build into a
 # temporary folder (DESTDIR, prefix /opt/lfi), then builds a program outside
 # the tree against the installed package twice, through find_package(lfi) and
 # through pkg-config, and runs both: each opens a sim: camera and grabs a frame.
-# Also checks that the udev rules land in LFI_UDEV_RULES_DIR, outside the prefix.
+# Also checks that the udev rules land in LFI_UDEV_RULES_DIR, outside the prefix,
+# and that the package and the .pc file carry the licence.
 set -euo pipefail
 build=$(realpath "$1") source=$(realpath "$2")
 tmp=$(mktemp -d)
@@ -21,6 +23,9 @@ done
 libdir=$(dirname "$(find "$prefix" -name liblfi_core.a)")
 [[ -n "$libdir" ]] || fail "liblfi_core.a not installed"
 scene="$source/data/scenes/inspection_bench.toml"
+# The licence: its text beside the documentation, its name in the .pc file
+cmp -s "$prefix/share/doc/lfi/LICENSE" "$source/LICENSE" || fail "LICENSE not installed in share/doc/lfi"
+grep -qx 'License: Apache-2.0' "$libdir/pkgconfig/lfi.pc" || fail "lfi.pc does not name the licence"
 
 # CMake package
 cmake -S "$source/tests/install/consumer" -B "$tmp/consumer" -G Ninja -DCMAKE_BUILD_TYPE=Release \

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The method on the bench it drives: the intact reference lens lit by the
 // light field it produces, emitted by a full-parallax lenslet-array display and
 // by a horizontal-parallax lenticular display, seen by a telecentric camera of

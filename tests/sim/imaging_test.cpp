@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Whole-bench imaging checks: the telecentric camera's depth of field against
 // thin-lens geometry, and the inverse schlieren round trip (capture a light
 // field through the intact lens, emit it, image it).

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Interface optics (Snell, Fresnel, total internal reflection), the paraxial
 // focal length of a traced thick lens, and the two sensors' ray geometry,
 // all against closed-form optics.

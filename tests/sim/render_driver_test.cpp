@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // render() as a caller sees it: a bit-identical image for any thread count and
 // tile size, cancellation, progress reports, and the options it refuses.
 #include "lfi/core/error.h"

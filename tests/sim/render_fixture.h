@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The renderer's test bench: a telecentric camera looking down -z and a back
 // light below it (render_transport_test.cpp, render_driver_test.cpp).

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The renderer's random numbers and samples: SplitMix64 streams, Kensler's
 // permutations, the concentric disc, and the vectorised sample and stratified
 // choice passes against the one-sample formulas, to the bit.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The path tracer against analytic radiometry and geometry: a flat slab's
 // transmission with incoherent multiple reflections and Beer-Lambert absorption,
 // nested dielectrics, the bright disc of a lens under parallel illumination, meshes far out.

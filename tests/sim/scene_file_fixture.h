@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The fixture of the scene file tests (scene_file*_test.cpp): a folder of the
 // test's own for the files it writes, and the [camera] table of most scenes.

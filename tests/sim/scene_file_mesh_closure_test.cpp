@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Meshes that must bound a solid (meshClosureFault): a dielectric mesh with a
 // hole or a face wound the wrong way is refused, each part is wound outwards
 // but cavities, and vertices within a float's precision close a mesh.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Mesh files (loadMesh): OBJ, PLY and glTF load where the file places them,
 // at the scene's scale, with normals smooth across gentle edges and sharp
 // across creases; a mesh ball refracts as the analytic one does.

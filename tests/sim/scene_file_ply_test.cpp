@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // PLY mesh files (lfi's own reader): ASCII and both binary byte orders read
 // alike, and corrupt or seeded-damaged files are errors naming file and place.
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Solids in scene files: cut-outs subtracted from a solid, and sensors whose
 // rays would start inside a solid refused.
 

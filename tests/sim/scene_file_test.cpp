@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Scene files: the documented keys load into the scene they describe, and
 // every kind of bad input, written or seeded, is an error naming file, line
 // and key.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The part model of a scene file against the thick-lens formulas: the study's
 // N-BK7 lens (R = ±51.5 mm, 5 mm thick, n = 1.5168) bends a ray 1 mm off the
 // axis towards its back focal point; a ray on the axis goes straight through;

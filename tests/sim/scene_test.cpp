@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Scene::intersect against brute force: the nearest hit over every object,
 // computed from the solids' exact intervals and the rectangles' planes.
 #include "lfi/sim/scene.h"

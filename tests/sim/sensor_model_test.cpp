@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The camera sensor model against its own statistics: exposure, shot + read +
 // quantisation noise, saturation, linearity, reproducibility.
 #include "lfi/sim/devices/camera_sensor_model.h"

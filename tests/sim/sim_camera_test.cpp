@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The ray-traced camera backend ("sim:<scene-file>"): the sensor model's
 // response and noise against the analytic model, the state machine, the frame
 // clock and reproducibility per frame id.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The ray-traced display backend ("sim:<scene-file>") and the physical display
 // emitter (PanelEmission): the state machine through the registry, a light field
 // encoded for the display and emitted through the panel + lenslet model against

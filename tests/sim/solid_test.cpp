@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Analytic solids and CSG against closed-form geometry: ray-sphere roots,
 // spherical sag, normals of booleans, contains() versus intervals, bounds.
 #include "lfi/sim/solid.h"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The reference study in quick mode, end to end: what it writes, and the
 // expectations that physics (not today's numbers) guarantees.
 

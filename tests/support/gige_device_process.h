@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // A GigE Vision device served on 127.0.0.1 by a child process — Aravis's fake
 // camera (arv-fake-gv-camera-0.8) or `lfi serve-camera` — for the loopback

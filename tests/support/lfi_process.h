@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The `lfi` executable run as a user runs it (LFI_EXECUTABLE, set by the test's
 // CMake entry): its exit status and what it printed.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The scene-file text (docs/scene-files.md) of the device tests' benches: a
 // camera looking down the z axis at the plane z = 0, and the objects under it.

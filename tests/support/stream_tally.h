@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // A GigE Vision stream's frames over loopback, tallied so that a test does
 // not depend on the host's load. Loopback loses packets only when this host

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The study's defect parts on the inspection bench (data/scenes/inspection_bench.toml:
 // the N-BK7 lens, R = 51.5 mm, 5 mm thick, Ø25.4, seen in 0.5 mm object pixels), as

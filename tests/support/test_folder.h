@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // A folder of the test's own under the system's temporary directory, for the
 // files it writes; removed, with everything in it, when the test ends.

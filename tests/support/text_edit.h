@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Reading a text file whole and editing shipped bench and scene files' text in
 // tests: an edit whose text is not there fails the test (the file changed

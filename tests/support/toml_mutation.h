@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Seeded edits of a TOML file's values, of the kinds a hand edit or a script
 // gets wrong: a number replaced by zero, a sign, an extreme, NaN or infinity,

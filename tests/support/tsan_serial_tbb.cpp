@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Linked into every test of the ThreadSanitizer build (LFI_SANITIZE_THREAD):
 // TBB's scheduler is not instrumented, so the hand-over of work between its
 // threads is invisible to ThreadSanitizer and every task's access would be

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # Tests udev/70-lfi.rules with udev itself: the emulated display, a USB3 Vision
 # camera and an unrelated USB device are described as umockdev devices
 # (devices.umockdev, with real descriptor bytes so that udev's usb_id builtin

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The display calibration's results in a bench file and its record.
 
 #include "lfi/controller/display_calibration.h"

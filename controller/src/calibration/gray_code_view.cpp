@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "gray_code_view.h"
 
 #include "lfi/core/error.h"

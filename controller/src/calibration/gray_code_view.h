@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // What the calibrations through the bench share: frames taken and counted,
 // all white, all black and the Gray code patterns shown and decoded per camera

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The [display.optics] table the calibrations write (bench_file.h): every key
 // of a lens or pinhole array's class, each with the comment given; a

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "lfi/controller/part_calibration.h"
 
 #include "gray_code_view.h"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // A measured value in a calibration record (lfi-calibration-record): the value,
 // its standard and expanded uncertainties and its unit.

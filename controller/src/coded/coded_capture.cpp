@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "lfi/controller/coded_capture.h"
 
 #include "lfi/calib/coded_patterns.h"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The aravis: scheme in the camera registry: aravis:<device-id>[?packetSize=<bytes>].
 #include "lfi/core/error.h"
 #include "lfi/drivers/aravis/aravis_camera.h"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The Aravis backend's Camera (aravis_camera.h): opening and closing the device,
 // its info and generic feature access. Every Aravis call that takes a GError is
 // checked; failures become lfi::Error naming the device and the call.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Internal to the Aravis backend: the Camera implementation's class and the helpers its
 // files share (error checking, the wire pixel formats, discovery under Aravis's lock).

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The Aravis backend's configure(): each CameraSettings field applied to the device
 // within its bounds, the settings read back, and the wire pixel formats behind
 // each PixelFormat.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The Aravis backend's stream: its buffer pool, grabbing frames and checking each
 // against the configured pixel format, region and padding, the stream statistics,
 // and telling a device that is gone from one that is slow.

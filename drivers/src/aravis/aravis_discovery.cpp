@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Device discovery and address handling for the Aravis backend: Aravis's device
 // list (listAravisDevices) and reaching a GigE Vision device at one of this host's
 // own addresses through loopback.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // GvCameraServer (gv_camera_server.h) on Aravis's ArvGvFakeCamera.
 
 #include "lfi/drivers/aravis/gv_camera_server.h"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "image_payload.h"
 
 #include "aravis_camera_impl.h"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Internal to the Aravis backend: a received buffer's image checked before it
 // becomes a frame. Aravis parsed the GVSP leader (size, pixel format, padding)

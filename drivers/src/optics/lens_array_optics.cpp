@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "lfi/drivers/optics/lens_array_optics.h"
 
 #include <cmath>

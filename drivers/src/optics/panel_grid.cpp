@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "lfi/drivers/optics/panel_grid.h"
 
 #include <algorithm>

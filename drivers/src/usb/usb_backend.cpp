@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The usb: scheme in the display registry:
 // usb:<vid>:<pid>[/<serial>][?timeout_ms=<ms>&calibration=<file>].
 #include "lfi/core/error.h"

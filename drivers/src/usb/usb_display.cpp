@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The usb: backend's Display (usb_display.h): open/close, show, blank, brightness and
 // status over the vendor interface's control requests, and the identity read at open.
 

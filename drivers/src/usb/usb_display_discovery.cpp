@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Finding the usb: display on the buses: usb: URIs (UsbDisplaySelector), listUsbDisplays(),
 // and UsbDisplay::openDevice(), which picks the device a selector names and claims its interface.
 

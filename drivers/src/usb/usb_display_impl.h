@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Internal to the usb: display backend: the Display implementation's class, its
 // methods split over usb_display.cpp (lifecycle and control requests),

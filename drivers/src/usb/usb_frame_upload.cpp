@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Frame upload for the usb: backend: UsbDisplay::buildFrame() lays out header and
 // payload, sendFrame() sends them as asynchronous bulk OUT transfers, several in flight.
 

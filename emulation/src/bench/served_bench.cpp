@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // ServedBench (served_bench.h): a SimImager behind a GvCameraServer, and an
 // EmulatedUsbDisplay whose panel drives the imager's SimBench.
 

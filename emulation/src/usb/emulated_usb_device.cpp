@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The emulated USB display's device side, as firmware would behave: frame assembly and
 // validation from bulk OUT data, PRESENT, and the answers to the protocol's control requests.
 

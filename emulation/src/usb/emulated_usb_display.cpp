@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // EmulatedUsbDisplay (emulated_usb_display.h): plugging the device in and out, arming
 // faults and reading its state from the test thread, and the process-wide umockdev setup.
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Internal to the emulated USB display: EmulatedUsbDisplay::Impl, whose methods are split
 // over emulated_usb_testbed.cpp (umockdev testbed, handler thread, usbdevfs ioctls and URBs)

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The emulated USB display's plumbing: umockdev's shared testbed, the ioctl handler on its
 // own GLib main context thread, and the usbdevfs ioctls libusb sends (URBs submitted, reaped,
 // discarded; claim, clear halt), handed to the device side in emulated_usb_device.cpp.

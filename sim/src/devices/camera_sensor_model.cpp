@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "lfi/sim/devices/camera_sensor_model.h"
 
 #include "lfi/core/error.h"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Internal to lfi_sim: the scene of a reference capture, the parts of a scene
 // file under the collimated capture beam (a parallel emitter facing -z at

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The ray-traced camera backend (sim_camera.h): a state machine over SimImager
 // with a simulated frame clock and buffer pool, so that timing, underruns and
 // software triggers behave like a streaming device's.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The ray-traced display backend (sim_display.h): the Display state machine over
 // the shared SimBench's panel.
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The reference in the display's own ray space (sim_light_field_capture.h,
 // capturePanelReference): every panel subpixel's rays traced backwards through
 // the parts to the capture beam.

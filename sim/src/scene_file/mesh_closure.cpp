@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Whether a mesh bounds a solid the tracer can enter and leave
 // (meshClosureFault): with vertices within a float's precision welded, every
 // edge crossed once each way, and each part wound outwards (a cavity inwards).

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Loading a mesh file (loadMesh): PLY through lfi's own reader, the other
 // formats through Assimp; the vertices scaled and bounded, welded, and given
 // smooth or sharp normals by the crease angle.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "ply_mesh.h"
 
 #include "lfi/core/error.h"

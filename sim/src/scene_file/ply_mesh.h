@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Internal to lfi_sim: a reader for Stanford PLY meshes (ASCII and binary,
 // either byte order), written for untrusted files. Debian's Assimp 5.2.5 hangs,

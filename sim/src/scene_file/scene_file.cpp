@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The scene file reader (loadSceneFile): the file's tables (render settings,
 // the camera or light field sensor, [camera_sensor], the objects, [display]) into
 // a scene, with the check that no sensor's rays start inside a solid.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Internal to lfi_sim's scene file reader: what its files share. The mesh
 // helpers serve loading a mesh, checking that it bounds a solid and telling

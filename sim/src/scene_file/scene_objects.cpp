@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // [[object]] tables: the shape (a solid with its spherical cut-outs, a
 // rectangle or a mesh file), the material and the emitter.
 

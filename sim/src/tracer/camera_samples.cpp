@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "camera_samples.h"
 
 #include "lfi/sim/render.h"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Internal to lfi_sim: what the renderer's new samples start with, for many
 // samples at once (structure of arrays, vectorised): the telecentric camera's

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "fresnel_step.h"
 
 #include "simd.h"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Internal to lfi_sim: a Fresnel event at a dielectric interface — Snell's
 // law, total internal reflection, the unpolarised Fresnel reflectance and

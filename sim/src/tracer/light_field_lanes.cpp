@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "light_field_lanes.h"
 
 #include "simd.h"

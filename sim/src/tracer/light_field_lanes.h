@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Internal to lfi_sim: the light field emitter (docs/architecture.md) for a packet's lanes
 // at once. Where each lane's ray meets the emitter's plane and from which

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The physical light field display emitter (PanelOptics, PanelEmission in scene.h).
 
 #include "lfi/core/error.h"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Internal to lfi_sim: one path's interactions (emitters' radiance, the media it
 // is inside, Beer-Lambert absorption, the Fresnel choice, diffuse bounces), inline

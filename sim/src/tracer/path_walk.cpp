@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // One path at a time: the public optics helpers (the concentric disc, Fresnel
 // reflectance, refraction, reflection) and the one-ray walk behind
 // traceRadiance() and refractionPath().

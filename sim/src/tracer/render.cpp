@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // render(): the image cut into tiles, rendered in parallel on TBB (each by the
 // packet renderer, tile_renderer.cpp), with progress reports and cancellation.
 

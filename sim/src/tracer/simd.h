@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Internal to lfi_sim: the attribute that builds a loop-heavy function for
 // several instruction sets, chosen at load time. The functions it marks run

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Building solids: the primitives, their boolean combinations (flattened into
 // convex parts where they allow it), their bounds and point membership.
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Where rays meet solids: one ray's intervals through a solid (primitives, convex
 // parts, the boolean event merge) and the nearest crossings of many rays at once,
 // lane-parallel; both give the same bits.

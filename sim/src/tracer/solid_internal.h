@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Internal to lfi_sim: what building solids (solid.cpp) and meeting them with
 // rays (solid_crossings.cpp) share.

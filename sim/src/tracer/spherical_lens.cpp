@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The spherical lens: its faces' shape, the checks of a lens's dimensions, and
 // the lens as a solid (an edge cylinder cut by its two faces).
 

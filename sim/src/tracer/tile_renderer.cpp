@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The packet renderer of one tile: its pixels' samples traced as a structure of
 // arrays of Scene::kPacket paths, refilled as samples end (render.cpp runs the tiles).
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Internal to lfi_sim: the packet renderer of one tile (tile_renderer.cpp), which
 // render()'s tile-parallel driver (render.cpp) runs for every tile.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Opens the simulated camera of a scene file through the installed lfi
 // libraries and grabs one frame: grab_frame <scene.toml>. Prints the frame's
 // size, status and mean; exits non-zero unless the frame is complete.

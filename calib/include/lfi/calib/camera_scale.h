@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The telecentric camera's object-space scale from points of known position
 // in the display frame seen in its image: lens centres of a measured lens

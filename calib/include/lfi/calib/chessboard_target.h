@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // A chessboard target (a printed board, or chrome on glass back-lit by the
 // display) found in the camera's image with OpenCV's calib3d

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Binary Gray code patterns for the display's panel and their decoding per
 // camera pixel: which panel pixel's light reaches each camera pixel. This is

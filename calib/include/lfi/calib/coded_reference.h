@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The coded reference's panel image from decoded correspondences
 // (coded_patterns.h), and its closed-loop refinement: the panel pixels whose

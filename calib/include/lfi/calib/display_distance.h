@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Calibration of the display-to-part distance Δ, the parameter the inverse
 // schlieren method is most sensitive to (docs/calibration.md).

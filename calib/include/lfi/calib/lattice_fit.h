@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The lens (pinhole) array of a full-parallax display measured through the
 // telecentric camera, with no part in view. Along the camera's axis a lens

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // A bench file's devices, opened through the backend registries (which the
 // program fills first: registerDriverBackends(), lfi::sim::registerSimBackends()).

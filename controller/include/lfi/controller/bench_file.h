@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The inspection bench file: one TOML file that describes a bench (its
 // devices, how the camera runs, the geometry, where the reference lives, how

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Changing values of a bench file the way a person would: each value
 // replaced where it stands, new keys after their table's last key, new tables

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The camera's object-space scale from a chessboard target in the part's
 // place (`lfi calibrate camera`): a board of known squares (a printed one, or

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The coded reference capture (`coded:`): the bench measures its own reference
 // through its display and camera, with the intact part in place. Binary Gray

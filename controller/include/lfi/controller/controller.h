@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The inverse schlieren cycle, one code path whatever the backends (docs/architecture.md):
 //

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The display's lens (pinhole) array and the camera's object-space scale,
 // measured with the bench's own display and camera and nothing in view

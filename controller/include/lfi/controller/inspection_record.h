@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The record of one part's inspection, as `lfi inspect` writes it (one JSON
 // file) and `lfi run` appends it (one line of a JSON Lines file), and the

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Part after part against a reference package (reference_package.h): the
 // package's reference shown once (its panel image, or its light field with

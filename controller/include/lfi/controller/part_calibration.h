@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The display-to-part distance Δ, the part's lateral position and the
 // display's gap, measured through the intact part with the bench's own display

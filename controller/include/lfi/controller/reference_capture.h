@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // A bench's reference package taken with its devices (what `lfi capture` does
 // before it writes the package): the reference light field captured (or read)

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The reference package: what `lfi capture` takes once per bench and every
 // inspection compares against, one folder written atomically

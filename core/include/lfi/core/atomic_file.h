@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Atomic, non-clobbering writes for files users care about (captured light
 // fields, calibrations, study results). The content is written to a temporary

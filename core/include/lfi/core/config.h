@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Reading human-edited TOML files (benches, scenes) with errors that name the
 // file, line and key. Every key read is recorded; finish() turns any key that

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The project's one exception type (docs/contributing.md). It is thrown for what stops an
 // operation: a bad file, a bad configuration, a device that is not there, a

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // OpenEXR files for light fields and HDR (linear radiance) images, written with
 // the OpenEXR library so that the parametrisation travels in the header as

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Vectors and rigid transforms. Units: millimetres and radians. World frame:
 // +z is the optical axis from the illumination side towards the camera.

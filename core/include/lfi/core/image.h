@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The stack's image type is cv::Mat. Pixel formats used at library boundaries:
 //

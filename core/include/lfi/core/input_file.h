@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The check every reader of a user's file makes before it opens it, so that a
 // missing file, one it may not look at, or something that is not a file (a

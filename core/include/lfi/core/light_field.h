@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The 4D light field of a lensless light field sensor or display (docs/file-formats.md).
 //

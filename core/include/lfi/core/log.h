@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // One logging set-up for the whole project: spdlog's default logger writing to
 // stderr, so that stdout stays free for the output of commands (tables, JSON).

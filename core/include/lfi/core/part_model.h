@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // A part's optics as a calibration traces them: where a ray that comes down
 // the optical axis's direction at a lateral position leaves the part. The

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Device backends by URI scheme: one registry per device type,
 // all of the one shape below (BackendRegistry<Device>), reached through

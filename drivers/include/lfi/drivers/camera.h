@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The bench camera as the rest of the stack sees it: a GenICam-style area-scan
 // camera delivering monochrome frames. Backends (Aravis, the ray-traced `sim:`

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The camera registry: camera backends by URI scheme (backend_registry.h has
 // the URI grammar and the rules). Schemes: aravis:<device-id> (lfi_drivers,

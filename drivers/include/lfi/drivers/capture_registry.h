@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The light field capture registry: reference capture backends by URI scheme
 // (backend_registry.h has the URI grammar and the rules). Schemes:

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The bench's light field display as the rest of the stack sees it: a flat panel
 // behind 2-D optics that give full parallax (a lenslet array or a pinhole array:

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // A bench's own measurement of a display's optics, overriding the calibration
 // the display keeps in its memory (commercial displays ship one per unit; a

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The light field display's optics model, one code path for every class of
 // optics (display.h, OpticsType): which ray each panel (sub)pixel emits, the

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // A trace of the calls lfi makes to its devices, for a user diagnosing a
 // bench ("what did it send to my camera?") and for the hardware-in-the-loop

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The method's reference step (README, "the method"): the light field an intact part
 // produces under a collimated beam, recorded on the plane where the display

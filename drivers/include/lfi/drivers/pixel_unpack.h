@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Wire pixel formats → the stack's image types (image.h). The packed 12-bit
 // formats carry two pixels in three bytes, packed continuously over the whole

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // An emulated lfi USB display for tests, benchmarks and the simulated bench:
 // the device side of docs/usb-display-protocol.md behind Linux usbdevfs, built

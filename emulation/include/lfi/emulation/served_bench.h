@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The simulated bench behind the real drivers: the ray-traced camera of a
 // scene file served as a GigE Vision device (GvCameraServer) and its display

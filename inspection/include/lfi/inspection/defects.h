@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Defects an image shows against the golden model (golden_model.h), without
 // ground truth. The difference d = image - ideal is smoothed with a Gaussian

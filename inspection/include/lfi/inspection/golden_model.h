@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The golden model of the intact part, for golden-template comparison (MVTec
 // HALCON's variation model is the reference point): an ideal image and a

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // A part's verdict from the defects its image shows (defects.h): each defect
 // placed in the part's frame in millimetres, and pass/fail by the bench's rules.

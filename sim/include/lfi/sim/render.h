@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Path tracer for specular transport (the paper's model): from a sensor sample through
 // Fresnel reflection/refraction (chosen at random with probability F), Beer-

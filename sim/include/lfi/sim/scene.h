@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // A bench scene for the ray tracer: objects (a shape, where it is, what it is
 // made of, whether it emits) in the world frame, with Embree doing the ray

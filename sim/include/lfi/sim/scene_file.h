@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Scene files: a whole bench for the ray tracer in one human-editable TOML
 // file (docs/scene-files.md). Errors name the file, line and key; unknown keys

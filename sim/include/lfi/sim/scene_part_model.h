@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // A part model (lfi/core/part_model.h) from a scene file: its objects other
 // than the display and the emitters, placed as the file places them, the

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Sensors of the ray tracer: each maps a pixel sample (and, for the camera, an
 // aperture sample) to a ray of sight in the world frame, exactly as the paper models them.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Analytic solids and constructive solid geometry, intersected exactly in
 // double precision. A solid is a closed set; along a line it is a sorted list

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The blind detector's findings (lfi/inspection/defects.h: golden-template
 // comparison, no ground truth) scored against the study's ground truth

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The reference study (docs/study.md): the bi-convex lens with six kinds of defect,
 // seen by the telecentric camera in five setups (parallel and area back light,

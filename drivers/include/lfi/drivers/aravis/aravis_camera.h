@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The GenICam backend on Aravis 0.8: any GigE Vision or USB3 Vision camera.
 // URI: "aravis:<device-id>[?packetSize=<bytes>]" where <device-id> is what

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The device side of GigE Vision: serves images made by this process as a
 // GigE Vision camera, with Aravis's own device implementation (ArvGvFakeCamera:

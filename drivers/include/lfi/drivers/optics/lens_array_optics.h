@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The full-parallax classes: a 2-D array of lenses or of pinholes over the
 // panel, one model (a pinhole is a lens of no power whose aperture is the hole).

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The centres of a 2-D lens (or pinhole) array in the display's lens plane: a
 // square or hexagonal lattice of pitch P, rotated by θ against the panel rows,

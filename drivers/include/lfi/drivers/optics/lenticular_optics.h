@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Lenticular and line-barrier optics: slanted cylinder lenses (or slits) over
 // the panel. Horizontal parallax only: every ray a lens sends fans out across the

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The panel's pixel grid in the display frame (display.h): where each subpixel
 // sits on the pixel plane z = -gap, and which subpixel holds a point of it.

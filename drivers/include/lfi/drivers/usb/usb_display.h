@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The `usb:` display backend: the host side of the lfi USB display protocol
 // (docs/usb-display-protocol.md) over libusb-1.0. libusb is private to lfi_drivers:

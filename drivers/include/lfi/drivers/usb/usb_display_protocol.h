@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The lfi light field display's USB vendor protocol, version 1.0
 // (docs/usb-display-protocol.md is the normative text; this header is its code).

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The camera's sensor: radiance in, digital numbers out. One model for the
 // whole stack (the study and the simulated camera backend use it).

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The simulated bench that the `sim:` devices of one process share: a SimCamera
 // and a SimDisplay opened on the same scene file see each other, so that what the

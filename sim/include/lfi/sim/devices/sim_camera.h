@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The ray-traced camera: "sim:<scene-file>" (docs/camera.md). It renders the
 // scene file's [camera] view with the path tracer and turns it into digital

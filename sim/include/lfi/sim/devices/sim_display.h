@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The ray-traced light field display: "sim:<scene-file>" (display_registry.h).
 // It drives the scene file's [display] (docs/scene-files.md): show() puts the

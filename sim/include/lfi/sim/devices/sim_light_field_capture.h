@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The sim: light field capture (the method's capture step): the parts of a scene file,
 // lit by a collimated beam from the camera side, recorded by the lensless
