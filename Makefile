@@ -1,7 +1,8 @@
 # SPDX-License-Identifier: Apache-2.0
 # Thin wrapper around CMake (the presets in CMakePresets.json hold the details).
-#   make study       install dependencies if missing, build (Release), run the reference study
-#   make check       same set-up, then build and run every test
+#   make study       install dependencies if missing, build the lfi program (Release), run the reference study
+#   make check       same set-up, then build everything (tests, fuzz replays, benchmarks) and run every test
+#   make check-format  fail on a source file that differs from .clang-format
 #   make check-asan  the tests under AddressSanitizer + UndefinedBehaviorSanitizer
 #   make check-tsan  the threaded parts' tests under ThreadSanitizer
 #   make fuzz        the libFuzzer targets (clang), each for FUZZ_SECONDS on its corpus (docs/reliability.md)
@@ -12,7 +13,7 @@ FUZZ_SECONDS ?= 30
 CMAKE_WERROR := $(if $(CI),-DLFI_WERROR=ON,)
 LFI := build/release/apps/lfi
 
-.PHONY: deps configure build study check check-asan check-tsan fuzz clean
+.PHONY: deps configure build build-lfi study check check-format check-asan check-tsan fuzz clean
 
 deps:
 	@scripts/install-deps.sh
@@ -23,11 +24,19 @@ configure: deps
 build: configure
 	@cmake --build --preset release -j $(JOBS)
 
-study: build
+# Only the lfi program and the libraries it links: no tests, fuzz replays or benchmarks.
+build-lfi: configure
+	@cmake --build --preset release -j $(JOBS) --target lfi
+
+study: build-lfi
 	$(LFI) study --out $(STUDY_OUT) --quality $(STUDY_QUALITY) --force
 
 check: build
 	ctest --preset release -j $(JOBS)
+
+check-format:
+	@git ls-files '*.cpp' '*.h' | xargs clang-format --dry-run -Werror
+	@echo "check-format: every source file matches .clang-format"
 
 check-asan: deps
 	@cmake --preset asan $(CMAKE_WERROR) >/dev/null
