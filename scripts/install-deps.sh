@@ -30,6 +30,8 @@ PACKAGES=(
   iproute2 util-linux
   # the fuzz targets (make fuzz: clang's libFuzzer)
   clang libclang-rt-14-dev
+  # the formatting check (make check-format, CI)
+  clang-format
 )
 
 if [[ ! -r /etc/os-release ]] || ! grep -qE '^ID=debian' /etc/os-release \
