@@ -12,6 +12,7 @@
 #include "lfi/controller/reference_package.h"
 #include "lfi/core/error.h"
 #include "lfi/core/exr_io.h"
+#include "lfi/drivers/display_optics.h"
 
 #include <fmt/format.h>
 
@@ -46,7 +47,8 @@ int runEmit(const EmitArgs& a, const GlobalOptions&) {
   if (!(white > 0)) white = lfi::Controller::defaultWhite(lightField);
   auto display = lfi::openBenchDisplay(bench);
   const lfi::PresentResult r =
-      panel.empty() ? display->show(lightField, white) : display->show(lfi::panelFromLevels(panel, display->info()));
+      display->show(panel.empty() ? lfi::encodeLightField(lightField, lfi::DisplayOptics(display->info()), white)
+                                  : lfi::panelFromLevels(panel, display->info()));
   if (r.status != lfi::PresentStatus::Presented)
     lfi::fail(lfi::Errc::Device, "emit: display '{}' did not show the {} ({}{}{})", bench.displayUri,
               panel.empty() ? "light field" : "reference's panel image", lfi::toString(r.status),

@@ -4,6 +4,7 @@
 #include "lfi/core/error.h"
 #include "lfi/core/image.h"
 #include "lfi/core/log.h"
+#include "lfi/drivers/display_optics.h"
 
 #include <algorithm>
 #include <chrono>
@@ -100,7 +101,8 @@ void Controller::emit(const LightField& reference, double white) {
   // of a stream started before the panel settles may too (the caller may start
   // one after this): inspect() waits for the panel and (re)starts the stream.
   staleFrames_ = true;
-  const std::uint32_t sequence = shown(display_.show(reference, white_), "the light field");
+  const cv::Mat panel = encodeLightField(reference, DisplayOptics(display_.info()), white_);
+  const std::uint32_t sequence = shown(display_.show(panel), "the light field");
   spdlog::info("emit: light field shown (sequence {}, white = {:.4g})", sequence, white_);
 }
 

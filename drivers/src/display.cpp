@@ -2,7 +2,6 @@
 #include "lfi/drivers/display.h"
 
 #include "lfi/core/error.h"
-#include "lfi/drivers/display_optics.h"
 
 #include <fmt/format.h>
 #include <fmt/ranges.h>
@@ -129,11 +128,6 @@ void DisplayInfo::validate() const {
           "(0, inf) for a barrier display");
   check(viewCount >= 1, "viewCount", viewCount, "[1, inf)");
   check(brightnessMax >= brightnessMin, "brightnessMax", brightnessMax, "[brightnessMin, inf)");
-}
-
-PresentResult Display::show(const LightField& lightField, double white) {
-  requireDisplayState(state(), {State::Open, State::Showing}, "show(LightField)", name());
-  return show(encodeLightField(lightField, DisplayOptics(info()), white));
 }
 
 void requireDisplayState(Display::State current, std::initializer_list<Display::State> allowed, const char* method,

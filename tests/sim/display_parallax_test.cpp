@@ -91,8 +91,9 @@ Lighting inspect(const std::filesystem::path& scene, const LightField* reference
   const std::string uri = "sim:" + scene.string();
   auto display = openDisplay(uri);
   auto camera = openCamera(uri);
-  const PresentResult shown =
-      reference ? display->show(*reference, white(reference->lensletImage())) : display->show(*panel);
+  const PresentResult shown = display->show(
+      reference ? encodeLightField(*reference, DisplayOptics(display->info()), white(reference->lensletImage()))
+                : *panel);
   EXPECT_EQ(shown.status, PresentStatus::Presented);
   camera->configure({.exposure_us = 2000, .pixelFormat = PixelFormat::Mono12, .trigger = TriggerMode::Software});
   camera->start(1);

@@ -25,9 +25,9 @@
 // centre of the panel's active area, x along panel columns (left to right), y along
 // panel rows upwards (row 0 is the top), z = 0 the emitting plane (the lens/barrier
 // plane) and +z from the display towards the part and the camera. This is the light
-// field plane frame of light_field.h, so a LightField is encoded in place.
-
-#include "lfi/core/light_field.h"
+// field plane frame of light_field.h, so a LightField is encoded in place: the
+// optics model (display_optics.h, encodeLightField) turns it into the panel
+// image show() takes; a display itself knows panels, not light fields.
 
 #include <opencv2/core.hpp>
 
@@ -165,11 +165,6 @@ class Display {
   // subpixel order left to right. A device that vanishes throws Errc::Device (the
   // display is then Closed).
   virtual PresentResult show(const cv::Mat& panel) = 0;
-
-  // Open, Showing: encodes the light field through the optics model
-  // (display_optics.h, encodeLightField) and shows it. `white` is the radiance
-  // shown at full drive level.
-  PresentResult show(const LightField& lightField, double white = 1.0);
 
   // Open, Showing → Open: the panel goes dark.
   virtual void blank() = 0;
