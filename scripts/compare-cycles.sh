@@ -17,7 +17,7 @@ if ! command -v blender >/dev/null; then
   SUDO=(); [[ $(id -u) -ne 0 ]] && SUDO=(sudo)
   "${SUDO[@]}" apt-get install -y -q --no-install-recommends blender
 fi
-[[ -x build/release/apps/lfi && -x build/release/bench/lfi-bench ]] || make build
+[[ -x build/release/apps/lfi && -x build/release/benchmarks/lfi-bench ]] || make build
 OUT=$(mktemp -d)
 trap 'rm -rf "$OUT"' EXIT
 
@@ -52,7 +52,7 @@ case "$MODE" in
     scene "$RES"
     lfi_render 1024 "$THREADS" 999 lfi-ref split >/dev/null
     cycles_render 4096 "$RES" "$THREADS" 999 "$OUT/cycles-ref.exr" >/dev/null
-    rmse() { build/release/bench/lfi-bench --rmse "$1" "$2" | cut -d= -f2; }
+    rmse() { build/release/benchmarks/lfi-bench --rmse "$1" "$2" | cut -d= -f2; }
     printf "%6s %10s %10s %10s %10s %10s %10s\n" spp "lfi s" "lfi rmse" "split s" "split rmse" "Cycles s" "Cyc. rmse"
     for spp in 1 4 16 64 256; do
       tl=$(lfi_render "$spp" "$THREADS" 1 lfi)
