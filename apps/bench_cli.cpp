@@ -2,7 +2,7 @@
 #include "bench_cli.h"
 
 #include "lfi/core/error.h"
-#include "lfi/drivers/backend_registry.h"
+#include "lfi/drivers/device_uri.h"
 
 #include <signal.h>
 
@@ -25,16 +25,14 @@ void onSignal(int signal) {
   }
 }
 
-std::string replaceScene(const std::string& uriText, const char* kind, const fs::path& scene) {
-  const DeviceUri uri = parseDeviceUri(uriText, kind, "sim:scene.toml");
+DeviceUri replaceScene(DeviceUri uri, const char* kind, const fs::path& scene) {
   if (uri.scheme != "sim")
     fail(Errc::Config,
          "--part replaces the part of a simulated bench; the {} '{}' is not sim: (a physical bench "
          "inspects the part that is under its camera)",
-         kind, uriText);
-  const auto query = uriText.find('?');
-  return "sim:" + percentEncodeUriPart(fs::absolute(scene).lexically_normal().string()) +
-         (query == std::string::npos ? "" : uriText.substr(query));
+         kind, uri);
+  uri.path = fs::absolute(scene).lexically_normal().string();
+  return uri;
 }
 
 }  // namespace

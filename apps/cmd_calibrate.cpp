@@ -146,7 +146,7 @@ int runCalibrate(const CalibrateArgs& a, const GlobalOptions& global) {
     record = lfi::displayCalibrationRecord(c, bench, stamp, lfi::describeCamera(*camera, bench.cameraUri));
   } else if (a.what == "camera") {
     const lfi::CameraCalibration c =
-        lfi::calibrateCamera(controller.probe(), *target, bench.cameraUri, a.cameraSettings, progress);
+        lfi::calibrateCamera(controller.probe(), *target, bench.cameraUri.text(), a.cameraSettings, progress);
     bar.finish();
     printCameraCalibration(c, bench);
     lfi::setCameraCalibration(edit, c, stamp);

@@ -66,7 +66,7 @@ void calibrateDistance(const DistanceArgs& a, const std::vector<double>& candida
   const lfi::BenchFile devices = a.part.empty() ? bench : withSimulatedPart(bench, a.part);
   // A reference captured for the scan is kept beside it (scan.json: scan.lightfield.exr), as `inspect` keeps its
   // own; a stored one (--light-field, or the bench's [capture] light_field) is named.
-  const bool captures = a.lightField.empty() && !bench.captureUri.empty();
+  const bool captures = a.lightField.empty() && bench.captureUri.has_value();
   const fs::path referenceFile = captures               ? fs::path(out).replace_extension(".lightfield.exr")
                                  : a.lightField.empty() ? bench.lightFieldFile
                                                         : a.lightField;
@@ -145,7 +145,7 @@ void calibrateDistance(const DistanceArgs& a, const std::vector<double>& candida
   result["reference"] = {{"source", capture->description()},
                          {"file", fs::absolute(referenceFile).string()},
                          {"distance_mm", reference.geometry().distance_mm}};
-  result["camera"] = {{"uri", devices.cameraUri},
+  result["camera"] = {{"uri", devices.cameraUri.text()},
                       {"vendor", info.vendor},
                       {"model", info.model},
                       {"serial", info.serial},
@@ -155,7 +155,7 @@ void calibrateDistance(const DistanceArgs& a, const std::vector<double>& candida
                       {"binning", settings.binning},
                       {"frames", options.frames},
                       {"settle_ms", bench.settle_ms}};
-  result["display"] = {{"uri", devices.displayUri}, {"white", white}};
+  result["display"] = {{"uri", devices.displayUri.text()}, {"white", white}};
   result["roi_px"] = roiBox.empty() ? nlohmann::ordered_json(nullptr) : nlohmann::ordered_json(roiBox);
   result["dark"] = scan.dark;
   result["noise"] = scan.noise;

@@ -43,17 +43,17 @@ bool checkBench(const fs::path& file) {
       return false;
     }
   };
-  const bool cameraPresent = check("camera", bench.cameraUri, [&] {
+  const bool cameraPresent = check("camera", bench.cameraUri.text(), [&] {
     auto camera = lfi::openBenchCamera(bench);  // (configured: the bench's settings are accepted)
     return fmt::format("{}, {}", lfi::describeCamera(*camera, bench.cameraUri), lfi::toString(camera->state()));
   });
-  const bool displayPresent = check("display", bench.displayUri, [&] {
+  const bool displayPresent = check("display", bench.displayUri.text(), [&] {
     auto display = lfi::openBenchDisplay(bench);
     const lfi::DisplayInfo info = display->info();
     return fmt::format("{}, {} x {} panel, {}", info.deviceId, info.panelWidth_px, info.panelHeight_px,
                        lfi::toString(display->state()));
   });
-  check("capture", bench.captureUri.empty() ? bench.lightFieldFile.string() : bench.captureUri, [&] {
+  check("capture", bench.captureUri ? bench.captureUri->text() : bench.lightFieldFile.string(), [&] {
     auto capture = lfi::openBenchCapture(bench);
     if (capture->measuresThroughBench() && !(cameraPresent && displayPresent))
       lfi::fail(lfi::Errc::NotFound, "it measures through the bench's display and camera, {}",
@@ -85,8 +85,8 @@ int listDevices() {
   const std::vector<lfi::AravisDeviceInfo> cameras = lfi::listAravisDevices();
   fmt::print("GenICam cameras: {}\n", cameras.empty() ? "none" : std::to_string(cameras.size()));
   for (const lfi::AravisDeviceInfo& c : cameras)
-    fmt::print("  aravis:{}  ({} {}, serial {}, {} at {})\n", lfi::percentEncodeUriPart(c.id), c.vendor, c.model,
-               c.serial, c.protocol, c.address);
+    fmt::print("  {}  ({} {}, serial {}, {} at {})\n", lfi::DeviceUri{.scheme = "aravis", .path = c.id}, c.vendor,
+               c.model, c.serial, c.protocol, c.address);
   return listed ? 0 : 1;
 }
 

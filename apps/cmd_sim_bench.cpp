@@ -48,8 +48,8 @@ struct SimBenchArgs {
 
 // The scene of a bench whose camera and display are sim: on one scene file.
 fs::path benchScene(const BenchFile& bench) {
-  const DeviceUri camera = parseDeviceUri(bench.cameraUri, "camera", "sim:scene.toml");
-  const DeviceUri display = parseDeviceUri(bench.displayUri, "display", "sim:scene.toml");
+  const DeviceUri& camera = bench.cameraUri;
+  const DeviceUri& display = bench.displayUri;
   std::error_code ec;
   if (camera.scheme != "sim" || display.scheme != "sim" || !fs::equivalent(camera.path, display.path, ec))
     fail(Errc::Config,
@@ -172,8 +172,8 @@ std::vector<std::string> childEnvironment(const lfi::emulation::ServedBench& ben
     if (std::strncmp(*e, "TMPDIR=", 7) != 0 && std::strncmp(*e, "LFI_SIM_BENCH_", 14) != 0) env.emplace_back(*e);
   if (callerTmpDir) env.push_back("TMPDIR=" + *callerTmpDir);
   env.push_back(std::string(kControlSocketVariable) + "=" + control.string());
-  env.push_back("LFI_SIM_BENCH_CAMERA=" + bench.cameraUri());
-  env.push_back("LFI_SIM_BENCH_DISPLAY=" + bench.displayUri());
+  env.push_back("LFI_SIM_BENCH_CAMERA=" + bench.cameraUri().text());
+  env.push_back("LFI_SIM_BENCH_DISPLAY=" + bench.displayUri().text());
   return env;
 }
 

@@ -8,7 +8,7 @@
 #include "lfi/controller/coded_capture.h"
 #include "lfi/core/error.h"
 #include "lfi/core/log.h"
-#include "lfi/drivers/backend_registry.h"
+#include "lfi/drivers/builtin_backends.h"
 #include "lfi/sim/devices/sim_camera.h"
 
 #include <CLI/CLI.hpp>

@@ -8,6 +8,7 @@
 //   lfi-camera-bench [--frames N] [--rate HZ] [--size PX] [--format Mono8|Mono16] [--rounds N]
 
 #include "lfi/drivers/aravis/aravis_camera.h"
+#include "lfi/drivers/builtin_backends.h"
 #include "lfi/drivers/camera_registry.h"
 
 #include "bench_util.h"

@@ -70,10 +70,23 @@ std::unique_ptr<Display> openBenchDisplay(const BenchFile& bench) {
   return calibrated;
 }
 
+void StoredLightField::setDistance(double distance_mm) {
+  const double recorded = lightField_.geometry().distance_mm;
+  if (recorded != 0 && recorded != distance_mm)
+    fail(Errc::Config, "{} was recorded {} mm below the part, not at Δ = {} mm", description_, recorded, distance_mm);
+}
+
 std::unique_ptr<LightFieldCapture> openBenchCapture(const BenchFile& bench) {
-  if (!bench.captureUri.empty()) return openLightFieldCapture(bench.captureUri);
-  return std::make_unique<StoredLightField>(readLightFieldExr(bench.lightFieldFile),
-                                            "file " + bench.lightFieldFile.string());
+  std::unique_ptr<LightFieldCapture> capture =
+      bench.captureUri ? openLightFieldCapture(*bench.captureUri)
+                       : std::make_unique<StoredLightField>(readLightFieldExr(bench.lightFieldFile),
+                                                            "light field file " + bench.lightFieldFile.string());
+  try {
+    capture->setDistance(bench.distance_mm);
+  } catch (const Error& e) {
+    fail(Errc::Config, "{}: [geometry] distance_mm = {}: {}", bench.file.string(), bench.distance_mm, e.what());
+  }
+  return capture;
 }
 
 ControllerOptions controllerOptions(const BenchFile& bench, int frames) {
@@ -86,7 +99,7 @@ ControllerOptions controllerOptions(const BenchFile& bench, int frames) {
   return o;
 }
 
-std::string describeCamera(Camera& camera, const std::string& uri) {
+std::string describeCamera(Camera& camera, const DeviceUri& uri) {
   const CameraInfo info = camera.info();
   return fmt::format("{} {} {} ({})", info.vendor, info.model, info.serial, uri);
 }

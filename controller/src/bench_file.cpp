@@ -3,7 +3,7 @@
 
 #include "lfi/core/config.h"
 #include "lfi/core/error.h"
-#include "lfi/drivers/backend_registry.h"
+#include "lfi/drivers/device_uri.h"
 #include "lfi/drivers/display_calibration_file.h"
 
 #include <fmt/format.h>
@@ -27,18 +27,16 @@ fs::path pathIn(ConfigTable& t, const std::string& key) {
 }
 
 // A device URI; the path of a sim: URI (a scene file) relative to the file's folder.
-std::string uriIn(ConfigTable& t, const std::string& key, const char* kind) {
-  const std::string text = t.string(key);
+DeviceUri uriIn(ConfigTable& t, const std::string& key, const char* kind) {
   DeviceUri uri;
   try {
-    uri = parseDeviceUri(text, kind, "sim:scene.toml");
+    uri = DeviceUri::parse(t.string(key), kind, "sim:scene.toml");
   } catch (const Error& e) {
     fail(Errc::Config, "{}: {}", t.where(key), e.what());
   }
-  if (uri.scheme != "sim" || fs::path(uri.path).is_absolute() || uri.path.empty()) return text;
-  const auto query = text.find('?');
-  return "sim:" + percentEncodeUriPart((t.directory() / uri.path).lexically_normal().string()) +
-         (query == std::string::npos ? "" : text.substr(query));
+  if (uri.scheme == "sim" && !uri.path.empty() && !fs::path(uri.path).is_absolute())
+    uri.path = (t.directory() / uri.path).lexically_normal().string();
+  return uri;
 }
 
 std::optional<double> optionalNumber(ConfigTable& t, const std::string& key, double min, double max) {
@@ -95,9 +93,14 @@ void readCapture(ConfigTable t, BenchFile& b) {
   if (t.has("uri") == t.has("light_field"))
     fail(Errc::Config, "{}: [capture] needs exactly one of 'uri' (a capture device) and 'light_field' (a file)",
          t.where(t.has("uri") ? "uri" : "light_field"));
-  if (t.has("uri"))
+  if (t.has("uri")) {
     b.captureUri = uriIn(t, "uri", "light field capture");
-  else
+    if (b.captureUri->find("distance_mm"))
+      fail(Errc::Config,
+           "{}: the capture URI carries distance_mm, but Δ has one place in a bench file: [geometry] distance_mm, "
+           "which the capture is handed; delete '{}' from the URI (docs/inspection.md)",
+           t.where("uri"), "distance_mm=" + *b.captureUri->find("distance_mm"));
+  } else
     b.lightFieldFile = pathIn(t, "light_field");
   t.finish();
 }
@@ -173,12 +176,11 @@ std::string fromBenchFolder(const fs::path& benchFile, const fs::path& path) {
   return relative.empty() ? path.string() : relative.string();
 }
 
-std::string portableUri(const fs::path& benchFile, const std::string& text) {
-  if (text.rfind("sim:", 0) != 0) return text;
-  const DeviceUri uri = parseDeviceUri(text, "device", "sim:scene.toml");
-  const auto query = text.find('?');
-  return "sim:" + percentEncodeUriPart(fromBenchFolder(benchFile, uri.path)) +
-         (query == std::string::npos ? "" : text.substr(query));
+std::string portableUri(const fs::path& benchFile, const DeviceUri& uri) {
+  if (uri.scheme != "sim") return uri.text();
+  DeviceUri portable = uri;
+  portable.path = fromBenchFolder(benchFile, uri.path);
+  return portable.text();
 }
 
 }  // namespace
@@ -245,7 +247,8 @@ std::string BenchFile::referenceIdentity() const {
              "{}\n"
              "reference.mask_radius_mm = {}\nreference.mask_lit_fraction = {:.17g}\n",
              portableUri(file, cameraUri), camera.exposure_us, camera.gain, toString(camera.pixelFormat),
-             camera.binning, objectPixel_mm, portableUri(file, displayUri), white, portableUri(file, captureUri),
+             camera.binning, objectPixel_mm, portableUri(file, displayUri), white,
+             captureUri ? portableUri(file, *captureUri) : "",
              lightFieldFile.empty() ? "" : fromBenchFolder(file, lightFieldFile), distance_mm,
              partCentre_px ? fmt::format("[{:.17g}, {:.17g}]", partCentre_px->x, partCentre_px->y) : "centre",
              maskRadius_mm ? fmt::format("{:.17g}", *maskRadius_mm) : "none", maskLitFraction);

@@ -14,11 +14,6 @@ namespace lfi {
 
 ReferencePackage takeReference(const BenchFile& bench, LightFieldCapture& capture, Display& display, Camera& camera,
                                const Controller::Progress& progress, ReferenceCoverage* coverage) {
-  if (!capture.measuresThroughBench() && capture.geometry().distance_mm != bench.distance_mm)
-    fail(Errc::Config,
-         "{}: the capture ({}) records the light field {} mm below the part, the bench's [geometry] "
-         "distance_mm is {} mm",
-         bench.file.string(), capture.description(), capture.geometry().distance_mm, bench.distance_mm);
   Controller controller(capture, display, camera, controllerOptions(bench, bench.inspectionFrames));
   const auto step = [&](const char* what, double f) {
     if (progress) progress(what, f);

@@ -202,8 +202,8 @@ fs::path inspectionBench(const fs::path& dir, double error) {
 fs::path scanBench(const fs::path& scene, int spp) {
   std::string text = readText(fs::path(LFI_SOURCE_DIR) / "data" / "benches" / "inspection_sim.toml");
   const std::string uri = "sim:" + scene.string();
-  replaceOnce(text, "uri = \"sim:../scenes/inspection_bench.toml?distance_mm=30\"",
-              fmt::format("uri = \"{}?distance_mm=30&spatial=16&angular=16&spp={}\"", uri, spp));
+  replaceOnce(text, "[capture]\nuri = \"sim:../scenes/inspection_bench.toml\"",
+              fmt::format("[capture]\nuri = \"{}?spatial=16&angular=16&spp={}\"", uri, spp));
   replaceAll(text, "uri = \"sim:../scenes/inspection_bench.toml\"", "uri = \"" + uri + "\"");  // camera, display
   replaceOnce(text, "exposure_us = 10000", "exposure_us = 2000");
   replaceOnce(text, "\"../../out/bench/reference\"", "\"reference\"");

@@ -96,9 +96,7 @@ class LfiHilLoop : public testing::TestWithParam<std::string> {
                 "folder = \"" + (folder_ / "hil" / "reference").string());
     replaceOnce(text, "folder = \"../../out/bench-hil/inspections",
                 "folder = \"" + (folder_ / "hil" / "inspections").string());
-    if (!coded)
-      replaceOnce(text, "uri = \"coded:?distance_mm=30\"",
-                  "uri = \"sim:" + scenes + "inspection_bench.toml?distance_mm=30\"");
+    if (!coded) replaceOnce(text, "uri = \"coded:\"", "uri = \"sim:" + scenes + "inspection_bench.toml\"");
     hilBench_ = folder_.write("hil-bench.toml", text);
     const std::string scene = readText(source_ / "data" / "scenes" / "inspection_bench.toml");
     for (const StudyPart& part : studyParts())

@@ -57,7 +57,7 @@ retries = 0
 [display]
 uri = "usb:1209:4c46/LFI-SIM-0001"
 [capture]
-uri = "sim:{0}/inspection_bench.toml?distance_mm=30"
+uri = "sim:{0}/inspection_bench.toml"
 [geometry]
 distance_mm = 30
 part_centre_px = [27.5, 27.5]

@@ -155,7 +155,7 @@ TEST_F(BenchFileEditTest, WhereTheCameraLooksOnTheDisplayReadsAsAnAffineMapBothW
 
 TEST_F(BenchFileEditTest, StringsReadAsTheTextHoldsThemAndWriteBackEscaped) {
   BenchFileEdit edit(write(kBench));
-  EXPECT_EQ(edit.string("capture", "uri"), "sim:../scenes/bench.toml?distance_mm=30");
+  EXPECT_EQ(edit.string("capture", "uri"), "sim:../scenes/bench.toml?spp=8");
   EXPECT_FALSE(edit.string("camera", "exposure_us"));  // a number
   EXPECT_FALSE(edit.string("camera", "none"));
   EXPECT_FALSE(edit.string("none", "uri"));

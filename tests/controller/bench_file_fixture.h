@@ -41,7 +41,7 @@ dn_per_electron = 0.39
 uri = "usb:1209:4c46/LFI-0001"
 
 [capture]
-uri = "sim:../scenes/bench.toml?distance_mm=30"
+uri = "sim:../scenes/bench.toml?spp=8"
 
 [geometry]
 distance_mm = 30

@@ -33,7 +33,7 @@ TEST_F(BenchFileTest, ReferenceHashIsFnv1aOfTheIdentity) {
   EXPECT_EQ(b.referenceHash().size(), 16u);
   // One "key = value" line per setting; paths relative to the bench file as it gives them.
   EXPECT_NE(identity.find("camera.uri = aravis:Fake-GV01\n"), std::string::npos) << identity;
-  EXPECT_NE(identity.find("capture.uri = sim:../scenes/bench.toml?distance_mm=30\n"), std::string::npos) << identity;
+  EXPECT_NE(identity.find("capture.uri = sim:../scenes/bench.toml?spp=8\n"), std::string::npos) << identity;
   EXPECT_NE(identity.find("geometry.distance_mm = 30\n"), std::string::npos) << identity;
   EXPECT_EQ(std::count(identity.begin(), identity.end(), '\n'), 14);
 }
@@ -89,9 +89,9 @@ TEST_F(BenchFileTest, ReferenceHashChangesWithWhatTheReferenceDependsOn) {
            {"uri = \"aravis:Fake-GV01\"", "uri = \"aravis:Fake-GV02\""},
            {"uri = \"usb:1209:4c46/LFI-0001\"", "uri = \"usb:1209:4c46/LFI-0002\""},
            {"uri = \"usb:1209:4c46/LFI-0001\"", "uri = \"usb:1209:4c46/LFI-0001\"\nwhite = 2"},
-           {"?distance_mm=30", "?distance_mm=31"},
-           {"uri = \"sim:../scenes/bench.toml?distance_mm=30\"", "uri = \"sim:../scenes/other.toml?distance_mm=30\""},
-           {"uri = \"sim:../scenes/bench.toml?distance_mm=30\"", "light_field = \"lf.exr\""},
+           {"?spp=8", "?spp=9"},
+           {"uri = \"sim:../scenes/bench.toml?spp=8\"", "uri = \"sim:../scenes/other.toml?spp=8\""},
+           {"uri = \"sim:../scenes/bench.toml?spp=8\"", "light_field = \"lf.exr\""},
            {"distance_mm = 30", "distance_mm = 30.5"},
            {"part_centre_px = [27.5, 27.5]", "part_centre_px = [27.5, 28]"},
            {"part_centre_px = [27.5, 27.5]\n", ""},  // the image's centre instead

@@ -27,18 +27,14 @@ TEST_F(BenchFileTest, ShippedSimulatedBenchReadsAsWritten) {
   const fs::path file = source / "data" / "benches" / "inspection_sim.toml";
   const BenchFile b = readBenchFile(file);
   EXPECT_EQ(b.file, file);
-  // sim: scene paths are relative to the bench file, made absolute (percent-encoded as a URI path); the capture's
-  // query stays as written.
+  // sim: scene paths are relative to the bench file, made absolute.
   const fs::path scene = (source / "data" / "scenes" / "inspection_bench.toml").lexically_normal();
-  const std::string sceneUri = "sim:" + percentEncodeUriPart(scene.string());
+  const DeviceUri sceneUri{.scheme = "sim", .path = scene.string()};
   EXPECT_EQ(b.cameraUri, sceneUri);
   EXPECT_EQ(b.displayUri, sceneUri);
-  EXPECT_EQ(b.captureUri, sceneUri + "?distance_mm=30");
+  EXPECT_EQ(b.captureUri, sceneUri);
   EXPECT_TRUE(b.lightFieldFile.empty());
-  const DeviceUri capture = parseDeviceUri(b.captureUri, "light field capture", "sim:scene.toml");
-  EXPECT_EQ(capture.scheme, "sim");
-  EXPECT_EQ(fs::path(capture.path), scene);
-  EXPECT_TRUE(fs::is_regular_file(capture.path)) << capture.path;
+  EXPECT_TRUE(fs::is_regular_file(b.captureUri->path)) << b.captureUri->path;
   // [camera]
   EXPECT_EQ(b.camera.exposure_us, 10000);
   EXPECT_EQ(b.camera.gain, 0);
@@ -103,14 +99,15 @@ TEST_F(BenchFileTest, RelativePathsAreRelativeToTheBenchFile) {
   EXPECT_EQ(b.referenceFolder, dir / "reference");
   EXPECT_EQ(b.outputFolder, folder_.path() / "inspections");
   // A device URI of another scheme is kept as written; a sim: scene path becomes absolute, its query kept.
-  EXPECT_EQ(b.cameraUri, "aravis:Fake-GV01");
-  EXPECT_EQ(b.displayUri, "usb:1209:4c46/LFI-0001");
-  EXPECT_EQ(b.captureUri,
-            "sim:" + percentEncodeUriPart((folder_.path() / "scenes" / "bench.toml").string()) + "?distance_mm=30");
+  EXPECT_EQ(b.cameraUri.text(), "aravis:Fake-GV01");
+  EXPECT_EQ(b.displayUri.text(), "usb:1209:4c46/LFI-0001");
+  EXPECT_EQ(b.captureUri, (DeviceUri{.scheme = "sim",
+                                     .path = (folder_.path() / "scenes" / "bench.toml").string(),
+                                     .query = {{"spp", "8"}}}));
   // A light field file instead of a capture device, likewise relative to the file.
-  const BenchFile f = read(replaced(kBench, "uri = \"sim:../scenes/bench.toml?distance_mm=30\"",
-                                    "light_field = \"../light fields/lf.exr\""));
-  EXPECT_TRUE(f.captureUri.empty());
+  const BenchFile f =
+      read(replaced(kBench, "uri = \"sim:../scenes/bench.toml?spp=8\"", "light_field = \"../light fields/lf.exr\""));
+  EXPECT_FALSE(f.captureUri.has_value());
   EXPECT_EQ(f.lightFieldFile, folder_.path() / "light fields" / "lf.exr");
 }
 
@@ -118,21 +115,32 @@ TEST_F(BenchFileTest, AbsolutePathsAndUrisAreKept) {
   const std::string text =
       replaced(replaced(replaced(kBench, "folder = \"reference\"", "folder = \"/srv/lfi/reference\""),
                         "folder = \"../inspections\"", "folder = \"/srv/lfi/inspections\""),
-               "uri = \"sim:../scenes/bench.toml?distance_mm=30\"", "uri = \"sim:/srv/scenes/bench.toml\"");
+               "uri = \"sim:../scenes/bench.toml?spp=8\"", "uri = \"sim:/srv/scenes/bench.toml\"");
   const BenchFile b = read(text);
   EXPECT_EQ(b.referenceFolder, fs::path("/srv/lfi/reference"));
   EXPECT_EQ(b.outputFolder, fs::path("/srv/lfi/inspections"));
-  EXPECT_EQ(b.captureUri, "sim:/srv/scenes/bench.toml");
+  EXPECT_EQ(b.captureUri->text(), "sim:/srv/scenes/bench.toml");
 }
 
 TEST_F(BenchFileTest, SimUriPathIsPercentDecodedAndEncodedAgain) {
   // "my scene?.toml" written percent-encoded: the URI made absolute still parses back to the same file.
-  const BenchFile b = read(replaced(kBench, "uri = \"sim:../scenes/bench.toml?distance_mm=30\"",
-                                    "uri = \"sim:my%20scene%3F.toml?distance_mm=30\""));
-  const DeviceUri uri = parseDeviceUri(b.captureUri, "light field capture", "sim:scene.toml");
+  const BenchFile b =
+      read(replaced(kBench, "uri = \"sim:../scenes/bench.toml?spp=8\"", "uri = \"sim:my%20scene%3F.toml?spp=8\""));
+  const DeviceUri& uri = *b.captureUri;
   EXPECT_EQ(fs::path(uri.path), folder_.path() / "benches" / "my scene?.toml");
   ASSERT_EQ(uri.query.size(), 1u);
-  EXPECT_EQ(uri.query.at("distance_mm"), "30");
+  EXPECT_EQ(uri.query.at("spp"), "8");
+  EXPECT_EQ(DeviceUri::parse(uri.text(), "capture", "sim:x"), uri);
+}
+
+// Δ has one place in a bench file, [geometry] distance_mm: a capture URI that
+// still carries it is refused, saying where Δ lives now.
+TEST_F(BenchFileTest, ACaptureUriThatCarriesTheDistanceIsRefused) {
+  const std::string text =
+      replaced(kBench, "uri = \"sim:../scenes/bench.toml?spp=8\"", "uri = \"coded:?distance_mm=30&rounds=2\"");
+  EXPECT_TRUE(refusedAt(text, lineOf(text, "coded:?distance_mm"), "key 'capture.uri'"));
+  EXPECT_TRUE(throwsError([&] { read(text); }, Errc::Config,
+                          {"[geometry] distance_mm", "delete 'distance_mm=30'", "docs/inspection.md"}));
 }
 
 TEST_F(BenchFileTest, EmptyPathIsRefused) {
@@ -325,7 +333,7 @@ TEST_F(BenchFileTest, ValueOutOfRangeOrOfTheWrongKindNamesFileLineAndKey) {
 }
 
 TEST_F(BenchFileTest, CaptureNeedsExactlyOneOfUriAndLightField) {
-  const std::string uriLine = "uri = \"sim:../scenes/bench.toml?distance_mm=30\"";
+  const std::string uriLine = "uri = \"sim:../scenes/bench.toml?spp=8\"";
   const std::string both = replaced(kBench, uriLine, uriLine + "\nlight_field = \"lf.exr\"");
   EXPECT_TRUE(refusedAt(both, lineOf(both, uriLine), "key 'capture.uri': [capture] needs exactly one of"));
   const std::string neither = replaced(kBench, uriLine + "\n", "");

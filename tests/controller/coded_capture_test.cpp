@@ -107,7 +107,8 @@ class CodedCaptureTest : public testing::Test {
 
 TEST_F(CodedCaptureTest, ItFindsTheLightThatReachesTheCameraThroughThePart) {
   Bench b = bench({});
-  auto capture = openLightFieldCapture("coded:?distance_mm=30");
+  auto capture = openLightFieldCapture("coded:");
+  capture->setDistance(30);
   ASSERT_TRUE(capture->measuresThroughBench());
   Controller controller(*capture, *b.display, *b.camera);
   const LightField lightField = controller.captureReference();

@@ -5,6 +5,8 @@
 #include "lfi/controller/controller.h"
 #include "lfi/controller/bench_devices.h"
 #include "lfi/controller/bench_file.h"
+#include "lfi/core/exr_io.h"
+#include "lfi/drivers/builtin_backends.h"
 #include "lfi/drivers/camera_registry.h"
 #include "lfi/drivers/capture_registry.h"
 #include "lfi/drivers/display_registry.h"
@@ -167,7 +169,7 @@ TEST(SimBackends, RegisterWhenAnotherLibraryTookTheCaptureScheme) {
     if (std::ranges::find(captures, std::string("sim")) != captures.end()) std::_Exit(2);  // (not a fresh registry)
     backendRegistry<LightFieldCapture>().add(LightFieldCaptureBackend{
         .scheme = "sim",
-        .queryKeys = {},
+        .keys = {},
         .description = "another library's",
         .factory = [](const DeviceUri&) -> std::unique_ptr<LightFieldCapture> {
           fail(Errc::Device, "another library's");
@@ -385,21 +387,46 @@ TEST_F(ControllerTest, ErrorsNameTheProblem) {
                           {"missing.toml"}));
   EXPECT_TRUE(
       throwsError([&] { openLightFieldCapture(uri("intact.toml") + "?angular=0"); }, Errc::Config, {"angular"}));
-  // The lens spans z = -2.5 .. 2.5 mm: a sensor plane or a beam inside it is refused at open, naming both.
-  EXPECT_TRUE(throwsError([&] { openLightFieldCapture(uri("intact.toml") + "?distance_mm=2"); }, Errc::Config,
-                          {"intact.toml", "'lens'", "distance_mm", "-2"}));
+  // The lens spans z = -2.5 .. 2.5 mm: a sensor plane or a beam inside it is refused, naming both (the sensor's
+  // plane when the bench hands Δ in, the beam's at open).
+  auto near = openLightFieldCapture(uri("intact.toml"));
+  EXPECT_TRUE(throwsError([&] { near->setDistance(2); }, Errc::Config, {"intact.toml", "'lens'", "-Δ", "-2"}));
+  EXPECT_TRUE(throwsError([&] { near->setDistance(0); }, Errc::InvalidArgument, {"intact.toml", "Δ = 0"}));
   EXPECT_TRUE(throwsError([&] { openLightFieldCapture(uri("intact.toml") + "?beam_distance_mm=2.4"); }, Errc::Config,
                           {"'lens'", "beam_distance_mm", "2.4"}));
-  EXPECT_NO_THROW(openLightFieldCapture(uri("intact.toml") + "?distance_mm=2.6&beam_distance_mm=2.6"));
+  auto tight = openLightFieldCapture(uri("intact.toml") + "?beam_distance_mm=2.6");
+  EXPECT_NO_THROW(tight->setDistance(2.6));
+  EXPECT_EQ(tight->geometry().distance_mm, 2.6);
   // Numbers that parse but mean nothing here: a beam at infinity lights nothing; more samples than a scene file takes.
   for (const char* bad : {"beam_distance_mm=inf", "beam_distance_mm=1e300", "beam_distance_mm=nan"})
     EXPECT_TRUE(throwsError([&] { openLightFieldCapture(uri("intact.toml") + "?" + bad); }, Errc::Config,
-                            {"beam_distance_mm", "(0, 1e6]"}))
+                            {"beam_distance_mm", "1e-06 .. 1000000 mm"}))
         << bad;
   EXPECT_TRUE(throwsError([&] { openLightFieldCapture(uri("intact.toml") + "?spp=2000000"); }, Errc::Config,
-                          {uri("intact.toml") + "?spp=2000000", "spp = 2000000", "2^20"}));
+                          {uri("intact.toml") + "?spp=2000000", "spp = '2000000'", "1 .. 1048576"}));
   EXPECT_TRUE(throwsError([&] { openLightFieldCapture(uri("intact.toml") + "?beam_half_angle_rad=0"); }, Errc::Config,
-                          {uri("intact.toml") + "?beam_half_angle_rad=0", "[1e-6, 1.5)"}));
+                          {uri("intact.toml") + "?beam_half_angle_rad=0", "1e-06 .. 1.5 rad"}));
+}
+
+// Δ has one owner, the bench's [geometry] distance_mm: the capture the bench opens records there, and a light
+// field file recorded at another Δ is refused naming the bench and the file.
+TEST_F(ControllerTest, TheBenchHandsItsDistanceToTheCapture) {
+  BenchFile b = readBenchFile(std::filesystem::path(LFI_SOURCE_DIR) / "data" / "benches" / "inspection_sim.toml");
+  b.distance_mm = 36.5;
+  EXPECT_EQ(openBenchCapture(b)->geometry().distance_mm, 36.5);
+  b.distance_mm = 1;  // the sensor's plane inside the lens
+  EXPECT_TRUE(throwsError([&] { openBenchCapture(b); }, Errc::Config,
+                          {"inspection_sim.toml", "[geometry] distance_mm = 1", "'lens'"}));
+  const std::filesystem::path file = dir_ / "at-30.exr";
+  writeLightFieldExr(
+      file, LightField({.spatialX = 2, .spatialY = 2, .angular = 2, .pixelPitch_mm = 0.05, .distance_mm = 30}));
+  b.captureUri.reset();
+  b.lightFieldFile = file;
+  b.distance_mm = 30;
+  EXPECT_EQ(openBenchCapture(b)->geometry().distance_mm, 30);
+  b.distance_mm = 31;
+  EXPECT_TRUE(throwsError([&] { openBenchCapture(b); }, Errc::Config,
+                          {"inspection_sim.toml", "at-30.exr", "recorded 30 mm", "Δ = 31 mm"}));
 }
 
 // No part passes a line-triggered bench's sensor while it calibrates or takes its reference: lfi triggers

@@ -19,7 +19,7 @@
 #include "lfi/controller/coded_capture.h"
 #include "lfi/controller/inspector.h"
 #include "lfi/controller/reference_capture.h"
-#include "lfi/drivers/backend_registry.h"
+#include "lfi/drivers/builtin_backends.h"
 #include "lfi/emulation/served_bench.h"
 #include "lfi/sim/devices/sim_camera.h"
 
@@ -104,12 +104,12 @@ closing_mm = 0.5
 [output]
 folder = "out"
 )",
-                    servedCamera ? served_->cameraUri() : sim,
+                    servedCamera ? served_->cameraUri().text() : sim,
                     // The served camera's format is Mono16 (the scene's 12 bits x 16); the sim: camera's Mono12.
                     servedCamera ? "Mono16" : "Mono12", servedCamera ? 6.24 : 0.39, servedCamera ? 15.7 : 0.98,
-                    wiring == Wiring::ServedDisplay ? served_->displayUri() : sim,
-                    capture == "coded" ? std::string("coded:?distance_mm=30")
-                                       : "sim:" + scenes_.at("intact").string() + "?distance_mm=30")));
+                    wiring == Wiring::ServedDisplay ? served_->displayUri().text() : sim,
+                    capture == "coded" ? std::string("coded:")
+                                       : DeviceUri{.scheme = "sim", .path = scenes_.at("intact").string()}.text())));
   }
 
   // Capture → emit → inspect: the reference with the intact part, then each part of the study in turn.

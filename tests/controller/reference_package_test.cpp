@@ -109,7 +109,7 @@ ReferenceInfo info(const std::string& hash) {
   i.updated_utc = "2024-05-07T10:11:12Z";
   i.camera = "Aravis \"Fake\" GV01 (aravis:Aravis-Fake-GV01)";
   i.display = "LFI-0001 (usb:1209:4c46/LFI-0001) µ";
-  i.capture = "sim:/srv/scenes/bench.toml?distance_mm=30";
+  i.capture = "sim:/srv/scenes/bench.toml?spp=8";
   i.exposure_us = 12345.678;
   i.gain = 1.5;
   i.pixelFormat = "Mono12";

@@ -11,6 +11,7 @@
 // processes `ctest -j` starts. Each camera gets a serial unique to the process.
 
 #include "lfi/drivers/aravis/aravis_camera.h"
+#include "lfi/drivers/builtin_backends.h"
 #include "lfi/drivers/camera_registry.h"
 
 #include "gige_device_process.h"

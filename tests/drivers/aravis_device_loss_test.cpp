@@ -134,7 +134,7 @@ TEST_F(AravisCameraTest, LostPacketsMakeIncompleteFramesNeverCompleteOnes) {
   fake_ = std::make_unique<FakeGvCamera>("LFIR" + std::to_string(::getpid()));
   fake_->start(binary_, 5);  // the fake device drops 0.5 % of its stream packets
   // Small packets: 256 x 256 Mono8 is ~48 packets per frame, so about a fifth of the frames lose one.
-  auto camera = openCamera("aravis:" + fake_->id() + "?packetSize=1400");
+  auto camera = openCamera("aravis:" + fake_->id() + "?packet_size_bytes=1400");
   camera->configure(smallSettings());
   camera->start(8);
   std::uint64_t complete = 0, incomplete = 0;

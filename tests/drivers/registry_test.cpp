@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
-// The camera URI grammar and the backend registry (no device needed).
+// The device URI grammar, URIs as values and the backend registry (no device needed).
 
+#include "lfi/drivers/builtin_backends.h"
 #include "lfi/drivers/camera_registry.h"
 #include "lfi_test_support.h"
 
@@ -12,13 +13,39 @@ namespace {
 using testing_support::throwsError;
 
 TEST(DeviceUri, SplitsSchemePathAndQuery) {
-  const DeviceUri uri = backendRegistry<Camera>().parse("aravis:192.168.1.20?packetSize=1400&x=y");
+  const DeviceUri uri = backendRegistry<Camera>().parse("aravis:192.168.1.20?packet_size_bytes=1400&x=y");
   EXPECT_EQ(uri.scheme, "aravis");
   EXPECT_EQ(uri.path, "192.168.1.20");
   ASSERT_EQ(uri.query.size(), 2u);
-  EXPECT_EQ(uri.query.at("packetSize"), "1400");
+  EXPECT_EQ(uri.query.at("packet_size_bytes"), "1400");
   EXPECT_EQ(uri.query.at("x"), "y");
-  EXPECT_EQ(uri.text, "aravis:192.168.1.20?packetSize=1400&x=y");
+  EXPECT_EQ(uri.text(), "aravis:192.168.1.20?packet_size_bytes=1400&x=y");
+}
+
+// text() writes what parse() reads back to the same value: the delimiters and
+// bytes outside printable ASCII encoded, keys in order whatever order they came in.
+TEST(DeviceUri, FormatsWhatItParsesBackToTheSameValue) {
+  const DeviceUri built{.scheme = "sim",
+                        .path = "/benches/a?b c/100%#1.toml",
+                        .query = {{"file", "x&y=z.toml"}, {"k=1", "\xC3\xA9 /"}, {"spp", "64"}}};
+  const std::string text = built.text();
+  EXPECT_EQ(text, "sim:/benches/a%3Fb%20c/100%25%231.toml?file=x%26y%3Dz.toml&k%3D1=%C3%A9%20/&spp=64");
+  EXPECT_EQ(DeviceUri::parse(text, "device", "sim:x"), built);
+  const DeviceUri reordered = DeviceUri::parse("usb:1209:4c46/A%2FB?timeout_ms=5&calibration=c.toml", "d", "usb:x");
+  EXPECT_EQ(reordered.text(), "usb:1209:4c46/A/B?calibration=c.toml&timeout_ms=5");
+  EXPECT_EQ(DeviceUri::parse(reordered.text(), "d", "usb:x"), reordered);
+  EXPECT_EQ(fmt::format("{}", reordered), reordered.text());
+}
+
+TEST(DeviceUri, IsChangedAsAValue) {
+  const DeviceUri uri = DeviceUri::parse("coded:?rounds=3", "capture", "coded:");
+  EXPECT_EQ(uri.with("iterations", "2").text(), "coded:?iterations=2&rounds=3");
+  EXPECT_EQ(uri.with("rounds", "4").text(), "coded:?rounds=4");
+  EXPECT_EQ(uri.without("rounds").text(), "coded:");
+  EXPECT_EQ(uri.without("absent"), uri);
+  ASSERT_NE(uri.find("rounds"), nullptr);
+  EXPECT_EQ(*uri.find("rounds"), "3");
+  EXPECT_EQ(uri.find("iterations"), nullptr);
 }
 
 TEST(DeviceUri, PathKeepsColonsAndMayBeEmpty) {
@@ -61,8 +88,10 @@ TEST(DeviceUri, MalformedUrisAreConfigErrors) {
   EXPECT_TRUE(throwsError([] { backendRegistry<Camera>().parse("Aravis-Fake-GV01"); }, Errc::Config,
                           {"Aravis-Fake-GV01", "no scheme"}));
   EXPECT_TRUE(throwsError([] { backendRegistry<Camera>().parse(":x"); }, Errc::Config, {"no scheme"}));
-  EXPECT_TRUE(throwsError([] { backendRegistry<Camera>().parse("aravis:x?packetSize"); }, Errc::Config,
-                          {"'packetSize'", "<key>=<value>"}));
+  EXPECT_TRUE(throwsError([] { backendRegistry<Camera>().parse("aravis:x?packet_size_bytes"); }, Errc::Config,
+                          {"'packet_size_bytes'", "<key>=<value>"}));
+  EXPECT_TRUE(
+      throwsError([] { backendRegistry<Camera>().parse("Aravis:x"); }, Errc::Config, {"'Aravis'", "[a-z0-9+.-]"}));
   EXPECT_TRUE(throwsError([] { backendRegistry<Camera>().parse("aravis:x?=3"); }, Errc::Config, {"<key>=<value>"}));
   EXPECT_TRUE(throwsError([] { backendRegistry<Camera>().parse("aravis:x?a=1&a=2"); }, Errc::Config, {"'a'", "twice"}));
   EXPECT_TRUE(throwsError([] { backendRegistry<Camera>().parse("aravis:x?a=1&"); }, Errc::Config, {"ends with '&'"}));
@@ -80,16 +109,40 @@ TEST(CameraRegistry, UnknownQueryKeyListsAcceptedKeys) {
   registerDriverBackends();
   // Rejected before any device is looked for.
   EXPECT_TRUE(throwsError([] { openCamera("aravis:x?packetsize=1400"); }, Errc::Config,
-                          {"unknown key 'packetsize'", "packetSize"}));
-  EXPECT_TRUE(throwsError([] { openCamera("aravis:x?packetSize=big"); }, Errc::Config, {"packetSize 'big'"}));
-  EXPECT_TRUE(throwsError([] { openCamera("aravis:x?packetSize=100"); }, Errc::Config, {"outside"}));
+                          {"unknown key 'packetsize'", "packet_size_bytes: integer 576 .. 65000 bytes"}));
+  EXPECT_TRUE(throwsError([] { openCamera("aravis:x?packet_size_bytes=big"); }, Errc::Config,
+                          {"packet_size_bytes = 'big'", "not an integer in 576 .. 65000 bytes"}));
+  EXPECT_TRUE(throwsError([] { openCamera("aravis:x?packet_size_bytes=1500.5"); }, Errc::Config, {"not an integer"}));
+  EXPECT_TRUE(throwsError([] { openCamera("aravis:x?packet_size_bytes=100"); }, Errc::Config, {"576 .. 65000"}));
+  // The same quantity in another unit, or without one, is named as such.
+  EXPECT_TRUE(throwsError([] { openCamera("aravis:x?packet_size_kib=1"); }, Errc::Config,
+                          {"'packet_size_kib'", "not in the unit", "packet_size_bytes"}));
+  EXPECT_TRUE(throwsError([] { openCamera("aravis:x?packet_size=1400"); }, Errc::Config,
+                          {"'packet_size'", "not in the unit", "packet_size_bytes"}));
+}
+
+// A backend's keys are declared in the one style, with a range their default lies in.
+TEST(CameraRegistry, KeyDeclarationsAreChecked) {
+  const auto add = [](UriKey key) {
+    backendRegistry<Camera>().add(
+        {.scheme = "test-keys", .keys = {key}, .factory = [](const DeviceUri&) { return std::unique_ptr<Camera>(); }});
+  };
+  EXPECT_TRUE(throwsError([&] { add({.name = "packetSize"}); }, Errc::InvalidArgument, {"'packetSize'", "snake_case"}));
+  EXPECT_TRUE(throwsError([&] { add({.name = "timeout", .unit = "ms", .lo = 1, .hi = 2}); }, Errc::InvalidArgument,
+                          {"'timeout'", "must end in '_ms'"}));
+  EXPECT_TRUE(throwsError([&] { add({.name = "gain", .lo = 2, .hi = 1}); }, Errc::InvalidArgument, {"'gain'"}));
+  EXPECT_TRUE(throwsError([&] { add({.name = "gain", .lo = 0, .hi = 1, .fallback = 2}); }, Errc::InvalidArgument,
+                          {"'gain'", "default 2"}));
+  EXPECT_TRUE(throwsError([&] { add({.name = "file", .value = UriValue::Text, .fallback = 1}); }, Errc::InvalidArgument,
+                          {"'file'"}));
+  EXPECT_EQ(backendRegistry<Camera>().keys("test-keys").size(), 0u);  // none of them was added
 }
 
 TEST(CameraRegistry, OtherLibrariesRegisterTheirSchemes) {
   registerDriverBackends();
   static DeviceUri seen;  // (static: the process-wide registry keeps the factory)
   backendRegistry<Camera>().add({.scheme = "test-registry",
-                                 .queryKeys = {"seed"},
+                                 .keys = {{.name = "seed", .value = UriValue::Integer, .lo = 0, .hi = 9}},
                                  .description = "test-registry:<anything>",
                                  .factory = [](const DeviceUri& uri) -> std::unique_ptr<Camera> {
                                    seen = uri;
@@ -102,6 +155,7 @@ TEST(CameraRegistry, OtherLibrariesRegisterTheirSchemes) {
   EXPECT_EQ(seen.path, "bench.toml");
   EXPECT_EQ(seen.query.at("seed"), "7");
   EXPECT_TRUE(throwsError([] { openCamera("test-registry:b?noise=0"); }, Errc::Config, {"'noise'", "seed"}));
+  EXPECT_TRUE(throwsError([] { openCamera("test-registry:b?seed=10"); }, Errc::Config, {"seed = '10'", "0 .. 9"}));
   EXPECT_TRUE(throwsError(
       [] {
         backendRegistry<Camera>().add(

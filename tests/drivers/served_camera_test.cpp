@@ -11,6 +11,7 @@
 #include "aravis_discovery.h"
 #include "gige_device_process.h"
 #include "lfi/drivers/aravis/aravis_camera.h"
+#include "lfi/drivers/builtin_backends.h"
 #include "lfi/drivers/camera_registry.h"
 #include "lfi/sim/devices/sim_camera.h"
 #include "lfi_test_support.h"

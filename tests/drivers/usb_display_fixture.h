@@ -4,7 +4,7 @@
 // checks that umockdev's preload library is active (the process has a private TMPDIR for
 // its testbed) and registers the display backends; helpers compare presented panels.
 
-#include "lfi/drivers/backend_registry.h"
+#include "lfi/drivers/builtin_backends.h"
 #include "lfi/drivers/display.h"
 #include "lfi/emulation/emulated_usb_display.h"
 

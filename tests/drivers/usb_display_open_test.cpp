@@ -174,7 +174,7 @@ TEST_F(UsbDisplayTest, ASerialWithSpacesAndSlashesIsNamedPercentEncoded) {
   for (std::size_t i = 0; i < all.size(); i += 100) {
     const UsbDisplaySelector s{0x1209, 0x4c46, all.substr(i, 100)};
     const std::string text = s.uri();
-    EXPECT_EQ(parseUsbDisplayPath(parseDeviceUri(text, "display", "usb:1209:4c46").path, text).serial, s.serial);
+    EXPECT_EQ(parseUsbDisplayPath(DeviceUri::parse(text, "display", "usb:1209:4c46").path, text).serial, s.serial);
   }
 }
 

@@ -80,7 +80,7 @@ std::string cameraCalibrationRecord(const CameraCalibration& c, const BenchFile&
         {"square_mm", c.target.square_mm},
         {"relative_tolerance", c.targetTolerance}}},
       {"camera",
-       {{"uri", bench.cameraUri}, {"device", cameraDescription}, {"image_px", {c.image.width, c.image.height}}}},
+       {{"uri", bench.cameraUri.text()}, {"device", cameraDescription}, {"image_px", {c.image.width, c.image.height}}}},
       {"previous", previous},
       {"camera_scale",
        {{"object_pixel", measured(m.objectPixel_mm, m.objectPixelSigma_mm, k, "mm")},

@@ -17,24 +17,6 @@ namespace lfi {
 using detail::measured;
 using detail::tomlNumber;
 
-namespace {
-
-// `uri` with the value of its query key `key` replaced by `value`; nullopt
-// when the query has no such key.
-std::optional<std::string> withQueryValue(const std::string& uri, const std::string& key, const std::string& value) {
-  const std::size_t query = uri.find('?');
-  if (query == std::string::npos) return std::nullopt;
-  for (std::size_t start = query + 1; start <= uri.size();) {
-    const std::size_t end = std::min(uri.find('&', start), uri.size());
-    if (uri.compare(start, key.size() + 1, key + "=") == 0)
-      return uri.substr(0, start + key.size() + 1) + value + uri.substr(end);
-    start = end + 1;
-  }
-  return std::nullopt;
-}
-
-}  // namespace
-
 void setPartCalibration(BenchFileEdit& edit, const BenchFile& bench, const PartCalibration& c,
                         const std::string& stampUtc) {
   const double k = c.coverageFactor;
@@ -47,11 +29,6 @@ void setPartCalibration(BenchFileEdit& edit, const BenchFile& bench, const PartC
            fmt::format("[{}, {}]", tomlNumber(c.partCentre_px.x), tomlNumber(c.partCentre_px.y)),
            fmt::format("lfi calibrate part {}: U = [{:.2g}, {:.2g}] px (k = {:g})", stampUtc,
                        k * c.lateralSigma_mm.x / perPixel, k * c.lateralSigma_mm.y / perPixel, k));
-  // A capture that records at a distance records at this one.
-  if (const auto uri = edit.string("capture", "uri"))
-    if (const auto atDistance = withQueryValue(*uri, "distance_mm", tomlNumber(c.distance_mm)))
-      edit.set("capture", "uri", tomlString(*atDistance),
-               fmt::format("lfi calibrate part {}: at the calibrated Δ", stampUtc));
   if (!bench.displayOptics) detail::setOpticsTable(edit, c.nominal.optics, "as the display states it (not measured)");
   edit.set("display.optics", "gap_mm", tomlNumber(c.gap_mm), within(c.gapSigma_mm, "mm"));
   if (c.nominal.optics.type == OpticsType::LensletArray)
@@ -78,8 +55,8 @@ std::string partCalibrationRecord(const PartCalibration& c, const BenchFile& ben
        "and the lens each ray lands in against Δ (docs/calibration.md)"},
       {"part_model", part.description()},
       {"coverage_factor", k},
-      {"display", {{"uri", bench.displayUri}, {"vendor", d.vendor}, {"model", d.model}, {"serial", d.serial}}},
-      {"camera", {{"uri", bench.cameraUri}}},
+      {"display", {{"uri", bench.displayUri.text()}, {"vendor", d.vendor}, {"model", d.model}, {"serial", d.serial}}},
+      {"camera", {{"uri", bench.cameraUri.text()}}},
       {"previous",
        {{"distance_mm", c.statedDistance_mm},
         {"part_centre_px", bench.partCentre_px ? nlohmann::json{bench.partCentre_px->x, bench.partCentre_px->y}

@@ -61,16 +61,21 @@ CodedCapture::CodedCapture(CodedCaptureSettings s) : settings_(s) {
   check(s.rounds >= 1 && s.rounds <= 16, "rounds", s.rounds, "1 .. 16");
   check(s.maxLightLeft >= 0 && s.maxLightLeft < 1, "max_light_left", s.maxLightLeft, "[0, 1)");
   check(s.secondShare >= 0 && s.secondShare < 0.5, "second_share", s.secondShare, "[0, 0.5)");
-  check(s.distance_mm >= 0 && std::isfinite(s.distance_mm), "distance_mm", s.distance_mm, "[0, inf)");
+}
+
+void CodedCapture::setDistance(double distance_mm) {
+  if (!(distance_mm >= 0 && distance_mm <= 1e6))
+    fail(Errc::InvalidArgument, "coded capture: Δ = {} mm is outside [0, 1e6]", distance_mm);
+  distance_mm_ = distance_mm;
 }
 
 LightFieldGeometry CodedCapture::geometry() const {
   if (!bench_) {
     LightFieldGeometry g;
-    g.distance_mm = settings_.distance_mm;
+    g.distance_mm = distance_mm_;
     return g;
   }
-  return codedLightFieldGeometry(bench_->display(), settings_.distance_mm);
+  return codedLightFieldGeometry(bench_->display(), distance_mm_);
 }
 
 std::string CodedCapture::description() const {
@@ -263,36 +268,89 @@ LightField CodedCapture::capture(const std::function<void(double)>& progress) {
         bestCv, report_.refineFrames - 1, settings_.targetCv);
   panel_ = best;
   LightField lightField =
-      decodePanelImage(panelFromLevels(best, display), optics, codedLightFieldGeometry(display, settings_.distance_mm));
+      decodePanelImage(panelFromLevels(best, display), optics, codedLightFieldGeometry(display, distance_mm_));
   report_.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   if (progress) progress(1);
   return lightField;
 }
 
+namespace {
+
+// The coded: capture's query keys; their defaults are CodedCaptureSettings's.
+const CodedCaptureSettings kDefaults;
+const UriKey kRounds{.name = "rounds",
+                     .value = UriValue::Integer,
+                     .lo = 1,
+                     .hi = 16,
+                     .fallback = kDefaults.rounds,
+                     .meaning = "most rounds of patterns"};
+const UriKey kMaxLightLeft{.name = "max_light_left",
+                           .lo = 0,
+                           .hi = 0.999,
+                           .fallback = kDefaults.maxLightLeft,
+                           .meaning = "stop when at most this share of the lit pixels' light is unfound"};
+const UriKey kTargetCv{.name = "target_cv",
+                       .lo = 1e-6,
+                       .hi = 0.999,
+                       .fallback = kDefaults.targetCv,
+                       .meaning = "uniformity target (standard deviation / mean)"};
+const UriKey kIterations{.name = "iterations",
+                         .value = UriValue::Integer,
+                         .lo = 0,
+                         .hi = 100,
+                         .fallback = kDefaults.iterations,
+                         .meaning = "most refinement steps"};
+const UriKey kTargetPercentile{.name = "target_percentile",
+                               .lo = 1e-6,
+                               .hi = 0.999999,
+                               .fallback = kDefaults.targetPercentile,
+                               .meaning = "the target level's percentile"};
+const UriKey kMinDecoded{.name = "min_decoded",
+                         .lo = 1e-6,
+                         .hi = 1,
+                         .fallback = kDefaults.minDecoded,
+                         .meaning = "fraction of lit camera pixels that must decode (first round)"};
+const UriKey kMinConfidence{.name = "min_confidence",
+                            .lo = 0,
+                            .hi = 1,
+                            .fallback = kDefaults.minConfidence,
+                            .meaning = "a decoded pixel's panel pixels are lit from this confidence on"};
+const UriKey kSecondShare{.name = "second_share",
+                          .lo = 0,
+                          .hi = 0.499,
+                          .fallback = kDefaults.secondShare,
+                          .meaning = "a camera pixel decodes to two panel columns (rows) from this share on"};
+const UriKey kAllowUndeflected{.name = "allow_undeflected",
+                               .value = UriValue::Integer,
+                               .lo = 0,
+                               .hi = 1,
+                               .fallback = kDefaults.allowUndeflected ? 1 : 0,
+                               .meaning = "1: accept a part that deflects no ray"};
+
+}  // namespace
+
 void registerControllerBackends() {
   backendRegistry<LightFieldCapture>().addOnce(LightFieldCaptureBackend{
       .scheme = "coded",
-      .queryKeys = {"rounds", "max_light_left", "target_cv", "iterations", "target_percentile", "min_decoded",
-                    "min_confidence", "second_share", "distance_mm", "allow_undeflected"},
+      .keys = {kRounds, kMaxLightLeft, kTargetCv, kIterations, kTargetPercentile, kMinDecoded, kMinConfidence,
+               kSecondShare, kAllowUndeflected},
       .description = "coded:[?rounds=&max_light_left=&target_cv=&iterations=&target_percentile=&min_decoded=&"
-                     "min_confidence=&second_share=&distance_mm=&allow_undeflected=]  Gray code patterns through the "
+                     "min_confidence=&second_share=&allow_undeflected=]  Gray code patterns through the "
                      "bench's display and camera",
       .factory = [](const DeviceUri& uri) -> std::unique_ptr<LightFieldCapture> {
         if (!uri.path.empty())
           fail(Errc::Config, "light field capture URI '{}': coded: takes no path (its devices are the bench's)",
-               uri.text);
-        constexpr const char* kind = "light field capture";
+               uri.text());
         CodedCaptureSettings s;
-        s.rounds = uriNumber(uri, kind, "rounds", s.rounds, 1, 16);
-        s.maxLightLeft = uriNumber(uri, kind, "max_light_left", s.maxLightLeft, 0.0, 0.999);
-        s.targetCv = uriNumber(uri, kind, "target_cv", s.targetCv, 1e-6, 0.999);
-        s.iterations = uriNumber(uri, kind, "iterations", s.iterations, 0, 100);
-        s.targetPercentile = uriNumber(uri, kind, "target_percentile", s.targetPercentile, 1e-6, 0.999999);
-        s.minDecoded = uriNumber(uri, kind, "min_decoded", s.minDecoded, 1e-6, 1.0);
-        s.minConfidence = uriNumber(uri, kind, "min_confidence", s.minConfidence, 0.0, 1.0);
-        s.secondShare = uriNumber(uri, kind, "second_share", s.secondShare, 0.0, 0.499);
-        s.distance_mm = uriNumber(uri, kind, "distance_mm", s.distance_mm, 0.0, 1e6);
-        s.allowUndeflected = uriNumber(uri, kind, "allow_undeflected", 0, 0, 1) == 1;
+        s.rounds = *uriNumber<int>(uri, kRounds);
+        s.maxLightLeft = *uriNumber(uri, kMaxLightLeft);
+        s.targetCv = *uriNumber(uri, kTargetCv);
+        s.iterations = *uriNumber<int>(uri, kIterations);
+        s.targetPercentile = *uriNumber(uri, kTargetPercentile);
+        s.minDecoded = *uriNumber(uri, kMinDecoded);
+        s.minConfidence = *uriNumber(uri, kMinConfidence);
+        s.secondShare = *uriNumber(uri, kSecondShare);
+        s.allowUndeflected = *uriNumber<int>(uri, kAllowUndeflected) == 1;
         return std::make_unique<CodedCapture>(s);
       },
   });

@@ -1,25 +1,21 @@
 // SPDX-License-Identifier: Apache-2.0
-// The aravis: scheme in the camera registry: aravis:<device-id>[?packetSize=<bytes>].
-#include "lfi/core/error.h"
+// The aravis: scheme in the camera registry: aravis:<device-id>[?packet_size_bytes=<bytes>].
 #include "lfi/drivers/aravis/aravis_camera.h"
 #include "lfi/drivers/camera_registry.h"
-
-#include <charconv>
 
 namespace lfi {
 namespace {
 
+const UriKey kPacketSize{.name = "packet_size_bytes",
+                         .value = UriValue::Integer,
+                         .unit = "bytes",
+                         .lo = 576,
+                         .hi = 65'000,
+                         .meaning = "fixed GigE Vision stream packet size (default: negotiated at start)"};
+
 std::unique_ptr<Camera> openAravisFromUri(const DeviceUri& uri) {
   AravisOptions options;
-  if (auto it = uri.query.find("packetSize"); it != uri.query.end()) {
-    int value = 0;
-    const char* end = it->second.data() + it->second.size();
-    if (const auto [at, ec] = std::from_chars(it->second.data(), end, value); ec != std::errc() || at != end)
-      fail(Errc::Config, "camera URI '{}': packetSize '{}' is not an integer number of bytes", uri.text, it->second);
-    if (value < 576 || value > 65'000)
-      fail(Errc::Config, "camera URI '{}': packetSize {} is outside 576..65000 bytes", uri.text, value);
-    options.packetSize_bytes = value;
-  }
+  if (const auto size = uriNumber<int>(uri, kPacketSize, "camera")) options.packetSize_bytes = *size;
   return openAravisCamera(uri.path, options);
 }
 
@@ -28,8 +24,8 @@ std::unique_ptr<Camera> openAravisFromUri(const DeviceUri& uri) {
 void registerAravisBackend() {
   backendRegistry<Camera>().addOnce(CameraBackend{
       .scheme = "aravis",
-      .queryKeys = {"packetSize"},
-      .description = "aravis:<device-id>[?packetSize=<bytes>]  GenICam camera via Aravis",
+      .keys = {kPacketSize},
+      .description = "aravis:<device-id>[?packet_size_bytes=<bytes>]  GenICam camera via Aravis",
       .factory = openAravisFromUri,
   });
 }

@@ -174,14 +174,14 @@ ServedBench::~ServedBench() {
   impl_->camera.reset();
 }
 
-std::string ServedBench::cameraUri() const {
+DeviceUri ServedBench::cameraUri() const {
   const GvCameraServerOptions& o = impl_->options.camera;
-  return fmt::format("aravis:{}-{}-{}", o.vendor, o.model, o.serial);
+  return {.scheme = "aravis", .path = fmt::format("{}-{}-{}", o.vendor, o.model, o.serial)};
 }
 
-std::string ServedBench::displayUri() const {
+DeviceUri ServedBench::displayUri() const {
   const EmulatedDisplayConfig& c = impl_->options.display;
-  return fmt::format("usb:{:04x}:{:04x}/{}", c.vendorId, c.productId, c.serial);
+  return {.scheme = "usb", .path = fmt::format("{:04x}:{:04x}/{}", c.vendorId, c.productId, c.serial)};
 }
 
 bool ServedBench::putPart(const fs::path& scene) {

@@ -33,7 +33,7 @@ std::uint64_t frameNoiseSeed(std::uint64_t sceneSeed, std::uint64_t frameId) {
 }
 
 SimImager::SimImager(const fs::path& sceneFile) : sceneFile_(sceneFile) {
-  const std::string name = "sim:" + percentEncodeUriPart(sceneFile.string());  // (a URI that opens it)
+  const std::string name = DeviceUri{.scheme = "sim", .path = sceneFile.string()}.text();  // (a URI that opens it)
   bench_ = SimBench::open(sceneFile, fmt::format("camera '{}'", name));
   description_ = bench_->description();
   const auto* camera = std::get_if<TelecentricCamera>(&description_.sensor);
@@ -354,7 +354,7 @@ class SimCamera final : public Camera {
     double exposure_us, gain;  // likewise: a frame exposed before ExposureTime or Gain changed keeps the old ones
   };
 
-  std::string name() const { return "sim:" + percentEncodeUriPart(sceneFile_.string()); }  // (a URI that reopens it)
+  std::string name() const { return DeviceUri{.scheme = "sim", .path = sceneFile_.string()}.text(); }  // (reopens it)
 
   // ExposureTime and Gain are written; other features are NotFound or read-only.
   void requireWritable(const std::string& feature) {
@@ -443,7 +443,7 @@ void registerSimBackends() {
   registerSimLightFieldCapture();
   backendRegistry<Camera>().addOnce(CameraBackend{
       .scheme = "sim",
-      .queryKeys = {},
+      .keys = {},
       .description = "sim:<scene-file>  ray-traced camera (the scene file's [camera] and [camera_sensor])",
       .factory = [](const DeviceUri& uri) { return openSimCamera(uri.path); },
   });

@@ -19,7 +19,7 @@ namespace {
 class SimDisplay final : public Display {
  public:
   explicit SimDisplay(fs::path sceneFile)
-      : sceneFile_(std::move(sceneFile)), name_("sim:" + percentEncodeUriPart(sceneFile_.string())) {
+      : sceneFile_(std::move(sceneFile)), name_(DeviceUri{.scheme = "sim", .path = sceneFile_.string()}.text()) {
     open();
   }
   ~SimDisplay() override { close(); }
@@ -121,7 +121,7 @@ std::unique_ptr<Display> openSimDisplay(const fs::path& sceneFile) {
 void registerSimDisplayBackend() {
   backendRegistry<Display>().addOnce(DisplayBackend{
       .scheme = "sim",
-      .queryKeys = {},
+      .keys = {},
       .description = "sim:<scene-file>  ray-traced light field display (the scene file's [display])",
       .factory = [](const DeviceUri& uri) { return openSimDisplay(uri.path); },
   });

@@ -36,12 +36,6 @@ class SimLightFieldCapture final : public LightFieldCapture {
     if (settings_.samplesPerPixel < 1 || settings_.samplesPerPixel > kMostSamplesPerPixel)
       fail(Errc::InvalidArgument, "sim light field capture of '{}': spp = {} is outside 1 .. 2^20", sceneFile_.string(),
            settings_.samplesPerPixel);
-    // (0 means "not set" in a light field file; here it is where the sensor is.)
-    if (!(settings_.geometry.distance_mm > 0))
-      fail(Errc::InvalidArgument,
-           "sim light field capture of '{}': distance_mm = {} must be > 0: the sensor's plane "
-           "lies Δ below the part",
-           sceneFile_.string(), settings_.geometry.distance_mm);
     // Load now, so that a bad scene file is reported at open.
     SceneDescription d = loadSceneFile(sceneFile_);
     seed_ = d.render.seed;
@@ -49,15 +43,25 @@ class SimLightFieldCapture final : public LightFieldCapture {
     for (Object& o : d.objects)
       if (!o.emission) parts_.push_back(std::move(o));
     if (parts_.empty()) fail(Errc::Config, "'{}': no part to capture (every object emits)", sceneFile_.string());
+    setDistance(settings_.geometry.distance_mm);
+  }
+
+  // (0 means "not set" in a light field file; here it is where the sensor is.)
+  void setDistance(double distance_mm) override {
+    if (!(distance_mm > 0 && distance_mm <= kFarthest_mm))
+      fail(Errc::InvalidArgument,
+           "sim light field capture of '{}': Δ = {} mm is outside (0, 1e6]: the sensor's plane lies Δ below the part",
+           sceneFile_.string(), distance_mm);
     // The sensor looks up at the part from below it, the beam shines down from
     // above it: a part reaching either plane would be captured from inside.
-    const double sensorZ = -settings_.geometry.distance_mm, beamZ = settings_.beamDistance_mm;
+    const double sensorZ = -distance_mm, beamZ = settings_.beamDistance_mm;
     for (const Object& part : parts_)
       if (const Bounds box = worldBounds(part); !(box.lo.z > sensorZ && box.hi.z < beamZ))
         fail(Errc::Config,
              "'{}': part '{}' spans z = {} .. {} mm, which reaches the light field sensor's plane "
-             "(z = -distance_mm = {}) or the beam's (z = beam_distance_mm = {}): the part must lie between them",
+             "(z = -Δ = {}) or the beam's (z = beam_distance_mm = {}): the part must lie between them",
              sceneFile_.string(), part.name, box.lo.z, box.hi.z, sensorZ, beamZ);
+    settings_.geometry.distance_mm = distance_mm;
   }
 
   LightFieldGeometry geometry() const override { return settings_.geometry; }
@@ -90,17 +94,44 @@ class SimLightFieldCapture final : public LightFieldCapture {
   double ambientIor_ = 1;
 };
 
-template <typename T>
-T parseValue(const DeviceUri& uri, const std::string& key, T fallback) {
-  auto it = uri.query.find(key);
-  if (it == uri.query.end()) return fallback;
-  T value{};
-  const std::string& text = it->second;
-  const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), value);
-  if (ec != std::errc() || end != text.data() + text.size())
-    fail(Errc::Config, "light field capture URI '{}': {} = '{}' is not a number", uri.text, key, text);
-  return value;
-}
+// The sim: capture's query keys; their defaults are SimCaptureSettings's.
+const SimCaptureSettings kDefaults;
+const UriKey kSpatial{.name = "spatial",
+                      .value = UriValue::Integer,
+                      .lo = 1,
+                      .hi = 1 << 14,
+                      .fallback = kDefaults.geometry.spatialX,
+                      .meaning = "spatial elements per side"};
+const UriKey kAngular{.name = "angular",
+                      .value = UriValue::Integer,
+                      .lo = 1,
+                      .hi = 1 << 10,
+                      .fallback = kDefaults.geometry.angular,
+                      .meaning = "angular elements per side"};
+const UriKey kPitch{.name = "pitch_mm",
+                    .unit = "mm",
+                    .lo = 1e-6,
+                    .hi = 1e3,
+                    .fallback = kDefaults.geometry.pixelPitch_mm,
+                    .meaning = "sensor pixel pitch"};
+const UriKey kBeamHalfAngle{.name = "beam_half_angle_rad",
+                            .unit = "rad",
+                            .lo = kNarrowestCone_rad,
+                            .hi = 1.5,
+                            .fallback = kDefaults.beamHalfAngle_rad,
+                            .meaning = "divergence of the collimated beam"};
+const UriKey kBeamDistance{.name = "beam_distance_mm",
+                           .unit = "mm",
+                           .lo = 1e-6,
+                           .hi = kFarthest_mm,
+                           .fallback = kDefaults.beamDistance_mm,
+                           .meaning = "beam plane at world z = +beam_distance_mm, facing -z"};
+const UriKey kSpp{.name = "spp",
+                  .value = UriValue::Integer,
+                  .lo = 1,
+                  .hi = kMostSamplesPerPixel,
+                  .fallback = kDefaults.samplesPerPixel,
+                  .meaning = "samples per sensor pixel"};
 
 }  // namespace
 
@@ -112,23 +143,23 @@ std::unique_ptr<LightFieldCapture> openSimLightFieldCapture(const std::filesyste
 void registerSimLightFieldCapture() {
   backendRegistry<LightFieldCapture>().addOnce(LightFieldCaptureBackend{
       .scheme = "sim",
-      .queryKeys = {"spatial", "angular", "pitch_mm", "distance_mm", "beam_half_angle_rad", "beam_distance_mm", "spp"},
-      .description = "sim:<scene-file>[?spatial=&angular=&pitch_mm=&distance_mm=&beam_half_angle_rad=&"
-                     "beam_distance_mm=&spp=]  simulated lensless light field sensor",
+      .keys = {kSpatial, kAngular, kPitch, kBeamHalfAngle, kBeamDistance, kSpp},
+      .description = "sim:<scene-file>[?spatial=&angular=&pitch_mm=&beam_half_angle_rad=&beam_distance_mm=&spp=]  "
+                     "simulated lensless light field sensor (Δ: the bench's)",
       .factory = [](const DeviceUri& uri) -> std::unique_ptr<LightFieldCapture> {
         SimCaptureSettings s;
-        s.geometry.spatialX = s.geometry.spatialY = parseValue(uri, "spatial", s.geometry.spatialX);
-        s.geometry.angular = parseValue(uri, "angular", s.geometry.angular);
-        s.geometry.pixelPitch_mm = parseValue(uri, "pitch_mm", s.geometry.pixelPitch_mm);
-        s.geometry.distance_mm = parseValue(uri, "distance_mm", s.geometry.distance_mm);
-        s.beamHalfAngle_rad = parseValue(uri, "beam_half_angle_rad", s.beamHalfAngle_rad);
-        s.beamDistance_mm = parseValue(uri, "beam_distance_mm", s.beamDistance_mm);
-        s.samplesPerPixel = parseValue(uri, "spp", s.samplesPerPixel);
+        constexpr const char* kind = "light field capture";
+        s.geometry.spatialX = s.geometry.spatialY = *uriNumber<int>(uri, kSpatial, kind);
+        s.geometry.angular = *uriNumber<int>(uri, kAngular, kind);
+        s.geometry.pixelPitch_mm = *uriNumber(uri, kPitch, kind);
+        s.beamHalfAngle_rad = *uriNumber(uri, kBeamHalfAngle, kind);
+        s.beamDistance_mm = *uriNumber(uri, kBeamDistance, kind);
+        s.samplesPerPixel = *uriNumber<int>(uri, kSpp, kind);
         try {
           return openSimLightFieldCapture(uri.path, s);
         } catch (const Error& e) {  // (a setting out of range: the URI's)
           if (e.code() != Errc::InvalidArgument) throw;
-          fail(Errc::Config, "light field capture URI '{}': {}", uri.text, e.what());
+          fail(Errc::Config, "light field capture URI '{}': {}", uri.text(), e.what());
         }
       },
   });

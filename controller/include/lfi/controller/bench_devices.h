@@ -21,6 +21,9 @@ class StoredLightField final : public LightFieldCapture {
   StoredLightField(LightField lightField, std::string description)
       : lightField_(std::move(lightField)), description_(std::move(description)) {}
   LightFieldGeometry geometry() const override { return lightField_.geometry(); }
+  // The light field was recorded at its own Δ: Errc::Config naming the
+  // description when that is set (not 0) and another than `distance_mm`.
+  void setDistance(double distance_mm) override;
   LightField capture(const std::function<void(double)>&) override { return lightField_; }
   const LightField& lightField() const { return lightField_; }
   std::string description() const override { return description_; }
@@ -36,6 +39,7 @@ class StoredLightField final : public LightFieldCapture {
 class NoCapture final : public LightFieldCapture {
  public:
   LightFieldGeometry geometry() const override { return {}; }
+  void setDistance(double) override {}
   LightField capture(const std::function<void(double)>&) override;
   std::string description() const override { return "none (a controller that only shows panels and takes images)"; }
 };
@@ -52,11 +56,13 @@ std::unique_ptr<Camera> openBenchCamera(const BenchFile& bench, BenchExposures e
 // The display, with the optics of [display.optics] in place of the device's own when the bench states them
 // (Errc::Config naming the bench file when they are of another class than the device's, or out of range).
 std::unique_ptr<Display> openBenchDisplay(const BenchFile& bench);
-// The capture device, or the bench's light field file as a StoredLightField.
+// The capture device, or the bench's light field file as a StoredLightField,
+// handed the bench's Δ ([geometry] distance_mm). Errc::Config naming the bench
+// file when the capture cannot record at Δ, or the file was recorded at another.
 std::unique_ptr<LightFieldCapture> openBenchCapture(const BenchFile& bench);
 // The controller's options from the bench's [camera], [display] and `frames`.
 ControllerOptions controllerOptions(const BenchFile& bench, int frames);
 // "<vendor> <model> <serial> (<uri>)" for records.
-std::string describeCamera(Camera& camera, const std::string& uri);
+std::string describeCamera(Camera& camera, const DeviceUri& uri);
 
 }  // namespace lfi

@@ -30,7 +30,9 @@
 //                                                             keys of display_calibration_file.h, the class and
 //                                                             every value it needs
 //   [capture]      uri  | light_field     -      one of      the reference's capture (sim:, coded:), or a light field
-//   file [geometry]     distance_mm            mm     required    Δ: display plane to the part's reference plane
+//                                                             file; the capture is handed Δ from [geometry]
+//   [geometry]     distance_mm            mm     required    Δ: display plane to the part's reference plane (its
+//                                                             one place: a capture URI never carries it)
 //                  part_centre_px         px     centre      [column, row] of the part's origin on the image
 //                  display_per_pixel_mm   mm/px  none        [a, b, c, d]: the display point a camera pixel sees,
 //                                                             (x, y) = [[a, b], [c, d]] (u - u0, v - v0) + the
@@ -61,6 +63,7 @@
 
 #include "lfi/calib/camera_scale.h"
 #include "lfi/drivers/camera.h"
+#include "lfi/drivers/device_uri.h"
 #include "lfi/drivers/display.h"
 #include "lfi/inspection/defects.h"
 #include "lfi/inspection/golden_model.h"
@@ -78,19 +81,19 @@ enum class OnDeviceLoss { Stop, Wait };
 struct BenchFile {
   std::filesystem::path file;  // as given
   // [camera]
-  std::string cameraUri;
+  DeviceUri cameraUri;
   CameraSettings camera;
   double objectPixel_mm = 0;
   CameraNoise noise;
   int grabTimeout_ms = 5000;
   int retries = 3;
   // [display]
-  std::string displayUri;
+  DeviceUri displayUri;
   int settle_ms = 0;
   double white = 0;
   std::optional<DisplayOpticsParams> displayOptics;  // [display.optics]
   // [capture]: exactly one of the two
-  std::string captureUri;
+  std::optional<DeviceUri> captureUri;
   std::filesystem::path lightFieldFile;
   // [geometry]
   double distance_mm = 0;

@@ -43,7 +43,7 @@
 //
 // URI: coded:[?rounds=&max_light_left=&target_cv=&iterations=&
 //      target_percentile=&min_decoded=&min_confidence=&second_share=&
-//      distance_mm=&allow_undeflected=]
+//      allow_undeflected=]
 //   key                 default  meaning
 //   rounds              3        most rounds of patterns
 //   max_light_left      0.02     stop when at most this share of the lit pixels' light is unfound
@@ -54,8 +54,8 @@
 //   min_confidence      0.25     a decoded pixel's panel pixels are lit from this confidence on
 //   second_share        0.1      a camera pixel decodes to two panel columns (rows) when the
 //                                second has this share of its light (DecodeSettings::secondShare)
-//   distance_mm         0        Δ recorded in the light field (0: not set)
 //   allow_undeflected   0        1: accept a part that deflects no ray
+// Δ, recorded in the light field, is the bench's (setDistance; 0 until set).
 //
 // The light field (capture()'s result) is the reference panel decoded through
 // the display's optics (display_optics.h, decodePanelImage) at white = 1:
@@ -81,7 +81,6 @@ struct CodedCaptureSettings {
   double minDecoded = 0.5;
   double minConfidence = 0.25;
   double secondShare = 0.1;
-  double distance_mm = 0;
   bool allowUndeflected = false;
 };
 
@@ -107,6 +106,8 @@ class CodedCapture final : public LightFieldCapture {
 
   // The light field's geometry once the bench is set (before: only distance_mm).
   LightFieldGeometry geometry() const override;
+  // Δ to record in the light field. Errc::InvalidArgument outside [0, 1e6] mm.
+  void setDistance(double distance_mm) override;
   // Errc::InvalidArgument without a bench; the refusals above.
   LightField capture(const std::function<void(double)>& progress = {}) override;
   std::string description() const override;
@@ -119,6 +120,7 @@ class CodedCapture final : public LightFieldCapture {
  private:
   CodedCaptureSettings settings_;
   BenchProbe* bench_ = nullptr;
+  double distance_mm_ = 0;
   cv::Mat panel_;
   CodedCaptureReport report_;
 };

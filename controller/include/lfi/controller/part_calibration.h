@@ -98,9 +98,9 @@ PartCalibration calibratePart(BenchProbe& bench, const PartModel& part, const ca
                               const std::function<void(double)>& progress = {});
 
 // What `lfi calibrate part` writes into a bench file: [geometry] distance_mm
-// and part_centre_px, the distance_mm of a capture URI that states one (the
-// same Δ), and [display.optics] gap_mm and focal_length_mm (the table added with
-// the display's stated optics when the bench has none).
+// (Δ's one place) and part_centre_px, and [display.optics] gap_mm and
+// focal_length_mm (the table added with the display's stated optics when the
+// bench has none).
 void setPartCalibration(BenchFileEdit& edit, const BenchFile& bench, const PartCalibration& calibration,
                         const std::string& stampUtc);
 

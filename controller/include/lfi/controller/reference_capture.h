@@ -23,9 +23,8 @@ struct ReferenceCoverage {
   double cv = 0;            // and its coefficient of variation
 };
 
-// Takes the package (info.created_utc and updated_utc are now). Throws
-// Errc::Config when a capture that does not measure through the bench records
-// its light field at another distance than [geometry] distance_mm, and what the
+// Takes the package (info.created_utc and updated_utc are now) with a capture
+// that openBenchCapture opened (and so handed the bench's Δ). Throws what the
 // devices and the capture throw.
 ReferencePackage takeReference(const BenchFile& bench, LightFieldCapture& capture, Display& display, Camera& camera,
                                const Controller::Progress& progress = {}, ReferenceCoverage* coverage = nullptr);

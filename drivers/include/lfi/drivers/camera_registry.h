@@ -22,8 +22,11 @@ BackendRegistry<Camera>& backendRegistry<Camera>();
 // factory. An unknown scheme throws Errc::Config listing the known schemes; an
 // unknown key throws Errc::Config listing the accepted keys. With the driver
 // trace on (driver_trace.h) the camera traces its calls.
+inline std::unique_ptr<Camera> openCamera(const DeviceUri& uri) {
+  return traceCalls(backendRegistry<Camera>().open(uri), uri.text());
+}
 inline std::unique_ptr<Camera> openCamera(std::string_view uri) {
-  return traceCalls(backendRegistry<Camera>().open(uri), uri);
+  return openCamera(backendRegistry<Camera>().parse(uri));
 }
 
 }  // namespace lfi

@@ -19,6 +19,9 @@ BackendRegistry<LightFieldCapture>& backendRegistry<LightFieldCapture>();
 
 // Parses `uri`, checks its query keys against the backend's and runs the
 // factory. An unknown scheme or key throws Errc::Config listing what is known.
+inline std::unique_ptr<LightFieldCapture> openLightFieldCapture(const DeviceUri& uri) {
+  return backendRegistry<LightFieldCapture>().open(uri);
+}
 inline std::unique_ptr<LightFieldCapture> openLightFieldCapture(std::string_view uri) {
   return backendRegistry<LightFieldCapture>().open(uri);
 }

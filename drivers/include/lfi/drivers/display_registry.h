@@ -21,8 +21,11 @@ BackendRegistry<Display>& backendRegistry<Display>();
 // Parses `uri`, checks its query keys against the backend's and runs the
 // factory. An unknown scheme or key throws Errc::Config listing what is known.
 // With the driver trace on (driver_trace.h) the display traces its calls.
+inline std::unique_ptr<Display> openDisplay(const DeviceUri& uri) {
+  return traceCalls(backendRegistry<Display>().open(uri), uri.text());
+}
 inline std::unique_ptr<Display> openDisplay(std::string_view uri) {
-  return traceCalls(backendRegistry<Display>().open(uri), uri);
+  return openDisplay(backendRegistry<Display>().parse(uri));
 }
 
 }  // namespace lfi

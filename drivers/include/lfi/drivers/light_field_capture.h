@@ -60,6 +60,13 @@ class LightFieldCapture {
 
   // What the capture will record (distance_mm = Δ, the plane's distance to the part).
   virtual LightFieldGeometry geometry() const = 0;
+  // Sets Δ, the distance from the recording plane to the part: where a sensor
+  // of its own records, or what a capture through the bench writes into the
+  // light field. Its one owner is the bench file's [geometry] distance_mm,
+  // which the controller hands in before capture(); a URI never carries it.
+  // Throws Errc::InvalidArgument or Errc::Config for a distance the capture
+  // cannot record at.
+  virtual void setDistance(double distance_mm) = 0;
   // Records the light field; `progress` gets the fraction done (0..1) from any thread.
   virtual LightField capture(const std::function<void(double)>& progress = {}) = 0;
   // One line naming the source, for logs and file headers.

@@ -34,6 +34,8 @@
 #include "lfi/drivers/aravis/gv_camera_server.h"
 #include "lfi/emulation/emulated_usb_display.h"
 
+#include "lfi/drivers/device_uri.h"
+
 #include <cstdint>
 #include <filesystem>
 #include <memory>
@@ -70,8 +72,8 @@ class ServedBench {
   ServedBench& operator=(const ServedBench&) = delete;
 
   // The URIs a bench file names the devices by: "aravis:<id>", "usb:<vid>:<pid>/<serial>".
-  std::string cameraUri() const;
-  std::string displayUri() const;
+  DeviceUri cameraUri() const;
+  DeviceUri displayUri() const;
 
   // Puts the part of `scene` under the camera, then fires the line; returns
   // whether that triggered a frame. Throws Errc::Config naming the file when

@@ -9,10 +9,13 @@
 //   spatial              40       -      spatial elements per side
 //   angular              16       -      angular elements per side
 //   pitch_mm             0.05     mm     sensor pixel pitch
-//   distance_mm          30       mm     Δ: sensor plane at world z = -Δ, looking +z
 //   beam_half_angle_rad  0.0087   rad    divergence of the collimated beam
 //   beam_distance_mm     50       mm     beam plane at world z = +beam_distance_mm, facing -z
 //   spp                  64       -      samples per sensor pixel
+//
+// Δ is not a key: the sensor's plane lies at world z = -Δ, looking +z, with Δ
+// the bench's [geometry] distance_mm, handed in by setDistance()
+// (SimCaptureSettings's geometry.distance_mm until then).
 //
 // The scene's emitters (back lights, displays) are left out; its sensor and
 // render settings are not used (the seed is). Every part's bounding box must
