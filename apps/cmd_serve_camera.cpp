@@ -8,7 +8,7 @@
 #include "lfi/core/error.h"
 #include "lfi/core/exr_io.h"
 #include "lfi/core/log.h"
-#include "lfi/drivers/aravis/gv_camera_server.h"
+#include "lfi/emulation/gv_camera_server.h"
 #include "lfi/sim/devices/sim_camera.h"
 
 #include <fmt/format.h>
@@ -32,8 +32,8 @@ namespace {
 // implementation until SIGINT or SIGTERM. The radiance of every binning is
 // rendered before the device appears (a render inside a frame would stall the
 // device's only thread, which also answers control requests).
-void serveCamera(const fs::path& sceneFile, lfi::GvCameraServerOptions options, int threads, double packetLoss,
-                 bool quiet) {
+void serveCamera(const fs::path& sceneFile, lfi::emulation::GvCameraServerOptions options, int threads,
+                 double packetLoss, bool quiet) {
   // Blocked before any thread starts (the renders' workers, Aravis's device
   // thread inherit the mask), so that SIGINT and SIGTERM reach sigwait() below
   // and not a worker's default action. One that comes during the first
@@ -43,7 +43,7 @@ void serveCamera(const fs::path& sceneFile, lfi::GvCameraServerOptions options, 
   sigaddset(&signals, SIGINT);
   sigaddset(&signals, SIGTERM);
   pthread_sigmask(SIG_BLOCK, &signals, nullptr);
-  lfi::GvCameraServer::validate(options);  // (before the renders: the serial's length, the interface)
+  lfi::emulation::GvCameraServer::validate(options);  // (before the renders: the serial's length, the interface)
   lfi::sim::SimImager imager(sceneFile);
   ProgressBar bar;
   imager.setRenderOptions(
@@ -57,10 +57,11 @@ void serveCamera(const fs::path& sceneFile, lfi::GvCameraServerOptions options, 
   options.sensorHeight_px = imager.camera().height;
   const std::string device = "lfi-served:" + sceneFile.string();
   cv::Mat frame;
-  lfi::GvCameraServer server(options, [&](const lfi::ServedFrameRequest& request, cv::Mat& image) {
-    imager.capture(imager.resolve(request.settings(), device), request.frameId, frame);
-    lfi::writeServedFrame(frame, image);
-  });
+  lfi::emulation::GvCameraServer server(
+      options, [&](const lfi::emulation::ServedFrameRequest& request, cv::Mat& image) {
+        imager.capture(imager.resolve(request.settings(), device), request.frameId, frame);
+        lfi::emulation::writeServedFrame(frame, image);
+      });
   server.setPacketLoss(packetLoss);
   fmt::print("{}\n", server.deviceId());
   std::fflush(stdout);
@@ -73,7 +74,7 @@ void serveCamera(const fs::path& sceneFile, lfi::GvCameraServerOptions options, 
 
 struct ServeArgs {
   fs::path scene;
-  lfi::GvCameraServerOptions options;
+  lfi::emulation::GvCameraServerOptions options;
   int threads = 0;
   double packetLoss = 0;
 };

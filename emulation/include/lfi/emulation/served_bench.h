@@ -31,8 +31,8 @@
 // Thread-safe. Needs umockdev's testbed (the `usb:` client runs with its
 // preload library: emulated_usb_display.h). Units: the scene's (mm).
 
-#include "lfi/drivers/aravis/gv_camera_server.h"
 #include "lfi/emulation/emulated_usb_display.h"
+#include "lfi/emulation/gv_camera_server.h"
 
 #include "lfi/drivers/device_uri.h"
 

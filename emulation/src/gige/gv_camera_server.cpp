@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 // GvCameraServer (gv_camera_server.h) on Aravis's ArvGvFakeCamera.
 
-#include "lfi/drivers/aravis/gv_camera_server.h"
+#include "lfi/emulation/gv_camera_server.h"
 
 #include "lfi/core/error.h"
 
@@ -18,7 +18,7 @@
 #include <mutex>
 #include <thread>
 
-namespace lfi {
+namespace lfi::emulation {
 namespace {
 
 // GigE Vision bootstrap registers (GigE Vision 2.x, table "bootstrap registers").
@@ -280,4 +280,4 @@ void GvCameraServer::setPacketLoss(double ratio) {
   g_object_set(impl_->gvCamera, "gvsp-lost-ratio", ratio, nullptr);
 }
 
-}  // namespace lfi
+}  // namespace lfi::emulation

@@ -30,7 +30,7 @@
 #include <optional>
 #include <string>
 
-namespace lfi {
+namespace lfi::emulation {
 
 // One frame as the client configured the device, read from its registers.
 struct ServedFrameRequest {
@@ -109,4 +109,4 @@ class GvCameraServer {
   std::unique_ptr<Impl> impl_;
 };
 
-}  // namespace lfi
+}  // namespace lfi::emulation
