@@ -60,26 +60,4 @@ CLI::Validator seedValue() {
   return wholeNumberIn<std::uint64_t>(0, lfi::sim::kLargestSeed);
 }
 
-void requireOutputFolder(const fs::path& given, const char* command, const char* source) {
-  const fs::path folder = given.empty() ? fs::path(".") : given;  // (the parent of a bare file name)
-  std::error_code made;
-  fs::create_directories(folder, made);
-  if (made || !fs::is_directory(folder, made))
-    lfi::fail(lfi::Errc::Io, "{}: cannot make the folder '{}' for {}: {}", command, folder.string(), source,
-              made ? made.message() : std::string("a file of that name is in the way"));
-  if (::access(folder.c_str(), W_OK | X_OK) != 0)  // (files are made in it: it must be searchable too)
-    lfi::fail(lfi::Errc::Io, "{}: cannot write into '{}' for {}: {}", command, folder.string(), source,
-              std::strerror(errno));
-}
-
-void refuseExisting(const std::vector<fs::path>& files, bool force, const char* command) {
-  if (force) return;
-  for (const fs::path& file : files) {
-    std::error_code ec;
-    if (fs::exists(file, ec))
-      lfi::fail(lfi::Errc::Exists, "'{}' exists; refusing to overwrite it (use --force to replace it)", file.string());
-    if (ec) lfi::fail(lfi::Errc::Io, "{}: cannot look for '{}': {}", command, file.string(), ec.message());
-  }
-}
-
 }  // namespace lfi::cli

@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 #pragma once
-// Helpers shared by several lfi subcommands: the progress display, whole-number
-// option checks, and the checks on output paths made before any work.
+// Helpers shared by several lfi subcommands: the progress display and
+// whole-number option checks. (Output folders: lfi/core/output_folder.h.)
 
 #include <fmt/format.h>
 #include <CLI/CLI.hpp>
@@ -11,7 +11,6 @@
 #include <filesystem>
 #include <mutex>
 #include <string>
-#include <vector>
 
 namespace lfi::cli {
 
@@ -56,14 +55,5 @@ CLI::Validator wholeNumberIn(T lowest, T highest) {
 }
 CLI::Validator threadCount();
 CLI::Validator seedValue();
-
-// Makes the folder that --out (or `source`) names or holds and checks that
-// files can be written into it, before any work: Errc::Io naming the source
-// and the reason. An empty path is the working folder (a bare file name's parent).
-void requireOutputFolder(const std::filesystem::path& folder, const char* command, const char* source = "--out");
-
-// Refuses to start when one of `files` exists, unless `force`; Errc::Io when
-// that cannot be told (a folder on the way that cannot be searched).
-void refuseExisting(const std::vector<std::filesystem::path>& files, bool force, const char* command);
 
 }  // namespace lfi::cli

@@ -13,6 +13,7 @@
 #include "lfi/core/atomic_file.h"
 #include "lfi/core/error.h"
 #include "lfi/core/exr_io.h"
+#include "lfi/core/output_folder.h"
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
@@ -72,14 +73,14 @@ void calibrateDistance(const DistanceArgs& a, const std::vector<double>& candida
                                                         : a.lightField;
   std::vector<fs::path> outputs{out};
   if (captures) outputs.push_back(referenceFile);
-  refuseExisting(outputs, a.force, "calibrate-distance");
+  refuseExisting(outputs, overwrite, "calibrate-distance");
   auto capture = a.lightField.empty() ? lfi::openBenchCapture(devices)
                                       : std::make_unique<lfi::StoredLightField>(lfi::readLightFieldExr(a.lightField),
                                                                                 "file " + a.lightField.string());
   auto display = lfi::openBenchDisplay(devices);
   auto camera = lfi::openBenchCamera(devices, lfi::BenchExposures::OnRequest);
   // Where the result goes must take it before the scan, not after (and a bad device leaves no folder behind).
-  requireOutputFolder(out.parent_path(), "calibrate-distance");
+  requireOutputFolder(out.parent_path(), "calibrate-distance", "--out");
   const lfi::CameraSettings settings = camera->settings();
   cv::Mat roi;
   const std::vector<int>& roiBox = a.roiBox;

@@ -11,6 +11,7 @@
 #include "lfi/controller/reference_capture.h"
 #include "lfi/core/error.h"
 #include "lfi/core/log.h"
+#include "lfi/core/output_folder.h"
 
 #include <fmt/format.h>
 
@@ -30,7 +31,7 @@ struct CaptureArgs {
 
 int runCapture(const CaptureArgs& a, const GlobalOptions& global) {
   const lfi::BenchFile bench = lfi::readBenchFile(a.bench);
-  refuseExisting({bench.referenceFolder}, a.force, "capture");
+  refuseExisting({bench.referenceFolder}, a.force ? Overwrite::Allow : Overwrite::Refuse, "capture");
   auto capture = lfi::openBenchCapture(bench);
   auto display = lfi::openBenchDisplay(bench);
   auto camera = lfi::openBenchCamera(bench, lfi::BenchExposures::OnRequest);

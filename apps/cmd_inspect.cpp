@@ -13,6 +13,7 @@
 #include "lfi/controller/reference_package.h"
 #include "lfi/core/atomic_file.h"
 #include "lfi/core/error.h"
+#include "lfi/core/output_folder.h"
 
 #include <fmt/format.h>
 

@@ -10,6 +10,7 @@
 #include "lfi/core/exr_io.h"
 #include "lfi/core/image.h"
 #include "lfi/core/log.h"
+#include "lfi/core/output_folder.h"
 #include "lfi/sim/scene_file.h"
 
 #include <fmt/format.h>
@@ -65,8 +66,8 @@ int runRenderCommand(const RenderArgs& a, const GlobalOptions& global) {
   const std::vector<fs::path> outputs =
       lightField ? std::vector<fs::path>{a.out / (d.name + "_lightfield.exr")}
                  : std::vector<fs::path>{a.out / (d.name + ".exr"), a.out / (d.name + ".png")};
-  requireOutputFolder(a.out, "render");
-  refuseExisting(outputs, a.force, "render");
+  requireOutputFolder(a.out, "render", "--out");
+  refuseExisting(outputs, overwrite, "render");
   const lfi::sim::Scene scene(std::move(d.objects), d.ambientIor);
   const auto start = std::chrono::steady_clock::now();
   cv::Mat image;

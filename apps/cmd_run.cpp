@@ -17,6 +17,7 @@
 #include "lfi/controller/reference_package.h"
 #include "lfi/core/error.h"
 #include "lfi/core/log.h"
+#include "lfi/core/output_folder.h"
 
 #include <fcntl.h>
 #include <fmt/format.h>

@@ -8,18 +8,16 @@
 #include "lfi/core/atomic_file.h"
 #include "lfi/core/error.h"
 #include "lfi/core/exr_io.h"
+#include "lfi/core/output_folder.h"
 #include "lfi/sim/render.h"
 
 #include "study_internal.h"
 
 #include <fmt/format.h>
 #include <fmt/ranges.h>
-#include <unistd.h>
 
 #include <algorithm>
-#include <cerrno>
 #include <cmath>
-#include <cstring>
 
 namespace lfi::study {
 
@@ -137,24 +135,13 @@ nlohmann::ordered_json runStudy(const Bench& bench, const fs::path& outDir, cons
                      : (options.quality == Quality::Quick ? std::vector<LimitPoint>{} : defaultLimits());
   const std::vector<SceneSpec> limitSpecs = limitScenes(bench, limits);  // (checked before the work)
   // Any of the study's files (an interrupted run leaves some without study.json) stops it before the work.
-  if (!options.overwrite)
-    for (const fs::path& file : {outDir / "study.json", outDir / "report.html", outDir / "lightfield.exr"}) {
-      std::error_code ec;
-      if (fs::exists(file, ec))
-        fail(Errc::Exists, "'{}' already holds a study ('{}' is there); use --force to replace it", outDir.string(),
-             file.filename().string());
-      if (ec) fail(Errc::Io, "study: cannot look for '{}' in the output folder: {}", file.string(), ec.message());
-    }
+  refuseExisting({outDir / "study.json", outDir / "report.html", outDir / "lightfield.exr"}, overwrite, "study");
   if (std::error_code ec;
       !options.overwrite && fs::is_directory(outDir / "images", ec) && !fs::is_empty(outDir / "images", ec))
     fail(Errc::Exists, "'{}' already holds a study's images; use --force to replace them", outDir.string());
-  if (std::error_code ec; !fs::create_directories(outDir / "images", ec) && ec)
-    fail(Errc::Io, "study: cannot make the folder '{}' for its results: {}", (outDir / "images").string(),
-         ec.message());
   // Both folders must take files before the work, not after it (they may have been there, read-only).
-  for (const fs::path& folder : {outDir, outDir / "images"})
-    if (::access(folder.c_str(), W_OK | X_OK) != 0)
-      fail(Errc::Io, "study: cannot write into '{}' for its results: {}", folder.string(), std::strerror(errno));
+  requireOutputFolder(outDir, "study", "its results");
+  requireOutputFolder(outDir / "images", "study", "its images");
   // Replacing an earlier study: its results go first, so that a run that fails
   // leaves no study.json of other inputs beside this run's files.
   if (options.overwrite)
