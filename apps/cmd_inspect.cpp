@@ -6,7 +6,7 @@
 #include "bench_cli.h"
 #include "cli_util.h"
 #include "commands.h"
-#include "part_output.h"
+#include "lfi/controller/part_records.h"
 
 #include "lfi/controller/bench_devices.h"
 #include "lfi/controller/inspector.h"

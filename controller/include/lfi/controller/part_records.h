@@ -10,7 +10,7 @@
 #include <filesystem>
 #include <string>
 
-namespace lfi::cli {
+namespace lfi {
 
 // The record of an inspected part; its images written into `folder` as
 // <stem>.exr and <stem>-overlay.png when the bench keeps them (never over an
@@ -23,4 +23,4 @@ InspectionRecord partRecord(const BenchFile& bench, const Inspector& inspector, 
 InspectionRecord errorRecord(const BenchFile& bench, std::uint64_t number, const std::string& timeUtc,
                              const std::string& error);
 
-}  // namespace lfi::cli
+}  // namespace lfi

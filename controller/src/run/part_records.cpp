@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: Apache-2.0
-#include "part_output.h"
+#include "lfi/controller/part_records.h"
 
 #include "lfi/core/exr_io.h"
 #include "lfi/core/image.h"
@@ -8,7 +8,7 @@
 
 namespace fs = std::filesystem;
 
-namespace lfi::cli {
+namespace lfi {
 
 namespace {
 
@@ -51,4 +51,4 @@ InspectionRecord errorRecord(const BenchFile& bench, std::uint64_t number, const
   return r;
 }
 
-}  // namespace lfi::cli
+}  // namespace lfi

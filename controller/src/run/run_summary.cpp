@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: Apache-2.0
-#include "run_summary.h"
+#include "lfi/controller/run_summary.h"
 
 #include "lfi/controller/inspection_record.h"
 #include "lfi/core/atomic_file.h"
@@ -17,7 +17,7 @@
 
 namespace fs = std::filesystem;
 
-namespace lfi::cli {
+namespace lfi {
 
 namespace {
 
@@ -129,4 +129,4 @@ RunCounts writeRunSummary(const fs::path& recordsFile, const fs::path& page, boo
   return c;
 }
 
-}  // namespace lfi::cli
+}  // namespace lfi

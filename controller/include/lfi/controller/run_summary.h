@@ -7,7 +7,7 @@
 
 #include <filesystem>
 
-namespace lfi::cli {
+namespace lfi {
 
 struct RunCounts {
   long parts = 0, passed = 0, failed = 0, errors = 0;
@@ -17,4 +17,4 @@ struct RunCounts {
 // warning) and writes `page` atomically. `live`: the page reloads itself.
 RunCounts writeRunSummary(const std::filesystem::path& records, const std::filesystem::path& page, bool live);
 
-}  // namespace lfi::cli
+}  // namespace lfi
