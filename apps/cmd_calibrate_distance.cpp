@@ -10,13 +10,13 @@
 #include "lfi/calib/display_distance.h"
 #include "lfi/controller/bench_devices.h"
 #include "lfi/controller/controller.h"
+#include "lfi/controller/distance_scan.h"
 #include "lfi/core/atomic_file.h"
 #include "lfi/core/error.h"
 #include "lfi/core/exr_io.h"
 #include "lfi/core/output_folder.h"
 
 #include <fmt/format.h>
-#include <nlohmann/json.hpp>
 
 #include <chrono>
 #include <cmath>
@@ -56,6 +56,27 @@ struct DistanceArgs {
   bool force = false;
 };
 
+// The part's pixels in the camera's image (--roi), or empty: all. Errc::Config for a box outside it.
+cv::Mat roiMask(const std::vector<int>& box, const lfi::CameraSettings& settings) {
+  if (box.empty()) return {};
+  const cv::Rect r(box[0], box[1], box[2], box[3]);
+  if (r.x < 0 || r.y < 0 || r.width < 1 || r.height < 1 || r.width > settings.roiWidth_px - r.x ||
+      r.height > settings.roiHeight_px - r.y)
+    lfi::fail(lfi::Errc::Config, "calibrate-distance: --roi {},{},{},{} is not inside the camera's {} x {} image", r.x,
+              r.y, r.width, r.height, settings.roiWidth_px, settings.roiHeight_px);
+  cv::Mat roi = cv::Mat::zeros(settings.roiHeight_px, settings.roiWidth_px, CV_8UC1);
+  roi(r).setTo(255);
+  return roi;
+}
+
+void printScan(const lfi::calib::DisplayDistanceScan& scan, double referenceDistance_mm) {
+  fmt::print("with the display dark: {:.6g} (noise of a mean {:.2g})\n", scan.dark, scan.noise);
+  for (size_t i = 0; i < scan.candidates_mm.size(); ++i)
+    fmt::print("{:+8.3f} mm  {:.6g}\n", scan.candidates_mm[i], scan.brightness[i]);
+  fmt::print("estimate {:+.3f} mm (the display {:.3f} mm {} the part than the reference's {} mm)\n", scan.estimate_mm,
+             std::abs(scan.estimate_mm), scan.estimate_mm >= 0 ? "further from" : "nearer to", referenceDistance_mm);
+}
+
 // lfi calibrate-distance: the display-to-part distance scan (docs/calibration.md).
 void calibrateDistance(const DistanceArgs& a, const std::vector<double>& candidates, bool quiet) {
   const fs::path& out = a.out;
@@ -81,94 +102,42 @@ void calibrateDistance(const DistanceArgs& a, const std::vector<double>& candida
   auto camera = lfi::openBenchCamera(devices, lfi::BenchExposures::OnRequest);
   // Where the result goes must take it before the scan, not after (and a bad device leaves no folder behind).
   requireOutputFolder(out.parent_path(), "calibrate-distance", "--out");
-  const lfi::CameraSettings settings = camera->settings();
-  cv::Mat roi;
-  const std::vector<int>& roiBox = a.roiBox;
-  if (!roiBox.empty()) {
-    const cv::Rect box(roiBox[0], roiBox[1], roiBox[2], roiBox[3]);
-    if (box.x < 0 || box.y < 0 || box.width < 1 || box.height < 1 || box.width > settings.roiWidth_px - box.x ||
-        box.height > settings.roiHeight_px - box.y)
-      lfi::fail(lfi::Errc::Config, "calibrate-distance: --roi {},{},{},{} is not inside the camera's {} x {} image",
-                box.x, box.y, box.width, box.height, settings.roiWidth_px, settings.roiHeight_px);
-    roi = cv::Mat::zeros(settings.roiHeight_px, settings.roiWidth_px, CV_8UC1);
-    roi(box).setTo(255);
-  }
+  const cv::Mat roi = roiMask(a.roiBox, camera->settings());
   const lfi::ControllerOptions options =
       lfi::controllerOptions(bench, a.frames > 0 ? a.frames : bench.inspectionFrames);
   // The candidates against the reference's distance before a capture, not after it.
   lfi::calib::checkDisplayDistanceCandidates(capture->geometry(), candidates);
   lfi::Controller controller(*capture, *display, *camera, options);
   ProgressBar bar;
-  const lfi::LightField reference = controller.captureReference([&](const char* step, double f) {
+  const auto progress = [&](const std::string& step, double f) {
     if (!quiet) bar(step, f);
-  });
+  };
+  const lfi::LightField reference = controller.captureReference([&](const char* step, double f) { progress(step, f); });
   if (captures) lfi::writeLightFieldExr(referenceFile, reference, overwrite);
-  // One drive scale for every candidate: the brightness compares the display's position, not the fields' peaks.
-  const double white = lfi::Controller::defaultWhite(reference);
-  size_t done = 0;
-  const size_t images = candidates.size() + 3;  // and two with the display dark, and the brightest again
-  lfi::calib::DisplayDistanceScan scan;
+  lfi::DistanceScanRun run;
   try {
-    scan = lfi::calib::calibrateDisplayDistance(
-        reference,
-        [&](const lfi::LightField& shown) {
-          if (!quiet) bar(fmt::format("image {} of {}", done + 1, images), static_cast<double>(done) / images);
-          ++done;
-          controller.emit(shown, white);
-          return controller.inspect();
-        },
-        candidates, roi, 1 / std::sqrt(12.0));  // a digital number's quantisation (alike frames keep it)
+    run = lfi::scanDisplayDistance(controller, reference, candidates, roi, progress);
   } catch (const lfi::Error& e) {
     if (!captures) throw;
     throw lfi::Error(e.code(), fmt::format("{} (the captured reference is kept: --light-field {} scans again "
                                            "without capturing)",
                                            e.what(), referenceFile.string()));
   }
-  if (!quiet) bar("scan", 1);
   bar.finish();
   // The table first: should the file fail to be written, the scan is not lost.
-  fmt::print("with the display dark: {:.6g} (noise of a mean {:.2g})\n", scan.dark, scan.noise);
-  for (size_t i = 0; i < scan.candidates_mm.size(); ++i)
-    fmt::print("{:+8.3f} mm  {:.6g}\n", scan.candidates_mm[i], scan.brightness[i]);
-  fmt::print("estimate {:+.3f} mm (the display {:.3f} mm {} the part than the reference's {} mm)\n", scan.estimate_mm,
-             std::abs(scan.estimate_mm), scan.estimate_mm >= 0 ? "further from" : "nearer to",
-             reference.geometry().distance_mm);
-  const lfi::CameraInfo info = camera->info();
-  nlohmann::ordered_json result;
-  result["format"] = "lfi-display-distance-scan";
-  result["version"] = 1;
-  result["units"] = "mm; brightness in the camera's digital numbers";
-  result["convention"] =
-      "epsilon > 0: the display is further from the part than the reference light field's distance_mm; the "
-      "estimate is the centre of the brightness peak, half-way between where it falls below `level` on either "
-      "side (docs/calibration.md)";
-  result["bench"] = fs::absolute(a.bench).lexically_normal().string();
-  result["reference"] = {{"source", capture->description()},
-                         {"file", fs::absolute(referenceFile).string()},
-                         {"distance_mm", reference.geometry().distance_mm}};
-  result["camera"] = {{"uri", devices.cameraUri.text()},
-                      {"vendor", info.vendor},
-                      {"model", info.model},
-                      {"serial", info.serial},
-                      {"exposure_us", settings.exposure_us},
-                      {"gain", settings.gain},
-                      {"pixel_format", lfi::toString(settings.pixelFormat)},
-                      {"binning", settings.binning},
-                      {"frames", options.frames},
-                      {"settle_ms", bench.settle_ms}};
-  result["display"] = {{"uri", devices.displayUri.text()}, {"white", white}};
-  result["roi_px"] = roiBox.empty() ? nlohmann::ordered_json(nullptr) : nlohmann::ordered_json(roiBox);
-  result["dark"] = scan.dark;
-  result["noise"] = scan.noise;
-  result["dark_noise"] = scan.darkNoise;
-  result["candidates_mm"] = scan.candidates_mm;
-  result["brightness"] = scan.brightness;
-  result["level"] = scan.level;
-  result["estimate_mm"] = scan.estimate_mm;
-  result["peak_width_mm"] = scan.width_mm;
-  // Device strings and paths need not be UTF-8: replace what is not.
-  lfi::writeFileAtomically(out, overwrite,
-                           result.dump(2, ' ', false, nlohmann::ordered_json::error_handler_t::replace) + "\n");
+  printScan(run.scan, reference.geometry().distance_mm);
+  const lfi::DistanceScanSource source{.benchFile = a.bench,
+                                       .capture = capture->description(),
+                                       .referenceFile = referenceFile,
+                                       .referenceDistance_mm = reference.geometry().distance_mm,
+                                       .cameraUri = devices.cameraUri,
+                                       .displayUri = devices.displayUri,
+                                       .camera = camera->info(),
+                                       .cameraSettings = camera->settings(),
+                                       .frames = options.frames,
+                                       .settle_ms = bench.settle_ms,
+                                       .roi_px = a.roiBox};
+  lfi::writeFileAtomically(out, overwrite, lfi::distanceScanRecord(source, run));
   fmt::print("{}\n", out.string());
 }
 
