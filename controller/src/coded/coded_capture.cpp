@@ -138,6 +138,173 @@ double linkedPercentile(const cv::Mat& image, const calib::PanelLinks& links, co
   return *nth;
 }
 
+// One coded capture through a bench, in its steps: white and black, rounds of
+// patterns until the light is found, the reference panel refined.
+class CodedRun {
+ public:
+  CodedRun(BenchProbe& bench, const CodedCaptureSettings& settings, CodedCaptureReport& report,
+           const std::function<void(double)>& progress)
+      : bench_(bench),
+        settings_(settings),
+        report_(report),
+        progress_(progress),
+        display_(bench.display()),
+        optics_(display_),
+        panelSize_(display_.panelWidth_px, display_.panelHeight_px),
+        set_(calib::grayCodePatterns(panelSize_.width, panelSize_.height)),
+        // (For the progress: every round and every refinement.)
+        mostFrames_(2 + settings.rounds * (set_.layout.patternCount() + 1) + 1 + settings.iterations) {
+    report_ = {};
+    report_.panelWidth = panelSize_.width;
+    report_.panelHeight = panelSize_.height;
+  }
+
+  // The reference panel's weights (CV_32FC1, the panel's size).
+  cv::Mat measure() {
+    whiteAndBlack();
+    const calib::PanelLinks links = findLight();
+    report_.patternFrames = taken_;
+    const cv::Mat best = refine(links);
+    report_.refineFrames = taken_ - report_.patternFrames;
+    return best;
+  }
+
+  const DisplayInfo& display() const { return display_; }
+  const DisplayOptics& optics() const { return optics_; }
+
+ private:
+  cv::Mat take(const cv::Mat& levels, const char* what) {
+    if (progress_) progress_(std::min(1.0, static_cast<double>(taken_) / mostFrames_));
+    try {
+      cv::Mat image = bench_.take(levels);
+      ++taken_;
+      return image;
+    } catch (const Error& e) {
+      fail(e.code(), "coded capture: frame {} ({}) of display '{}': {}", taken_ + 1, what, display_.deviceId, e.what());
+    }
+  }
+
+  // White and black first: the refusals that need no pattern come before the patterns' time.
+  void whiteAndBlack() {
+    const double fullScale = bench_.cameraFullScale_dn();
+    const double dnPer8Bit = fullScale / 255;
+    decode_.secondShare = settings_.secondShare;
+    decode_.minLit_dn = std::max(1, static_cast<int>(std::lround(decode_.minLit_dn * dnPer8Bit)));
+    decode_.minContrast_dn = std::max(1, static_cast<int>(std::lround(decode_.minContrast_dn * dnPer8Bit)));
+    white_ = take(set_.white, "all white");
+    black_ = take(set_.black, "all black");
+    const cv::Mat range = white_ - black_;
+    lit_ = range >= decode_.minLit_dn;
+    const int litPixels = cv::countNonZero(lit_);
+    if (litPixels == 0)
+      fail(Errc::Device,
+           "coded capture: the camera sees no change between the all-white and the all-black panel of "
+           "display '{}' (none of its {} pixels by {} DN): the display is not in the camera's view, or it is dark "
+           "or covered",
+           display_.deviceId, lit_.total(), decode_.minLit_dn);
+    const int saturated = cv::countNonZero(lit_ & (white_ >= fullScale - 0.5));
+    if (saturated > kMostSaturated * litPixels)
+      fail(Errc::Device,
+           "coded capture: {} of the {} lit camera pixels are at the camera's full scale ({} DN) under "
+           "the all-white panel: lower the exposure or the gain",
+           saturated, litPixels, fullScale);
+    // The region uniformity is measured over: the camera pixels that see the panel fully.
+    region_ = lit_ & (range >= kRegionFraction * percentile(range, 0.99));
+  }
+
+  // Rounds of patterns, each with the panel pixels found so far left dark, each followed by the all-white panel
+  // less what is found (the light left), until little is left.
+  calib::PanelLinks findLight() {
+    calib::PanelLinks links(white_.size(), panelSize_);
+    const cv::Mat black = toDecodable(black_);
+    cv::Mat found = cv::Mat::zeros(panelSize_, CV_8UC1);
+    cv::Mat roundWhite = white_;
+    const double allLight = litLight(white_, black_, lit_);  // (> 0: some pixel is lit)
+    for (int round = 0; round < settings_.rounds; ++round) {
+      std::vector<cv::Mat> frames;
+      frames.reserve(set_.patterns.size());
+      for (size_t k = 0; k < set_.patterns.size(); ++k) {
+        cv::Mat levels = set_.patterns[k].clone();
+        levels.setTo(0, found);
+        frames.push_back(toDecodable(take(levels, k % 2 == 0 ? "pattern" : "inverse pattern")));
+      }
+      const calib::PanelCorrespondence c =
+          calib::decodeGrayCode(frames, toDecodable(roundWhite), black, set_.layout, decode_);
+      if (round == 0) firstRound(c);
+      report_.rounds = round + 1;
+      const int added = links.add(c, {}, settings_.minConfidence);
+      if (added == 0) break;  // (nothing more to find: the light left is as last measured)
+      found = panelWeights(links) > 0;
+      cv::Mat levels = set_.white.clone();
+      levels.setTo(0, found);
+      roundWhite = take(levels, "all white but the panel pixels found");
+      report_.lightLeft = litLight(roundWhite, black_, lit_) / allLight;
+      spdlog::info("coded capture: round {}: {} of {} lit camera pixels decoded, {:.1f} % of the light left", round + 1,
+                   added, c.lit, 100 * report_.lightLeft);
+      if (report_.lightLeft <= settings_.maxLightLeft) break;
+    }
+    return links;
+  }
+
+  // The first round's refusals: too few pixels decoded, or nothing deflected.
+  void firstRound(const calib::PanelCorrespondence& c) {
+    report_.lit = c.lit;
+    report_.decoded = c.decoded;
+    if (c.decoded < settings_.minDecoded * c.lit)
+      fail(Errc::Device,
+           "coded capture: {} of the {} camera pixels that see display '{}' decoded to a panel "
+           "pixel, fewer than min_decoded = {}: the patterns blur (focus, vibration, a frame rate the panel does "
+           "not keep up with) or the camera's pixels each see many panel pixels",
+           c.decoded, c.lit, display_.deviceId, settings_.minDecoded);
+    if (!settings_.allowUndeflected) requireDeflection(c, optics_, display_.deviceId);
+  }
+
+  // The reference panel, then its closed-loop refinement: until the target, the most steps, or a step that does
+  // not improve on the best (which is kept).
+  cv::Mat refine(const calib::PanelLinks& links) {
+    cv::Mat weights = calib::panelWeights(links);
+    cv::Mat image = take(weights, "reference panel");
+    calib::Uniformity u = calib::uniformity(image, links, region_);
+    report_.cvFirst = u.cv;
+    report_.target_dn = linkedPercentile(image, links, region_, settings_.targetPercentile);
+    spdlog::info("coded capture: reference panel: mean {:.1f} DN, cv {:.4f}; target {:.1f} DN", u.mean_dn, u.cv,
+                 report_.target_dn);
+    cv::Mat best = weights;
+    double bestCv = u.cv;
+    for (int step = 0; step < settings_.iterations && bestCv > settings_.targetCv && report_.target_dn > 0; ++step) {
+      weights = calib::refinePanelWeights(weights, links, image, region_, report_.target_dn);
+      image = take(weights, "refined reference panel");
+      u = calib::uniformity(image, links, region_);
+      spdlog::info("coded capture: refinement {}: mean {:.1f} DN, cv {:.4f}", step + 1, u.mean_dn, u.cv);
+      if (!(u.cv < bestCv)) break;
+      best = weights;
+      bestCv = u.cv;
+    }
+    report_.cvFinal = bestCv;
+    report_.converged = bestCv <= settings_.targetCv;
+    report_.panelPixelsLit = cv::countNonZero(best);
+    if (!report_.converged)
+      spdlog::warn(
+          "coded capture: the intact part's image is uniform to cv {:.4f} after {} refinements, not "
+          "the target {}",
+          bestCv, taken_ - report_.patternFrames - 1, settings_.targetCv);
+    return best;
+  }
+
+  BenchProbe& bench_;
+  const CodedCaptureSettings& settings_;
+  CodedCaptureReport& report_;
+  const std::function<void(double)>& progress_;
+  const DisplayInfo display_;
+  const DisplayOptics optics_;
+  const cv::Size panelSize_;
+  const calib::CodedPatternSet set_;
+  const int mostFrames_;
+  int taken_ = 0;
+  calib::DecodeSettings decode_;
+  cv::Mat white_, black_, lit_, region_;
+};
+
 }  // namespace
 
 LightField CodedCapture::capture(const std::function<void(double)>& progress) {
@@ -146,129 +313,10 @@ LightField CodedCapture::capture(const std::function<void(double)>& progress) {
          "coded capture: no bench to measure through (a coded: capture runs in a bench's "
          "controller, with its display and camera)");
   const auto start = std::chrono::steady_clock::now();
-  BenchProbe& bench = *bench_;
-  const DisplayInfo display = bench.display();
-  const DisplayOptics optics(display);
-  const cv::Size panelSize(display.panelWidth_px, display.panelHeight_px);
-  const calib::CodedPatternSet set = calib::grayCodePatterns(panelSize.width, panelSize.height);
-  // (For the progress: every round and every refinement.)
-  const int mostFrames = 2 + settings_.rounds * (set.layout.patternCount() + 1) + 1 + settings_.iterations;
-  report_ = {};
-  report_.panelWidth = panelSize.width;
-  report_.panelHeight = panelSize.height;
-  int taken = 0;
-  const auto take = [&](const cv::Mat& levels, const char* what) {
-    if (progress) progress(std::min(1.0, static_cast<double>(taken) / mostFrames));
-    try {
-      cv::Mat image = bench.take(levels);
-      ++taken;
-      return image;
-    } catch (const Error& e) {
-      fail(e.code(), "coded capture: frame {} ({}) of display '{}': {}", taken + 1, what, display.deviceId, e.what());
-    }
-  };
-
-  // White and black first: the refusals that need no pattern come before the patterns' time.
-  const double fullScale = bench.cameraFullScale_dn();
-  const double dnPer8Bit = fullScale / 255;
-  calib::DecodeSettings decode;
-  decode.secondShare = settings_.secondShare;
-  decode.minLit_dn = std::max(1, static_cast<int>(std::lround(decode.minLit_dn * dnPer8Bit)));
-  decode.minContrast_dn = std::max(1, static_cast<int>(std::lround(decode.minContrast_dn * dnPer8Bit)));
-  const cv::Mat whiteImage = take(set.white, "all white"), blackImage = take(set.black, "all black");
-  const cv::Mat range = whiteImage - blackImage;
-  const cv::Mat lit = range >= decode.minLit_dn;
-  const int litPixels = cv::countNonZero(lit);
-  if (litPixels == 0)
-    fail(Errc::Device,
-         "coded capture: the camera sees no change between the all-white and the all-black panel of "
-         "display '{}' (none of its {} pixels by {} DN): the display is not in the camera's view, or it is dark "
-         "or covered",
-         display.deviceId, lit.total(), decode.minLit_dn);
-  const int saturated = cv::countNonZero(lit & (whiteImage >= fullScale - 0.5));
-  if (saturated > kMostSaturated * litPixels)
-    fail(Errc::Device,
-         "coded capture: {} of the {} lit camera pixels are at the camera's full scale ({} DN) under "
-         "the all-white panel: lower the exposure or the gain",
-         saturated, litPixels, fullScale);
-
-  // The region uniformity is measured over: the camera pixels that see the panel fully.
-  const cv::Mat region = lit & (range >= kRegionFraction * percentile(range, 0.99));
-
-  // Rounds of patterns, each with the panel pixels found so far left dark, each followed by the all-white panel
-  // less what is found (the light left), until little is left.
-  calib::PanelLinks links(whiteImage.size(), panelSize);
-  const cv::Mat black = toDecodable(blackImage);
-  cv::Mat found = cv::Mat::zeros(panelSize, CV_8UC1);
-  cv::Mat roundWhite = whiteImage;
-  const double allLight = litLight(whiteImage, blackImage, lit);  // (> 0: some pixel is lit)
-  for (int round = 0; round < settings_.rounds; ++round) {
-    std::vector<cv::Mat> frames;
-    frames.reserve(set.patterns.size());
-    for (size_t k = 0; k < set.patterns.size(); ++k) {
-      cv::Mat levels = set.patterns[k].clone();
-      levels.setTo(0, found);
-      frames.push_back(toDecodable(take(levels, k % 2 == 0 ? "pattern" : "inverse pattern")));
-    }
-    const calib::PanelCorrespondence c =
-        calib::decodeGrayCode(frames, toDecodable(roundWhite), black, set.layout, decode);
-    if (round == 0) {
-      report_.lit = c.lit;
-      report_.decoded = c.decoded;
-      if (c.decoded < settings_.minDecoded * c.lit)
-        fail(Errc::Device,
-             "coded capture: {} of the {} camera pixels that see display '{}' decoded to a panel "
-             "pixel, fewer than min_decoded = {}: the patterns blur (focus, vibration, a frame rate the panel does "
-             "not keep up with) or the camera's pixels each see many panel pixels",
-             c.decoded, c.lit, display.deviceId, settings_.minDecoded);
-      if (!settings_.allowUndeflected) requireDeflection(c, optics, display.deviceId);
-    }
-    report_.rounds = round + 1;
-    const int added = links.add(c, {}, settings_.minConfidence);
-    if (added == 0) break;  // (nothing more to find: the light left is as last measured)
-    found = panelWeights(links) > 0;
-    cv::Mat levels = set.white.clone();
-    levels.setTo(0, found);
-    roundWhite = take(levels, "all white but the panel pixels found");
-    report_.lightLeft = litLight(roundWhite, blackImage, lit) / allLight;
-    spdlog::info("coded capture: round {}: {} of {} lit camera pixels decoded, {:.1f} % of the light left", round + 1,
-                 added, c.lit, 100 * report_.lightLeft);
-    if (report_.lightLeft <= settings_.maxLightLeft) break;
-  }
-  report_.patternFrames = taken;
-
-  // The reference panel, then its closed-loop refinement: until the target, the most steps, or a step that does
-  // not improve on the best (which is kept).
-  cv::Mat weights = calib::panelWeights(links);
-  cv::Mat image = take(weights, "reference panel");
-  calib::Uniformity u = calib::uniformity(image, links, region);
-  report_.cvFirst = u.cv;
-  report_.target_dn = linkedPercentile(image, links, region, settings_.targetPercentile);
-  spdlog::info("coded capture: reference panel: mean {:.1f} DN, cv {:.4f}; target {:.1f} DN", u.mean_dn, u.cv,
-               report_.target_dn);
-  cv::Mat best = weights;
-  double bestCv = u.cv;
-  for (int step = 0; step < settings_.iterations && bestCv > settings_.targetCv && report_.target_dn > 0; ++step) {
-    weights = calib::refinePanelWeights(weights, links, image, region, report_.target_dn);
-    image = take(weights, "refined reference panel");
-    u = calib::uniformity(image, links, region);
-    spdlog::info("coded capture: refinement {}: mean {:.1f} DN, cv {:.4f}", step + 1, u.mean_dn, u.cv);
-    if (!(u.cv < bestCv)) break;
-    best = weights;
-    bestCv = u.cv;
-  }
-  report_.refineFrames = taken - report_.patternFrames;
-  report_.cvFinal = bestCv;
-  report_.converged = bestCv <= settings_.targetCv;
-  report_.panelPixelsLit = cv::countNonZero(best);
-  if (!report_.converged)
-    spdlog::warn(
-        "coded capture: the intact part's image is uniform to cv {:.4f} after {} refinements, not "
-        "the target {}",
-        bestCv, report_.refineFrames - 1, settings_.targetCv);
-  panel_ = best;
-  LightField lightField =
-      decodePanelImage(panelFromLevels(best, display), optics, codedLightFieldGeometry(display, distance_mm_));
+  CodedRun run(*bench_, settings_, report_, progress);
+  panel_ = run.measure();
+  LightField lightField = decodePanelImage(panelFromLevels(panel_, run.display()), run.optics(),
+                                           codedLightFieldGeometry(run.display(), distance_mm_));
   report_.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   if (progress) progress(1);
   return lightField;
