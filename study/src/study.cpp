@@ -125,181 +125,218 @@ auto namingTheStep(const std::string& step, Step run) {
   }
 }
 
-nlohmann::ordered_json runStudy(const Bench& bench, const fs::path& outDir, const StudyOptions& options) {
+namespace {
+
+// The output folder before any work: an earlier study's files are refused
+// (any of them: an interrupted run leaves some without study.json) or, with
+// overwrite, removed first, so that a run that fails leaves no study.json of
+// other inputs beside its own files; both folders must take files.
+void prepareOutput(const fs::path& outDir, const StudyOptions& options) {
   const Overwrite overwrite = options.overwrite ? Overwrite::Allow : Overwrite::Refuse;
-  const std::vector<SweepVariant> sweep = sweepVariants(
-      bench, options.sweep ? *options.sweep
-                           : (options.quality == Quality::Quick ? std::vector<SweepPoint>{} : defaultSweep()));
-  const std::vector<LimitPoint> limits =
-      options.limits ? *options.limits
-                     : (options.quality == Quality::Quick ? std::vector<LimitPoint>{} : defaultLimits());
-  const std::vector<SceneSpec> limitSpecs = limitScenes(bench, limits);  // (checked before the work)
-  // Any of the study's files (an interrupted run leaves some without study.json) stops it before the work.
   refuseExisting({outDir / "study.json", outDir / "report.html", outDir / "lightfield.exr"}, overwrite, "study");
   if (std::error_code ec;
       !options.overwrite && fs::is_directory(outDir / "images", ec) && !fs::is_empty(outDir / "images", ec))
     fail(Errc::Exists, "'{}' already holds a study's images; use --force to replace them", outDir.string());
-  // Both folders must take files before the work, not after it (they may have been there, read-only).
   requireOutputFolder(outDir, "study", "its results");
   requireOutputFolder(outDir / "images", "study", "its images");
-  // Replacing an earlier study: its results go first, so that a run that fails
-  // leaves no study.json of other inputs beside this run's files.
   if (options.overwrite)
     for (const fs::path& file : {outDir / "study.json", outDir / "report.html"})
       if (std::error_code ec; !fs::remove(resolvedTarget(file), ec) && ec)
         fail(Errc::Io, "cannot remove the earlier study's '{}': {}", file.string(), ec.message());
+}
 
-  const QualitySettings q = settingsFor(options.quality);
-  const sim::TelecentricCamera camera = binnedCamera(bench, q.binning);
-  const auto specs = sceneSpecs(bench);
+// One study run, its steps in the order runStudy takes them.
+class StudyRun {
+ public:
+  StudyRun(const Bench& bench, const fs::path& outDir, const StudyOptions& options)
+      : bench_(bench),
+        outDir_(outDir),
+        options_(options),
+        overwrite_(options.overwrite ? Overwrite::Allow : Overwrite::Refuse),
+        sweep_(sweepVariants(
+            bench, options.sweep ? *options.sweep
+                                 : (options.quality == Quality::Quick ? std::vector<SweepPoint>{} : defaultSweep()))),
+        limits_(options.limits ? *options.limits
+                               : (options.quality == Quality::Quick ? std::vector<LimitPoint>{} : defaultLimits())),
+        limitSpecs_(limitScenes(bench, limits_)),  // (checked before the work)
+        q_(settingsFor(options.quality)),
+        // The sweep runs the inverse schlieren setup only, at the quick camera
+        // resolution, so that its many variants fit the time budget; its light
+        // fields are captured with a quarter of the study's samples (which angular
+        // pixels a capture finds lit decides which lens regions its display
+        // lights: docs/study.md, "The reference's drive").
+        sweepQuality_([&] {
+          QualitySettings s = settingsFor(Quality::Quick);
+          s.captureSamples = std::max(s.captureSamples, q_.captureSamples / 4);
+          return s;
+        }()),
+        camera_(binnedCamera(bench, q_.binning)),
+        sweepCamera_(binnedCamera(bench, sweepQuality_.binning)),  // (and the limits')
+        specs_(sceneSpecs(bench)),
+        // The display classes run with the sweep, at its camera.
+        classCases_(sweep_.empty() ? std::vector<DisplayClass>{} : displayClasses(bench)),
+        progress_(options, progressUnits()) {}
 
-  // The sweep runs the inverse schlieren setup only, at the quick camera
-  // resolution, so that its many variants fit the time budget; its light
-  // fields are captured with a quarter of the study's samples (which angular
-  // pixels a capture finds lit decides which lens regions its display
-  // lights: docs/study.md, "The reference's drive").
-  const QualitySettings sweepQuality = [&] {
-    QualitySettings s = settingsFor(Quality::Quick);
-    s.captureSamples = std::max(s.captureSamples, q.captureSamples / 4);
-    return s;
-  }();
-  const double rendersPerSetup = static_cast<double>(specs.size());
-  // The display classes run with the sweep, at its camera.
-  const std::vector<DisplayClass> classCases = sweep.empty() ? std::vector<DisplayClass>{} : displayClasses(bench);
-  constexpr int kMostClassSamples = 1024;
-  auto classSamples = [&](const DisplayClass& c) {
-    return std::min(kMostClassSamples, static_cast<int>(std::ceil(sweepQuality.samplesPerPixel / c.openShare)));
-  };
+  nlohmann::ordered_json operator()() {
+    prepareOutput(outDir_, options_);
+    captureAndDescribe();
+    evaluateSetups();
+    // The setups' results are kept before the longer runs (written again after each); "complete" says which.
+    writeResults(overwrite_, sweep_.empty() && limits_.empty());
+    if (!limits_.empty()) {
+      detectionLimits();
+      writeResults(Overwrite::Allow, sweep_.empty());  // (this run's own, written above)
+    }
+    if (!sweep_.empty()) {
+      displaySweep();
+      displayClassesAtTheBenchsPanel();
+      writeResults(Overwrite::Allow, true);
+    }
+    return study_;
+  }
+
+ private:
+  static constexpr int kMostClassSamples = 1024;
   // Progress units: one full-quality render each; the sweep's renders are
   // smaller (quick camera) and count a tenth, in proportion to their samples.
-  constexpr double kSweepRender = 0.1;
-  const double limitRender = kSweepRender * q.samplesPerPixel / sweepQuality.samplesPerPixel;
-  double classUnits = 0;
-  for (const DisplayClass& c : classCases)
-    classUnits += rendersPerSetup * kSweepRender * classSamples(c) / sweepQuality.samplesPerPixel;
-  Progress progress(options, 4 + kSetups.size() * 2 * rendersPerSetup +
-                                 kSetups.size() * 2 * static_cast<double>(limitSpecs.size()) * limitRender +
-                                 static_cast<double>(sweep.size()) * (0.25 + 2 * rendersPerSetup * kSweepRender) +
-                                 classUnits);
+  static constexpr double kSweepRender = 0.1;
 
-  const LightField captured = captureLightField(bench, bench.lightFieldGeometry(), q.captureSamples, options.seed,
-                                                options.threads, progress.step("light field capture", 4));
-  writeLightFieldExr(outDir / "lightfield.exr", captured, overwrite);
-  const auto lightField = std::make_shared<const LightField>(bench.displayed(captured));
-  std::vector<Illumination> lights;  // per setup (the display's panel encoded once)
-  for (const std::string& setup : kSetups) lights.push_back(setupLight(bench, setup, lightField));
+  int classSamples(const DisplayClass& c) const {
+    return std::min(kMostClassSamples, static_cast<int>(std::ceil(sweepQuality_.samplesPerPixel / c.openShare)));
+  }
+  double limitRender() const { return kSweepRender * q_.samplesPerPixel / sweepQuality_.samplesPerPixel; }
 
-  nlohmann::ordered_json study;
-  study["format"] = "lfi-study";
-  study["version"] = 1;
-  study["units"] = "lengths mm, angles rad; images and noise in the camera's digital numbers (DN)";
-  study["setups"] = kSetups;
-  study["quality"] = options.quality == Quality::Quick  ? "quick"
-                     : options.quality == Quality::High ? "high"
-                                                        : "default";
-  study["provenance"] = {{"bench", bench.source}, {"seed", options.seed}};  // (results do not depend on threads)
-  study["camera"] = {{"width", camera.width},
-                     {"height", camera.height},
-                     {"object_pixel_mm", camera.objectPixel_mm()},
-                     {"acceptance_half_angle_rad", camera.acceptanceHalfAngle_rad()},
-                     {"samples_per_pixel", q.samplesPerPixel},
-                     {"bit_depth", bench.sensorModel().bitDepth}};
-  study["light_field"] = {{"spatial", lightField->geometry().spatialX},
-                          {"angular", lightField->geometry().angular},
-                          {"pixel_pitch_mm", lightField->geometry().pixelPitch_mm},
-                          {"distance_mm", lightField->geometry().distance_mm},
-                          {"capture_samples_per_pixel", q.captureSamples},
-                          {"capture_half_angle_rad", bench.inverseSchlieren.captureHalfAngle_rad},
-                          {"drive", driveJson(bench)}};
-  study["criterion"] = criterionJson();
-  const DetectionSettings blind = blindSettings(bench, camera);
-  study["blind_detector"] = blindDetectorJson(blind, camera);
+  double progressUnits() const {
+    const double rendersPerSetup = static_cast<double>(specs_.size());
+    double classUnits = 0;
+    for (const DisplayClass& c : classCases_)
+      classUnits += rendersPerSetup * kSweepRender * classSamples(c) / sweepQuality_.samplesPerPixel;
+    return 4 + kSetups.size() * 2 * rendersPerSetup +
+           kSetups.size() * 2 * static_cast<double>(limitSpecs_.size()) * limitRender() +
+           static_cast<double>(sweep_.size()) * (0.25 + 2 * rendersPerSetup * kSweepRender) + classUnits;
+  }
 
-  sim::RenderOptions ro;
-  ro.samplesPerPixel = q.samplesPerPixel;
-  ro.threads = options.threads;
-  const fs::path imagesDir = outDir / "images";
-  const GroundTruth truth = traceGroundTruth(bench, specs, camera);
-  for (size_t si = 0; si < kSetups.size(); ++si) {
-    const Evaluation e = namingTheStep(fmt::format("setup '{}' of '{}'", kSetups[si], bench.source), [&] {
-      return evaluate(bench, lights[si], specs, truth, setupCamera(bench, camera, kSetups[si]), bench.sensorModel(), ro,
-                      options.seed * 1000 + si * 100, progress, 1.0, true, &imagesDir, overwrite, &blind);
-    });
-    study["noise"][kSetups[si]] = e.noise;
-    study["intact_uniformity"][kSetups[si]] = uniformityJson(e.intactUniformity);
-    for (const auto& [scene, result] : e.scenes.items()) {
-      auto& out = study["scenes"][scene];
-      if (!out.contains("defects")) out["defects"] = nlohmann::ordered_json::object();
-      for (const auto& [defect, cell] : result["defects"].items()) out["defects"][defect][kSetups[si]] = cell;
-      out["false_positives"][kSetups[si]] = result["false_positives"];
-      out["secondary_regions"][kSetups[si]] = result["secondary_regions"];
-      out["blind"][kSetups[si]] = result["blind"];
+  sim::RenderOptions renderOptions(int samplesPerPixel) const {
+    sim::RenderOptions ro;
+    ro.samplesPerPixel = samplesPerPixel;
+    ro.threads = options_.threads;
+    return ro;
+  }
+
+  void writeResults(Overwrite mode, bool complete) {
+    study_["complete"] = complete;
+    writeReport(outDir_, mode, study_);
+  }
+
+  // The reference light field (kept as lightfield.exr), each setup's light, and what the study is.
+  void captureAndDescribe() {
+    const LightField captured = captureLightField(bench_, bench_.lightFieldGeometry(), q_.captureSamples, options_.seed,
+                                                  options_.threads, progress_.step("light field capture", 4));
+    writeLightFieldExr(outDir_ / "lightfield.exr", captured, overwrite_);
+    lightField_ = std::make_shared<const LightField>(bench_.displayed(captured));
+    for (const std::string& setup : kSetups) lights_.push_back(setupLight(bench_, setup, lightField_));
+
+    study_["format"] = "lfi-study";
+    study_["version"] = 1;
+    study_["units"] = "lengths mm, angles rad; images and noise in the camera's digital numbers (DN)";
+    study_["setups"] = kSetups;
+    study_["quality"] = options_.quality == Quality::Quick  ? "quick"
+                        : options_.quality == Quality::High ? "high"
+                                                            : "default";
+    study_["provenance"] = {{"bench", bench_.source}, {"seed", options_.seed}};  // (results do not depend on threads)
+    study_["camera"] = {{"width", camera_.width},
+                        {"height", camera_.height},
+                        {"object_pixel_mm", camera_.objectPixel_mm()},
+                        {"acceptance_half_angle_rad", camera_.acceptanceHalfAngle_rad()},
+                        {"samples_per_pixel", q_.samplesPerPixel},
+                        {"bit_depth", bench_.sensorModel().bitDepth}};
+    study_["light_field"] = {{"spatial", lightField_->geometry().spatialX},
+                             {"angular", lightField_->geometry().angular},
+                             {"pixel_pitch_mm", lightField_->geometry().pixelPitch_mm},
+                             {"distance_mm", lightField_->geometry().distance_mm},
+                             {"capture_samples_per_pixel", q_.captureSamples},
+                             {"capture_half_angle_rad", bench_.inverseSchlieren.captureHalfAngle_rad},
+                             {"drive", driveJson(bench_)}};
+    study_["criterion"] = criterionJson();
+    blind_ = blindSettings(bench_, camera_);
+    study_["blind_detector"] = blindDetectorJson(blind_, camera_);
+  }
+
+  // Every scene in every setup at the study's quality, images kept.
+  void evaluateSetups() {
+    const sim::RenderOptions ro = renderOptions(q_.samplesPerPixel);
+    const fs::path imagesDir = outDir_ / "images";
+    truth_ = traceGroundTruth(bench_, specs_, camera_);
+    for (size_t si = 0; si < kSetups.size(); ++si) {
+      const Evaluation e = namingTheStep(fmt::format("setup '{}' of '{}'", kSetups[si], bench_.source), [&] {
+        return evaluate(bench_, lights_[si], specs_, truth_, setupCamera(bench_, camera_, kSetups[si]),
+                        bench_.sensorModel(), ro, options_.seed * 1000 + si * 100, progress_, 1.0, true, &imagesDir,
+                        overwrite_, &blind_);
+      });
+      study_["noise"][kSetups[si]] = e.noise;
+      study_["intact_uniformity"][kSetups[si]] = uniformityJson(e.intactUniformity);
+      for (const auto& [scene, result] : e.scenes.items()) {
+        auto& out = study_["scenes"][scene];
+        if (!out.contains("defects")) out["defects"] = nlohmann::ordered_json::object();
+        for (const auto& [defect, cell] : result["defects"].items()) out["defects"][defect][kSetups[si]] = cell;
+        out["false_positives"][kSetups[si]] = result["false_positives"];
+        out["secondary_regions"][kSetups[si]] = result["secondary_regions"];
+        out["blind"][kSetups[si]] = result["blind"];
+      }
     }
   }
 
-  // The setups' results are kept before the longer runs (written again after each); "complete" says which.
-  auto writeResults = [&](Overwrite mode, bool complete) {
-    study["complete"] = complete;
-    writeReport(outDir, mode, study);
-  };
-  writeResults(overwrite, sweep.empty() && limits.empty());
-  const sim::TelecentricCamera sweepCamera = binnedCamera(bench, sweepQuality.binning);  // (and the limits')
-  if (!limits.empty()) {
-    // The detection limits: each kind of defect at a ladder of sizes in every
-    // setup, at the sweep's camera with the study's samples, every scene
-    // rendered twice (the Monte Carlo noise out of the CNR).
-    const GroundTruth limitTruth = traceGroundTruth(bench, limitSpecs, sweepCamera);
-    sim::RenderOptions lro;
-    lro.samplesPerPixel = q.samplesPerPixel;
-    lro.threads = options.threads;
-    std::vector<std::vector<double>> cnr(limits.size(), std::vector<double>(kSetups.size()));
+  // The detection limits: each kind of defect at a ladder of sizes in every
+  // setup, at the sweep's camera with the study's samples, every scene
+  // rendered twice (the Monte Carlo noise out of the CNR).
+  void detectionLimits() {
+    const GroundTruth limitTruth = traceGroundTruth(bench_, limitSpecs_, sweepCamera_);
+    const sim::RenderOptions lro = renderOptions(q_.samplesPerPixel);
+    std::vector<std::vector<double>> cnr(limits_.size(), std::vector<double>(kSetups.size()));
     for (size_t si = 0; si < kSetups.size(); ++si) {
       const Evaluation e = namingTheStep(fmt::format("detection limits, setup '{}'", kSetups[si]), [&] {
-        return evaluate(bench, lights[si], limitSpecs, limitTruth, setupCamera(bench, sweepCamera, kSetups[si]),
-                        bench.sensorModel(), lro, options.seed * 1000 + 500 + si, progress, limitRender, true, nullptr,
-                        overwrite);
+        return evaluate(bench_, lights_[si], limitSpecs_, limitTruth, setupCamera(bench_, sweepCamera_, kSetups[si]),
+                        bench_.sensorModel(), lro, options_.seed * 1000 + 500 + si, progress_, limitRender(), true,
+                        nullptr, overwrite_);
       });
-      for (size_t i = 0; i < limits.size(); ++i)
-        cnr[i][si] = e.scenes[limitSpecs[i + 1].name]["defects"].begin().value()["cnr"].get<double>();
+      for (size_t i = 0; i < limits_.size(); ++i)
+        cnr[i][si] = e.scenes[limitSpecs_[i + 1].name]["defects"].begin().value()["cnr"].get<double>();
     }
-    auto& out = study["detection_limits"];
-    out["camera"] = {{"width", sweepCamera.width},
-                     {"height", sweepCamera.height},
-                     {"object_pixel_mm", sweepCamera.objectPixel_mm()},
+    auto& out = study_["detection_limits"];
+    out["camera"] = {{"width", sweepCamera_.width},
+                     {"height", sweepCamera_.height},
+                     {"object_pixel_mm", sweepCamera_.objectPixel_mm()},
                      {"samples_per_pixel", lro.samplesPerPixel},
                      {"renderings", 2}};
-    out["camera_noise"] = {{"full_well_e", bench.camera.fullWell_e},
-                           {"read_noise_e", bench.camera.readNoise_e},
-                           {"bit_depth", bench.camera.bitDepth},
-                           {"exposure_fill", bench.camera.exposureFill},
+    out["camera_noise"] = {{"full_well_e", bench_.camera.fullWell_e},
+                           {"read_noise_e", bench_.camera.readNoise_e},
+                           {"bit_depth", bench_.camera.bitDepth},
+                           {"exposure_fill", bench_.camera.exposureFill},
                            {"frames_averaged", 1}};
-    out["kinds"] = limitCurves(limits, kSetups, cnr);
-    writeResults(Overwrite::Allow, sweep.empty());  // (this run's own, written above)
+    out["kinds"] = limitCurves(limits_, kSetups, cnr);
   }
-  if (!sweep.empty()) {
-    // How good must the display be? Each variant captures its own light field
-    // (only as large as the lens's footprint on the display plane needs) and
-    // renders the inverse schlieren setup with both lookups.
+
+  // How good must the display be? Each variant captures its own light field
+  // (only as large as the lens's footprint on the display plane needs) and
+  // renders the inverse schlieren setup with both lookups.
+  void displaySweep() {
     // The quick quality's camera is the sweep's: its ground truth is traced already.
-    const GroundTruth sweepTruth =
-        sweepQuality.binning == q.binning ? truth : traceGroundTruth(bench, specs, sweepCamera);
-    sim::RenderOptions sro;
-    sro.samplesPerPixel = sweepQuality.samplesPerPixel;
-    sro.threads = options.threads;
-    const LightFieldGeometry reference = bench.lightFieldGeometry();
-    auto& out = study["sweep"];
+    sweepTruth_ = sweepQuality_.binning == q_.binning ? truth_ : traceGroundTruth(bench_, specs_, sweepCamera_);
+    const sim::RenderOptions sro = renderOptions(sweepQuality_.samplesPerPixel);
+    const LightFieldGeometry reference = bench_.lightFieldGeometry();
+    auto& out = study_["sweep"];
     out["setup"] = "inverse_schlieren";
     out["camera"] = {
-        {"width", sweepCamera.width}, {"height", sweepCamera.height}, {"samples_per_pixel", sro.samplesPerPixel}};
-    out["capture_samples_per_pixel"] = sweepQuality.captureSamples;
+        {"width", sweepCamera_.width}, {"height", sweepCamera_.height}, {"samples_per_pixel", sro.samplesPerPixel}};
+    out["capture_samples_per_pixel"] = sweepQuality_.captureSamples;
     out["reference"] = {{"angular", reference.angular},
                         {"element_mm", reference.elementPitch_mm()},
                         {"distance_mm", reference.distance_mm}};
-    for (const auto& [point, g, displayError] : sweep) {
+    for (const auto& [point, g, displayError] : sweep_) {
       const std::string label = fmt::format("sweep {}={}", point.series, point.value);
       const auto lf = std::make_shared<const LightField>(
-          bench.displayed(captureLightField(bench, g, sweepQuality.captureSamples, options.seed, options.threads,
-                                            progress.step(label + ": capture", 0.25))));
+          bench_.displayed(captureLightField(bench_, g, sweepQuality_.captureSamples, options_.seed, options_.threads,
+                                             progress_.step(label + ": capture", 0.25))));
       nlohmann::ordered_json entry = {{"series", point.series}, {"value", point.value},
                                       {"angular", g.angular},   {"element_mm", g.elementPitch_mm()},
                                       {"spatial", g.spatialX},  {"display_error_mm", displayError}};
@@ -307,9 +344,9 @@ nlohmann::ordered_json runStudy(const Bench& bench, const fs::path& outDir, cons
           {"nearest", LightFieldLookup::Nearest}, {"interpolated", LightFieldLookup::Interpolated}};
       for (const auto& [name, lookup] : lookups) {
         const Evaluation e = namingTheStep(fmt::format("{}, {} lookup", label, name), [&] {
-          return evaluate(bench, Illumination{"inverse_schlieren", lf, lookup, displayError}, specs, sweepTruth,
-                          sweepCamera, bench.sensorModel(), sro, options.seed * 1000 + 777, progress, kSweepRender,
-                          false, nullptr, overwrite);
+          return evaluate(bench_, Illumination{"inverse_schlieren", lf, lookup, displayError}, specs_, sweepTruth_,
+                          sweepCamera_, bench_.sensorModel(), sro, options_.seed * 1000 + 777, progress_, kSweepRender,
+                          false, nullptr, overwrite_);
         });
         entry["cnr"][name] = cnrByDefect(e);
         entry["false_positives"][name] = e.scenes["intact"]["false_positives"];
@@ -317,23 +354,26 @@ nlohmann::ordered_json runStudy(const Bench& bench, const fs::path& outDir, cons
       }
       out["points"].push_back(entry);
     }
-    study["sweep"]["answers"] = sweepAnswers(study["sweep"]);
+    study_["sweep"]["answers"] = sweepAnswers(study_["sweep"]);
+  }
 
-    // The display classes at the bench's panel, each showing the bench's light
-    // field, at the sweep's camera; a class that passes a share s of the
-    // display plane gets 1/s of the samples, so that as many reach the panel.
-    // (A new member may move the others: no reference into study is kept across it.)
-    auto& classes = study["display_classes"];
-    classes["camera"] = {{"width", sweepCamera.width}, {"height", sweepCamera.height}};
-    for (const DisplayClass& c : classCases) {
+  // The display classes at the bench's panel, each showing the bench's light
+  // field, at the sweep's camera; a class that passes a share s of the
+  // display plane gets 1/s of the samples, so that as many reach the panel.
+  // (A new member may move the others: no reference into study is kept across it.)
+  void displayClassesAtTheBenchsPanel() {
+    const sim::RenderOptions sro = renderOptions(sweepQuality_.samplesPerPixel);
+    auto& classes = study_["display_classes"];
+    classes["camera"] = {{"width", sweepCamera_.width}, {"height", sweepCamera_.height}};
+    for (const DisplayClass& c : classCases_) {
       sim::RenderOptions cro = sro;
       cro.samplesPerPixel = classSamples(c);
-      const Illumination light{"display", lightField, bench.inverseSchlieren.lookup, 0,
-                               displayPanel(bench, c.optics, *lightField)};
+      const Illumination light{"display", lightField_, bench_.inverseSchlieren.lookup, 0,
+                               displayPanel(bench_, c.optics, *lightField_)};
       const Evaluation e = namingTheStep(fmt::format("display class {}", c.name), [&] {
-        return evaluate(bench, light, specs, sweepTruth, sweepCamera, bench.sensorModel(), cro,
-                        options.seed * 1000 + 888, progress, kSweepRender * cro.samplesPerPixel / sro.samplesPerPixel,
-                        false, nullptr, overwrite);
+        return evaluate(bench_, light, specs_, sweepTruth_, sweepCamera_, bench_.sensorModel(), cro,
+                        options_.seed * 1000 + 888, progress_, kSweepRender * cro.samplesPerPixel / sro.samplesPerPixel,
+                        false, nullptr, overwrite_);
       });
       nlohmann::ordered_json entry = {{"class", c.name},
                                       {"open_share", c.openShare},
@@ -344,9 +384,31 @@ nlohmann::ordered_json runStudy(const Bench& bench, const fs::path& outDir, cons
       entry["cnr"] = cnrByDefect(e);
       classes["classes"].push_back(entry);
     }
-    writeResults(Overwrite::Allow, true);  // (this run's own, written above)
   }
-  return study;
+
+  const Bench& bench_;
+  const fs::path outDir_;
+  const StudyOptions& options_;
+  const Overwrite overwrite_;
+  const std::vector<SweepVariant> sweep_;
+  const std::vector<LimitPoint> limits_;
+  const std::vector<SceneSpec> limitSpecs_;
+  const QualitySettings q_, sweepQuality_;
+  const sim::TelecentricCamera camera_, sweepCamera_;
+  const std::vector<SceneSpec> specs_;
+  const std::vector<DisplayClass> classCases_;
+  Progress progress_;
+  std::shared_ptr<const LightField> lightField_;
+  std::vector<Illumination> lights_;  // per setup (the display's panel encoded once)
+  DetectionSettings blind_;
+  GroundTruth truth_, sweepTruth_;
+  nlohmann::ordered_json study_;
+};
+
+}  // namespace
+
+nlohmann::ordered_json runStudy(const Bench& bench, const fs::path& outDir, const StudyOptions& options) {
+  return StudyRun(bench, outDir, options)();
 }
 
 }  // namespace lfi::study
