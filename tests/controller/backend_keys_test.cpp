@@ -53,7 +53,9 @@ void checkEveryKey(const char* kind) {
     for (const UriKey& key : keys) {
       SCOPED_TRACE(key.name);
       EXPECT_FALSE(key.name.empty());
-      if (!key.unit.empty()) EXPECT_TRUE(key.name.ends_with("_" + key.unit));
+      if (!key.unit.empty()) {
+        EXPECT_TRUE(key.name.ends_with("_" + key.unit));
+      }
       const auto refused = [&](const std::string& value, std::initializer_list<std::string> parts) {
         const DeviceUri bad{.scheme = scheme, .path = kNowhere, .query = {{key.name, value}}};
         std::vector<std::string> expected{bad.text()};
@@ -75,8 +77,9 @@ void checkEveryKey(const char* kind) {
       EXPECT_TRUE(refused(numberText(below), {key.name, range}));
       EXPECT_TRUE(refused(numberText(above), {key.name, range}));
       EXPECT_TRUE(refused("x", {key.name, range}));
-      if (key.value == UriValue::Integer && key.hi > key.lo)
+      if (key.value == UriValue::Integer && key.hi > key.lo) {
         EXPECT_TRUE(refused(numberText(key.lo + 0.5), {"integer"}));
+      }
       // The quantity in another unit: named as the wrong unit, with the key it should be.
       if (!key.unit.empty()) {
         const std::string stem = key.name.substr(0, key.name.size() - key.unit.size() - 1);
