@@ -239,6 +239,88 @@ struct Membership {
   }
 };
 
+// Each decoded camera pixel's place on the display's plane, its panel point
+// within its lens, and its lens (ids in `lensIds`). Errc::Device when no ray
+// is deflected: the part is missing.
+std::vector<Pixel> decodedPixels(const calib::PanelCorrespondence& c, const DisplayInfo& info,
+                                 const calib::CameraMap& camera, cv::Size image, double minConfidence,
+                                 std::map<std::pair<long long, long long>, int>& lensIds) {
+  const DisplayOptics optics(info);
+  std::vector<Pixel> pixels;
+  int deflected = 0;
+  for (int row = 0; row < image.height; ++row)
+    for (int col = 0; col < image.width; ++col) {
+      const cv::Vec2i p = c.panel.at<cv::Vec2i>(row, col);
+      if (p[0] < 0) continue;
+      const Vec2 panel = detail::panelPixelCentre(info, p[0], p[1]);
+      const Vec2 lens = optics.apertureCentre(panel);
+      const Vec2 offset = panel - lens;
+      if (offset.length() > 2 * info.pixelPitch_mm) ++deflected;
+      const auto key = std::make_pair(std::llround(lens.x * 1e6), std::llround(lens.y * 1e6));
+      const int id = lensIds.try_emplace(key, static_cast<int>(lensIds.size())).first->second;
+      pixels.push_back({camera.displayPoint(Vec2(col, row), image), offset, lens, id,
+                        c.confidence.at<float>(row, col) >= minConfidence});
+    }
+  if (deflected <= 0.01 * static_cast<double>(pixels.size()))
+    fail(Errc::Device,
+         "part calibration: every ray the camera sees leaves display '{}' within two panel pixels of "
+         "its lens's centre: nothing deflects them, is the part missing?",
+         info.deviceId);
+  return pixels;
+}
+
+// The pixels whose rays the model takes through the part where the bench puts
+// it; Errc::Device when too few are left.
+std::vector<Pixel> throughThePart(const PartModel& part, const std::vector<Pixel>& pixels, Vec2 stated) {
+  const auto rays = traceAll(part, pixels, stated);
+  std::vector<Pixel> through;
+  for (size_t i = 0; i < pixels.size(); ++i)
+    if (rays[i]) through.push_back(pixels[i]);
+  if (through.size() < static_cast<size_t>(kMinPixels))
+    fail(Errc::Device,
+         "part calibration: {} decoded camera pixels look through the part, fewer than {}: too few "
+         "decoded pixels (is the part in the camera's view, where the bench expects it?)",
+         through.size(), kMinPixels);
+  return through;
+}
+
+// Δ's objective from the rays the offset fit traced.
+Membership membership(const std::vector<Pixel>& pixels, const OffsetFit& fit, const DisplayOpticsParams& optics) {
+  Membership m;
+  m.cells = cellsOf(optics);
+  for (size_t i = 0; i < pixels.size(); ++i) {
+    if (!fit.rays[i]) continue;
+    const PartRay& ray = *fit.rays[i];
+    const Vec2 s = slope(ray);
+    m.a.push_back(Vec2(ray.point.x, ray.point.y) + fit.lateral - ray.point.z * s);
+    m.b.push_back(-s);
+    m.lens.push_back(pixels[i].lens);
+    m.lensId.push_back(pixels[i].lensId);
+  }
+  return m;
+}
+
+// Δ's standard uncertainty: the decoded lenses resampled (`lenses` of them), Δ fitted again each time.
+double distanceSigma(const Membership& m, std::size_t lenses, double distance_mm, double step,
+                     const PartCalibrationSettings& settings) {
+  std::vector<std::vector<size_t>> byLens(lenses);
+  for (size_t i = 0; i < m.lensId.size(); ++i) byLens[static_cast<size_t>(m.lensId[i])].push_back(i);
+  std::erase_if(byLens, [](const std::vector<size_t>& v) { return v.empty(); });
+  std::mt19937_64 random(settings.seed);
+  std::uniform_int_distribution<size_t> pick(0, byLens.size() - 1);
+  double sum = 0, sum2 = 0;
+  for (int b = 0; b < settings.bootstrap; ++b) {
+    std::vector<double> weight(m.a.size(), 0.0);
+    for (size_t k = 0; k < byLens.size(); ++k)
+      for (size_t i : byLens[pick(random)]) weight[i] += 1;
+    const double d = m.minimise(distance_mm - 1, distance_mm + 1, 0.5 * step, weight);
+    sum += d;
+    sum2 += d * d;
+  }
+  const double n = settings.bootstrap;
+  return std::sqrt(std::max(0.0, (sum2 - sum * sum / n) / (n - 1)));
+}
+
 }  // namespace
 
 PartCalibration calibratePart(BenchProbe& bench, const PartModel& part, const calib::CameraMap& camera,
@@ -266,45 +348,12 @@ PartCalibration calibratePart(BenchProbe& bench, const PartModel& part, const ca
   out.lit = c.lit;
   out.decoded = c.decoded;
 
-  // Each decoded pixel's place on the display's plane and its panel point within its lens.
-  const DisplayOptics optics(info);
   const cv::Size image = view.white.size();
-  std::vector<Pixel> pixels;
   std::map<std::pair<long long, long long>, int> lensIds;
-  int deflected = 0;
-  for (int row = 0; row < image.height; ++row)
-    for (int col = 0; col < image.width; ++col) {
-      const cv::Vec2i p = c.panel.at<cv::Vec2i>(row, col);
-      if (p[0] < 0) continue;
-      const Vec2 panel = detail::panelPixelCentre(info, p[0], p[1]);
-      const Vec2 lens = optics.apertureCentre(panel);
-      const Vec2 offset = panel - lens;
-      if (offset.length() > 2 * info.pixelPitch_mm) ++deflected;
-      const auto key = std::make_pair(std::llround(lens.x * 1e6), std::llround(lens.y * 1e6));
-      const int id = lensIds.try_emplace(key, static_cast<int>(lensIds.size())).first->second;
-      pixels.push_back({camera.displayPoint(Vec2(col, row), image), offset, lens, id,
-                        c.confidence.at<float>(row, col) >= settings.minConfidence});
-    }
-  if (deflected <= 0.01 * static_cast<double>(pixels.size()))
-    fail(Errc::Device,
-         "part calibration: every ray the camera sees leaves display '{}' within two panel pixels of "
-         "its lens's centre: nothing deflects them, is the part missing?",
-         name);
-  // The pixels whose rays the model takes through the part where the bench puts it.
   const Vec2 stated =
       camera.displayPoint(statedPartCentre_px.value_or(Vec2(0.5 * (image.width - 1), 0.5 * (image.height - 1))), image);
-  {
-    const auto rays = traceAll(part, pixels, stated);
-    std::vector<Pixel> through;
-    for (size_t i = 0; i < pixels.size(); ++i)
-      if (rays[i]) through.push_back(pixels[i]);
-    pixels = std::move(through);
-  }
-  if (pixels.size() < static_cast<size_t>(kMinPixels))
-    fail(Errc::Device,
-         "part calibration: {} decoded camera pixels look through the part, fewer than {}: too few "
-         "decoded pixels (is the part in the camera's view, where the bench expects it?)",
-         pixels.size(), kMinPixels);
+  const std::vector<Pixel> pixels =
+      throughThePart(part, decodedPixels(c, info, camera, image, settings.minConfidence, lensIds), stated);
 
   // g and L from the offsets within each lens.
   const OffsetFit fit = fitOffsets(part, pixels, stated, info.optics.gap_mm, info.pixelPitch_mm, name);
@@ -324,17 +373,7 @@ PartCalibration calibratePart(BenchProbe& bench, const PartModel& part, const ca
          name, fit.rms);
 
   // Δ from which lens each ray lands in.
-  Membership m;
-  m.cells = cellsOf(info.optics);
-  for (size_t i = 0; i < pixels.size(); ++i) {
-    if (!fit.rays[i]) continue;
-    const PartRay& ray = *fit.rays[i];
-    const Vec2 s = slope(ray);
-    m.a.push_back(Vec2(ray.point.x, ray.point.y) + fit.lateral - ray.point.z * s);
-    m.b.push_back(-s);
-    m.lens.push_back(pixels[i].lens);
-    m.lensId.push_back(pixels[i].lensId);
-  }
+  const Membership m = membership(pixels, fit, info.optics);
   const double from = statedDistance_mm * (1 - settings.search), to = statedDistance_mm * (1 + settings.search);
   const double step = std::min(0.05, 0.01 * statedDistance_mm);
   const std::vector<double> ones(m.a.size(), 1.0);
@@ -353,23 +392,7 @@ PartCalibration calibratePart(BenchProbe& bench, const PartModel& part, const ca
          "lens than the one decoded: the residual is too large for the model",
          name, out.distance_mm, out.otherLens, m.a.size());
 
-  // Δ's uncertainty: the decoded lenses resampled.
-  std::vector<std::vector<size_t>> byLens(lensIds.size());
-  for (size_t i = 0; i < m.lensId.size(); ++i) byLens[static_cast<size_t>(m.lensId[i])].push_back(i);
-  std::erase_if(byLens, [](const std::vector<size_t>& v) { return v.empty(); });
-  std::mt19937_64 random(settings.seed);
-  std::uniform_int_distribution<size_t> pick(0, byLens.size() - 1);
-  double sum = 0, sum2 = 0;
-  for (int b = 0; b < settings.bootstrap; ++b) {
-    std::vector<double> weight(m.a.size(), 0.0);
-    for (size_t k = 0; k < byLens.size(); ++k)
-      for (size_t i : byLens[pick(random)]) weight[i] += 1;
-    const double d = m.minimise(out.distance_mm - 1, out.distance_mm + 1, 0.5 * step, weight);
-    sum += d;
-    sum2 += d * d;
-  }
-  const double n = settings.bootstrap;
-  out.distanceSigma_mm = std::sqrt(std::max(0.0, (sum2 - sum * sum / n) / (n - 1)));
+  out.distanceSigma_mm = distanceSigma(m, lensIds.size(), out.distance_mm, step, settings);
   out.partCentre_px = camera.cameraPoint(out.lateral_mm, image);
   out.frames = take.frames();
   if (progress) progress(1);
