@@ -85,6 +85,12 @@ void readDisplay(ConfigTable t, BenchFile& b) {
            t.file());
     b.displayOptics = readDisplayOpticsTable(optics, DisplayOpticsParams{});
     optics.finish();
+    // One place for the display's optics: the table, or a calibration file the URI names, not both.
+    if (b.displayUri.find("calibration"))
+      fail(Errc::Config,
+           "{}: the display's optics are stated twice, by [display.optics] and by the URI's calibration = '{}'; "
+           "keep one",
+           t.where("uri"), *b.displayUri.find("calibration"));
   }
   t.finish();
 }

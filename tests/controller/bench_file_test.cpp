@@ -133,6 +133,17 @@ TEST_F(BenchFileTest, SimUriPathIsPercentDecodedAndEncodedAgain) {
   EXPECT_EQ(DeviceUri::parse(uri.text(), "capture", "sim:x"), uri);
 }
 
+// The display's optics have one place too: [display.optics], or a calibration file the usb: URI names.
+TEST_F(BenchFileTest, DisplayOpticsStatedTwiceAreRefused) {
+  const std::string optics =
+      "\n[display.optics]\noptics = \"pinhole_array\"\narray_pitch_mm = 1\npinhole_diameter_mm = 0.1\ngap_mm = 3\n";
+  const std::string text = replaced(kBench, "uri = \"usb:1209:4c46/LFI-0001\"",
+                                    "uri = \"usb:1209:4c46/LFI-0001?calibration=display.toml\"" + optics);
+  EXPECT_TRUE(throwsError([&] { read(text); }, Errc::Config,
+                          {"key 'display.uri'", "stated twice", "[display.optics]", "display.toml"}));
+  EXPECT_NO_THROW(read(replaced(kBench, "uri = \"usb:1209:4c46/LFI-0001\"", "uri = \"usb:1209:4c46/LFI-0001\"" + optics)));
+}
+
 // Δ has one place in a bench file, [geometry] distance_mm: a capture URI that
 // still carries it is refused, saying where Δ lives now.
 TEST_F(BenchFileTest, ACaptureUriThatCarriesTheDistanceIsRefused) {
