@@ -169,7 +169,8 @@ void checkUriKeyDeclaration(const UriKey& key, std::string_view owner) {
 }
 
 void checkUriQuery(const DeviceUri& uri, const std::vector<UriKey>& keys, std::string_view kind) {
-  for (const auto& [name, value] : uri.query) {
+  for (const auto& entry : uri.query) {
+    const std::string& name = entry.first;  // (not a structured binding: clang 14 cannot capture one)
     const auto key = std::find_if(keys.begin(), keys.end(), [&](const UriKey& k) { return k.name == name; });
     if (key != keys.end()) {
       uriNumber(uri, *key, kind);
