@@ -141,7 +141,8 @@ TEST_F(BenchFileTest, DisplayOpticsStatedTwiceAreRefused) {
                                     "uri = \"usb:1209:4c46/LFI-0001?calibration=display.toml\"" + optics);
   EXPECT_TRUE(throwsError([&] { read(text); }, Errc::Config,
                           {"key 'display.uri'", "stated twice", "[display.optics]", "display.toml"}));
-  EXPECT_NO_THROW(read(replaced(kBench, "uri = \"usb:1209:4c46/LFI-0001\"", "uri = \"usb:1209:4c46/LFI-0001\"" + optics)));
+  EXPECT_NO_THROW(
+      read(replaced(kBench, "uri = \"usb:1209:4c46/LFI-0001\"", "uri = \"usb:1209:4c46/LFI-0001\"" + optics)));
 }
 
 // Δ has one place in a bench file, [geometry] distance_mm: a capture URI that
