@@ -3,7 +3,8 @@
 // The inverse schlieren cycle, one code path whatever the backends (docs/architecture.md):
 //
 //   1. capture  the reference light field of the intact part (LightFieldCapture)
-//   2. emit     it with the light field display (Display::show(LightField))
+//   2. emit     it with the light field display (encoded through the display's
+//               optics, encodeLightField, and shown as a panel image)
 //   3. inspect  the part through the telecentric camera (Camera): intact regions
 //               bright, defects dark
 //

@@ -10,7 +10,6 @@
 //   Display call     effect on the bench
 //   open()           panel dark (blank), backlight at brightnessMax
 //   show(panel)      panel levels = panel / 255, lit; PresentStatus::Presented, sequence + 1
-//   show(LightField) encodeLightField() through the display's optics model, then show(panel)
 //   blank()          dark (the panel keeps its image for the next show)
 //   setBrightness(l) emitted radiance = brightness · l / brightnessMax · level / 255
 //   close()          dark
