@@ -54,7 +54,7 @@ void printResult(const char* name, const Result& r) {
 }
 
 Result benchOurs(const std::string& id, int frames, double rate, int size, lfi::PixelFormat format) {
-  auto camera = lfi::openCamera("aravis:" + lfi::percentEncodeUriPart(id));
+  auto camera = lfi::openCamera(lfi::DeviceUri{.scheme = "aravis", .path = id});
   lfi::CameraSettings s;
   s.exposure_us = 2000;
   s.pixelFormat = format;

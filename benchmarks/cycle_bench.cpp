@@ -83,10 +83,10 @@ int run(int argc, char** argv) {
   spdlog::set_level(spdlog::level::warn);  // (the controller logs each step at info)
 
   sim::registerSimBackends();
-  const std::string uri = "sim:" + percentEncodeUriPart(scene);
+  const std::string uri = DeviceUri{.scheme = "sim", .path = scene}.text();
   auto camera = openCamera(uri);
   auto display = openDisplay(uri);
-  auto capture = openLightFieldCapture(captureQuery.empty() ? uri : uri + "?" + captureQuery);
+  auto capture = openLightFieldCapture(captureQuery.empty() ? uri : uri + "?" + captureQuery);  // (the user's query)
   CameraSettings settings;
   settings.pixelFormat = PixelFormat::Mono12;
   settings.trigger = TriggerMode::Software;

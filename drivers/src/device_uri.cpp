@@ -173,7 +173,10 @@ void checkUriQuery(const DeviceUri& uri, const std::vector<UriKey>& keys, std::s
     const std::string& name = entry.first;  // (not a structured binding: clang 14 cannot capture one)
     const auto key = std::find_if(keys.begin(), keys.end(), [&](const UriKey& k) { return k.name == name; });
     if (key != keys.end()) {
-      uriNumber(uri, *key, kind);
+      if (key->value != UriValue::Text)
+        uriNumber(uri, *key, kind);
+      else if (entry.second.empty())
+        fail(Errc::Config, "{} URI '{}': {} is empty", kind, uri.text(), name);
       continue;
     }
     std::vector<std::string> accepted;
@@ -193,10 +196,8 @@ void checkUriQuery(const DeviceUri& uri, const std::vector<UriKey>& keys, std::s
 std::optional<double> uriNumber(const DeviceUri& uri, const UriKey& key, std::string_view kind) {
   const std::string* text = uri.find(key.name);
   if (!text) return key.fallback;
-  if (key.value == UriValue::Text) {
-    if (text->empty()) fail(Errc::Config, "{} URI '{}': {} is empty", kind, uri.text(), key.name);
-    return std::nullopt;
-  }
+  if (key.value == UriValue::Text)
+    fail(Errc::InvalidArgument, "{} URI '{}': {} is a text key, not a number", kind, uri.text(), key.name);
   double value = 0;
   bool parsed = false;
   const char* end = text->data() + text->size();

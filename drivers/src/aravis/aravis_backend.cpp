@@ -15,7 +15,7 @@ const UriKey kPacketSize{.name = "packet_size_bytes",
 
 std::unique_ptr<Camera> openAravisFromUri(const DeviceUri& uri) {
   AravisOptions options;
-  if (const auto size = uriNumber<int>(uri, kPacketSize, "camera")) options.packetSize_bytes = *size;
+  if (const auto size = uriNumber<int>(uri, kPacketSize)) options.packetSize_bytes = *size;
   return openAravisCamera(uri.path, options);
 }
 

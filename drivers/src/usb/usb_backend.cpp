@@ -20,7 +20,7 @@ const UriKey kCalibration{.name = "calibration",
 std::unique_ptr<Display> openUsbFromUri(const DeviceUri& uri) {
   const UsbDisplaySelector selector = parseUsbDisplayPath(uri.path, uri.text());
   UsbDisplayOptions options;
-  if (const auto timeout = uriNumber<int>(uri, kTimeout, "display")) {
+  if (const auto timeout = uriNumber<int>(uri, kTimeout)) {
     options.controlTimeout = std::chrono::milliseconds(*timeout);
     options.transferTimeout = std::chrono::milliseconds(*timeout);
   }

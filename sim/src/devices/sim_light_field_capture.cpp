@@ -68,9 +68,10 @@ class SimLightFieldCapture final : public LightFieldCapture {
 
   std::string description() const override {
     const auto& g = settings_.geometry;
-    return fmt::format("sim:{} ({}x{} elements of {}x{}, pitch {} mm, Δ = {} mm, beam {} rad, {} spp)",
-                       percentEncodeUriPart(sceneFile_.string()), g.spatialX, g.spatialY, g.angular, g.angular,
-                       g.pixelPitch_mm, g.distance_mm, settings_.beamHalfAngle_rad, settings_.samplesPerPixel);
+    return fmt::format("{} ({}x{} elements of {}x{}, pitch {} mm, Δ = {} mm, beam {} rad, {} spp)",
+                       DeviceUri{.scheme = "sim", .path = sceneFile_.string()}, g.spatialX, g.spatialY, g.angular,
+                       g.angular, g.pixelPitch_mm, g.distance_mm, settings_.beamHalfAngle_rad,
+                       settings_.samplesPerPixel);
   }
 
   LightField capture(const std::function<void(double)>& progress) override {
@@ -148,13 +149,12 @@ void registerSimLightFieldCapture() {
                      "simulated lensless light field sensor (Δ: the bench's)",
       .factory = [](const DeviceUri& uri) -> std::unique_ptr<LightFieldCapture> {
         SimCaptureSettings s;
-        constexpr const char* kind = "light field capture";
-        s.geometry.spatialX = s.geometry.spatialY = *uriNumber<int>(uri, kSpatial, kind);
-        s.geometry.angular = *uriNumber<int>(uri, kAngular, kind);
-        s.geometry.pixelPitch_mm = *uriNumber(uri, kPitch, kind);
-        s.beamHalfAngle_rad = *uriNumber(uri, kBeamHalfAngle, kind);
-        s.beamDistance_mm = *uriNumber(uri, kBeamDistance, kind);
-        s.samplesPerPixel = *uriNumber<int>(uri, kSpp, kind);
+        s.geometry.spatialX = s.geometry.spatialY = *uriNumber<int>(uri, kSpatial);
+        s.geometry.angular = *uriNumber<int>(uri, kAngular);
+        s.geometry.pixelPitch_mm = *uriNumber(uri, kPitch);
+        s.beamHalfAngle_rad = *uriNumber(uri, kBeamHalfAngle);
+        s.beamDistance_mm = *uriNumber(uri, kBeamDistance);
+        s.samplesPerPixel = *uriNumber<int>(uri, kSpp);
         try {
           return openSimLightFieldCapture(uri.path, s);
         } catch (const Error& e) {  // (a setting out of range: the URI's)

@@ -98,8 +98,11 @@ void checkUriKeyDeclaration(const UriKey& key, std::string_view owner);
 // "<kind> URI '<uri>': ..." naming the key and what is accepted.
 void checkUriQuery(const DeviceUri& uri, const std::vector<UriKey>& keys, std::string_view kind);
 
-// The number `uri` gives for `key` (checked as checkUriQuery does), or the
-// key's default, or none. Throws Errc::Config as checkUriQuery.
+// The number `uri` gives for a number key (checked as checkUriQuery does), or
+// the key's default, or none. Throws Errc::Config as checkUriQuery, and
+// Errc::InvalidArgument for a text key (read those with DeviceUri::find). A
+// backend's factory runs after its registry checked the URI, so it reads its
+// keys with the default `kind`.
 std::optional<double> uriNumber(const DeviceUri& uri, const UriKey& key, std::string_view kind = "device");
 
 template <typename T>
