@@ -9,6 +9,7 @@
 #include "gige_device_process.h"
 #include "lfi/controller/bench_file.h"
 #include "lfi_process.h"
+#include "record_defects.h"
 #include "study_parts.h"
 #include "test_folder.h"
 #include "text_edit.h"
@@ -195,12 +196,8 @@ until_records() {{ i=0; while [ "$(count)" -lt "$1" ]; do i=$((i+1)); [ $i -gt 1
     ASSERT_FALSE(lines[i].is_discarded());
     EXPECT_EQ(lines[i]["status"], "inspected") << lines[i].dump();
     EXPECT_EQ(lines[i]["verdict"], parts[i].intact ? "pass" : "fail") << lines[i].dump();
-    for (const auto& [x, y] : parts[i].defects_mm) {
-      double best = 1e9;
-      for (const auto& d : lines[i]["defects"])
-        best = std::min(best, std::hypot(d["centroid_mm"][0].get<double>() - x, d["centroid_mm"][1].get<double>() - y));
-      EXPECT_LE(best, parts[i].within_mm) << lines[i].dump();
-    }
+    EXPECT_EQ(lfi::testing_support::misplacedDefects(parts[i], lfi::testing_support::centroidsOf(lines[i])), "")
+        << lines[i].dump();
   }
 }
 

@@ -6,7 +6,9 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -64,6 +66,38 @@ inline std::string studyPartScene(std::string sceneText, const StudyPart& part) 
     sceneText.replace(at, from.size(), to);
   }
   return sceneText + "\n" + part.extra + "\n";
+}
+
+// The centroids (x, y) mm of the regions a finder reported on a part.
+using Centroids = std::vector<std::pair<double, double>>;
+
+// What is wrong with `found`, the regions reported on `part`, or "" when it is the whole answer: as many regions
+// as the part has placed defects, each defect within `within_mm` of a region and each region within `within_mm`
+// of a defect, so a region beside them (a spurious one) or one missing is named. The placed defects are further
+// apart than twice `within_mm`, so that pairs them one to one. A part off as a whole (no place) has one region
+// or more anywhere; the intact part none.
+inline std::string misplacedDefects(const StudyPart& part, const Centroids& found) {
+  const auto distance = [](const std::pair<double, double>& a, const std::pair<double, double>& b) {
+    return std::hypot(a.first - b.first, a.second - b.second);
+  };
+  const auto nearest = [&](const std::pair<double, double>& p, const Centroids& among) {
+    double best = std::numeric_limits<double>::infinity();
+    for (const auto& q : among) best = std::min(best, distance(p, q));
+    return best;
+  };
+  if (part.intact) return found.empty() ? "" : fmt::format("{} regions on the intact part", found.size());
+  if (part.defects_mm.empty()) return found.empty() ? "no region on a part off as a whole" : "";
+  std::string wrong;
+  if (found.size() != part.defects_mm.size())
+    wrong += fmt::format("{} regions for {} defects; ", found.size(), part.defects_mm.size());
+  for (const auto& d : part.defects_mm)
+    if (const double r = nearest(d, found); r > part.within_mm)
+      wrong += fmt::format("the defect at ({}, {}) mm has no region within {} mm (nearest {:.3f} mm); ", d.first,
+                           d.second, part.within_mm, r);
+  for (const auto& c : found)
+    if (const double r = nearest(c, part.defects_mm); r > part.within_mm)
+      wrong += fmt::format("a region at ({:.3f}, {:.3f}) mm is {:.3f} mm from every defect; ", c.first, c.second, r);
+  return wrong;
 }
 
 }  // namespace lfi::testing_support
