@@ -16,6 +16,7 @@
 #include <nlohmann/json.hpp>
 
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -30,6 +31,7 @@ using lfi::testing_support::centroidsOf;
 using lfi::testing_support::misplacedDefects;
 using lfi::testing_support::readText;
 using lfi::testing_support::replaceAll;
+using lfi::testing_support::replaceOnce;
 using lfi::testing_support::runLfi;
 using lfi::testing_support::shellQuoted;
 
@@ -122,6 +124,40 @@ TEST_P(LfiInspectionCliEachCapture, TheIntactLensPassesAHundredTimesInARowWithFr
   EXPECT_NE(summary.find("<td>100</td><td>100</td><td>0</td><td>0</td><td>100.0 %</td>"), std::string::npos);
   EXPECT_EQ(summary.find("http-equiv=\"refresh\""), std::string::npos) << "a finished run's page stops reloading";
   EXPECT_FALSE(fs::exists(run / "images" / "part-000001.exr")) << "save_images = \"failed\" keeps no passed part";
+}
+
+// The same run at b = 3 raises false alarms, and each frame's noise is its own. The finder smooths with a
+// Gaussian of 0.5 px (smallest_defect_mm / 4 in 0.5 mm pixels), whose taps reach 2 px: smoothed pixels 5 px
+// apart share no camera pixel and no model pixel, so their noise is independent. The 49 such pixels within
+// 20 px (10 mm) of the centre, all well inside the lit lens, each exceed 3 σ with 2 Φ(-3) = 0.0027 or more
+// (σ estimated from the reference's frames only widens the tails), so a part shows a region with
+// 1 - (1 - 0.0027)^49 = 0.12 or more, and 100 parts show none with 0.88^100 = 1.8e-6 or less. Expected
+// over the whole lens (about 1870 pixels), about 5 off pixels a part. A finder that put σ too high by a
+// factor of two (b = 3 acting as 6) passes every part and fails this test.
+TEST_P(LfiInspectionCliEachCapture, AtThreeSigmaTheSameRunRaisesFalseAlarmsFromFreshNoise) {
+  std::string text = benchText_;
+  replaceOnce(text, "relative = 6", "relative = 3");
+  bench_ = folder_.write("three-sigma.toml", text);
+  capture();
+  const fs::path run = folder_ / "run";
+  const auto r = runLfi("-q run " + bench() + " --parts 100 --out " + shellQuoted(run.string()));
+  ASSERT_NE(r.status, 1) << r.output;
+  std::ifstream records(run / "records.jsonl");
+  int parts = 0, failed = 0;
+  nlohmann::json previous;
+  for (std::string line; std::getline(records, line); ++parts) {
+    const auto j = nlohmann::json::parse(line);
+    EXPECT_EQ(j["status"], "inspected");
+    if (j["verdict"] == "pass") continue;
+    ++failed;
+    // Fresh noise: a failed part's false alarms are not the last failed part's, which one frame again would
+    // be to the last bit of each region's peak contrast, a continuous quantity.
+    EXPECT_NE(j["defects"], previous) << line;
+    previous = j["defects"];
+  }
+  EXPECT_EQ(parts, 100);
+  EXPECT_GE(failed, 1) << "no false alarm in 100 parts at b = 3";
+  std::printf("[ info     ] %d of %d parts with false alarms at b = 3\n", failed, parts);
 }
 
 TEST_P(LfiInspectionCliEachCapture, EveryDefectOfTheStudyIsFoundBlindWhereItIs) {
