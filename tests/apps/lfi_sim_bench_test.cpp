@@ -93,34 +93,35 @@ wait_limit_s = 60
 
 // Each fault is injected once the run has recorded the one before and inspected a part since (so that
 // it hits a run in full flow, and never the same outage twice), at part 2, 6, 10, ... at the earliest,
-// and lasts 1 s, longer than the camera's grab timeout and the run's first back-off: the part in hand
-// must see it. The run then waits for the device with its
-// back-off and goes on. Every part is the intact one, so an image taken while the display was dark
-// would fail: none may be judged.
+// and lasts until the run has recorded the part in hand as not inspected: whatever the host's speed, the
+// part in hand sees it. The run then waits for the device with its back-off and goes on; it is stopped
+// (SIGTERM) once it has inspected a part after the tenth and reached fifty parts. Every part is the intact
+// one, so an image taken while the display was dark would fail: none may be judged.
 TEST_F(LfiSimBench, ARunOfFiftyPartsRidesOutTheCameraGoneAndTheDisplayUnpluggedFiveTimesEach) {
   const std::string lfi = shellQuoted(LFI_EXECUTABLE), bench = shellQuoted(hil_.string());
   const fs::path run = folder_ / "run", records = run / "records.jsonl";
   const std::string script = fmt::format(R"sh(set -u
 {0} -q capture {1} || exit 10
-{0} -q run {1} --parts 50 --out {2} & run=$!
+{0} -q run {1} --out {2} & run=$!
 count() {{ if [ -f {3} ]; then wc -l < {3}; else echo 0; fi; }}
 errors() {{ if [ -f {3} ]; then grep -c '"status":"error"' {3} || true; else echo 0; fi; }}
 recovered() {{ tail -n 1 {3} 2>/dev/null | grep -q '"status":"inspected"'; }}
-# Fault k (from 0) once the run is at part 2 + 4k or beyond, has recorded the k faults before, and
-# inspected a part since the last: never two faults in one outage, and all ten well within 50 parts.
+# waits (up to 120 s) until the condition holds
+until_() {{ i=0; until "$@"; do i=$((i+1)); [ $i -gt 2400 ] && exit 12; sleep 0.05; done; }}
 k=0
 for device in camera display camera display camera display camera display camera display; do
-  i=0
-  until [ "$(count)" -ge $((2 + 4 * k)) ] && [ "$(errors)" -eq $k ] && recovered; do
-    i=$((i+1)); [ $i -gt 2400 ] && exit 12; sleep 0.05
-  done
+  until_ eval '[ "$(count)" -ge $((2 + 4 * k)) ] && [ "$(errors)" -eq $k ] && recovered'
   if [ $device = camera ]; then
-    {0} -q bench-control camera off >/dev/null || exit 11; sleep 1; {0} -q bench-control camera on >/dev/null || exit 11
+    {0} -q bench-control camera off >/dev/null || exit 11
+    until_ eval '[ "$(errors)" -gt $k ]'; {0} -q bench-control camera on >/dev/null || exit 11
   else
-    {0} -q bench-control display unplug >/dev/null || exit 11; sleep 1; {0} -q bench-control display plug >/dev/null || exit 11
+    {0} -q bench-control display unplug >/dev/null || exit 11
+    until_ eval '[ "$(errors)" -gt $k ]'; {0} -q bench-control display plug >/dev/null || exit 11
   fi
   k=$((k+1))
 done
+until_ eval '[ "$(count)" -ge 50 ] && recovered'
+kill -TERM $run
 wait $run
 )sh",
                                          lfi, bench, shellQuoted(run.string()), shellQuoted(records.string()));
@@ -132,7 +133,7 @@ wait $run
     lines.push_back(nlohmann::json::parse(line, nullptr, false));
     ASSERT_FALSE(lines.back().is_discarded()) << "a torn record: " << line;
   }
-  ASSERT_EQ(lines.size(), 50u);
+  ASSERT_GE(lines.size(), 50u);
   std::vector<std::string> faults;
   for (size_t i = 0; i < lines.size(); ++i) {
     const auto& j = lines[i];
@@ -152,7 +153,9 @@ wait $run
   }
   EXPECT_EQ(faults, (std::vector<std::string>{"camera", "display", "camera", "display", "camera", "display", "camera",
                                               "display", "camera", "display"}));
-  EXPECT_NE(readText(run / "summary.html").find("<td>50</td><td>40</td><td>0</td><td>10</td>"), std::string::npos);
+  const size_t n = lines.size();
+  EXPECT_NE(readText(run / "summary.html").find(fmt::format("<td>{}</td><td>{}</td><td>0</td><td>10</td>", n, n - 10)),
+            std::string::npos);
 }
 
 // A line: each part put under the camera fires its input line Line0, and a run whose camera is triggered

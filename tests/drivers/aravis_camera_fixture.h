@@ -103,8 +103,12 @@ class FakeGvCamera {
 
   // Sets the device's heartbeat timeout (GigE Vision bootstrap register 0x0938); no controller may hold it.
   void setHeartbeatTimeout(std::chrono::milliseconds timeout) {
-    if (!gigeWriteRegister(kHeartbeatTimeoutRegister, static_cast<std::uint32_t>(timeout.count()), address_))
+    if (!trySetHeartbeatTimeout(timeout))
       throw std::runtime_error("the fake device at " + address_ + " did not take its heartbeat timeout");
+  }
+  // The same; false while a controller holds the device.
+  bool trySetHeartbeatTimeout(std::chrono::milliseconds timeout) {
+    return gigeWriteRegister(kHeartbeatTimeoutRegister, static_cast<std::uint32_t>(timeout.count()), address_);
   }
 
   static bool answersGvcp() { return gigeDeviceAnswers(); }
@@ -112,12 +116,9 @@ class FakeGvCamera {
   // SIGKILL: the device vanishes without a word, like a pulled cable.
   void kill() { process_.reset(); }
 
-  // SIGSTOP, then SIGCONT after `duration`: the device stalls and comes back.
-  void stall(std::chrono::milliseconds duration) {
-    ::kill(process_->pid(), SIGSTOP);
-    std::this_thread::sleep_for(duration);
-    ::kill(process_->pid(), SIGCONT);
-  }
+  // SIGSTOP: the device stalls; SIGCONT: it comes back.
+  void pause() { ::kill(process_->pid(), SIGSTOP); }
+  void resume() { ::kill(process_->pid(), SIGCONT); }
 
  private:
   std::string serial_;

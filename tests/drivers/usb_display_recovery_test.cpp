@@ -139,17 +139,21 @@ TEST_F(UsbDisplayTest, ADeviceThatVanishesAtAnyRequestIsNamedAndOpensAgainWhenBa
   EXPECT_EQ(display->state(), Display::State::Closed);
 }
 
+// The timeout of the tests below whose device falls silent: only a silent device reaches it, and no
+// transfer of a device that answers comes near it on a loaded host (each is one URB through umockdev).
+constexpr std::chrono::milliseconds kTimeout{2000};
+
 TEST_F(UsbDisplayTest, ADeviceThatNeverAnswersTimesOut) {
   EmulatedUsbDisplay device;
   device.plug();
   device.setSilent(true);
   auto start = Clock::now();
-  EXPECT_TRUE(throwsError([] { openDisplay("usb:1209:4c46?timeout_ms=500"); }, Errc::Timeout,
-                          {"usb:1209:4c46", "timed out after 500 ms"}));
+  EXPECT_TRUE(throwsError([] { openDisplay("usb:1209:4c46?timeout_ms=2000"); }, Errc::Timeout,
+                          {"usb:1209:4c46", "timed out after 2000 ms"}));
   std::printf("[ info     ] timed out after %.3f s\n", std::chrono::duration<double>(Clock::now() - start).count());
 
   device.setSilent(false);
-  auto display = openDisplay("usb:1209:4c46?timeout_ms=500");
+  auto display = openDisplay("usb:1209:4c46?timeout_ms=2000");
   const cv::Mat panel = randomPanel(display->info(), 9);
   device.setSilent(true);
   start = Clock::now();
@@ -172,7 +176,7 @@ TEST_F(UsbDisplayTest, AFrameAfterATimeoutIsPresented) {
   device.plug();
   UsbDisplayOptions options;
   options.transferSize_bytes = 64 * 1024;  // several transfers per frame
-  options.transferTimeout = options.controlTimeout = std::chrono::milliseconds(500);
+  options.transferTimeout = options.controlTimeout = kTimeout;
   const UsbDisplaySelector selector{usbdisplay::kDefaultVendorId, usbdisplay::kDefaultProductId, ""};
   auto display = openUsbDisplay(selector, options);
   const cv::Mat first = randomPanel(display->info(), 12), second = randomPanel(display->info(), 13);
@@ -205,7 +209,7 @@ TEST_F(UsbDisplayTest, AFailedClearHaltIsTriedAgainBeforeTheNextFrame) {
   device.plug();
   UsbDisplayOptions options;
   options.transferSize_bytes = 64 * 1024;
-  options.transferTimeout = options.controlTimeout = std::chrono::milliseconds(500);
+  options.transferTimeout = options.controlTimeout = kTimeout;
   const UsbDisplaySelector selector{usbdisplay::kDefaultVendorId, usbdisplay::kDefaultProductId, ""};
   auto display = openUsbDisplay(selector, options);
   const cv::Mat first = randomPanel(display->info(), 14), second = randomPanel(display->info(), 15);
@@ -228,7 +232,7 @@ TEST_F(UsbDisplayTest, AFrameAfterAnotherHostLeftPartOfOneIsPresented) {
   device.plug();
   UsbDisplayOptions options;
   options.transferSize_bytes = 64 * 1024;
-  options.transferTimeout = std::chrono::milliseconds(500);
+  options.transferTimeout = kTimeout;
   const UsbDisplaySelector selector{usbdisplay::kDefaultVendorId, usbdisplay::kDefaultProductId, ""};
   auto first = openUsbDisplay(selector, options);
   const cv::Mat panel = randomPanel(first->info(), 14);
