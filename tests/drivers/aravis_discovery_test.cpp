@@ -90,10 +90,11 @@ std::string ownNonLoopbackAddress() {
 // device through 127.0.0.1. Opening by address makes Aravis pick eth0 every time.
 TEST_F(AravisCameraTest, ADeviceAtAnotherOwnAddressStreams) {
   const std::string address = ownNonLoopbackAddress();
+  // (A skip even where skips fail the run: drivers.OwnAddressInANetworkNamespace, which must run, runs this
+  // test in a namespace that has such an address.)
   if (address.empty())
-    LFI_SKIP_WITHOUT_TOOL(
-        "this host has no IPv4 address outside 127/8 (the test drivers.OwnAddressInANetworkNamespace "
-        "runs this one where it has)");
+    GTEST_SKIP() << "this host has no IPv4 address outside 127/8 (the test drivers.OwnAddressInANetworkNamespace "
+                    "runs this one where it has)";
   FakeGvCamera other("LFIO" + std::to_string(::getpid()));
   other.start(binary_, 0, {}, address);
   auto camera = openCamera("aravis:" + address);
