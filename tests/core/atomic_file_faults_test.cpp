@@ -7,11 +7,13 @@
 
 #include "lfi/core/atomic_file.h"
 #include "lfi/core/error.h"
+#include "lfi/core/exr_io.h"
 
 #include "lfi_test_support.h"
 
 #include <fmt/format.h>
 #include <gtest/gtest.h>
+#include <opencv2/core.hpp>
 
 #include <sched.h>
 #include <sys/mount.h>
@@ -164,8 +166,8 @@ TEST_F(AtomicFileFaults, AFolderWriterKilledAtARandomMomentLeavesAWholeVersion) 
 }
 
 // A disk that fills up mid-write: in a child of its own mount namespace, a 256 KiB tmpfs holds an old file and
-// an old folder; replacing each with 1 MiB is an Errc::Io error naming the file or folder, the old one stays
-// whole, and no temporary is left. The child reports what failed on a pipe.
+// an old folder; replacing each with 1 MiB is an Errc::Io error naming the file (the folder's, for the
+// folder), the old one stays whole, and no temporary is left. The child reports what failed on a pipe.
 TEST_F(AtomicFileFaults, AFullDiskIsAClearErrorAndKeepsTheOldFile) {
   int pipe[2];
   ASSERT_EQ(::pipe(pipe), 0);
@@ -198,15 +200,18 @@ TEST_F(AtomicFileFaults, AFullDiskIsAClearErrorAndKeepsTheOldFile) {
       }
       check(readAll(file) == "old", "the old file was changed");
       try {
+        // The folder's content written by the library's own writer (an image of noise, 1 MiB that does not
+        // compress): it, not this test, must see the write fail.
+        cv::Mat noise(512, 512, CV_32FC1);
+        cv::randu(noise, 0.f, 1.f);
         lfi::writeFolderAtomically(folder, Overwrite::Allow, [&](const fs::path& f) {
-          std::ofstream out(f / "a.txt", std::ios::binary);
-          out << big;
-          out.close();
-          if (!out) lfi::fail(Errc::Io, "'{}': cannot write: disk full", (f / "a.txt").string());
+          lfi::writeRadianceExr(f / "image.exr", noise, {}, Overwrite::Allow);
         });
         check(false, "a 1 MiB folder was written on a 256 KiB disk");
       } catch (const lfi::Error& e) {
         check(e.code() == Errc::Io, fmt::format("folder: code {}, not Io: {}", static_cast<int>(e.code()), e.what()));
+        check(std::string(e.what()).find("image.exr") != std::string::npos,
+              "folder: the image not named: " + std::string(e.what()));
       }
       check(readAll(folder / "a.txt") == "old folder", "the old folder was changed");
       for (const auto& entry : fs::directory_iterator(disk))
