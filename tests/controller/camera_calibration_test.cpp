@@ -133,7 +133,13 @@ TEST_F(CameraCalibrationTest, RecoversTheCameraScaleOverItsRange) {
     covered += std::abs(error) <= c.coverageFactor * c.camera.objectPixelSigma_mm;
     distortionCovered += std::abs(c.camera.distortion_px) <= c.coverageFactor * c.camera.distortionSigma_px;
   }
-  // The k = 2 uncertainties cover the errors in at least 90 % of the trials.
+  // The k = 2 uncertainties cover the errors in at least 90 % of the trials. Not held here: the other side (U not
+  // much larger than the errors). The scale's U is set by the detector's corner bias, taken as an error shared by
+  // a column (row) of corners and independent between columns; on a board of 6-pixel squares neighbouring columns
+  // sit at nearly one phase, so much of the bias is probably common to the board and moves it rather than scaling
+  // it: the errors spread less than U says (60 trials: rms z 0.70 for the scale, 0.80 for the distortion,
+  // docs/calibration.md), by a factor the uncertainty's model does not bound. chessboard_target_test.cpp holds
+  // that model from the other side instead: the bias's size on held-out boards, and its spread through the fit.
   EXPECT_GE(covered, 9);
   EXPECT_GE(distortionCovered, 9);
 }
