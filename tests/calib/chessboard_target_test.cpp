@@ -154,7 +154,7 @@ TEST(ChessboardTarget, ABiasSharedByColumnsAndRowsSpreadsTheScaleAsItsUncertaint
   // draws. Where σ says what the draws spread, Σ z² (z = the scale's error / σ) is chi-square(200). σ is the
   // largest of that shared error's covariance and the residuals' (clustered by 12 columns and rows less 6
   // parameters, ν = 6: a σ² on average up to 1 + 1/√(6π) = 1.23 times the truth, the most a largest of estimates
-  // adds, as in tests/controller/calibration_bench.h), never below the truth: Σ z² between chi-square's lower
+  // adds, as in tests/support/normalised_errors.h), never below the truth: Σ z² between chi-square's lower
   // 10⁻³ quantile (143.8) over 1.23, 116.9, and its upper one, 267.6. A U twice too large puts Σ z² near 44 (a
   // quarter of the about 175 expected), one half as large near 700: each fails but with a probability below
   // 10⁻¹⁴.
