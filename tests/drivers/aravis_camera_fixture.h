@@ -15,14 +15,18 @@
 #include "lfi/drivers/camera_registry.h"
 
 #include "gige_device_process.h"
+#include "host_drops.h"
 #include "lfi_test_support.h"
+#include "stream_tally.h"
 
 #include <gtest/gtest.h>
 #include <signal.h>
 #include <unistd.h>
 
 #include <chrono>
+#include <cstdint>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <memory>
 #include <stdexcept>
@@ -63,13 +67,17 @@ inline double secondsSince(Clock::time_point t0) {
   return std::chrono::duration<double>(Clock::now() - t0).count();
 }
 
-// The next frame of a free-running stream, or the one after when it came incomplete: a loaded host may let
-// loopback drop a packet (tests/support/stream_tally.h), and a test allows as many frames incomplete as it
-// asks complete.
-inline Frame grabComplete(Camera& camera) {
-  Frame frame = camera.grab(2s);
-  if (frame.status == FrameStatus::Incomplete) frame = camera.grab(2s);
-  return frame;
+// The frame Aravis's fake camera sends as block id `frameId` in Mono8 at gain 0 and an exposure of 10 ms (its
+// diagonal ramp, arv_fake_camera_diagonal_ramp in Aravis 0.8, at a scale of 1 + gain + log10(exposure / 10 ms) = 1):
+// pixel (x, y) of the region is (x + y + id) mod 255.
+inline cv::Mat fakeCameraFrame(std::uint64_t frameId, int width, int height) {
+  std::vector<std::uint8_t> ramp(static_cast<std::size_t>(width) + 255);  // k mod 255: row y starts at (y + id) mod 255
+  for (std::size_t k = 0; k < ramp.size(); ++k) ramp[k] = static_cast<std::uint8_t>(k % 255);
+  cv::Mat image(height, width, CV_8UC1);
+  for (int y = 0; y < height; ++y)
+    std::memcpy(image.ptr(y), ramp.data() + (static_cast<std::uint64_t>(y) + frameId) % 255,
+                static_cast<std::size_t>(width));
+  return image;
 }
 
 // One arv-fake-gv-camera-0.8 process serving on 127.0.0.1.
@@ -165,9 +173,29 @@ class AravisCameraTest : public ::testing::Test {
     return s;
   }
 
+  // smallSettings() at the exposure whose frames are fakeCameraFrame().
+  static CameraSettings rampSettings() {
+    CameraSettings s = smallSettings();
+    s.exposure_us = 10000;
+    return s;
+  }
+
+  // The next complete frame of a free-running stream. A loaded host may make the ones before it come incomplete
+  // (tests/support/stream_tally.h); each must then be accounted for: by an underrun, a drop the host's kernel
+  // counted or a device pause.
+  Frame grabComplete(Camera& camera) {
+    testing_support::StreamLedger ledger(camera, 0, hostDrops_);
+    Frame frame;
+    do frame = camera.grab(2s);
+    while (frame.status == FrameStatus::Incomplete && ledger.add(frame) && ledger.wantsMore(1));
+    if (frame.status == FrameStatus::Complete) ledger.add(frame);  // (the incomplete ones accounted for at it)
+    return frame;
+  }
+
   std::string binary_;
   std::unique_ptr<LoopbackGigeLock> lock_;
   std::unique_ptr<FakeGvCamera> fake_;
+  testing_support::HostDrops hostDrops_;  // since before any stream of the test
 };
 
 }  // namespace lfi
