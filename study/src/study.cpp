@@ -343,11 +343,13 @@ class StudyRun {
       const std::vector<std::pair<std::string, LightFieldLookup>> lookups = {
           {"nearest", LightFieldLookup::Nearest}, {"interpolated", LightFieldLookup::Interpolated}};
       for (const auto& [name, lookup] : lookups) {
-        const Evaluation e = namingTheStep(fmt::format("{}, {} lookup", label, name), [&] {
-          return evaluate(bench_, Illumination{"inverse_schlieren", lf, lookup, displayError}, specs_, sweepTruth_,
-                          sweepCamera_, bench_.sensorModel(), sro, options_.seed * 1000 + 777, progress_, kSweepRender,
-                          false, nullptr, overwrite_);
-        });
+        // (the bindings by name: clang 14, the fuzz build's compiler, captures no structured binding)
+        const Evaluation e =
+            namingTheStep(fmt::format("{}, {} lookup", label, name), [&, lookup = lookup, displayError = displayError] {
+              return evaluate(bench_, Illumination{"inverse_schlieren", lf, lookup, displayError}, specs_, sweepTruth_,
+                              sweepCamera_, bench_.sensorModel(), sro, options_.seed * 1000 + 777, progress_,
+                              kSweepRender, false, nullptr, overwrite_);
+            });
         entry["cnr"][name] = cnrByDefect(e);
         entry["false_positives"][name] = e.scenes["intact"]["false_positives"];
         entry["intact_lit_fraction"][name] = e.intactLitFraction;
