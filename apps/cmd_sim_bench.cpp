@@ -14,6 +14,7 @@
 #include "lfi/core/error.h"
 #include "lfi/core/log.h"
 #include "lfi/drivers/backend_registry.h"
+#include "lfi/emulation/bench_control.h"
 #include "lfi/emulation/served_bench.h"
 
 #include <fmt/format.h>
@@ -28,7 +29,6 @@
 #include <fstream>
 #include <memory>
 #include <optional>
-#include <sstream>
 #include <string>
 #include <vector>
 
@@ -59,18 +59,6 @@ fs::path benchScene(const BenchFile& bench) {
   return camera.path;
 }
 
-double parseRatio(const std::string& text) {
-  std::size_t used = 0;
-  double value = -1;
-  try {
-    value = std::stod(text, &used);
-  } catch (const std::exception&) {
-  }
-  if (used != text.size() || !(value >= 0 && value <= 1))
-    fail(Errc::InvalidArgument, "packet-loss '{}': a fraction 0..1 is needed", text);
-  return value;
-}
-
 std::string status(lfi::emulation::ServedBench& bench) {
   const auto c = bench.counters();
   return fmt::format(
@@ -82,57 +70,67 @@ std::string status(lfi::emulation::ServedBench& bench) {
       c.partChanges, c.cameraRestarts, c.displayReplugs);
 }
 
-// One control request (docs/hardware-in-the-loop.md lists them).
-std::string control(lfi::emulation::ServedBench& bench, const fs::path& intact, const std::string& request) {
-  std::istringstream in(request);
-  std::string verb, what;
-  in >> verb;
-  std::getline(in >> std::ws, what);
-  while (!what.empty() && what.back() == ' ') what.pop_back();
+// One control request (docs/hardware-in-the-loop.md lists them; an lfi::Error becomes the reply "error <why>").
+std::string control(lfi::emulation::ServedBench& bench, const fs::path& intact, const std::string& line) {
+  using Action = lfi::emulation::BenchControlRequest::Action;
+  const lfi::emulation::BenchControlRequest request = lfi::emulation::parseBenchControlRequest(line);
+  const std::string& what = request.argument;
   std::string done;
-  const auto line = [](bool triggered) {
+  const auto edge = [](bool triggered) {
     return triggered ? "; Line0 triggered a frame"
                      : "; Line0 fired (no frame: the camera does not acquire with TriggerSource Line0)";
   };
-  if (verb == "part") {
-    const bool triggered = bench.putPart(what.empty() ? intact : fs::path(what));
-    done = "part " + bench.part().string() + line(triggered);
-  } else if (verb == "trigger" && what.empty()) {
-    done = std::string("trigger") + line(bench.fireLine());
-  } else if (verb == "camera" && (what == "off" || what == "on")) {
-    if (what == "off")
+  switch (request.action) {
+    case Action::Part: {
+      const bool triggered = bench.putPart(what.empty() ? intact : fs::path(what));
+      done = "part " + bench.part().string() + edge(triggered);
+      break;
+    }
+    case Action::Trigger:
+      done = std::string("trigger") + edge(bench.fireLine());
+      break;
+    case Action::CameraOff:
       bench.stopCamera();
-    else
+      done = "camera off";
+      break;
+    case Action::CameraOn:
       bench.startCamera();
-    done = "camera " + what;
-  } else if (verb == "packet-loss") {
-    bench.setPacketLoss(parseRatio(what));
-    done = "packet loss " + what;
-  } else if (verb == "display" && (what == "unplug" || what == "plug")) {
-    if (what == "unplug")
+      done = "camera on";
+      break;
+    case Action::PacketLoss:
+      bench.setPacketLoss(request.packetLoss);
+      done = "packet loss " + what;
+      break;
+    case Action::DisplayUnplug:
       bench.unplugDisplay();
-    else
+      done = "display unplugged";
+      break;
+    case Action::DisplayPlug:
       bench.plugDisplay();
-    done = "display " + what + "ged";
-  } else if (verb == "display" && what == "stall") {
-    bench.display().stallNextFrame();
-    done = "the display's next frame stalls its endpoint";
-  } else if (verb == "display" && what == "corrupt") {
-    bench.display().corruptNextFrame();
-    done = "the display's next frame arrives with a bad payload CRC";
-  } else if (verb == "display" && what == "short") {
-    bench.display().shortenNextFrame(0, 512);
-    done = "the display takes 512 bytes fewer of the next frame's first transfer";
-  } else if (verb == "display" && (what == "hang" || what == "answer")) {
-    bench.display().setSilent(what == "hang");
-    done = what == "hang" ? "the display takes requests and answers none" : "the display answers again";
-  } else if (verb == "status" && what.empty()) {
-    return "ok " + status(bench);
-  } else {
-    return fmt::format(
-        "error unknown request '{}' (part [SCENE] | trigger | camera off|on | packet-loss R | display "
-        "unplug|plug|stall|corrupt|short|hang|answer | status)",
-        request);
+      done = "display plugged";
+      break;
+    case Action::DisplayStall:
+      bench.display().stallNextFrame();
+      done = "the display's next frame stalls its endpoint";
+      break;
+    case Action::DisplayCorrupt:
+      bench.display().corruptNextFrame();
+      done = "the display's next frame arrives with a bad payload CRC";
+      break;
+    case Action::DisplayShort:
+      bench.display().shortenNextFrame(0, 512);
+      done = "the display takes 512 bytes fewer of the next frame's first transfer";
+      break;
+    case Action::DisplayHang:
+      bench.display().setSilent(true);
+      done = "the display takes requests and answers none";
+      break;
+    case Action::DisplayAnswer:
+      bench.display().setSilent(false);
+      done = "the display answers again";
+      break;
+    case Action::Status:
+      return "ok " + status(bench);
   }
   spdlog::info("sim-bench: {}", done);
   return "ok " + done;
