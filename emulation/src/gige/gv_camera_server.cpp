@@ -5,6 +5,8 @@
 
 #include "lfi/core/error.h"
 
+#include "served_camera_device.h"
+
 #include <arpa/inet.h>
 #include <arv.h>
 #include <ifaddrs.h>
@@ -42,92 +44,127 @@ guint32 readRegister(ArvFakeCamera* camera, guint32 address) {
 
 }  // namespace
 
+namespace detail {
+
+std::string servedDeviceId(const GvCameraServerOptions& options) {
+  return options.vendor + "-" + options.model + "-" + options.serial;
+}
+
+ServedCameraDevice::ServedCameraDevice(ArvFakeCamera* camera, const GvCameraServerOptions& options,
+                                       ServedFrameFiller filler)
+    : options_(options), filler_(std::move(filler)), camera_(camera) {
+  // Identity and sensor size. Aravis's device thread answers from
+  // arv_gv_fake_camera_new() on: a client that looks in this instant sees
+  // Aravis's defaults; `lfi serve-camera` prints the device's id only after this.
+  char name[kNameSize] = {};
+  std::strncpy(name, options.vendor.c_str(), kNameSize - 1);
+  arv_fake_camera_write_memory(camera, kManufacturerNameOffset, kNameSize, name);
+  std::memset(name, 0, kNameSize);
+  std::strncpy(name, options.model.c_str(), kNameSize - 1);
+  arv_fake_camera_write_memory(camera, kModelNameOffset, kNameSize, name);
+  const auto width = static_cast<guint32>(options.sensorWidth_px),
+             height = static_cast<guint32>(options.sensorHeight_px);
+  arv_fake_camera_write_register(camera, ARV_FAKE_CAMERA_REGISTER_SENSOR_WIDTH, width);
+  arv_fake_camera_write_register(camera, ARV_FAKE_CAMERA_REGISTER_SENSOR_HEIGHT, height);
+  arv_fake_camera_write_register(camera, ARV_FAKE_CAMERA_REGISTER_WIDTH, width);
+  arv_fake_camera_write_register(camera, ARV_FAKE_CAMERA_REGISTER_HEIGHT, height);
+  arv_fake_camera_write_register(camera, kHeartbeatTimeoutOffset, kHeartbeatTimeout_ms);
+  // In trigger mode the device looks for a software trigger once per period
+  // of this rate (Aravis's default, 25 Hz, adds 20 ms to each triggered frame
+  // on average). Its loop waits in whole milliseconds and spins through the
+  // last one of each period: at 1 kHz it would spin all the time and take the
+  // CPU its client needs (on 2 cores the frame then reaches the client no sooner).
+  arv_fake_camera_set_trigger_frequency(camera, kTriggerCheckRate_hz);
+  arv_fake_camera_set_fill_pattern(camera, &ServedCameraDevice::fill, this);
+}
+
+// Inside Aravis's fill-pattern callback arv_buffer_get_data() reports size 0
+// (the buffer's parts are not set up yet); the pointer is valid and holds the
+// payload, so the size comes from the registers.
+void ServedCameraDevice::fill(ArvBuffer* buffer, void* data, guint32 exposure_us, guint32 gain, ArvPixelFormat format) {
+  auto* self = static_cast<ServedCameraDevice*>(data);
+  if (buffer == nullptr) return;
+  void* pixels = const_cast<void*>(arv_buffer_get_data(buffer, nullptr));
+  if (pixels == nullptr) return;
+  // The registers as a client left them. GVCP lets a client write any value
+  // (GenICam's ranges are the client's courtesy): an image that would not
+  // fit the sensor, or the buffer Aravis allocated for the payload it computes
+  // from the same registers, is not written at all.
+  ArvFakeCamera* camera = self->camera_;
+  const std::uint64_t width = readRegister(camera, ARV_FAKE_CAMERA_REGISTER_WIDTH),
+                      height = readRegister(camera, ARV_FAKE_CAMERA_REGISTER_HEIGHT),
+                      binning = readRegister(camera, ARV_FAKE_CAMERA_REGISTER_BINNING_HORIZONTAL),
+                      binningY = readRegister(camera, ARV_FAKE_CAMERA_REGISTER_BINNING_VERTICAL);
+  const std::uint64_t bytesPerPixel = (ARV_PIXEL_FORMAT_BIT_PER_PIXEL(format) + 7) / 8;
+  const std::uint64_t size = width * height * bytesPerPixel;
+  const auto& o = self->options_;
+  if (width < 1 || height < 1 || width > static_cast<std::uint64_t>(o.sensorWidth_px) ||
+      height > static_cast<std::uint64_t>(o.sensorHeight_px) || size > arv_fake_camera_get_payload(camera)) {
+    self->warnOnce(
+        fmt::format("a {} x {} image of {} bytes a pixel does not fit the {} x {} sensor or the "
+                    "payload; the frame is not written",
+                    width, height, bytesPerPixel, o.sensorWidth_px, o.sensorHeight_px));
+    // A black frame, not the buffer's earlier contents: Aravis sends it as complete whatever we do. (It checked
+    // the buffer holds this payload before the call, on this same thread, the one that takes register writes.)
+    std::memset(pixels, 0, arv_fake_camera_get_payload(camera));
+    return;
+  }
+  std::memset(pixels, 0, static_cast<std::size_t>(size));
+  ServedFrameRequest request;
+  request.frameId = arv_buffer_get_frame_id(buffer);
+  request.width_px = static_cast<int>(width);
+  request.height_px = static_cast<int>(height);
+  request.offsetX_px = static_cast<int>(readRegister(camera, ARV_FAKE_CAMERA_REGISTER_X_OFFSET));
+  request.offsetY_px = static_cast<int>(readRegister(camera, ARV_FAKE_CAMERA_REGISTER_Y_OFFSET));
+  request.binning = static_cast<int>(binning);
+  request.exposure_us = exposure_us;
+  request.gain = gain;
+  int type = CV_8UC1;
+  if (format == ARV_PIXEL_FORMAT_MONO_8) {
+    request.pixelFormat = PixelFormat::Mono8;
+  } else if (format == ARV_PIXEL_FORMAT_MONO_16) {
+    request.pixelFormat = PixelFormat::Mono16;
+    type = CV_16UC1;
+  }
+  if (!request.pixelFormat) {
+    self->warnOnce(fmt::format("pixel format 0x{:08x} is not served (Mono8, Mono16); frames are black",
+                               static_cast<std::uint32_t>(format)));
+    return;
+  }
+  if (binningY != binning) {
+    self->warnOnce(
+        fmt::format("binning {} x {} (horizontal x vertical) is not served, only equal ones; frames "
+                    "are black",
+                    binning, binningY));
+    return;
+  }
+  try {
+    cv::Mat image(request.height_px, request.width_px, type, pixels);
+    self->filler_(request, image);
+    self->lastWarning_.clear();        // a frame as asked: the next refusal is news again
+  } catch (const std::exception& e) {  // (the filler refused what the client asked: every frame alike)
+    std::memset(pixels, 0, static_cast<std::size_t>(size));  // (it may have written part of the image)
+    self->warnOnce(fmt::format("frames go out black: {}", e.what()));
+  }
+}
+
+// A warning about what a client asked, once until it asks something else.
+void ServedCameraDevice::warnOnce(const std::string& what) {
+  if (what == lastWarning_) return;
+  spdlog::warn("served camera '{}': {}", servedDeviceId(options_), what);
+  lastWarning_ = what;
+}
+
+}  // namespace detail
+
 struct GvCameraServer::Impl {
   GvCameraServerOptions options;
-  ServedFrameFiller filler;
   ArvGvFakeCamera* gvCamera = nullptr;
-  ArvFakeCamera* camera = nullptr;  // owned by gvCamera
-  std::string lastWarning;          // (Aravis's device thread only)
-  std::mutex lineMutex;             // one line edge at a time
+  std::unique_ptr<detail::ServedCameraDevice> device;  // on gvCamera's camera
+  std::mutex lineMutex;                                // one line edge at a time
 
-  // Aravis's fill-pattern callback, on its device thread. Inside it
-  // arv_buffer_get_data() reports size 0 (the buffer's parts are not set up
-  // yet); the pointer is valid and holds the payload, so the size comes from the
-  // registers.
-  static void fill(ArvBuffer* buffer, void* data, guint32 exposure_us, guint32 gain, ArvPixelFormat format) {
-    auto* self = static_cast<Impl*>(data);
-    if (buffer == nullptr) return;
-    void* pixels = const_cast<void*>(arv_buffer_get_data(buffer, nullptr));
-    if (pixels == nullptr) return;
-    // The registers as a client left them. GVCP lets a client write any value
-    // (GenICam's ranges are the client's courtesy): an image that would not
-    // fit the sensor, or the buffer Aravis allocated for the payload it computes
-    // from the same registers, is not written at all.
-    const std::uint64_t width = readRegister(self->camera, ARV_FAKE_CAMERA_REGISTER_WIDTH),
-                        height = readRegister(self->camera, ARV_FAKE_CAMERA_REGISTER_HEIGHT),
-                        binning = readRegister(self->camera, ARV_FAKE_CAMERA_REGISTER_BINNING_HORIZONTAL),
-                        binningY = readRegister(self->camera, ARV_FAKE_CAMERA_REGISTER_BINNING_VERTICAL);
-    const std::uint64_t bytesPerPixel = (ARV_PIXEL_FORMAT_BIT_PER_PIXEL(format) + 7) / 8;
-    const std::uint64_t size = width * height * bytesPerPixel;
-    const auto& o = self->options;
-    if (width < 1 || height < 1 || width > static_cast<std::uint64_t>(o.sensorWidth_px) ||
-        height > static_cast<std::uint64_t>(o.sensorHeight_px) || size > arv_fake_camera_get_payload(self->camera)) {
-      self->warnOnce(
-          fmt::format("a {} x {} image of {} bytes a pixel does not fit the {} x {} sensor or the "
-                      "payload; the frame is not written",
-                      width, height, bytesPerPixel, o.sensorWidth_px, o.sensorHeight_px));
-      // A black frame, not the buffer's earlier contents: Aravis sends it as complete whatever we do. (It checked
-      // the buffer holds this payload before the call, on this same thread, the one that takes register writes.)
-      std::memset(pixels, 0, arv_fake_camera_get_payload(self->camera));
-      return;
-    }
-    std::memset(pixels, 0, static_cast<std::size_t>(size));
-    ServedFrameRequest request;
-    request.frameId = arv_buffer_get_frame_id(buffer);
-    request.width_px = static_cast<int>(width);
-    request.height_px = static_cast<int>(height);
-    request.offsetX_px = static_cast<int>(readRegister(self->camera, ARV_FAKE_CAMERA_REGISTER_X_OFFSET));
-    request.offsetY_px = static_cast<int>(readRegister(self->camera, ARV_FAKE_CAMERA_REGISTER_Y_OFFSET));
-    request.binning = static_cast<int>(binning);
-    request.exposure_us = exposure_us;
-    request.gain = gain;
-    int type = CV_8UC1;
-    if (format == ARV_PIXEL_FORMAT_MONO_8) {
-      request.pixelFormat = PixelFormat::Mono8;
-    } else if (format == ARV_PIXEL_FORMAT_MONO_16) {
-      request.pixelFormat = PixelFormat::Mono16;
-      type = CV_16UC1;
-    }
-    if (!request.pixelFormat) {
-      self->warnOnce(fmt::format("pixel format 0x{:08x} is not served (Mono8, Mono16); frames are black",
-                                 static_cast<std::uint32_t>(format)));
-      return;
-    }
-    if (binningY != binning) {
-      self->warnOnce(
-          fmt::format("binning {} x {} (horizontal x vertical) is not served, only equal ones; frames "
-                      "are black",
-                      binning, binningY));
-      return;
-    }
-    try {
-      cv::Mat image(request.height_px, request.width_px, type, pixels);
-      self->filler(request, image);
-      self->lastWarning.clear();         // a frame as asked: the next refusal is news again
-    } catch (const std::exception& e) {  // (the filler refused what the client asked: every frame alike)
-      std::memset(pixels, 0, static_cast<std::size_t>(size));  // (it may have written part of the image)
-      self->warnOnce(fmt::format("frames go out black: {}", e.what()));
-    }
-  }
-
-  // A warning about what a client asked, once until it asks something else.
-  void warnOnce(const std::string& what) {
-    if (what == lastWarning) return;
-    spdlog::warn("served camera '{}': {}", deviceId(), what);
-    lastWarning = what;
-  }
-
-  std::string deviceId() const { return options.vendor + "-" + options.model + "-" + options.serial; }
+  ArvFakeCamera* camera() const { return device->camera(); }
+  std::string deviceId() const { return detail::servedDeviceId(options); }
 };
 
 namespace {
@@ -183,7 +220,6 @@ GvCameraServer::GvCameraServer(const GvCameraServerOptions& options, ServedFrame
     fail(Errc::InvalidArgument, "served camera: sensor {} x {} px", options.sensorWidth_px, options.sensorHeight_px);
   if (!filler) fail(Errc::InvalidArgument, "served camera: no frame filler");
   impl_->options = options;
-  impl_->filler = std::move(filler);
 
   impl_->gvCamera = arv_gv_fake_camera_new(options.interfaceAddress.c_str(), options.serial.c_str());
   if (impl_->gvCamera == nullptr || !arv_gv_fake_camera_is_running(impl_->gvCamera)) {
@@ -193,31 +229,8 @@ GvCameraServer::GvCameraServer(const GvCameraServerOptions& options, ServedFrame
          "another GigE Vision device on it)",
          impl_->deviceId(), options.interfaceAddress);
   }
-  ArvFakeCamera* camera = arv_gv_fake_camera_get_fake_camera(impl_->gvCamera);
-  impl_->camera = camera;
-  // Identity and sensor size. Aravis's device thread answers from
-  // arv_gv_fake_camera_new() on: a client that looks in this instant sees
-  // Aravis's defaults; `lfi serve-camera` prints the device's id only after this.
-  char name[kNameSize] = {};
-  std::strncpy(name, options.vendor.c_str(), kNameSize - 1);
-  arv_fake_camera_write_memory(camera, kManufacturerNameOffset, kNameSize, name);
-  std::memset(name, 0, kNameSize);
-  std::strncpy(name, options.model.c_str(), kNameSize - 1);
-  arv_fake_camera_write_memory(camera, kModelNameOffset, kNameSize, name);
-  const auto width = static_cast<guint32>(options.sensorWidth_px),
-             height = static_cast<guint32>(options.sensorHeight_px);
-  arv_fake_camera_write_register(camera, ARV_FAKE_CAMERA_REGISTER_SENSOR_WIDTH, width);
-  arv_fake_camera_write_register(camera, ARV_FAKE_CAMERA_REGISTER_SENSOR_HEIGHT, height);
-  arv_fake_camera_write_register(camera, ARV_FAKE_CAMERA_REGISTER_WIDTH, width);
-  arv_fake_camera_write_register(camera, ARV_FAKE_CAMERA_REGISTER_HEIGHT, height);
-  arv_fake_camera_write_register(camera, kHeartbeatTimeoutOffset, kHeartbeatTimeout_ms);
-  // In trigger mode the device looks for a software trigger once per period
-  // of this rate (Aravis's default, 25 Hz, adds 20 ms to each triggered frame
-  // on average). Its loop waits in whole milliseconds and spins through the
-  // last one of each period: at 1 kHz it would spin all the time and take the
-  // CPU its client needs (on 2 cores the frame then reaches the client no sooner).
-  arv_fake_camera_set_trigger_frequency(camera, kTriggerCheckRate_hz);
-  arv_fake_camera_set_fill_pattern(camera, &Impl::fill, impl_.get());
+  impl_->device = std::make_unique<detail::ServedCameraDevice>(arv_gv_fake_camera_get_fake_camera(impl_->gvCamera),
+                                                               options, std::move(filler));
 }
 
 GvCameraServer::~GvCameraServer() {
@@ -253,7 +266,7 @@ void writeServedFrame(const cv::Mat& frame, cv::Mat& image) {
 
 bool GvCameraServer::fireLine(int timeout_ms) {
   std::lock_guard lock(impl_->lineMutex);
-  ArvFakeCamera* camera = impl_->camera;
+  ArvFakeCamera* camera = impl_->camera();
   constexpr guint32 kLine0 = 0, kSoftware = 1;  // TriggerSource values in Aravis's fake camera description
   if (readRegister(camera, ARV_FAKE_CAMERA_REGISTER_TRIGGER_MODE) != 1 ||
       readRegister(camera, ARV_FAKE_CAMERA_REGISTER_TRIGGER_SOURCE) != kLine0 ||

@@ -1,0 +1,44 @@
+// SPDX-License-Identifier: Apache-2.0
+#pragma once
+// The served camera without its network (internal to lfi_emulation): Aravis's
+// register model of a camera (ArvFakeCamera, the memory that GVCP's READREG,
+// WRITEREG, READMEM and WRITEMEM commands read and write; Aravis's device
+// thread answers them) set up as GvCameraServer serves it, and the frame fill
+// that reads what a client left in the registers. GvCameraServer runs one on
+// the camera of its ArvGvFakeCamera; the fuzz target gvcp_registers on one
+// with no sockets.
+
+#include "lfi/emulation/gv_camera_server.h"
+
+#include <arv.h>
+
+#include <string>
+
+namespace lfi::emulation::detail {
+
+class ServedCameraDevice {
+ public:
+  // Sets `camera` up: identity, sensor size, heartbeat timeout, trigger check
+  // rate, and this object's frame fill. `camera` is not owned; it must not
+  // fill a frame after this object is gone.
+  ServedCameraDevice(ArvFakeCamera* camera, const GvCameraServerOptions& options, ServedFrameFiller filler);
+  ServedCameraDevice(const ServedCameraDevice&) = delete;
+  ServedCameraDevice& operator=(const ServedCameraDevice&) = delete;
+
+  ArvFakeCamera* camera() const { return camera_; }
+
+ private:
+  // Aravis's fill-pattern callback, on its device thread.
+  static void fill(ArvBuffer* buffer, void* data, guint32 exposure_us, guint32 gain, ArvPixelFormat format);
+  void warnOnce(const std::string& what);
+
+  GvCameraServerOptions options_;
+  ServedFrameFiller filler_;
+  ArvFakeCamera* camera_;
+  std::string lastWarning_;  // (Aravis's device thread only)
+};
+
+// "<vendor>-<model>-<serial>", what Aravis's discovery reports.
+std::string servedDeviceId(const GvCameraServerOptions& options);
+
+}  // namespace lfi::emulation::detail
