@@ -23,6 +23,9 @@ std::string percentDecoded(std::string_view part, std::string_view kind, std::st
   };
   std::string out;
   for (std::size_t i = 0; i < part.size(); ++i) {
+    // (NUL, which %00 cannot give either: text() writes it as %00, and a C string would end there)
+    if (part[i] == '\0')
+      fail(Errc::Config, "{} URI '{}': a NUL byte cannot stand in a URI", kind, shown(text, text.size()));
     if (part[i] != '%') {
       out += part[i];
       continue;

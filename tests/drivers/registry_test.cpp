@@ -72,6 +72,15 @@ TEST(DeviceUri, PathKeysAndValuesArePercentDecoded) {
         << bad;
 }
 
+// NUL, which no part of a URI can hold as %00, is refused as a byte of its own too: the URI it would be in
+// formats to %00 (found by fuzzing, fuzz/corpus/device_uri/regression-nul-in-a-key).
+TEST(DeviceUri, ARawNulByteIsRefusedAsItsEncodingIs) {
+  using namespace std::string_literals;
+  for (const std::string& bad : {"sim:a\0b.toml"s, "aravis:x?packet_size_by\0=1500"s, "aravis:x?a=1\0"s})
+    EXPECT_TRUE(throwsError([&] { backendRegistry<Camera>().parse(bad); }, Errc::Config, {"NUL byte", "\\x00"}))
+        << shown(bad);
+}
+
 // Every byte but NUL survives the way through a URI, in the path and in a value.
 TEST(DeviceUri, PercentEncodingRoundTrips) {
   std::string all;

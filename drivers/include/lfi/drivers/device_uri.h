@@ -39,8 +39,8 @@ struct DeviceUri {
 
   // Splits `text`. Throws Errc::Config naming the URI (as a "<kind> URI") for
   // a missing scheme (the message shows `example`), an empty key, a key
-  // without '=', a repeated key, a trailing '&', or a '%' not followed by two
-  // hex digits of a byte 01..FF.
+  // without '=', a repeated key, a trailing '&', a '%' not followed by two
+  // hex digits of a byte 01..FF, or a NUL byte.
   static DeviceUri parse(std::string_view text, std::string_view kind, std::string_view example);
 
   // The URI as text: the path, keys and values percent-encoded where they hold
