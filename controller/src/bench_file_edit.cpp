@@ -7,6 +7,7 @@
 #include "lfi/core/input_file.h"
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 #include <toml++/toml.h>
 
 #include <algorithm>
@@ -78,13 +79,50 @@ const toml::table* findTable(const toml::table& root, const std::vector<std::str
   return t;
 }
 
-// The offset just after the line of the table's last key (its header's line when it has no key).
+// How a table stands in the text: under a [header] of its own; only through the headers of its sub-tables ([a.b]
+// or [[a.b]] without [a]: toml++ places it at that header); or in the lines of another table, inline ({...}) or by
+// dotted keys (a.b = 1).
+enum class Written { OwnHeader, ThroughSubTables, InLines };
+
+Written written(const std::string& text, const toml::table& t) {
+  if (t.is_inline()) return Written::InLines;
+  if (t.source().begin.line == 0) return Written::ThroughSubTables;
+  const size_t at = offsetOf(text, t.source().begin);
+  if (at >= text.size() || text[at] != '[') return Written::InLines;
+  if (text.compare(at, 2, "[[") == 0) return Written::ThroughSubTables;  // ([[a.b]] without [a]: the same)
+  for (auto&& [k, v] : t)
+    if (v.is_table() && v.source().begin == t.source().begin) return Written::ThroughSubTables;
+  return Written::OwnHeader;
+}
+
+// The last line of the table's own lines: its header's, or its last key's, a key of a table in it written by
+// dotted keys too (a sub-table's [header] or [[header]] starts the lines of another).
+toml::source_index lastLine(const std::string& text, const toml::table& table, toml::source_index line) {
+  for (auto&& [k, v] : table) {
+    if (const toml::table* sub = v.as_table(); sub && !sub->is_inline()) {
+      if (written(text, *sub) != Written::OwnHeader) line = lastLine(text, *sub, line);
+      continue;
+    }
+    if (v.is_array_of_tables() && text.compare(offsetOf(text, v.source().begin), 2, "[[") == 0) continue;
+    line = std::max(line, v.source().end.line);
+  }
+  return line;
+}
+
+// The offset just after the table's own lines.
 size_t afterLastKey(const std::string& text, const toml::table& table) {
-  toml::source_index line = table.source().begin.line;
-  for (auto&& [k, v] : table)
-    if (!v.is_table() && v.source().end.line > line) line = v.source().end.line;
-  const size_t end = lineEnd(text, offsetOf(text, {line, 1}));
+  const size_t end = lineEnd(text, offsetOf(text, {lastLine(text, table, table.source().begin.line), 1}));
   return end == text.size() ? end : end + 1;
+}
+
+// Inserts `lines` (each ending in a newline) at `at`, the start of a line or the end of the text: after a last
+// line that has no newline of its own, on lines of their own all the same.
+void insertLines(std::string& text, size_t at, const std::string& lines) {
+  if (at == text.size() && !text.empty() && text.back() != '\n') {
+    text += '\n';
+    at = text.size();
+  }
+  text.insert(at, lines);
 }
 
 // The whole file, checked first as every reader of a user's file does (input_file.h).
@@ -115,25 +153,54 @@ void BenchFileEdit::set(const std::string& table, const std::string& key, const 
   if (comment.find('\n') != std::string::npos || value.find('\n') != std::string::npos)
     fail(Errc::InvalidArgument, "bench file edit: a value or comment of more than one line for {}.{}", table, key);
   const toml::table root = parseText(text_, file_);
+  // The table, where it is: every name on the way to it a table (a value or an array of tables takes no key).
+  const toml::table* t = &root;
+  bool inlined = false;  // the table, or one it is in, is written inline: it takes no line
+  for (size_t k = 0; k < parts.size() && t; ++k) {
+    const toml::node* n = t->get(parts[k]);
+    if (n && !n->is_table())
+      fail(Errc::InvalidArgument, "bench file edit: {} in '{}' holds a value or an array of tables, not a table",
+           fmt::join(parts.begin(), parts.begin() + static_cast<std::ptrdiff_t>(k) + 1, "."), file_.string());
+    t = n ? n->as_table() : nullptr;
+    inlined = inlined || (t && t->is_inline());
+  }
   const std::string line = withComment(fmt::format("{} = {}", key, value), comment);
-  if (const toml::table* t = findTable(root, parts, parts.size())) {
+  if (t) {
     if (const toml::node* old = t->get(key)) {
-      if (old->is_table())
-        fail(Errc::InvalidArgument, "bench file edit: {}.{} in '{}' is a table, not a value", table, key,
-             file_.string());
-      // The value in place; with a comment, the rest of its last line (the old comment) goes.
+      if (old->is_table() || old->is_array_of_tables())
+        fail(Errc::InvalidArgument, "bench file edit: {}.{} in '{}' is a table or an array of tables, not a value",
+             table, key, file_.string());
+      // The value in place; with a comment, the rest of its last line (the old comment) goes, which must be no more.
       const size_t begin = offsetOf(text_, old->source().begin), end = offsetOf(text_, old->source().end);
       const size_t stop = comment.empty() ? end : lineEnd(text_, end);
+      const size_t after = text_.find_first_not_of(" \t\r", end);
+      if (!comment.empty() && after < stop && text_[after] != '#')
+        fail(Errc::InvalidArgument,
+             "bench file edit: {}.{} in '{}' shares its line with more than a comment (an inline table): no "
+             "comment can follow its value",
+             table, key, file_.string());
       text_.replace(begin, stop - begin, withComment(value, comment));
       return;
     }
-    text_.insert(afterLastKey(text_, *t), line + "\n");
-    return;
+    const Written w = written(text_, *t);
+    if (w == Written::OwnHeader) {
+      insertLines(text_, afterLastKey(text_, *t), line + "\n");
+      return;
+    }
+    if (w == Written::InLines || inlined)
+      fail(Errc::InvalidArgument,
+           "bench file edit: [{}] in '{}' is written inline or by dotted keys, not under a [{}] header of its own: "
+           "add '{}' to it by hand",
+           table, file_.string(), table, line);
   }
-  // A new table: after its parent's keys, or at the end.
+  // A new table (or one only there as the parent of its sub-tables): after its parent's keys, or at the end.
+  if (inlined)
+    fail(Errc::InvalidArgument, "bench file edit: [{}] in '{}' would be in an inline table: add '{}' to it by hand",
+         table, file_.string(), line);
   const std::string header = fmt::format("[{}]\n{}\n", table, line);
-  if (const toml::table* parent = parts.size() > 1 ? findTable(root, parts, parts.size() - 1) : nullptr) {
-    text_.insert(afterLastKey(text_, *parent), header);
+  const toml::table* parent = parts.size() > 1 ? findTable(root, parts, parts.size() - 1) : nullptr;
+  if (parent && written(text_, *parent) == Written::OwnHeader) {
+    insertLines(text_, afterLastKey(text_, *parent), header);
     return;
   }
   if (!text_.empty() && text_.back() != '\n') text_ += '\n';

@@ -58,6 +58,44 @@ TEST_F(BenchFileEditTest, AMissingKeyGoesAfterItsTablesLastKeyAndAMissingTableAf
                              "\n[run]\nwait_limit_s = 5\n");
 }
 
+// A file whose last line has no newline: a key or table added after that line goes on lines of its own (found
+// by fuzzing, fuzz/corpus/bench_file_edit/regression-no-last-newline: "[c]b = 0.4991").
+TEST_F(BenchFileEditTest, AKeyAddedAfterALastLineWithoutItsNewlineGoesOnALineOfItsOwn) {
+  const std::string text = kBench + "[run]";
+  BenchFileEdit edit(write(text));
+  edit.set("run", "wait_limit_s", "5");
+  EXPECT_EQ(edit.text(), kBench + "[run]\nwait_limit_s = 5\n");
+  BenchFileEdit optics(write(kBench + "[display.x]\nsettle_ms = 1"));
+  optics.set("display.x.optics", "gap_mm", "1.37");
+  EXPECT_EQ(optics.text(), kBench + "[display.x]\nsettle_ms = 1\n[display.x.optics]\ngap_mm = 1.37\n");
+}
+
+// Tables as TOML lets a file write them: a value or an array of tables on the way refused (found by fuzzing,
+// fuzz/corpus/bench_file_edit/regression-value-on-the-way: "a=1" took a new [a] table), a table with no header
+// of its own gets one (regression-array-of-tables-parent: a key for [y] went into [[y.s]]), a sub-table goes
+// after its parent's keys written by dotted keys too, and a key is never added to a table written inline or by
+// dotted keys, nor a comment after a value that shares its line.
+TEST_F(BenchFileEditTest, TablesWrittenAnyWayTomlAllowsAreEditedOrRefusedButNeverBroken) {
+  const auto edited = [&](const std::string& text, const std::string& table, const std::string& key,
+                          const std::string& comment = {}) {
+    BenchFileEdit edit(write(text));
+    edit.set(table, key, "1", comment);
+    return edit.text();
+  };
+  EXPECT_TRUE(throwsError([&] { edited("a = 1", "a", "e"); }, Errc::InvalidArgument, {"a in", "not a table"}));
+  EXPECT_TRUE(throwsError([&] { edited("[[a]]\nb = 2\n", "a.c", "e"); }, Errc::InvalidArgument, {"not a table"}));
+  EXPECT_EQ(edited("[x.y]\nz = 2\n", "x", "k"), "[x.y]\nz = 2\n\n[x]\nk = 1\n");
+  EXPECT_EQ(edited("[[y.s]]", "y", "k"), "[[y.s]]\n\n[y]\nk = 1\n");
+  EXPECT_EQ(edited("[d]\nu = 2\ns.a = 3\n[[d.i]]\nb = 4\n", "d.o", "g"),
+            "[d]\nu = 2\ns.a = 3\n[d.o]\ng = 1\n[[d.i]]\nb = 4\n");
+  EXPECT_TRUE(throwsError([&] { edited("[c]\ns.g = 2\n", "c.s", "k"); }, Errc::InvalidArgument, {"by dotted keys"}));
+  EXPECT_TRUE(throwsError([&] { edited("i = {a = 2}\n", "i", "k"); }, Errc::InvalidArgument, {"inline"}));
+  EXPECT_TRUE(throwsError([&] { edited("i = {a = 2}\n", "i.j", "k"); }, Errc::InvalidArgument, {"inline"}));
+  EXPECT_EQ(edited("i = {a = 2, b = 3}\n", "i", "a"), "i = {a = 1, b = 3}\n");
+  EXPECT_TRUE(throwsError([&] { edited("i = {a = 2, b = 3}\n", "i", "a", "c"); }, Errc::InvalidArgument,
+                          {"i.a", "more than a comment"}));
+}
+
 TEST_F(BenchFileEditTest, NamesThatAreNotBareKeysAndTablesAsValuesAreRefused) {
   BenchFileEdit edit(write(kBench));
   EXPECT_TRUE(throwsError([&] { edit.set("camera", "a b", "1"); }, Errc::InvalidArgument, {"bare key"}));
