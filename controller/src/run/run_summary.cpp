@@ -51,8 +51,9 @@ std::string heatMap(const std::vector<RecordSummary>& records) {
   extent = std::ceil(extent);
   std::vector<int> bins(kBins * kBins, 0);
   for (const Vec2& p : points) {
-    const int i = std::clamp(static_cast<int>((p.x + extent) / (2 * extent) * kBins), 0, kBins - 1);
-    const int j = std::clamp(static_cast<int>((extent - p.y) / (2 * extent) * kBins), 0, kBins - 1);
+    // As fractions of the extent, each within [-1, 1]: p + extent overflows near the largest double.
+    const int i = std::clamp(static_cast<int>((p.x / extent + 1) / 2 * kBins), 0, kBins - 1);
+    const int j = std::clamp(static_cast<int>((1 - p.y / extent) / 2 * kBins), 0, kBins - 1);
     ++bins[static_cast<size_t>(j * kBins + i)];
   }
   const int most = std::max(1, *std::max_element(bins.begin(), bins.end()));
