@@ -85,6 +85,14 @@ class AravisCamera final : public Camera {
 
   static void onControlLost(ArvDevice*, gpointer flag) { static_cast<std::atomic<bool>*>(flag)->store(true); }
 
+  // Aravis hands the buffers to its stream thread and back through GAsyncQueues,
+  // which ThreadSanitizer does not see: released before every push, acquired on
+  // the stream thread when it takes a buffer, is the hand-over it sees.
+  static void onStreamEvent(void* self, ArvStreamCallbackType type, ArvBuffer*) {
+    if (type == ARV_STREAM_CALLBACK_TYPE_START_BUFFER)
+      static_cast<AravisCamera*>(self)->buffersPushed_.load(std::memory_order_acquire);
+  }
+
   std::string name() const { return deviceId_.empty() ? std::string("(the first camera found)") : deviceId_; }
 
   void releaseDevice() noexcept;
@@ -130,6 +138,8 @@ class AravisCamera final : public Camera {
   ArvStream* stream_ = nullptr;
   gulong controlLostHandler_ = 0;
   std::atomic<bool> controlLost_ = false;  // set from Aravis's heartbeat thread
+  // Released before each buffer is pushed, acquired by onStreamEvent on the stream thread.
+  std::atomic<bool> buffersPushed_ = false;
   bool lost_ = false;
   std::string gvcpIp_;
   std::uint16_t gvcpPort_ = 3956;

@@ -93,7 +93,7 @@ void AravisCamera::startStream(int bufferCount) {
       spdlog::debug("camera '{}': GigE Vision packet size {} bytes", name(), size);
     }
   }
-  stream_ = arv_camera_create_stream(camera_, nullptr, nullptr, &error);
+  stream_ = arv_camera_create_stream(camera_, &AravisCamera::onStreamEvent, this, &error);
   if (stream_ == nullptr) {
     if (error == nullptr) fail(Errc::Device, "camera '{}': arv_camera_create_stream returned no stream", name());
     check(error, name(), "arv_camera_create_stream");
@@ -135,7 +135,11 @@ void AravisCamera::startStream(int bufferCount) {
   if (ARV_IS_GV_STREAM(stream_))
     g_object_set(stream_, "socket-buffer", ARV_GV_STREAM_SOCKET_BUFFER_FIXED, "socket-buffer-size",
                  static_cast<gint>(std::min<std::uint64_t>(std::uint64_t{payload} * bufferCount, INT_MAX)), nullptr);
-  for (int i = 0; i < bufferCount; ++i) arv_stream_push_buffer(stream_, arv_buffer_new_allocate(payload));
+  for (int i = 0; i < bufferCount; ++i) {
+    ArvBuffer* buffer = arv_buffer_new_allocate(payload);
+    buffersPushed_.store(true, std::memory_order_release);
+    arv_stream_push_buffer(stream_, buffer);
+  }
   arv_camera_set_acquisition_mode(camera_, ARV_ACQUISITION_MODE_CONTINUOUS, &error);
   const char* call = "arv_camera_set_acquisition_mode";
   if (error == nullptr) arv_camera_start_acquisition(camera_, &error), call = "arv_camera_start_acquisition";
@@ -206,8 +210,12 @@ void AravisCamera::grabInto(Frame& frame, std::chrono::milliseconds timeout) {
   struct PushBack {
     ArvStream* stream;
     ArvBuffer* buffer;
-    ~PushBack() { arv_stream_push_buffer(stream, buffer); }
-  } pushBack{stream_, buffer};
+    std::atomic<bool>& pushed;
+    ~PushBack() {
+      pushed.store(true, std::memory_order_release);
+      arv_stream_push_buffer(stream, buffer);
+    }
+  } pushBack{stream_, buffer, buffersPushed_};
 
   const ArvBufferStatus status = arv_buffer_get_status(buffer);
   frame.frameId = arv_buffer_get_frame_id(buffer);
