@@ -75,6 +75,7 @@ ServedCameraDevice::ServedCameraDevice(ArvFakeCamera* camera, const GvCameraServ
   // last one of each period: at 1 kHz it would spin all the time and take the
   // CPU its client needs (on 2 cores the frame then reaches the client no sooner).
   arv_fake_camera_set_trigger_frequency(camera, kTriggerCheckRate_hz);
+  published_.store(true, std::memory_order_release);
   arv_fake_camera_set_fill_pattern(camera, &ServedCameraDevice::fill, this);
 }
 
@@ -83,6 +84,7 @@ ServedCameraDevice::ServedCameraDevice(ArvFakeCamera* camera, const GvCameraServ
 // payload, so the size comes from the registers.
 void ServedCameraDevice::fill(ArvBuffer* buffer, void* data, guint32 exposure_us, guint32 gain, ArvPixelFormat format) {
   auto* self = static_cast<ServedCameraDevice*>(data);
+  self->published_.load(std::memory_order_acquire);
   if (buffer == nullptr) return;
   void* pixels = const_cast<void*>(arv_buffer_get_data(buffer, nullptr));
   if (pixels == nullptr) return;

@@ -12,6 +12,7 @@
 
 #include <arv.h>
 
+#include <atomic>
 #include <string>
 
 namespace lfi::emulation::detail {
@@ -36,6 +37,10 @@ class ServedCameraDevice {
   ServedFrameFiller filler_;
   ArvFakeCamera* camera_;
   std::string lastWarning_;  // (Aravis's device thread only)
+  // Released last in the constructor, acquired first in fill: Aravis hands
+  // this object to its device thread under a GMutex (a futex) that
+  // ThreadSanitizer does not see; this is the hand-over it sees.
+  std::atomic<bool> published_{false};
 };
 
 // "<vendor>-<model>-<serial>", what Aravis's discovery reports.

@@ -13,6 +13,7 @@
 #include <umockdev.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cerrno>
 #include <cstddef>
 #include <cstdio>
@@ -51,17 +52,25 @@ UMockdevTestbed* sharedTestbed() {
 }
 
 // Runs `f` on the handler thread and waits for it (umockdev's handler objects
-// belong to that thread's main context).
+// belong to that thread's main context; never called on that thread). GLib
+// hands the source to the thread under the context's lock, a futex that
+// ThreadSanitizer does not see: `posted`, released once the source and the
+// call are made and acquired first on the handler thread, is the hand-over it
+// sees, of the call and of the source GLib frees there.
 void EmulatedUsbDisplay::Impl::runOnHandlerThread(const std::function<void()>& f) {
   struct Call {
     const std::function<void()>* f;
     std::promise<void> done;
+    std::atomic<bool> posted{false};
   } call{&f, {}};
   auto future = call.done.get_future();
-  g_main_context_invoke(
-      context,
+  GSource* source = g_idle_source_new();
+  g_source_set_priority(source, G_PRIORITY_DEFAULT);  // (as g_main_context_invoke)
+  g_source_set_callback(
+      source,
       [](gpointer data) -> gboolean {
         auto* c = static_cast<Call*>(data);
+        c->posted.load(std::memory_order_acquire);
         try {
           (*c->f)();
           c->done.set_value();
@@ -70,7 +79,10 @@ void EmulatedUsbDisplay::Impl::runOnHandlerThread(const std::function<void()>& f
         }
         return G_SOURCE_REMOVE;
       },
-      &call);
+      &call, nullptr);
+  call.posted.store(true, std::memory_order_release);
+  g_source_attach(source, context);
+  g_source_unref(source);
   future.get();
 }
 
