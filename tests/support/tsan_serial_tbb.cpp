@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: Apache-2.0
-// Linked into every test of the ThreadSanitizer build (LFI_SANITIZE_THREAD):
+// Linked into every test and the `lfi` program of the ThreadSanitizer build
+// (LFI_SANITIZE_THREAD, tests/CMakeLists.txt):
 // TBB's scheduler is not instrumented, so the hand-over of work between its
 // threads is invisible to ThreadSanitizer and every task's access would be
 // reported. With TBB held to one thread what still runs on it (Embree's BVH
