@@ -122,11 +122,11 @@ Bench Bench::load(const std::filesystem::path& path) {
     b.camera.exposureFill = t.number("exposure_fill", 0.7, 0.01, 1.0);
     t.finish();
   }
-  auto backlight = [&](ConfigTable& t, bool parallel) {
+  auto backlight = [&](ConfigTable& t, bool collimated) {
     Backlight l{};
     l.distance_mm = t.number("distance_mm", std::nullopt, 0.01, 1e4);
     l.size_mm = t.number("size_mm", std::nullopt, 0.01, 1e4);
-    l.halfAngle_rad = parallel ? t.number("half_angle_rad", std::nullopt, 1e-6, 1.5) : 0;
+    l.halfAngle_rad = collimated ? t.number("half_angle_rad", std::nullopt, 1e-6, 1.5) : 0;
     t.finish();
     return l;
   };
