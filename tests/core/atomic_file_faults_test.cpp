@@ -10,6 +10,7 @@
 #include "lfi/core/exr_io.h"
 
 #include "lfi_test_support.h"
+#include "text_edit.h"
 
 #include <fmt/format.h>
 #include <gtest/gtest.h>
@@ -22,6 +23,8 @@
 
 #include <chrono>
 #include <csignal>
+#include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <functional>
@@ -35,13 +38,7 @@ namespace {
 namespace fs = std::filesystem;
 using lfi::Errc;
 using lfi::Overwrite;
-
-std::string readAll(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
+using lfi::testing_support::readText;
 
 // Version `v` of the file: a line naming it, then 256 KiB of one letter.
 std::string versionText(long v) {
@@ -93,7 +90,7 @@ class ReplacedFile : public Replaced {
  public:
   explicit ReplacedFile(fs::path p) : path_(std::move(p)) {}
   void write(long v) const override { lfi::writeFileAtomically(path_, Overwrite::Allow, versionText(v)); }
-  long read() const override { return wholeVersion(readAll(path_)); }
+  long read() const override { return wholeVersion(readText(path_)); }
 
  private:
   fs::path path_;
@@ -109,8 +106,8 @@ class ReplacedFolder : public Replaced {
     });
   }
   long read() const override {
-    const long a = wholeVersion(readAll(path_ / "lightfield.exr"));
-    return a == wholeVersion(readAll(path_ / "reference.json")) ? a : -1;
+    const long a = wholeVersion(readText(path_ / "lightfield.exr"));
+    return a == wholeVersion(readText(path_ / "reference.json")) ? a : -1;
   }
 
  private:
@@ -165,71 +162,79 @@ TEST_F(AtomicFileFaults, AFolderWriterKilledAtARandomMomentLeavesAWholeVersion) 
   killWritersAtRandom(ReplacedFolder(dir_ / "reference"), [this] { return temporaries(); });
 }
 
-// A disk that fills up mid-write: in a child of its own mount namespace, a 256 KiB tmpfs holds an old file and
-// an old folder; replacing each with 1 MiB is an Errc::Io error naming the file (the folder's, for the
-// folder), the old one stays whole, and no temporary is left. The child reports what failed on a pipe.
+// Whether this process may make a mount namespace of its own with a tmpfs at `disk` (root, unshare), asked in a
+// child that does nothing else.
+bool canMountATmpfs(const fs::path& disk) {
+  const pid_t child = ::fork();
+  if (child == 0) {
+    const bool ok = ::unshare(CLONE_NEWNS) == 0 && ::mount(nullptr, "/", nullptr, MS_REC | MS_PRIVATE, nullptr) == 0 &&
+                    ::mount("tmpfs", disk.c_str(), "tmpfs", 0, "size=256k") == 0;
+    ::_exit(ok ? 0 : 1);
+  }
+  int status = 0;
+  return child > 0 && ::waitpid(child, &status, 0) == child && WIFEXITED(status) && WEXITSTATUS(status) == 0;
+}
+
+// In a mount namespace of its own, a 256 KiB tmpfs at `disk` holds an old file and an old folder; replacing each
+// with 1 MiB must fail. Writes what went wrong to stderr and exits 0 when nothing did.
+[[noreturn]] void fillTheDisk(const fs::path& disk) {
+  std::string report;
+  const auto check = [&](bool ok, const std::string& what) {
+    if (!ok) report += what + "\n";
+  };
+  if (::unshare(CLONE_NEWNS) != 0 || ::mount(nullptr, "/", nullptr, MS_REC | MS_PRIVATE, nullptr) != 0 ||
+      ::mount("tmpfs", disk.c_str(), "tmpfs", 0, "size=256k") != 0) {
+    std::fputs("no tmpfs in a mount namespace of its own\n", stderr);
+    std::_Exit(1);
+  }
+  const fs::path file = disk / "calibration.json", folder = disk / "reference";
+  lfi::writeFileAtomically(file, Overwrite::Allow, std::string_view("old"));
+  lfi::writeFolderAtomically(folder, Overwrite::Allow,
+                             [](const fs::path& f) { std::ofstream(f / "a.txt") << "old folder"; });
+  const std::string big(1 << 20, 'x');
+  try {
+    lfi::writeFileAtomically(file, Overwrite::Allow, big);
+    check(false, "a 1 MiB file was written on a 256 KiB disk");
+  } catch (const lfi::Error& e) {
+    check(e.code() == Errc::Io, fmt::format("file: code {}, not Io: {}", static_cast<int>(e.code()), e.what()));
+    check(std::string(e.what()).find(file.string()) != std::string::npos, "file: not named: " + std::string(e.what()));
+  }
+  check(readText(file) == "old", "the old file was changed");
+  try {
+    // The folder's content written by the library's own writer (an image of noise, 1 MiB that does not
+    // compress): it, not this test, must see the write fail.
+    cv::Mat noise(512, 512, CV_32FC1);
+    cv::randu(noise, 0.f, 1.f);
+    lfi::writeFolderAtomically(folder, Overwrite::Allow, [&](const fs::path& f) {
+      lfi::writeRadianceExr(f / "image.exr", noise, {}, Overwrite::Allow);
+    });
+    check(false, "a 1 MiB folder was written on a 256 KiB disk");
+  } catch (const lfi::Error& e) {
+    check(e.code() == Errc::Io, fmt::format("folder: code {}, not Io: {}", static_cast<int>(e.code()), e.what()));
+    check(std::string(e.what()).find("image.exr") != std::string::npos,
+          "folder: the image not named: " + std::string(e.what()));
+  }
+  check(readText(folder / "a.txt") == "old folder", "the old folder was changed");
+  for (const auto& entry : fs::directory_iterator(disk))
+    check(!entry.path().filename().string().starts_with("."), "a temporary was left: " + entry.path().string());
+  ::umount(disk.c_str());
+  std::error_code ignored;
+  fs::remove_all(disk.parent_path(), ignored);  // this process's own test folder (its fixture's, pid in the name)
+  std::fputs(report.c_str(), stderr);
+  std::fflush(stderr);
+  std::_Exit(report.empty() ? 0 : 1);
+}
+
+// A disk that fills up mid-write: replacing a file or a folder is an Errc::Io error naming the file (the
+// folder's, for the folder), the old one stays whole, and no temporary is left.
 TEST_F(AtomicFileFaults, AFullDiskIsAClearErrorAndKeepsTheOldFile) {
-  int pipe[2];
-  ASSERT_EQ(::pipe(pipe), 0);
   const fs::path disk = dir_ / "disk";
   fs::create_directories(disk);
-  const pid_t child = ::fork();
-  ASSERT_GE(child, 0);
-  if (child == 0) {
-    ::close(pipe[0]);
-    std::string report;
-    const auto check = [&](bool ok, const std::string& what) {
-      if (!ok) report += what + "\n";
-    };
-    if (::unshare(CLONE_NEWNS) != 0 || ::mount(nullptr, "/", nullptr, MS_REC | MS_PRIVATE, nullptr) != 0 ||
-        ::mount("tmpfs", disk.c_str(), "tmpfs", 0, "size=256k") != 0) {
-      report = "SKIP: needs root and a mount namespace of its own (unshare)";
-    } else {
-      const fs::path file = disk / "calibration.json", folder = disk / "reference";
-      lfi::writeFileAtomically(file, Overwrite::Allow, std::string_view("old"));
-      lfi::writeFolderAtomically(folder, Overwrite::Allow,
-                                 [](const fs::path& f) { std::ofstream(f / "a.txt") << "old folder"; });
-      const std::string big(1 << 20, 'x');
-      try {
-        lfi::writeFileAtomically(file, Overwrite::Allow, big);
-        check(false, "a 1 MiB file was written on a 256 KiB disk");
-      } catch (const lfi::Error& e) {
-        check(e.code() == Errc::Io, fmt::format("file: code {}, not Io: {}", static_cast<int>(e.code()), e.what()));
-        check(std::string(e.what()).find(file.string()) != std::string::npos,
-              "file: not named: " + std::string(e.what()));
-      }
-      check(readAll(file) == "old", "the old file was changed");
-      try {
-        // The folder's content written by the library's own writer (an image of noise, 1 MiB that does not
-        // compress): it, not this test, must see the write fail.
-        cv::Mat noise(512, 512, CV_32FC1);
-        cv::randu(noise, 0.f, 1.f);
-        lfi::writeFolderAtomically(folder, Overwrite::Allow, [&](const fs::path& f) {
-          lfi::writeRadianceExr(f / "image.exr", noise, {}, Overwrite::Allow);
-        });
-        check(false, "a 1 MiB folder was written on a 256 KiB disk");
-      } catch (const lfi::Error& e) {
-        check(e.code() == Errc::Io, fmt::format("folder: code {}, not Io: {}", static_cast<int>(e.code()), e.what()));
-        check(std::string(e.what()).find("image.exr") != std::string::npos,
-              "folder: the image not named: " + std::string(e.what()));
-      }
-      check(readAll(folder / "a.txt") == "old folder", "the old folder was changed");
-      for (const auto& entry : fs::directory_iterator(disk))
-        check(!entry.path().filename().string().starts_with("."), "a temporary was left: " + entry.path().string());
-    }
-    (void)!::write(pipe[1], report.data(), report.size());
-    ::_exit(0);
-  }
-  ::close(pipe[1]);
-  std::string report;
-  char buffer[4096];
-  for (ssize_t n; (n = ::read(pipe[0], buffer, sizeof buffer)) > 0;) report.append(buffer, static_cast<size_t>(n));
-  ::close(pipe[0]);
-  int status = 0;
-  ASSERT_EQ(::waitpid(child, &status, 0), child);
-  ASSERT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << "status " << status;
-  if (report.starts_with("SKIP: ")) LFI_SKIP_WITHOUT_TOOL(report.substr(6));
-  EXPECT_EQ(report, "");
+  if (!canMountATmpfs(disk)) LFI_SKIP_WITHOUT_TOOL("root and a mount namespace of its own (unshare)");
+  // The writes run in a fresh process (the threadsafe death test runs this binary again): a fork of this one
+  // would inherit OpenEXR's thread pool, which an earlier test started, without its threads, and wait on it.
+  GTEST_FLAG_SET(death_test_style, "threadsafe");
+  EXPECT_EXIT(fillTheDisk(disk), ::testing::ExitedWithCode(0), "");
 }
 
 }  // namespace
