@@ -20,6 +20,7 @@
 #include <random>
 #include <string>
 
+namespace camera_calibration_test {
 namespace {
 
 using namespace lfi;
@@ -174,3 +175,4 @@ TEST_F(CameraCalibrationTest, RefusesABenchWithoutTheBoardAndABoardOfAnotherSize
 }
 
 }  // namespace
+}  // namespace camera_calibration_test

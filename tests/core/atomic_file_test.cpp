@@ -5,6 +5,7 @@
 
 #include <fmt/format.h>
 #include "lfi_test_support.h"
+#include "text_edit.h"
 
 #include <gtest/gtest.h>
 #include <sys/stat.h>
@@ -29,15 +30,9 @@ namespace {
 namespace fs = std::filesystem;
 using lfi::Errc;
 using lfi::Overwrite;
+using lfi::testing_support::readText;
 
 using lfi::testing_support::throwsError;
-
-std::string readAll(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
 
 void writePlain(const fs::path& path, const std::string& content) {
   std::ofstream(path, std::ios::binary) << content;
@@ -91,7 +86,7 @@ TEST_F(AtomicFile, InterruptedWriteKeepsOldFileAndRemovesTemporary) {
   EXPECT_EQ(seenTemporary.parent_path(), target.parent_path());
   EXPECT_NE(seenTemporary, target);
   EXPECT_FALSE(fs::exists(seenTemporary));
-  EXPECT_EQ(readAll(target), "old content");
+  EXPECT_EQ(readText(target), "old content");
   EXPECT_EQ(entries(), (Names{"calibration.json"}));
 }
 
@@ -151,7 +146,7 @@ TEST_F(AtomicFile, ASignalThatEndsTheProcessMidWriteLeavesNoTemporary) {
   });
   std::signal(SIGTERM, previous);
   EXPECT_EQ(handled.load(), 1);
-  EXPECT_EQ(readAll(dir_ / "kept.txt"), "written");
+  EXPECT_EQ(readText(dir_ / "kept.txt"), "written");
 }
 
 TEST_F(AtomicFile, RefuseKeepsExistingTarget) {
@@ -163,7 +158,7 @@ TEST_F(AtomicFile, RefuseKeepsExistingTarget) {
                                  [](const fs::path& temporary) { std::ofstream(temporary) << "replacement"; });
       },
       Errc::Exists, {target.string()}));
-  EXPECT_EQ(readAll(target), "original");
+  EXPECT_EQ(readText(target), "original");
   EXPECT_EQ(entries(), (Names{"result.csv"}));
 }
 
@@ -178,7 +173,7 @@ TEST_F(AtomicFile, RefuseDetectsTargetCreatedDuringWrite) {
         });
       },
       Errc::Exists, {target.string()}));
-  EXPECT_EQ(readAll(target), "theirs");
+  EXPECT_EQ(readText(target), "theirs");
   EXPECT_EQ(entries(), (Names{"race.txt"}));
 }
 
@@ -187,7 +182,7 @@ TEST_F(AtomicFile, RefuseCreatesMissingTarget) {
   lfi::writeFileAtomically(target, Overwrite::Refuse, [](const fs::path& temporary) {
     std::ofstream(temporary, std::ios::binary) << "fresh content";
   });
-  EXPECT_EQ(readAll(target), "fresh content");
+  EXPECT_EQ(readText(target), "fresh content");
   EXPECT_EQ(entries(), (Names{"fresh.txt"}));
 }
 
@@ -196,7 +191,7 @@ TEST_F(AtomicFile, AllowReplacesExistingTarget) {
   writePlain(target, "a much longer original content that must not leave a tail behind");
   lfi::writeFileAtomically(target, Overwrite::Allow,
                            [](const fs::path& temporary) { std::ofstream(temporary, std::ios::binary) << "short"; });
-  EXPECT_EQ(readAll(target), "short");
+  EXPECT_EQ(readText(target), "short");
   EXPECT_EQ(entries(), (Names{"result.csv"}));
 }
 
@@ -216,15 +211,15 @@ TEST_F(AtomicFile, StringOverloadWritesExactBytes) {
   const fs::path target = dir_ / "blob.bin";
   const std::string content("line 1\nline 2\r\n\0binary\xff\x00tail", 28);
   lfi::writeFileAtomically(target, Overwrite::Refuse, content);
-  EXPECT_EQ(readAll(target), content);
+  EXPECT_EQ(readText(target), content);
   EXPECT_EQ(fs::file_size(target), content.size());
   EXPECT_TRUE(throwsError([&] { lfi::writeFileAtomically(target, Overwrite::Refuse, "other"); }, Errc::Exists,
                           {target.string()}));
-  EXPECT_EQ(readAll(target), content);
+  EXPECT_EQ(readText(target), content);
   lfi::writeFileAtomically(target, Overwrite::Allow, "other");
-  EXPECT_EQ(readAll(target), "other");
+  EXPECT_EQ(readText(target), "other");
   lfi::writeFileAtomically(target, Overwrite::Allow, std::string_view());
-  EXPECT_EQ(readAll(target), "");
+  EXPECT_EQ(readText(target), "");
   EXPECT_TRUE(fs::exists(target));
   EXPECT_EQ(entries(), (Names{"blob.bin"}));
 }
@@ -256,7 +251,7 @@ TEST_F(AtomicFile, PublishedFileHasUmaskModeAndReplacementKeepsMode) {
     ASSERT_TRUE(out.good()) << "the temporary is not writable while it is written";
     out << "c";
   });
-  EXPECT_EQ(readAll(target), "c");
+  EXPECT_EQ(readText(target), "c");
   ASSERT_EQ(::stat(target.c_str(), &st), 0);
   EXPECT_EQ(st.st_mode & 0777, 0444u);
   // The same under a umask that takes the owner's write bit.
@@ -286,13 +281,13 @@ TEST_F(AtomicFile, ASymbolicLinkKeepsPointingAtTheWrittenFile) {
   lfi::writeFileAtomically(dir_ / "link-to-link.txt", Overwrite::Allow, "new");
   EXPECT_TRUE(fs::is_symlink(dir_ / "s.txt"));
   EXPECT_TRUE(fs::is_symlink(dir_ / "link-to-link.txt"));
-  EXPECT_EQ(readAll(dir_ / "real" / "s.txt"), "new");
+  EXPECT_EQ(readText(dir_ / "real" / "s.txt"), "new");
   for (const bool force : {false, true}) {
     const std::string name = force ? "forced.txt" : "dangling.txt";
     fs::create_symlink(fs::path("real") / ("to-" + name), dir_ / name);
     lfi::writeFileAtomically(dir_ / name, force ? Overwrite::Allow : Overwrite::Refuse, "x");
     EXPECT_TRUE(fs::is_symlink(dir_ / name)) << name;
-    EXPECT_EQ(readAll(dir_ / "real" / ("to-" + name)), "x") << name;
+    EXPECT_EQ(readText(dir_ / "real" / ("to-" + name)), "x") << name;
   }
   EXPECT_EQ(entries(), (Names{"dangling.txt", "forced.txt", "link-to-link.txt", "real", "s.txt"}));
   std::vector<std::string> real;
@@ -314,15 +309,15 @@ void writePackage(const fs::path& folder, const std::string& content) {
 TEST_F(AtomicFile, AFolderIsPublishedWholeAndNeverReplacedUnasked) {
   const fs::path target = dir_ / "package";
   lfi::writeFolderAtomically(target, Overwrite::Refuse, [](const fs::path& tmp) { writePackage(tmp, "one"); });
-  EXPECT_EQ(readAll(target / "a.txt"), "one");
-  EXPECT_EQ(readAll(target / "b.txt"), "oneone");
+  EXPECT_EQ(readText(target / "a.txt"), "one");
+  EXPECT_EQ(readText(target / "b.txt"), "oneone");
   EXPECT_EQ(entries(), (Names{"package"}));
   bool called = false;
   EXPECT_TRUE(throwsError(
       [&] { lfi::writeFolderAtomically(target, Overwrite::Refuse, [&](const fs::path&) { called = true; }); },
       Errc::Exists, {"package", "--force"}));
   EXPECT_FALSE(called) << "an existing folder is refused before any work";
-  EXPECT_EQ(readAll(target / "a.txt"), "one");
+  EXPECT_EQ(readText(target / "a.txt"), "one");
 }
 
 TEST_F(AtomicFile, AFolderReplacedWithAllowHoldsOnlyTheNewFiles) {
@@ -332,7 +327,7 @@ TEST_F(AtomicFile, AFolderReplacedWithAllowHoldsOnlyTheNewFiles) {
     writePlain(tmp / "stale.txt", "only in the old one");
   });
   lfi::writeFolderAtomically(target, Overwrite::Allow, [](const fs::path& tmp) { writePackage(tmp, "new"); });
-  EXPECT_EQ(readAll(target / "a.txt"), "new");
+  EXPECT_EQ(readText(target / "a.txt"), "new");
   EXPECT_FALSE(fs::exists(target / "stale.txt"));
   EXPECT_EQ(entries(), (Names{"package"})) << "the old folder is removed, no temporary is left";
 }
@@ -346,7 +341,7 @@ TEST_F(AtomicFile, AFolderWriteThatFailsLeavesTheOldFolderAndNoTemporary) {
                                             throw std::runtime_error("the writer failed");
                                           }),
                std::runtime_error);
-  EXPECT_EQ(readAll(target / "a.txt"), "old");
+  EXPECT_EQ(readText(target / "a.txt"), "old");
   EXPECT_EQ(entries(), (Names{"package"}));
 }
 
@@ -358,7 +353,7 @@ TEST_F(AtomicFile, AFileInTheWayOfAFolderIsAnError) {
                                    [](const fs::path& tmp) { writePackage(tmp, "x"); });
       },
       Errc::Io, {"package", "in the way"}));
-  EXPECT_EQ(readAll(dir_ / "package"), "a file");
+  EXPECT_EQ(readText(dir_ / "package"), "a file");
   EXPECT_EQ(entries(), (Names{"package"}));
 }
 
