@@ -5,7 +5,7 @@
 # (build/fuzz/corpus/<target>/, where new inputs go), then prints a table of
 # the executions and the result. A crash, sanitizer report, leak, timeout (10 s
 # an input) or out-of-memory input leaves build/fuzz/findings/<target>-<kind>-...
-# and fails the run.
+# and fails the run. FUZZ_JOBS targets run at a time (default: one a core).
 #   scripts/run-fuzzers.sh SECONDS [TARGET ...]      (default: every target)
 #   scripts/run-fuzzers.sh --runs N [TARGET ...]     each target until N executions
 set -uo pipefail
@@ -25,13 +25,10 @@ fi
 # The targets write each input to a file: a memory file system when there is one.
 if [[ -d /dev/shm && -w /dev/shm ]]; then export TMPDIR=/dev/shm; fi
 mkdir -p build/fuzz/findings build/fuzz/logs
-status=0
-rows=()
-for t in "${targets[@]}"; do
-  exe=build/fuzz/fuzz/fuzz_$t
-  if [[ ! -x $exe ]]; then echo "run-fuzzers: no target $exe (make fuzz builds them)" >&2; exit 2; fi
+jobs=${FUZZ_JOBS:-$(nproc)}
+fuzz_one() {  # fuzz_one TARGET: runs it, leaves its row of the table in build/fuzz/logs/TARGET.row
+  local t=$1 exe=build/fuzz/fuzz/fuzz_$1 log=build/fuzz/logs/$1.log rc runs time corpus result
   mkdir -p "build/fuzz/corpus/$t"
-  log=build/fuzz/logs/$t.log
   "$exe" "$limit" -timeout=10 -rss_limit_mb=4096 -print_final_stats=1 \
     -artifact_prefix="build/fuzz/findings/$t-" "build/fuzz/corpus/$t" "fuzz/corpus/$t" >"$log" 2>&1
   rc=$?
@@ -40,12 +37,28 @@ for t in "${targets[@]}"; do
   corpus=$(find "build/fuzz/corpus/$t" -type f | wc -l)
   if [[ $rc -eq 0 ]]; then result=clean; else
     result="FAILED (exit $rc; $(grep -m1 -oE 'ERROR: [A-Za-z]+: [^ ]+( [^ ]+)?|libFuzzer: [a-z-]+' "$log" || echo see log), $log"
-    status=1
   fi
-  rows+=("$(printf '%-26s %12s %8s %8s  %s' "$t" "${runs:-?}" "${time:-?}" "$corpus" "$result")")
-  echo "${rows[-1]}"
+  printf '%-26s %12s %8s %8s  %s\n' "$t" "${runs:-?}" "${time:-?}" "$corpus" "$result" | tee "build/fuzz/logs/$t.row"
+}
+for t in "${targets[@]}"; do
+  if [[ ! -x build/fuzz/fuzz/fuzz_$t ]]; then echo "run-fuzzers: no target build/fuzz/fuzz/fuzz_$t (make fuzz builds them)" >&2; exit 2; fi
+  rm -f "build/fuzz/logs/$t.row"
 done
+for t in "${targets[@]}"; do
+  while [[ $(jobs -rp | wc -l) -ge $jobs ]]; do wait -n; done
+  fuzz_one "$t" &
+done
+wait
 echo
 printf '%-26s %12s %8s %8s  %s\n' target executions time corpus result
-printf '%s\n' "${rows[@]}"
+status=0
+for t in "${targets[@]}"; do
+  if [[ ! -f build/fuzz/logs/$t.row ]]; then
+    printf '%-26s  FAILED (no result: the run script stopped)\n' "$t"
+    status=1
+    continue
+  fi
+  cat "build/fuzz/logs/$t.row"
+  if ! grep -q ' clean$' "build/fuzz/logs/$t.row"; then status=1; fi
+done
 exit $status
