@@ -77,7 +77,8 @@ TEST_F(ExrIo, ModifiedAttributeFailsChecksum) {
       {radiance, [](Imf::Header& h) { h.typedAttribute<Imf::StringAttribute>("lfi.description").value() = "area"; }},
   };
   int n = 0;
-  for (const auto& [original, edit] : edits) {
+  for (const auto& [source, edit] : edits) {
+    const fs::path& original = source;  // (clang 14 cannot capture a structured binding)
     Imf::Header header = Imf::InputFile(original.c_str()).header();
     edit(header);
     const fs::path path = file(fmt::format("edited-{}.exr", n++));

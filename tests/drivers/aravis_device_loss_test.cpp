@@ -75,7 +75,8 @@ TEST_F(AravisCameraTest, ADeviceGoneAtAnyRequestClosesTheCamera) {
       {"feature", [&](Camera& c) { c.getIntegerFeature("Width"); }},
   };
   auto camera = openFake();
-  for (const auto& [what, request] : requests) {
+  for (const auto& [what, request_] : requests) {
+    const auto& request = request_;  // (clang 14 cannot capture a structured binding)
     SCOPED_TRACE(what);
     camera->configure(triggered);
     if (what == "software trigger") camera->start(4);
