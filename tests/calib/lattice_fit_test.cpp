@@ -189,12 +189,13 @@ struct CameraTruth {
 
 std::vector<CameraPoint> cameraPoints(const CameraTruth& t, double noise_px, std::uint32_t seed) {
   std::mt19937 random(seed);
-  std::normal_distribution<double> normal(0, noise_px);
+  std::normal_distribution<double> normal(0, 1);  // (a deviation of 0 is outside the distribution's domain)
   std::vector<CameraPoint> out;
   for (int v = 2; v < t.image.height - 2; v += 2)
     for (int u = 2; u < t.image.width - 2; u += 2) {
       const Vec2 camera(u + 0.3, v - 0.2);
-      out.push_back({camera + Vec2(normal(random), normal(random)), t.display(camera), {u / 2, v / 2}});
+      const Vec2 error(noise_px * normal(random), noise_px * normal(random));
+      out.push_back({camera + error, t.display(camera), {u / 2, v / 2}});
     }
   return out;
 }
