@@ -3,9 +3,9 @@
 #   make study       install dependencies if missing, build the lfi program (Release), run the reference study
 #   make check       same set-up, then build everything (tests, fuzz replays, benchmarks) and run every test
 #   make check-format  fail on a source file that differs from .clang-format
-#   make check-asan  the tests under AddressSanitizer + UndefinedBehaviorSanitizer
+#   make check-asan  the tests under AddressSanitizer + UndefinedBehaviorSanitizer (clang, build/asan)
 #   make check-tsan  the threaded parts' tests under ThreadSanitizer
-#   make fuzz        the libFuzzer targets (clang), each for FUZZ_SECONDS on its corpus (docs/reliability.md)
+#   make fuzz        the libFuzzer targets (build/asan), each for FUZZ_SECONDS on its corpus (docs/reliability.md)
 JOBS ?= 2
 STUDY_OUT ?= out/study
 STUDY_QUALITY ?= default
@@ -49,7 +49,7 @@ check-tsan: deps
 	scripts/check-tsan.sh
 
 fuzz: deps
-	@cmake --preset fuzz $(CMAKE_WERROR) >/dev/null
+	@cmake --preset asan $(CMAKE_WERROR) >/dev/null
 	@cmake --build --preset fuzz -j $(JOBS)
 	scripts/run-fuzzers.sh $(FUZZ_SECONDS)
 

@@ -30,11 +30,9 @@ if(LFI_SANITIZE_THREAD)
   target_compile_definitions(lfi_options INTERFACE LFI_SANITIZE_THREAD)
 endif()
 if(LFI_FUZZ)
-  # Every library instrumented for libFuzzer's coverage and the sanitizers; the fuzz targets (fuzz/) add
-  # libFuzzer's main.
-  target_compile_options(lfi_options INTERFACE -fsanitize=fuzzer-no-link,address,undefined
-                         -fno-omit-frame-pointer -fno-sanitize-recover=undefined)
-  target_link_options(lfi_options INTERFACE -fsanitize=address,undefined)
+  # Every library instrumented for libFuzzer's coverage as well (the sanitizers come with LFI_SANITIZE): one
+  # build serves the tests under the sanitizers and the fuzz targets (fuzz/), which add libFuzzer's main.
+  target_compile_options(lfi_options INTERFACE -fsanitize=fuzzer-no-link)
 endif()
 
 # lfi_library(<name> [NO_INSTALL] SOURCES ... PUBLIC_DEPS ... PRIVATE_DEPS ...): one folder,
