@@ -57,11 +57,27 @@ simbench+=':LfiSimBench.RequestsItCannotDoAreRefusedWithTheReasonAndTheBenchGoes
 simbench+=':LfiSimBench.ABenchThatIsNotSimulatedAndAControlSocketNobodyServesAreNamed'
 # (test_mixed_wiring is not run: each of its cases runs the study's parts twice,
 # 80 s and more, and the served bench's threads are sim-bench's.)
+# Two lanes, one a core: the runs that serve a GigE Vision device on 127.0.0.1:3956 (aravis, served_camera,
+# sim_bench) take turns in the first; the others run beside them in the second.
+gige_lane() {
+  local status=0
+  run aravis 400 "$tests/test_drivers" || status=1
+  run served_camera 180 "$tests/test_served_camera" --gtest_filter="$served" || status=1
+  run sim_bench 240 "$tests/test_lfi_sim_bench" --gtest_filter="$simbench" || status=1
+  return $status
+}
+other_lane() {
+  local status=0
+  run usb_display 300 "$umockdev" "$tests/test_display" || status=1
+  run tile_renderer 120 "$tests/test_sim" --gtest_filter='Render.*:CameraSensorModel.*' || status=1
+  run sim_camera 120 "$tests/test_sim_camera" || status=1
+  return $status
+}
+gige_lane &
+gige=$!
+other_lane &
+other=$!
 status=0
-run tile_renderer 120 "$tests/test_sim" --gtest_filter='Render.*:CameraSensorModel.*' || status=1
-run sim_camera 120 "$tests/test_sim_camera" || status=1
-run aravis 400 "$tests/test_drivers" || status=1
-run usb_display 300 "$umockdev" "$tests/test_display" || status=1
-run served_camera 180 "$tests/test_served_camera" --gtest_filter="$served" || status=1
-run sim_bench 240 "$tests/test_lfi_sim_bench" --gtest_filter="$simbench" || status=1
+wait $gige || status=1
+wait $other || status=1
 exit $status
