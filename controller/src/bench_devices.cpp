@@ -26,8 +26,9 @@ std::unique_ptr<Camera> openBenchCamera(const BenchFile& bench, BenchExposures e
 
 namespace {
 
-// The bench's display with the optics its [display.optics] states in place of the device's own: what a light
-// field is encoded through (Display::show) and what a coded capture decodes with.
+// The bench's display with the optics its [display.optics] states in place of the device's own (or in place of
+// none, for a monitor): what a light field is encoded through (Display::show) and what a coded capture decodes
+// with.
 class CalibratedDisplay final : public Display {
  public:
   CalibratedDisplay(std::unique_ptr<Display> inner, const DisplayOpticsParams& optics, std::string benchFile)
@@ -38,10 +39,11 @@ class CalibratedDisplay final : public Display {
   void close() noexcept override { inner_->close(); }
   DisplayInfo info() const override {
     DisplayInfo info = inner_->info();
-    if (info.optics.type != optics_.type)
+    if (info.opticsStated && info.optics.type != optics_.type)
       fail(Errc::Config, "{}: [display.optics] states {} optics; display '{}' has {} optics", benchFile_,
            toString(optics_.type), inner_->name(), toString(info.optics.type));
     info.optics = optics_;
+    info.opticsStated = true;
     try {
       info.validate();
     } catch (const Error& e) {

@@ -83,6 +83,10 @@ void DisplayInfo::validate() const {
     if (!ok) fail(Errc::InvalidArgument, "display info {} = {} is outside {}", field, value, range);
   };
   auto finite = [](double v) { return std::isfinite(v); };
+  if (!opticsStated)
+    fail(Errc::InvalidArgument,
+         "the display does not state the optics in front of its panel (a monitor cannot): "
+         "give them in the bench file's [display.optics] or a display calibration file");
   check(panelWidth_px >= 1 && panelWidth_px <= 16384, "panelWidth_px", panelWidth_px, "[1, 16384]");
   check(panelHeight_px >= 1 && panelHeight_px <= 16384, "panelHeight_px", panelHeight_px, "[1, 16384]");
   check(finite(pixelPitch_mm) && pixelPitch_mm > 0 && pixelPitch_mm <= 10, "pixelPitch_mm", pixelPitch_mm, "(0, 10]");

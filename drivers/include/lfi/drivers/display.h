@@ -31,8 +31,10 @@
 
 #include <opencv2/core.hpp>
 
+#include <chrono>
 #include <cstdint>
 #include <initializer_list>
+#include <optional>
 #include <string>
 
 namespace lfi {
@@ -95,6 +97,9 @@ struct DisplayInfo {
   double pixelPitch_mm = 0;  // square panel pixels
   SubpixelLayout subpixels = SubpixelLayout::Mono;
   DisplayOpticsParams optics;
+  // False for a device that cannot say what is in front of its panel (a monitor: window:): `optics` means
+  // nothing until a calibration file or the bench file's [display.optics] gives them.
+  bool opticsStated = true;
   int viewCount = 0;  // distinct directions per lens, as the device states it
   int brightnessMin = 0;
   int brightnessMax = 0;
@@ -102,7 +107,7 @@ struct DisplayInfo {
   int subpixelsPerPixel() const { return subpixels == SubpixelLayout::Mono ? 1 : 3; }
   // The panel image type show() takes: CV_8UC1 for Mono, CV_8UC3 otherwise.
   int panelType() const;
-  // Throws Errc::InvalidArgument naming the first field out of range.
+  // Throws Errc::InvalidArgument naming the first field out of range, or saying that the optics are not stated.
   void validate() const;
 };
 
@@ -128,6 +133,8 @@ struct DisplayStatus {
   int brightness = 0;
   std::string lastError;            // the device's last error in words, empty if none
   std::uint64_t stallsCleared = 0;  // host side: endpoint halts cleared and frames resent since open()
+  // When the last frame was presented (window: the moment the present returned), if the backend knows it.
+  std::optional<std::chrono::steady_clock::time_point> lastPresent;
 };
 
 // A display device. Non-copyable, non-movable: one object owns one device.
