@@ -12,8 +12,8 @@ PACKAGES=(
   libembree-dev libtbb-dev
   # camera: GenICam through Aravis (tools for the loopback tests)
   libaravis-dev aravis-tools
-  # display: USB
-  libusb-1.0-0-dev
+  # display: USB; monitors (HDMI, DisplayPort, USB display adapters) through SDL2, tested on a real X server
+  libusb-1.0-0-dev libsdl2-dev xvfb
   # images, light fields, analysis
   libopencv-dev libopenexr-dev libimath-dev zlib1g-dev libpng-dev
   # Gray code patterns for the coded reference (OpenCV's structured_light)

@@ -3,12 +3,14 @@
 
 #include "lfi/drivers/aravis/aravis_camera.h"
 #include "lfi/drivers/usb/usb_display.h"
+#include "lfi/drivers/window/window_display.h"
 
 namespace lfi {
 
 void registerDriverBackends() {
   registerAravisBackend();
   registerUsbBackend();
+  registerWindowBackend();
 }
 
 }  // namespace lfi

@@ -7,8 +7,8 @@
 
 namespace lfi {
 
-// Registers aravis: (cameras, aravis/aravis_camera.h) and usb: (displays,
-// usb/usb_display.h). Idempotent.
+// Registers aravis: (cameras, aravis/aravis_camera.h), usb: and window:
+// (displays, usb/usb_display.h, window/window_display.h). Idempotent.
 void registerDriverBackends();
 
 }  // namespace lfi

@@ -2,7 +2,8 @@
 #pragma once
 // The display registry: display backends by URI scheme (backend_registry.h has
 // the URI grammar and the rules). Schemes: usb:<vid>:<pid>[/<serial>]
-// (lfi_drivers, docs/usb-display-protocol.md), sim:<scene-file> (lfi_sim).
+// (lfi_drivers, docs/usb-display-protocol.md), window:<output> (lfi_drivers,
+// window/window_display.h), sim:<scene-file> (lfi_sim).
 
 #include "lfi/drivers/backend_registry.h"
 #include "lfi/drivers/display.h"
