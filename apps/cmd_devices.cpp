@@ -13,6 +13,7 @@
 #include "lfi/drivers/aravis/aravis_camera.h"
 #include "lfi/drivers/backend_registry.h"
 #include "lfi/drivers/usb/usb_display.h"
+#include "lfi/drivers/window/window_display.h"
 
 #include <fmt/format.h>
 
@@ -82,6 +83,15 @@ int listDevices() {
     fmt::print("USB displays: cannot be listed ({})\n", e.what());
     listed = false;
   }
+  try {  // a bench computer with no display server and no KMS/DRM device has no outputs: not an error
+    const std::vector<lfi::WindowOutput> outputs = lfi::listWindowOutputs();
+    fmt::print("Monitor outputs: {}\n", outputs.empty() ? "none" : std::to_string(outputs.size()));
+    for (const lfi::WindowOutput& o : outputs)
+      fmt::print("  {}  ('{}' {}x{} at {:g} Hz, {} at ({}, {}))\n", o.uri(), o.name, o.width_px, o.height_px,
+                 o.refresh_hz, o.driver, o.x, o.y);
+  } catch (const lfi::Error& e) {
+    fmt::print("Monitor outputs: none ({})\n", e.what());
+  }
   const std::vector<lfi::AravisDeviceInfo> cameras = lfi::listAravisDevices();
   fmt::print("GenICam cameras: {}\n", cameras.empty() ? "none" : std::to_string(cameras.size()));
   for (const lfi::AravisDeviceInfo& c : cameras)
@@ -94,7 +104,8 @@ int listDevices() {
 
 Command addDevicesCommand(CLI::App& app) {
   auto* devices = app.add_subcommand(
-      "devices", "Check a bench file's devices; list the GenICam cameras and USB displays attached, with their URIs");
+      "devices",
+      "Check a bench file's devices; list the GenICam cameras, USB displays and monitor outputs, with their URIs");
   auto bench = std::make_shared<fs::path>();
   devices->add_option("bench", *bench, "Bench file whose devices to check")->check(CLI::ExistingFile);
   return {devices, [bench](const GlobalOptions&) {
