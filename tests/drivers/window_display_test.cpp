@@ -8,13 +8,14 @@
 #include "lfi/core/error.h"
 #include "lfi/drivers/builtin_backends.h"
 #include "lfi/drivers/display_registry.h"
+#include "lfi/emulation/xvfb_screen.h"
 
 #include "lfi_test_support.h"
-#include "xvfb_server.h"
 
 #include <gtest/gtest.h>
 #include <opencv2/core.hpp>
 
+#include <cstdlib>
 #include <memory>
 #include <optional>
 #include <string>
@@ -22,8 +23,8 @@
 namespace {
 
 using lfi::Errc;
+using lfi::emulation::XvfbScreen;
 using lfi::testing_support::throwsError;
-using lfi::testing_support::XvfbServer;
 
 class WindowDisplayTest : public ::testing::Test {
  protected:
@@ -31,10 +32,14 @@ class WindowDisplayTest : public ::testing::Test {
     lfi::registerDriverBackends();
     server_ = start(800, 800);
   }
-  std::unique_ptr<XvfbServer> start(int width, int height) {
+  void TearDown() override { ::unsetenv("DISPLAY"); }
+  // A server of its own for this test, the one the presenters it starts talk to.
+  static std::unique_ptr<XvfbScreen> start(int width, int height) {
     try {
-      return std::make_unique<XvfbServer>(width, height);
-    } catch (const std::runtime_error& e) {
+      auto server = std::make_unique<XvfbScreen>(width, height);
+      ::setenv("DISPLAY", server->display().c_str(), 1);
+      return server;
+    } catch (const lfi::Error& e) {
       ADD_FAILURE() << e.what();
       return nullptr;
     }
@@ -54,7 +59,7 @@ class WindowDisplayTest : public ::testing::Test {
     return cv::countNonZero(diff);
   }
 
-  std::unique_ptr<XvfbServer> server_;
+  std::unique_ptr<XvfbScreen> server_;
 };
 
 TEST_F(WindowDisplayTest, TheServersOutputIsListedWithItsMode) {
@@ -127,12 +132,19 @@ TEST_F(WindowDisplayTest, AFourKFrameArrivesWhole) {
   server_.reset();
   server_ = start(3840, 2160);
   ASSERT_TRUE(server_);
-  auto display = lfi::openDisplay("window:0?pitch_mm=0.03&mode=3840x2160");
-  for (int frame = 0; frame < 2; ++frame) {
-    const cv::Mat panel = noise(3840, 2160, CV_8UC3, 20 + frame);
-    display->show(panel);
-    EXPECT_EQ(differing(server_->screen(), panel), 0) << "frame " << frame;
+  {
+    auto display = lfi::openDisplay("window:0?pitch_mm=0.03&mode=3840x2160");
+    for (int frame = 0; frame < 2; ++frame) {
+      const cv::Mat panel = noise(3840, 2160, CV_8UC3, 20 + frame);
+      display->show(panel);
+      EXPECT_EQ(differing(server_->screen(), panel), 0) << "frame " << frame;
+    }
   }
+  // An 11520 x 2160 mono panel in the same mode: its bytes, row by row, are the output's RGB bytes.
+  auto display = lfi::openDisplay("window:0?pitch_mm=0.01&mode=3840x2160&layout=mono_subpixels");
+  const cv::Mat panel = noise(11520, 2160, CV_8UC1, 22);
+  display->show(panel);
+  EXPECT_EQ(differing(server_->screen().reshape(1), panel), 0) << "mono_subpixels";
 }
 
 TEST_F(WindowDisplayTest, AModeOtherThanThePanelsIsRefusedNamingTheOutputAndBothModes) {
@@ -161,7 +173,7 @@ TEST_F(WindowDisplayTest, AServerKilledMidRunIsADeviceErrorAndTheDisplayOpensOnT
   auto display = lfi::openDisplay("window:0?pitch_mm=0.1");
   const cv::Mat panel = noise(800, 800, CV_8UC3, 30);
   display->show(panel);
-  server_->kill();
+  server_->stop(/*kill=*/true);
   EXPECT_TRUE(throwsError([&] { display->show(panel); }, Errc::Device, {"window:0", "presenter ended"}));
   EXPECT_EQ(display->state(), lfi::Display::State::Closed);
   server_.reset();
@@ -174,6 +186,7 @@ TEST_F(WindowDisplayTest, AServerKilledMidRunIsADeviceErrorAndTheDisplayOpensOnT
 
 TEST_F(WindowDisplayTest, WithNoServerTheDisplayIsNotFound) {
   server_.reset();
+  ::unsetenv("DISPLAY");
   EXPECT_TRUE(throwsError([] { lfi::openDisplay("window:0?pitch_mm=0.1"); }, Errc::NotFound, {"window:0", "SDL"}));
 }
 
