@@ -6,9 +6,11 @@
 
 #include "lfi/core/error.h"
 #include "lfi/drivers/display_calibration_file.h"
+#include "lfi/drivers/driver_trace.h"
 #include "presenter_process.h"
 #include "presenter_protocol.h"
 
+#include <fmt/format.h>
 #include <opencv2/imgproc.hpp>
 
 #include <sys/mman.h>
@@ -87,6 +89,9 @@ class WindowDisplay final : public Display {
       close();
       throw;
     }
+    traceDriverCall("window", name_, "presenter",
+                    fmt::format("{} output '{}' {}x{} at {} mHz, vsync {}", ready.driver, ready.textView(),
+                                ready.width_px, ready.height_px, ready.refresh_mHz, ready.vsync ? "on" : "off"));
     state_ = State::Open;
     framesPresented_ = 0;
     lastPresent_.reset();
@@ -189,6 +194,8 @@ class WindowDisplay final : public Display {
              "{}: {}", name_,
              reply.op == PresenterOp::Presented ? std::string("the presenter answered for another frame")
                                                 : std::string(reply.textView()));
+      traceDriverCall("window", name_, op == PresenterOp::Show ? "present" : "present black",
+                      fmt::format("frame {} at {} ns", sequence, reply.presentTime_ns));
       presentedSequence_ = sequence;
       ++framesPresented_;
       lastPresent_ = std::chrono::steady_clock::time_point(std::chrono::nanoseconds(reply.presentTime_ns));
