@@ -27,6 +27,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <fstream>
+#include <map>
 #include <memory>
 #include <optional>
 #include <string>
@@ -172,6 +173,10 @@ std::vector<std::string> childEnvironment(const lfi::emulation::ServedBench& ben
   env.push_back(std::string(kControlSocketVariable) + "=" + control.string());
   env.push_back("LFI_SIM_BENCH_CAMERA=" + bench.cameraUri().text());
   env.push_back("LFI_SIM_BENCH_DISPLAY=" + bench.displayUri().text());
+  if (const std::string x = bench.xDisplay(); !x.empty()) {  // (a monitor: its X server, in place of the caller's)
+    std::erase_if(env, [](const std::string& e) { return e.starts_with("DISPLAY=") || e.starts_with("WAYLAND_"); });
+    env.push_back("DISPLAY=" + x);
+  }
   return env;
 }
 
@@ -218,11 +223,12 @@ int runSimBench(SimBenchArgs a) {
     fmt::print(
         "camera   {}\ndisplay  {}\ncontrol  {}\n"
         "Run a program against this bench with its devices in the environment:\n"
-        "  UMOCKDEV_DIR={} LD_PRELOAD={} {}={} lfi run BENCH\n"
-        "(BENCH names the camera and display by the URIs above: data/benches/inspection_hil.toml.)\n"
+        "  UMOCKDEV_DIR={} LD_PRELOAD={} {}={}{} lfi run BENCH\n"
+        "(BENCH names the camera and display by the URIs above: data/benches/inspection_hil.toml, or "
+        "inspection_window.toml for --display window.)\n"
         "SIGINT or SIGTERM stops.\n",
         bench.cameraUri(), bench.displayUri(), socket.string(), std::getenv("UMOCKDEV_DIR"), std::getenv("LD_PRELOAD"),
-        kControlSocketVariable, socket.string());
+        kControlSocketVariable, socket.string(), bench.xDisplay().empty() ? "" : " DISPLAY=" + bench.xDisplay());
     std::fflush(stdout);
   }
   for (;;) {
@@ -250,7 +256,8 @@ int runSimBench(SimBenchArgs a) {
 Command addSimBenchCommand(CLI::App& app) {
   auto* command = app.add_subcommand(
       "sim-bench",
-      "Serve a simulated bench to the real drivers (GigE Vision camera, USB display) and run COMMAND against it");
+      "Serve a simulated bench to the real drivers (GigE Vision camera; USB display or a monitor on an X server) and "
+      "run COMMAND against it");
   auto a = std::make_shared<SimBenchArgs>();
   a->options.display.serial = "LFI-SIM-0001";
   addBenchArgument(*command, a->bench);
@@ -261,6 +268,12 @@ Command addSimBenchCommand(CLI::App& app) {
   command->add_option("--camera-serial", a->options.camera.serial, "Camera serial (id: lfi-SimCamera-<serial>)")
       ->capture_default_str();
   command->add_option("--display-serial", a->options.display.serial, "USB display serial")->capture_default_str();
+  command
+      ->add_option("--display", a->options.displayKind,
+                   "How the display is served: usb (an lfi USB display) or window (a monitor: an X server, Xvfb, "
+                   "with the panel's mode, for the window: backend)")
+      ->transform(CLI::CheckedTransformer(std::map<std::string, lfi::emulation::ServedDisplay>{
+          {"usb", lfi::emulation::ServedDisplay::Usb}, {"window", lfi::emulation::ServedDisplay::Window}}));
   command->add_option("--control", a->control, "Control socket (default: in the bench's private TMPDIR)");
   command->add_option("--threads", a->options.renderThreads, "Render threads (0 = all cores)")
       ->transform(threadCount());

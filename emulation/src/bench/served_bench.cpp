@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 // ServedBench (served_bench.h): a SimImager behind a GvCameraServer, and an
-// EmulatedUsbDisplay whose panel drives the imager's SimBench.
+// EmulatedUsbDisplay or an X server (XvfbScreen) whose panel drives the
+// imager's SimBench.
 
 #include "lfi/emulation/served_bench.h"
 
@@ -10,6 +11,8 @@
 #include "lfi/sim/devices/sim_camera.h"
 
 #include <fmt/format.h>
+#include <opencv2/core.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include <chrono>
 #include <mutex>
@@ -35,12 +38,17 @@ proto::SubpixelCode subpixelCode(SubpixelLayout layout) {
   return proto::SubpixelCode::Mono;
 }
 
-// The USB device that is the scene's display: its panel, optics and brightness range, the identity given.
-EmulatedDisplayConfig displayConfig(const sim::SimBench& bench, EmulatedDisplayConfig config) {
+// The scene's display; Errc::Config for a scene without one.
+const DisplayInfo& sceneDisplay(const sim::SimBench& bench) {
   if (!bench.hasDisplay())
     fail(Errc::Config, "simulated bench: the scene file '{}' has no [display] table (docs/scene-files.md)",
          bench.sceneFile().string());
-  const DisplayInfo& info = bench.description().display->info;
+  return bench.description().display->info;
+}
+
+// The USB device that is the scene's display: its panel, optics and brightness range, the identity given.
+EmulatedDisplayConfig displayConfig(const sim::SimBench& bench, EmulatedDisplayConfig config) {
+  const DisplayInfo& info = sceneDisplay(bench);
   constexpr int kMaxU16 = 0xffff;
   if (info.panelWidth_px > kMaxU16 || info.panelHeight_px > kMaxU16 || info.brightnessMax > kMaxU16)
     fail(Errc::Config,
@@ -56,6 +64,35 @@ EmulatedDisplayConfig displayConfig(const sim::SimBench& bench, EmulatedDisplayC
   config.viewCount = info.viewCount;
   config.calibration = proto::toCalibrationBlock(info.pixelPitch_mm, info.optics);
   return config;
+}
+
+// The window: layout that shows the panel on an output of its own size.
+const char* windowLayout(SubpixelLayout layout) {
+  switch (layout) {
+    case SubpixelLayout::RgbStripe:
+      return "rgb";
+    case SubpixelLayout::BgrStripe:
+      return "bgr";
+    case SubpixelLayout::Mono:
+      break;
+  }
+  return "mono";
+}
+
+// The panel image an X server's screen (RGB) holds in that layout.
+cv::Mat panelOnScreen(const cv::Mat& rgb, SubpixelLayout layout) {
+  cv::Mat panel;
+  switch (layout) {
+    case SubpixelLayout::RgbStripe:
+      return rgb;
+    case SubpixelLayout::BgrStripe:
+      cv::cvtColor(rgb, panel, cv::COLOR_RGB2BGR);
+      return panel;
+    case SubpixelLayout::Mono:
+      break;
+  }
+  cv::extractChannel(rgb, panel, 0);  // (the window: display's mono layout puts the level in all three)
+  return panel;
 }
 
 }  // namespace
@@ -79,7 +116,9 @@ struct ServedBench::Impl {
 
   mutable std::mutex devicesMutex;  // the servers' lifetimes
   std::unique_ptr<GvCameraServer> camera;
-  std::unique_ptr<EmulatedUsbDisplay> display;
+  std::unique_ptr<EmulatedUsbDisplay> display;  // the display served over USB, or
+  mutable std::mutex monitorMutex;              // (taken after devicesMutex, before displayMutex)
+  std::unique_ptr<XvfbScreen> monitor;          // the display served as a monitor
   double packetLoss = 0;
 
   mutable std::mutex countersMutex;
@@ -99,8 +138,24 @@ struct ServedBench::Impl {
     return imager->bench();
   }
 
+  // What the monitor's X server shows now goes to the bench when it changed: the panel of each frame the
+  // window: display presented before the frame was asked for.
+  void watchMonitor() {
+    std::lock_guard watching(monitorMutex);
+    if (!monitor->running()) return;
+    const cv::Mat shown = panelOnScreen(monitor->screen(), displayInfo.subpixels);
+    std::lock_guard lock(displayMutex);
+    if (lit && cv::norm(shown, panel, cv::NORM_INF) == 0) return;
+    panel = shown.clone();
+    lit = true;
+    bench().showPanel(panel);
+    std::lock_guard counting(countersMutex);
+    ++counters.panelsPresented;
+  }
+
   void fill(const ServedFrameRequest& request, cv::Mat& image) {
     const auto start = std::chrono::steady_clock::now();
+    if (monitor) watchMonitor();
     {
       std::lock_guard lock(partMutex);
       imager->capture(imager->resolve(request.settings(), "served camera '" + options.camera.serial + "'"),
@@ -158,20 +213,25 @@ ServedBench::ServedBench(ServedBenchOptions options) : impl_(new Impl) {
   d.imager->setRenderOptions(d.options.renderThreads, {});
   d.part = d.options.scene;
   d.camera0 = d.imager->camera();
-  d.options.display = displayConfig(d.imager->bench(), d.options.display);
-  d.displayInfo = d.imager->bench().description().display->info;
+  d.displayInfo = sceneDisplay(d.imager->bench());
+  const bool usb = d.options.displayKind == ServedDisplay::Usb;
+  if (usb) d.options.display = displayConfig(d.imager->bench(), d.options.display);
   d.backlight = d.imager->bench().backlight();
   d.replay(d.imager->bench());
+  if (!usb) d.monitor = std::make_unique<XvfbScreen>(d.displayInfo.panelWidth_px, d.displayInfo.panelHeight_px);
   d.startCamera();
-  d.display = std::make_unique<EmulatedUsbDisplay>(d.options.display);
-  d.display->observePanel(d.observer());
-  d.display->plug();
+  if (usb) {
+    d.display = std::make_unique<EmulatedUsbDisplay>(d.options.display);
+    d.display->observePanel(d.observer());
+    d.display->plug();
+  }
 }
 
 ServedBench::~ServedBench() {
   // The devices first: their threads call into the part.
   impl_->display.reset();
   impl_->camera.reset();
+  impl_->monitor.reset();
 }
 
 DeviceUri ServedBench::cameraUri() const {
@@ -180,8 +240,21 @@ DeviceUri ServedBench::cameraUri() const {
 }
 
 DeviceUri ServedBench::displayUri() const {
-  const EmulatedDisplayConfig& c = impl_->options.display;
+  const Impl& d = *impl_;
+  if (d.monitor) {
+    const DisplayInfo& p = d.displayInfo;
+    return {.scheme = "window",
+            .path = "0",
+            .query = {{"pitch_mm", fmt::format("{}", p.pixelPitch_mm)},
+                      {"mode", fmt::format("{}x{}", p.panelWidth_px, p.panelHeight_px)},
+                      {"layout", windowLayout(p.subpixels)}}};
+  }
+  const EmulatedDisplayConfig& c = d.options.display;
   return {.scheme = "usb", .path = fmt::format("{:04x}:{:04x}/{}", c.vendorId, c.productId, c.serial)};
+}
+
+std::string ServedBench::xDisplay() const {
+  return impl_->monitor ? impl_->monitor->display() : std::string();
 }
 
 bool ServedBench::putPart(const fs::path& scene) {
@@ -257,8 +330,13 @@ void ServedBench::setPacketLoss(double ratio) {
 void ServedBench::unplugDisplay() {
   Impl& d = *impl_;
   std::lock_guard lock(d.devicesMutex);
-  if (!d.display->state().plugged) return;
-  d.display->unplug();
+  if (!displayPlugged()) return;
+  if (d.monitor) {
+    std::lock_guard watching(d.monitorMutex);
+    d.monitor->stop(/*kill=*/true);  // (the server gone at once, as a pulled cable or a crash)
+  } else {
+    d.display->unplug();
+  }
   std::lock_guard dark(d.displayMutex);  // (a display without power shows nothing)
   d.lit = false;
   d.bench().blankPanel();
@@ -267,17 +345,31 @@ void ServedBench::unplugDisplay() {
 void ServedBench::plugDisplay() {
   Impl& d = *impl_;
   std::lock_guard lock(d.devicesMutex);
-  if (d.display->state().plugged) return;
-  d.display->plug();
+  if (displayPlugged()) return;
+  if (d.monitor) {
+    std::lock_guard watching(d.monitorMutex);
+    d.monitor->start();
+  } else {
+    d.display->plug();
+  }
   std::lock_guard counting(d.countersMutex);
   ++d.counters.displayReplugs;
 }
 
 bool ServedBench::displayPlugged() const {
+  if (impl_->monitor) {
+    std::lock_guard watching(impl_->monitorMutex);
+    return impl_->monitor->running();
+  }
   return impl_->display->state().plugged;
 }
 
 EmulatedUsbDisplay& ServedBench::display() {
+  if (!impl_->display)
+    fail(Errc::InvalidArgument,
+         "simulated bench: its display is served as a monitor ({}); the USB display's faults "
+         "do not apply to it",
+         displayUri().text());
   return *impl_->display;
 }
 

@@ -23,16 +23,25 @@
 // camera's input line Line0 (its part sensor): a camera acquiring with
 // TriggerSource Line0 exposes one frame of it.
 //
+// The display may be served as a monitor instead (ServedDisplay::Window): a
+// real X server, Xvfb, with the panel's mode (xvfb_screen.h), which the
+// `window:` backend shows its panels on. The served camera reads the server's
+// screen as it makes each frame, and the panel it holds goes to the bench:
+// what the X server shows is what the tracer emits.
+//
 // Faults for tests: the camera off the network and back (its process killed
 // and restarted, as a client sees it), the display unplugged and plugged in
-// again (dark while unplugged), GVSP packet loss, and every fault the emulated
+// again (dark while unplugged; a monitor's X server killed and started again
+// on the same display number), GVSP packet loss, and every fault the emulated
 // USB display knows (display()).
 //
-// Thread-safe. Needs umockdev's testbed (the `usb:` client runs with its
-// preload library: emulated_usb_display.h). Units: the scene's (mm).
+// Thread-safe. The USB display needs umockdev's testbed (the `usb:` client
+// runs with its preload library: emulated_usb_display.h). Units: the scene's
+// (mm).
 
 #include "lfi/emulation/emulated_usb_display.h"
 #include "lfi/emulation/gv_camera_server.h"
+#include "lfi/emulation/xvfb_screen.h"
 
 #include "lfi/drivers/device_uri.h"
 
@@ -43,9 +52,13 @@
 
 namespace lfi::emulation {
 
+// How the bench's display is served: as an lfi USB display (usb:) or as a monitor on an X server (window:).
+enum class ServedDisplay { Usb, Window };
+
 struct ServedBenchOptions {
-  std::filesystem::path scene;    // the bench with its intact part: [camera], [display] and the part
-  GvCameraServerOptions camera;   // interface and identity; the sensor size is the scene's
+  std::filesystem::path scene;   // the bench with its intact part: [camera], [display] and the part
+  GvCameraServerOptions camera;  // interface and identity; the sensor size is the scene's
+  ServedDisplay displayKind = ServedDisplay::Usb;
   EmulatedDisplayConfig display;  // USB identity and bus position; panel, optics and brightness the scene's
   int renderThreads = 0;          // 0: all cores
 };
@@ -71,9 +84,12 @@ class ServedBench {
   ServedBench(const ServedBench&) = delete;
   ServedBench& operator=(const ServedBench&) = delete;
 
-  // The URIs a bench file names the devices by: "aravis:<id>", "usb:<vid>:<pid>/<serial>".
+  // The URIs a bench file names the devices by: "aravis:<id>", "usb:<vid>:<pid>/<serial>" or
+  // "window:0?pitch_mm=<pitch>&mode=<w>x<h>&layout=<layout>" (the panel's pitch, mode and layout).
   DeviceUri cameraUri() const;
   DeviceUri displayUri() const;
+  // The X server a window: client talks to (its DISPLAY), or empty for a USB display.
+  std::string xDisplay() const;
 
   // Puts the part of `scene` under the camera, then fires the line; returns
   // whether that triggered a frame. Throws Errc::Config naming the file when
@@ -95,7 +111,8 @@ class ServedBench {
   void unplugDisplay();
   void plugDisplay();
   bool displayPlugged() const;
-  // The emulated device, for its own faults (stalls, corrupt or short transfers, silence).
+  // The emulated device, for its own faults (stalls, corrupt or short transfers, silence). Throws
+  // Errc::InvalidArgument for a display served as a monitor.
   EmulatedUsbDisplay& display();
 
   ServedBenchCounters counters() const;
