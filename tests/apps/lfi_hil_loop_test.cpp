@@ -5,9 +5,12 @@
 // inspection_coded_sim.toml) and once through the aravis: and usb: backends
 // against `lfi sim-bench` (data/benches/inspection_hil.toml), for both ways of
 // taking the reference: the simulated light field sensor and the coded
-// capture through the display and camera. Under sim-bench one script takes the
-// reference and inspects the parts one after another, putting each under the
-// camera with `lfi bench-control part`, as a line would.
+// capture through the display and camera; and the coded capture once more
+// through the aravis: and window: backends against `lfi sim-bench --display
+// window`, whose display is an X server (data/benches/inspection_window.toml).
+// Under sim-bench one script takes the reference and inspects the parts one
+// after another, putting each under the camera with `lfi bench-control part`,
+// as a line would.
 
 #include "gige_device_process.h"
 #include "lfi_process.h"
@@ -78,12 +81,13 @@ std::vector<TraceLine> readTrace(const fs::path& file) {
   return lines;
 }
 
-// Param: the reference's capture, "sim" (the simulated light field sensor) or "coded" (through the display).
+// Param: the reference's capture, "sim" (the simulated light field sensor) or "coded" (through the display),
+// with the usb: display; or "window": the coded capture with the window: display.
 class LfiHilLoop : public testing::TestWithParam<std::string> {
  protected:
   void SetUp() override {
     const std::string scenes = (source_ / "data" / "scenes").string() + "/";
-    const bool coded = GetParam() == "coded";
+    const bool coded = GetParam() != "sim";
     // In process: the shipped simulated bench of this capture.
     std::string text =
         readText(source_ / "data" / "benches" / (coded ? "inspection_coded_sim.toml" : "inspection_sim.toml"));
@@ -94,10 +98,11 @@ class LfiHilLoop : public testing::TestWithParam<std::string> {
                 "folder = \"" + (folder_ / "in-process" / "inspections").string());
     simBench_ = folder_.write("sim-bench.toml", text);
     // Through the real drivers: the shipped bench that names sim-bench's devices, with this capture.
-    text = readText(source_ / "data" / "benches" / "inspection_hil.toml");
-    replaceOnce(text, "folder = \"../../out/bench-hil/reference",
+    const std::string served = window() ? "bench-window" : "bench-hil";
+    text = readText(source_ / "data" / "benches" / (window() ? "inspection_window.toml" : "inspection_hil.toml"));
+    replaceOnce(text, "folder = \"../../out/" + served + "/reference",
                 "folder = \"" + (folder_ / "hil" / "reference").string());
-    replaceOnce(text, "folder = \"../../out/bench-hil/inspections",
+    replaceOnce(text, "folder = \"../../out/" + served + "/inspections",
                 "folder = \"" + (folder_ / "hil" / "inspections").string());
     if (!coded) replaceOnce(text, "uri = \"coded:\"", "uri = \"sim:" + scenes + "inspection_bench.toml\"");
     hilBench_ = folder_.write("hil-bench.toml", text);
@@ -132,9 +137,10 @@ class LfiHilLoop : public testing::TestWithParam<std::string> {
                 out + ".status\n";
     }
     const fs::path file = folder_.write("hil.sh", script);
-    const auto r =
-        runLfi("-q sim-bench " + shellQuoted(simBench_.string()) + " -- sh " + shellQuoted(file.string()), true,
-               "LFI_DRIVER_TRACE=" + shellQuoted(remoteTrace().string()) + " timeout --foreground --signal=KILL 600 ");
+    const auto r = runLfi(
+        "-q sim-bench " + shellQuoted(simBench_.string()) + (window() ? " --display window" : "") + " -- sh " +
+            shellQuoted(file.string()),
+        true, "LFI_DRIVER_TRACE=" + shellQuoted(remoteTrace().string()) + " timeout --foreground --signal=KILL 600 ");
     EXPECT_EQ(r.status, 0) << r.output;
     std::map<std::string, Inspection> out;
     for (const StudyPart& part : studyParts()) {
@@ -162,8 +168,11 @@ class LfiHilLoop : public testing::TestWithParam<std::string> {
          {"camera.open", "camera.configure", "camera.start", "camera.trigger", "camera.grab", "camera.stop",
           "camera.close", "display.open", "display.show", "display.status", "display.close"})
       EXPECT_TRUE(made.count(call)) << call << ": the bench path makes it (a sim: device saw none)";
-    // What each interface call must have done on the wire.
-    const std::map<std::string, std::vector<std::string>> wire = {
+    // What each interface call must have done on the wire: the USB display's requests, or the window:
+    // display's presenter and its presents (a monitor's status and brightness are not the wire's).
+    const std::map<std::string, std::vector<std::string>> windowWire = {
+        {"display.open", {"presenter"}}, {"display.show", {"present"}}, {"display.blank", {"present black"}}};
+    std::map<std::string, std::vector<std::string>> wire = {
         {"camera.open", {"arv_camera_new"}},
         {"camera.configure",
          {"arv_camera_set_exposure_time", "arv_camera_set_pixel_format_from_string", "arv_camera_set_trigger"}},
@@ -176,13 +185,17 @@ class LfiHilLoop : public testing::TestWithParam<std::string> {
         {"display.status", {"GET_STATUS"}},
         {"display.blank", {"BLANK"}},
         {"display.brightness", {"SET_BRIGHTNESS"}}};
+    if (window()) {
+      std::erase_if(wire, [](const auto& w) { return w.first.starts_with("display."); });
+      wire.insert(windowWire.begin(), windowWire.end());
+    }
     std::map<std::string, std::set<std::string>>
         since;  // per process and interface layer: wire calls since its last line
     std::map<std::string, int> checked;
     for (const TraceLine& l : remote) {
       const bool camera = l.layer == "camera" || l.layer == "aravis";
       std::set<std::string>& pending = since[l.pid + (camera ? "camera" : "display")];
-      if (l.layer == "aravis" || l.layer == "usb") {
+      if (l.layer == "aravis" || l.layer == "usb" || l.layer == "window") {
         pending.insert(l.call);
         continue;
       }
@@ -197,6 +210,8 @@ class LfiHilLoop : public testing::TestWithParam<std::string> {
       EXPECT_TRUE(!wire.count(call) || checked[call] > 0) << call << " never went through the real driver whole";
   }
 
+  static bool window() { return GetParam() == "window"; }
+
   // The driver traces (driver_trace.h) of the two wirings' processes.
   fs::path localTrace() const { return folder_ / "in-process.trace"; }
   fs::path remoteTrace() const { return folder_ / "hil.trace"; }
@@ -208,9 +223,11 @@ class LfiHilLoop : public testing::TestWithParam<std::string> {
   std::map<std::string, fs::path> scenes_;
 };
 
-INSTANTIATE_TEST_SUITE_P(Captures, LfiHilLoop, testing::Values("sim", "coded"),
+INSTANTIATE_TEST_SUITE_P(Captures, LfiHilLoop, testing::Values("sim", "coded", "window"),
                          [](const testing::TestParamInfo<std::string>& p) {
-                           return p.param == "sim" ? std::string("SimulatedSensor") : std::string("Coded");
+                           return p.param == "sim"     ? std::string("SimulatedSensor")
+                                  : p.param == "coded" ? std::string("Coded")
+                                                       : std::string("CodedOnAMonitor");
                          });
 
 // The verdicts agree part by part, and are the truth: the intact part passes, every defect part fails.
