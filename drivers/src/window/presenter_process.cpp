@@ -15,8 +15,10 @@
 #include <cerrno>
 #include <cstdlib>
 #include <cstring>
+#include <initializer_list>
 #include <optional>
 #include <thread>
+#include <utility>
 
 extern char** environ;
 
@@ -34,6 +36,27 @@ std::vector<char*> argv(const fs::path& exe, const std::vector<std::string>& arg
   for (const std::string& a : args) v.push_back(const_cast<char*>(a.c_str()));
   v.push_back(nullptr);
   return v;
+}
+
+// Starts `presenter` with `args` and the child's descriptors (to) made of the child's ends (from), which are
+// closed here then; on failure the parent's ends `ours` are closed as well. Throws Errc::Device after `prefix`.
+pid_t spawn(const fs::path& presenter, const std::vector<std::string>& args,
+            std::initializer_list<std::pair<int, int>> childEnds, std::initializer_list<int> ours,
+            const std::string& prefix) {
+  posix_spawn_file_actions_t actions;
+  posix_spawn_file_actions_init(&actions);
+  for (const auto& [from, to] : childEnds) posix_spawn_file_actions_adddup2(&actions, from, to);
+  std::string exe;
+  std::vector<char*> v = argv(presenter, args, exe);
+  pid_t pid = 0;
+  const int rc = ::posix_spawn(&pid, exe.c_str(), &actions, nullptr, v.data(), environ);
+  posix_spawn_file_actions_destroy(&actions);
+  for (const auto& end : childEnds) ::close(end.first);
+  if (rc != 0) {
+    for (int fd : ours) ::close(fd);
+    fail(Errc::Device, "{}cannot start {}: {}", prefix, presenter.string(), std::strerror(rc));
+  }
+  return pid;
 }
 
 std::string describeStatus(int status) {
@@ -105,22 +128,7 @@ std::string runPresenter(const fs::path& presenter, const std::vector<std::strin
     ::close(out[1]);
     fail(Errc::Device, "cannot make a pipe: {}", std::strerror(errno));
   }
-  posix_spawn_file_actions_t actions;
-  posix_spawn_file_actions_init(&actions);
-  posix_spawn_file_actions_adddup2(&actions, out[1], 1);
-  posix_spawn_file_actions_adddup2(&actions, err[1], 2);
-  std::string exe;
-  std::vector<char*> v = argv(presenter, args, exe);
-  pid_t pid = 0;
-  const int rc = ::posix_spawn(&pid, exe.c_str(), &actions, nullptr, v.data(), environ);
-  posix_spawn_file_actions_destroy(&actions);
-  ::close(out[1]);
-  ::close(err[1]);
-  if (rc != 0) {
-    ::close(out[0]);
-    ::close(err[0]);
-    fail(Errc::Device, "cannot start {}: {}", presenter.string(), std::strerror(rc));
-  }
+  const pid_t pid = spawn(presenter, args, {{out[1], 1}, {err[1], 2}}, {out[0], err[0]}, "");
   ::fcntl(out[0], F_SETFL, O_NONBLOCK);
   ::fcntl(err[0], F_SETFL, O_NONBLOCK);
   std::string output, errors;
@@ -156,22 +164,8 @@ std::unique_ptr<PresenterProcess> PresenterProcess::start(const fs::path& given,
     ::close(pair[1]);
     fail(Errc::Device, "{}: cannot make a pipe: {}", device, std::strerror(errno));
   }
-  posix_spawn_file_actions_t actions;
-  posix_spawn_file_actions_init(&actions);
-  posix_spawn_file_actions_adddup2(&actions, pair[1], kPresenterSocketFd);
-  posix_spawn_file_actions_adddup2(&actions, err[1], 2);
-  std::string exe;
-  std::vector<char*> v = argv(presenter, args, exe);
-  pid_t pid = 0;
-  const int rc = ::posix_spawn(&pid, exe.c_str(), &actions, nullptr, v.data(), environ);
-  posix_spawn_file_actions_destroy(&actions);
-  ::close(pair[1]);
-  ::close(err[1]);
-  if (rc != 0) {
-    ::close(pair[0]);
-    ::close(err[0]);
-    fail(Errc::Device, "{}: cannot start {}: {}", device, presenter.string(), std::strerror(rc));
-  }
+  const pid_t pid =
+      spawn(presenter, args, {{pair[1], kPresenterSocketFd}, {err[1], 2}}, {pair[0], err[0]}, device + ": ");
   ::fcntl(err[0], F_SETFL, O_NONBLOCK);
   return std::unique_ptr<PresenterProcess>(new PresenterProcess(pid, pair[0], err[0], std::move(device)));
 }
