@@ -173,8 +173,10 @@ TEST_F(WindowDisplayTest, AServerKilledMidRunIsADeviceErrorAndTheDisplayOpensOnT
   auto display = lfi::openDisplay("window:0?pitch_mm=0.1");
   const cv::Mat panel = noise(800, 800, CV_8UC3, 30);
   display->show(panel);
+  EXPECT_TRUE(display->status().showing);
+  // Gone while the panel should be showing: the next status says so, before an image relies on it.
   server_->stop(/*kill=*/true);
-  EXPECT_TRUE(throwsError([&] { display->show(panel); }, Errc::Device, {"window:0", "presenter ended"}));
+  EXPECT_TRUE(throwsError([&] { display->status(); }, Errc::Device, {"window:0", "presenter ended"}));
   EXPECT_EQ(display->state(), lfi::Display::State::Closed);
   server_.reset();
   server_ = start(800, 800);
@@ -182,6 +184,10 @@ TEST_F(WindowDisplayTest, AServerKilledMidRunIsADeviceErrorAndTheDisplayOpensOnT
   display->open();
   display->show(panel);
   EXPECT_EQ(differing(server_->screen(), panel), 0);
+  // Gone before a frame: the frame's present says so.
+  server_->stop(/*kill=*/true);
+  EXPECT_TRUE(throwsError([&] { display->show(panel); }, Errc::Device, {"window:0", "presenter ended"}));
+  EXPECT_EQ(display->state(), lfi::Display::State::Closed);
 }
 
 TEST_F(WindowDisplayTest, WithNoServerTheDisplayIsNotFound) {

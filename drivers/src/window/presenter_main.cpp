@@ -267,8 +267,17 @@ int present(std::string_view output, bool vsync, int wantWidth, int wantHeight) 
     PresenterMessage request;
     const ssize_t n = ::recv(kPresenterSocketFd, &request, sizeof request, 0);
     if (n <= 0) break;  // the display closed its end: done
-    if (n != sizeof request || (request.op != PresenterOp::Show && request.op != PresenterOp::Blank))
+    if (n != sizeof request ||
+        (request.op != PresenterOp::Show && request.op != PresenterOp::Blank && request.op != PresenterOp::Status))
       fail(PresenterErrc::Device, "the display sent a message the presenter does not know");
+    if (request.op == PresenterOp::Status) {  // (the events pumped ask the server: a dead one ends this process)
+      if (const std::string loss = lossInEvents(window, index); !loss.empty())
+        finish(PresenterOp::Lost, PresenterErrc::Device, loss);
+      PresenterMessage reply;
+      reply.op = PresenterOp::Status;
+      send(reply);
+      continue;
+    }
     const std::int64_t at = draw(request.op == PresenterOp::Blank);
     if (const std::string loss = lossInEvents(window, index); !loss.empty())
       finish(PresenterOp::Lost, PresenterErrc::Device, loss);

@@ -10,6 +10,8 @@
 //   presenter → display   Ready (mode, refresh, vsync, the frame's file) | Failed
 //   display → presenter   Show n | Blank n          (the frame file holds frame n)
 //   presenter → display   Presented n (present time) | Failed | Lost
+//   display → presenter   Status
+//   presenter → display   Status (the window still up on its server) | Lost
 //
 // The presenter is a process of its own so that a display server that goes
 // away (Xlib ends the process it was talking to) or a driver that hangs takes
@@ -28,6 +30,7 @@ enum class PresenterOp : std::uint32_t {
   Presented = 4,  // presenter: frame `sequence` was presented at presentTime_ns (CLOCK_MONOTONIC)
   Failed = 5,     // presenter: it cannot do what was asked; `errc` and `text` say why; it exits
   Lost = 6,       // presenter: the output, the window or the server went away; it exits
+  Status = 7,     // display: is the window still up? presenter: it is, having asked its server
 };
 
 // Why a Failed message failed, as lfi::Errc names it (the display throws it).

@@ -148,8 +148,24 @@ class WindowDisplay final : public Display {
            level);
   }
 
+  // Asks the presenter, which asks its display server: a server, output or window gone since the last frame
+  // is a Device error here, before anything relies on the panel still showing.
   DisplayStatus status() override {
     requireDisplayState(state_, {State::Open, State::Showing}, "status", name_);
+    PresenterMessage request;
+    request.op = PresenterOp::Status;
+    try {
+      presenter_->send(request);
+      const PresenterMessage reply = presenter_->receive(options_.timeout, "answer");
+      if (reply.op != PresenterOp::Status)
+        fail(reply.op == PresenterOp::Lost || reply.op == PresenterOp::Failed ? toErrc(reply.errc) : Errc::Device,
+             "{}: {}", name_,
+             reply.op == PresenterOp::Presented ? std::string("the presenter answered a frame nobody sent")
+                                                : std::string(reply.textView()));
+    } catch (const Error&) {
+      close();
+      throw;
+    }
     DisplayStatus s;
     s.showing = state_ == State::Showing;
     s.presentedSequence = presentedSequence_;

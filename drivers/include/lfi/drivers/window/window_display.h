@@ -17,10 +17,13 @@
 //     returns when the present returned: after the vertical blank with vsync
 //     on. DisplayStatus::lastPresent holds that moment (CLOCK_MONOTONIC,
 //     measured: SDL2 does not pass on the driver's own time stamp).
-//   - The output disconnected, the window closed, hidden or minimised, the
-//     display server gone or the presenter not answering within the timeout:
-//     Errc::Device naming the output, and the display is Closed; open()
-//     starts a new presenter.
+//   - status() asks the presenter, which asks its display server, whether
+//     the window is still up on the output.
+//   - The output disconnected, the window closed, hidden or minimised, or the
+//     display server gone: Errc::Device naming the output, from the next
+//     show(), blank() or status(); the presenter not answering within the
+//     timeout: Errc::Timeout. The display is then Closed; open() starts a new
+//     presenter.
 //   - A monitor cannot state the optics on it or its pixel pitch: the URI
 //     gives the pitch (pitch_mm) and may name a display calibration file for
 //     the optics (calibration=), as usb: does; a bench file's [display.optics]
