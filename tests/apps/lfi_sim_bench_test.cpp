@@ -80,8 +80,8 @@ wait_limit_s = 60
   }
 
   // `lfi sim-bench` on the served bench running `sh -c SCRIPT`.
-  lfi::testing_support::LfiResult simBench(const std::string& script) {
-    return runLfi("-q sim-bench " + shellQuoted(served_.string()) + " -- sh -c " + shellQuoted(script), true,
+  lfi::testing_support::LfiResult simBench(const std::string& script, const std::string& options = "") {
+    return runLfi("-q sim-bench " + shellQuoted(served_.string()) + options + " -- sh -c " + shellQuoted(script), true,
                   "timeout --foreground --signal=KILL 600 ");
   }
 
@@ -156,6 +156,64 @@ wait $run
   const size_t n = lines.size();
   EXPECT_NE(readText(run / "summary.html").find(fmt::format("<td>{}</td><td>{}</td><td>0</td><td>10</td>", n, n - 10)),
             std::string::npos);
+}
+
+// The display served as a monitor (an X server) and driven by the window: backend: a run that waits for
+// lost devices rides out the X server killed three times, at part 2, 5, 8 at the earliest. The part in
+// hand when the server goes is recorded as not inspected, naming the output; the run opens the display
+// again on the server that comes back (the same display number) and goes on; every other part passes.
+TEST_F(LfiSimBench, ARunOnAMonitorRidesOutItsXServerKilledThreeTimes) {
+  std::string text = readText(hil_);
+  replaceOnce(text, "uri = \"usb:1209:4c46/LFI-SIM-0001\"", R"(uri = "window:0?pitch_mm=0.0315&mode=800x800&layout=rgb"
+[display.optics]
+optics = "lenslet_array"
+array_pitch_mm = 1.0
+gap_mm = 1.37
+focal_length_mm = 1.37)");
+  const fs::path bench = folder_.write("window.toml", text);
+  const std::string lfi = shellQuoted(LFI_EXECUTABLE);
+  const fs::path run = folder_ / "run", records = run / "records.jsonl";
+  const std::string script =
+      fmt::format(R"sh(set -u
+{0} -q capture {1} || exit 10
+{0} -q run {1} --out {2} & run=$!
+count() {{ if [ -f {3} ]; then wc -l < {3}; else echo 0; fi; }}
+errors() {{ if [ -f {3} ]; then grep -c '"status":"error"' {3} || true; else echo 0; fi; }}
+recovered() {{ tail -n 1 {3} 2>/dev/null | grep -q '"status":"inspected"'; }}
+until_() {{ i=0; until "$@"; do i=$((i+1)); [ $i -gt 2400 ] && exit 12; sleep 0.05; done; }}
+for k in 0 1 2; do
+  until_ eval '[ "$(count)" -ge $((2 + 3 * k)) ] && [ "$(errors)" -eq $k ] && recovered'
+  {0} -q bench-control display unplug >/dev/null || exit 11
+  until_ eval '[ "$(errors)" -gt $k ]'; {0} -q bench-control display plug >/dev/null || exit 11
+done
+until_ eval '[ "$(count)" -ge 12 ] && recovered'
+kill -TERM $run
+wait $run
+)sh",
+                  lfi, shellQuoted(bench.string()), shellQuoted(run.string()), shellQuoted(records.string()));
+  const auto r = simBench(script, " --display window");
+  ASSERT_EQ(r.status, 0) << r.output;
+  std::vector<nlohmann::json> lines;
+  std::ifstream in(records);
+  for (std::string line; std::getline(in, line);) {
+    lines.push_back(nlohmann::json::parse(line, nullptr, false));
+    ASSERT_FALSE(lines.back().is_discarded()) << "a torn record: " << line;
+  }
+  ASSERT_GE(lines.size(), 12u);
+  int faults = 0;
+  for (size_t i = 0; i < lines.size(); ++i) {
+    const auto& j = lines[i];
+    EXPECT_EQ(j["part"], i + 1);
+    if (j["status"] == "error") {
+      ++faults;
+      EXPECT_NE(j["error"].get<std::string>().find("window:0"), std::string::npos) << "names the output: " << j;
+      ASSERT_LT(i + 1, lines.size());
+      EXPECT_EQ(lines[i + 1]["status"], "inspected") << "the run goes on once the server is back";
+    } else {
+      EXPECT_EQ(j["verdict"], "pass") << j.dump();
+    }
+  }
+  EXPECT_EQ(faults, 3);
 }
 
 // A line: each part put under the camera fires its input line Line0, and a run whose camera is triggered
