@@ -15,7 +15,6 @@
 #include <cstdlib>
 #include <cstring>
 #include <fstream>
-#include <iterator>
 #include <system_error>
 #include <vector>
 
@@ -123,8 +122,12 @@ void XvfbScreen::launch(const std::string& displayArgument) {
 
 cv::Mat XvfbScreen::screen() const {
   if (!running()) fail(Errc::Device, "Xvfb {}: the server is not running", display_);
-  std::ifstream in(folder_ / "Xvfb_screen0", std::ios::binary);
-  const std::vector<unsigned char> file((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  // (One read of the whole file: the served camera reads the screen at every frame.)
+  std::ifstream in(folder_ / "Xvfb_screen0", std::ios::binary | std::ios::ate);
+  std::vector<unsigned char> file(in ? static_cast<std::size_t>(in.tellg()) : 0);
+  in.seekg(0);
+  in.read(reinterpret_cast<char*>(file.data()), static_cast<std::streamsize>(file.size()));
+  if (!in) file.clear();
   const auto field = [&](int i) {  // the XWD header's CARD32 fields, big-endian
     const unsigned char* b = file.data() + 4 * i;
     return static_cast<std::uint32_t>(b[0]) << 24 | static_cast<std::uint32_t>(b[1]) << 16 |
