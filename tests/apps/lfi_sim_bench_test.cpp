@@ -33,6 +33,16 @@ using lfi::testing_support::replaceOnce;
 using lfi::testing_support::runLfi;
 using lfi::testing_support::shellQuoted;
 
+// A run's records, one JSON object a line; fails at a line that is not one (a torn record).
+testing::AssertionResult readRecords(const fs::path& file, std::vector<nlohmann::json>& lines) {
+  std::ifstream in(file);
+  for (std::string line; std::getline(in, line);) {
+    lines.push_back(nlohmann::json::parse(line, nullptr, false));
+    if (lines.back().is_discarded()) return testing::AssertionFailure() << "a torn record: " << line;
+  }
+  return testing::AssertionSuccess();
+}
+
 class LfiSimBench : public testing::Test {
  protected:
   void SetUp() override {
@@ -128,11 +138,7 @@ wait $run
   const auto r = simBench(script);
   ASSERT_EQ(r.status, 0) << r.output;
   std::vector<nlohmann::json> lines;
-  std::ifstream in(records);
-  for (std::string line; std::getline(in, line);) {
-    lines.push_back(nlohmann::json::parse(line, nullptr, false));
-    ASSERT_FALSE(lines.back().is_discarded()) << "a torn record: " << line;
-  }
+  ASSERT_TRUE(readRecords(records, lines));
   ASSERT_GE(lines.size(), 50u);
   std::vector<std::string> faults;
   for (size_t i = 0; i < lines.size(); ++i) {
@@ -194,11 +200,7 @@ wait $run
   const auto r = simBench(script, " --display window");
   ASSERT_EQ(r.status, 0) << r.output;
   std::vector<nlohmann::json> lines;
-  std::ifstream in(records);
-  for (std::string line; std::getline(in, line);) {
-    lines.push_back(nlohmann::json::parse(line, nullptr, false));
-    ASSERT_FALSE(lines.back().is_discarded()) << "a torn record: " << line;
-  }
+  ASSERT_TRUE(readRecords(records, lines));
   ASSERT_GE(lines.size(), 12u);
   int faults = 0;
   for (size_t i = 0; i < lines.size(); ++i) {
