@@ -12,7 +12,9 @@
 //   gain             -          digital gain applied before quantisation (1 = full well
 //                               maps to full scale)
 // signal_e ~ Poisson(electronsPerUnit * L) + Normal(0, readNoise_e);
-// DN = clamp(round(gain * signal_e / fullWell_e * (2^bits - 1)), 0, 2^bits - 1).
+// DN = clamp(round(gain * signal_e / fullWell_e * (2^bits - 1)), 0, 2^bits - 1),
+// with the Poisson draw clipped at the full well. How capture() draws that law
+// fast, and how close: sensor_noise.h.
 
 #include <opencv2/core.hpp>
 
