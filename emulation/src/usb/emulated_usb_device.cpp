@@ -17,19 +17,6 @@
 #include <vector>
 
 namespace lfi::emulation {
-namespace {
-
-std::vector<std::uint8_t> utf16Descriptor(const std::string& text) {
-  std::vector<std::uint8_t> d{static_cast<std::uint8_t>(2 + 2 * text.size()), 3};
-  for (char c : text) {
-    d.push_back(static_cast<std::uint8_t>(c));
-    d.push_back(0);
-  }
-  return d;
-}
-
-}  // namespace
-
 void EmulatedUsbDisplay::Impl::resetFrame() {
   rx.clear();
   expected = 0;
@@ -147,11 +134,11 @@ void EmulatedUsbDisplay::Impl::control(std::uint8_t* bytes, int length, Urb& u) 
     if (index == 0)
       reply = {4, 3, 0x09, 0x04};
     else if (index == 1)
-      reply = utf16Descriptor(config.vendor);
+      reply = detail::stringDescriptor(config.vendor);
     else if (index == 2)
-      reply = utf16Descriptor(config.model);
+      reply = detail::stringDescriptor(config.model);
     else if (index == 3 && config.serialDescriptor)
-      reply = utf16Descriptor(config.serial);
+      reply = detail::stringDescriptor(config.serial);
     else
       stall = true;
   } else if (type == proto::kRequestTypeIn) {

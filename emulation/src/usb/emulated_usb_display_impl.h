@@ -1,65 +1,32 @@
 // SPDX-License-Identifier: Apache-2.0
 #pragma once
-// Internal to the emulated USB display: EmulatedUsbDisplay::Impl, whose methods are split
-// over emulated_usb_testbed.cpp (umockdev testbed, handler thread, usbdevfs ioctls and URBs)
-// and emulated_usb_device.cpp (the device's protocol state machine).
+// Internal to the emulated USB display: EmulatedUsbDisplay::Impl, the device side on
+// its usbdevfs node (usbdevfs_node.h), whose methods are split over
+// emulated_usb_display.cpp (its record, URBs, claims, faults) and
+// emulated_usb_device.cpp (the protocol's state machine).
 
 #include "lfi/emulation/emulated_usb_display.h"
 
-#include <umockdev.h>
+#include "usbdevfs_node.h"
 
-#include <atomic>
 #include <cstddef>
 #include <cstdint>
-#include <cstdlib>
-#include <deque>
-#include <functional>
-#include <mutex>
 #include <string>
-#include <thread>
 #include <vector>
 
 namespace lfi::emulation {
 
 namespace proto = usbdisplay;
+using detail::Urb;
 
-// One URB the host submitted: the umockdev copies of the struct and its buffer
-// (kept referenced until reaped) and its outcome, applied at reap time.
-struct Urb {
-  UMockdevIoctlClient* client = nullptr;
-  UMockdevIoctlData* urb = nullptr;
-  UMockdevIoctlData* buffer = nullptr;
-  bool bulk = false;
-  int status = 0;
-  int actualLength = 0;
-};
+// The display's device side on its usbdevfs node. Everything but the
+// constructor runs under node.mutex(): on the node's handler thread, or on the
+// test thread arming faults and reading state.
+struct EmulatedUsbDisplay::Impl final : detail::UsbdevfsDevice {
+  explicit Impl(const EmulatedDisplayConfig& c);
 
-// Drops the umockdev references `u` holds and empties it.
-void release(Urb& u);
-
-// The process's one testbed: umockdev's preload library follows the newest
-// testbed's directory, so devices emulated at once must share one. Never
-// freed (devices come and go in it; usePrivateTmpDir's folder goes at exit).
-UMockdevTestbed* sharedTestbed();
-
-struct EmulatedUsbDisplay::Impl {
   EmulatedDisplayConfig config;
-  UMockdevTestbed* testbed = nullptr;
-  UMockdevIoctlBase* handler = nullptr;
-  GMainContext* context = nullptr;
-  std::thread thread;
-  std::atomic<bool> stop{false};
-  std::string devnode;
-  std::string syspath;
-  bool inTestbed = false;  // its sysfs entry and node are in the testbed (from plug() to unplug())
-  bool trace = std::getenv("LFI_USB_EMULATION_TRACE") != nullptr;  // log every ioctl to stderr
-
-  mutable std::mutex mutex;
   EmulatedDisplayState state;
-  std::deque<Urb> done;  // completed, waiting to be reaped
-  std::deque<Urb> held;  // accepted but never completed (silent device)
-  std::uint32_t inFlight = 0;
-  bool unplugged = true;
   bool halted = false;
   // faults
   bool stallAll = false, corruptNext = false, unplugNext = false, silent = false;
@@ -91,20 +58,16 @@ struct EmulatedUsbDisplay::Impl {
   std::string lastErrorText;
   cv::Mat presented;
   EmulatedUsbDisplay::PanelObserver observer;
+  detail::UsbdevfsNode node;  // (last: its handler thread stops before the rest goes)
 
-  // emulated_usb_testbed.cpp: the testbed and the handler thread
-  void runOnHandlerThread(const std::function<void()>& f);
-  void attachHandler();
-  void removeNode() const;
-  void removeFromTestbed();
-  void detachHandler();
-  std::string description() const;
+  // The device's sysfs record and descriptors (one bulk OUT endpoint, high speed).
+  std::string record() const;
 
-  // ---- device side, on the handler thread, under `mutex` ----
-  // emulated_usb_testbed.cpp: usbdevfs ioctls and URBs
-  gboolean onIoctl(UMockdevIoctlClient* client);
-  gboolean submit(UMockdevIoctlClient* client, UMockdevIoctlData* arg);
-  void failAll();
+  // detail::UsbdevfsDevice: the host's URBs, claims and clear-halts
+  Submitted submit(Urb& u) override;
+  int claimInterface(unsigned interface, bool claim) override;
+  int clearHalt(unsigned endpoint) override;
+  void vanish();  // the device goes mid-transfer (a fault)
 
   // emulated_usb_device.cpp: frames, control requests and their answers
   void resetFrame();
