@@ -10,8 +10,8 @@ PACKAGES=(
   g++ cmake make pkg-config ninja-build git
   # ray queries, parallelism
   libembree-dev libtbb-dev
-  # camera: GenICam through Aravis (tools for the loopback tests)
-  libaravis-dev aravis-tools
+  # camera: GenICam through Aravis (tools for the loopback and USB3 Vision tests: arv-camera-test, arv-tool)
+  libaravis-dev aravis-tools aravis-tools-cli
   # display: USB; monitors (HDMI, DisplayPort, USB display adapters) through SDL2, tested on a real X server
   libusb-1.0-0-dev libsdl2-dev xvfb
   # images, light fields, analysis
@@ -22,9 +22,9 @@ PACKAGES=(
   libassimp-dev
   # small libraries instead of hand-written code
   libcli11-dev libtomlplusplus-dev nlohmann-json3-dev libspdlog-dev libfmt-dev
-  # exact Poisson draws for the camera sensor model (Boost.Random, header-only)
+  # exact Poisson draws for the camera sensor model where its fast draw does not apply (Boost.Random, header-only)
   libboost-dev
-  # tests, and the emulated USB display (emulation/: umockdev)
+  # tests, and the emulated USB display and USB3 Vision camera (emulation/: umockdev)
   libgtest-dev libgmock-dev umockdev libumockdev-dev udev
   # network namespaces for the tests that need an address outside 127/8 (ip, unshare)
   iproute2 util-linux

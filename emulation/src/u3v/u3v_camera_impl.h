@@ -1,0 +1,95 @@
+// SPDX-License-Identifier: Apache-2.0
+#pragma once
+// Internal to the emulated USB3 Vision camera: EmulatedU3vCamera::Impl, the
+// device side on its usbdevfs node (usbdevfs_node.h). Its methods are split
+// over u3v_device.cpp (descriptors, control requests, GenCP and the register
+// memory) and u3v_stream.cpp (the stream endpoint and the frame thread).
+
+#include "lfi/emulation/emulated_u3v_camera.h"
+
+#include "../usb/usbdevfs_node.h"
+
+#include <condition_variable>
+#include <cstddef>
+#include <cstdint>
+#include <deque>
+#include <map>
+#include <string>
+#include <thread>
+#include <vector>
+
+namespace lfi::emulation {
+
+using detail::Urb;
+
+// The USB endpoints and interfaces.
+namespace u3vusb {
+inline constexpr unsigned char kControlOut = 0x01, kControlIn = 0x81, kStreamIn = 0x82;
+inline constexpr unsigned kControlInterface = 0, kStreamInterface = 1;
+}  // namespace u3vusb
+
+// GenCP status codes the device answers with.
+enum class GencpStatus : std::uint16_t {
+  Success = 0x0000,
+  NotImplemented = 0x8001,
+  InvalidParameter = 0x8002,
+  InvalidAddress = 0x8003,
+  WriteProtect = 0x8004,
+  BadAlignment = 0x8005,
+};
+
+struct EmulatedU3vCamera::Impl final : detail::UsbdevfsDevice {
+  Impl(const EmulatedU3vCameraConfig& c, ServedFrameFiller f);
+  ~Impl() override;
+
+  EmulatedU3vCameraConfig config;
+  ServedFrameFiller filler;
+  std::string guid;
+
+  // ---- under node.mutex() ----
+  EmulatedU3vCameraState state;
+  std::map<std::uint64_t, std::vector<std::uint8_t>> memory;  // regions by base address
+  std::deque<std::vector<std::uint8_t>> acks;                 // for the control IN endpoint
+  struct Transfer {                                           // one device transfer on the stream endpoint
+    std::vector<std::uint8_t> bytes;
+    std::size_t sent = 0;
+    bool endsFrame = false;  // the trailer
+  };
+  std::deque<Transfer> stream;
+  int queuedFrames = 0;
+  bool streamHalted = false;
+  std::uint64_t pendingTriggers = 0;
+  std::uint64_t framesLeft = 0;  // SingleFrame / MultiFrame: frames still to make; 0 with Continuous
+  bool stopThread = false;
+  std::condition_variable wake;  // (with node.mutex()) the frame thread: acquisition, trigger, stop
+  detail::UsbdevfsNode node;     // (its handler thread stops before what it calls goes)
+  std::thread frameThread;       // (last: joined first)
+
+  // u3v_device.cpp
+  std::string record() const;
+  void resetRegisters();
+  Submitted submit(Urb& u) override;
+  int claimInterface(unsigned interface, bool claim) override;
+  int clearHalt(unsigned endpoint) override;
+  Submitted control(Urb& u);
+  void command(const std::uint8_t* bytes, int length);
+  GencpStatus read(std::uint64_t address, std::size_t length, std::vector<std::uint8_t>& out) const;
+  GencpStatus write(std::uint64_t address, const std::uint8_t* data, std::size_t length);
+  std::uint8_t* at(std::uint64_t address, std::size_t length);
+  std::uint32_t reg(std::uint64_t address) const;
+  void setReg(std::uint64_t address, std::uint32_t value);
+  float floatReg(std::uint64_t address) const;
+  void updatePayloadSize();
+  std::uint64_t payloadSize() const;
+  void deliverAcks();
+
+  // u3v_stream.cpp
+  void runFrames();
+  void queueFrame(const ServedFrameRequest& request, std::uint32_t format, std::vector<std::uint8_t> payload,
+                  std::uint64_t timestamp_ns);
+  bool fillStream(Urb& u);  // the next bytes of the stream into `u`; false: nothing to send yet
+  void deliverStream();
+  void startAcquisition();
+};
+
+}  // namespace lfi::emulation
