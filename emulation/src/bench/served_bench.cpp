@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
-// ServedBench (served_bench.h): a SimImager behind a GvCameraServer, and an
-// EmulatedUsbDisplay or an X server (XvfbScreen) whose panel drives the
-// imager's SimBench.
+// ServedBench (served_bench.h): a SimImager behind a GvCameraServer or an
+// EmulatedU3vCamera, and an EmulatedUsbDisplay or an X server (XvfbScreen)
+// whose panel drives the imager's SimBench.
 
 #include "lfi/emulation/served_bench.h"
 
@@ -114,8 +114,9 @@ struct ServedBench::Impl {
   bool lit = false;
   int backlight = 0;
 
-  mutable std::mutex devicesMutex;  // the servers' lifetimes
-  std::unique_ptr<GvCameraServer> camera;
+  mutable std::mutex devicesMutex;              // the servers' lifetimes
+  std::unique_ptr<GvCameraServer> camera;       // the camera served over GigE Vision, or
+  std::unique_ptr<EmulatedU3vCamera> u3v;       // over USB3 Vision
   std::unique_ptr<EmulatedUsbDisplay> display;  // the display served over USB, or
   mutable std::mutex monitorMutex;              // (taken after devicesMutex, before displayMutex)
   std::unique_ptr<XvfbScreen> monitor;          // the display served as a monitor
@@ -153,30 +154,49 @@ struct ServedBench::Impl {
     ++counters.panelsPresented;
   }
 
+  const std::string& cameraSerial() const {
+    return options.cameraKind == ServedCamera::U3v ? options.u3v.serial : options.camera.serial;
+  }
+
   void fill(const ServedFrameRequest& request, cv::Mat& image) {
     const auto start = std::chrono::steady_clock::now();
     if (monitor) watchMonitor();
     {
       std::lock_guard lock(partMutex);
-      imager->capture(imager->resolve(request.settings(), "served camera '" + options.camera.serial + "'"),
-                      request.frameId, frame);
+      imager->capture(imager->resolve(request.settings(), "served camera '" + cameraSerial() + "'"), request.frameId,
+                      frame);
       writeServedFrame(frame, image);
     }
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    traceDriverCall("served", options.camera.serial, "frame",
-                    fmt::format("{} in {:.3f} ms", request.frameId, 1e3 * seconds));
+    traceDriverCall("served", cameraSerial(), "frame", fmt::format("{} in {:.3f} ms", request.frameId, 1e3 * seconds));
     std::lock_guard lock(countersMutex);
     ++counters.framesServed;
     counters.frameSeconds += seconds;
   }
 
   void startCamera() {
+    auto filler = [this](const ServedFrameRequest& r, cv::Mat& image) { fill(r, image); };
+    if (options.cameraKind == ServedCamera::U3v) {
+      EmulatedU3vCameraConfig c = options.u3v;
+      c.sensorWidth_px = camera0.width;
+      c.sensorHeight_px = camera0.height;
+      u3v = std::make_unique<EmulatedU3vCamera>(c, filler);
+      u3v->plug();
+      return;
+    }
     GvCameraServerOptions o = options.camera;
     o.sensorWidth_px = camera0.width;
     o.sensorHeight_px = camera0.height;
-    camera =
-        std::make_unique<GvCameraServer>(o, [this](const ServedFrameRequest& r, cv::Mat& image) { fill(r, image); });
+    camera = std::make_unique<GvCameraServer>(o, filler);
     if (packetLoss > 0) camera->setPacketLoss(packetLoss);
+  }
+
+  // The camera leaves: a GigE Vision device stops answering, a USB3 Vision one is unplugged (what the host
+  // has pending fails as the device goes).
+  void stopCamera() {
+    camera.reset();
+    if (u3v) u3v->unplug();
+    u3v.reset();
   }
 
   // The display's observer: each change goes to the part's bench, before the device answers the request.
@@ -231,12 +251,14 @@ ServedBench::~ServedBench() {
   // The devices first: their threads call into the part.
   impl_->display.reset();
   impl_->camera.reset();
+  impl_->u3v.reset();
   impl_->monitor.reset();
 }
 
 DeviceUri ServedBench::cameraUri() const {
-  const GvCameraServerOptions& o = impl_->options.camera;
-  return {.scheme = "aravis", .path = fmt::format("{}-{}-{}", o.vendor, o.model, o.serial)};
+  const ServedBenchOptions& o = impl_->options;
+  if (o.cameraKind == ServedCamera::U3v) return {.scheme = "aravis", .path = emulatedU3vDeviceId(o.u3v)};
+  return {.scheme = "aravis", .path = fmt::format("{}-{}-{}", o.camera.vendor, o.camera.model, o.camera.serial)};
 }
 
 DeviceUri ServedBench::displayUri() const {
@@ -293,6 +315,7 @@ bool ServedBench::putPart(const fs::path& scene) {
 
 bool ServedBench::fireLine() {
   std::lock_guard lock(impl_->devicesMutex);
+  if (impl_->u3v) return impl_->u3v->fireLine();
   return impl_->camera && impl_->camera->fireLine();
 }
 
@@ -303,12 +326,12 @@ fs::path ServedBench::part() const {
 
 void ServedBench::stopCamera() {
   std::lock_guard lock(impl_->devicesMutex);
-  impl_->camera.reset();
+  impl_->stopCamera();
 }
 
 void ServedBench::startCamera() {
   std::lock_guard lock(impl_->devicesMutex);
-  if (impl_->camera) return;
+  if (impl_->camera || impl_->u3v) return;
   impl_->startCamera();
   std::lock_guard counting(impl_->countersMutex);
   ++impl_->counters.cameraRestarts;
@@ -316,11 +339,15 @@ void ServedBench::startCamera() {
 
 bool ServedBench::cameraServing() const {
   std::lock_guard lock(impl_->devicesMutex);
-  return impl_->camera != nullptr;
+  return impl_->camera != nullptr || impl_->u3v != nullptr;
 }
 
 void ServedBench::setPacketLoss(double ratio) {
   std::lock_guard lock(impl_->devicesMutex);
+  if (impl_->options.cameraKind == ServedCamera::U3v)
+    fail(Errc::InvalidArgument,
+         "simulated bench: packet loss is GigE Vision's; its camera is served over USB3 Vision ({})",
+         cameraUri().text());
   if (!(ratio >= 0 && ratio <= 1))
     fail(Errc::InvalidArgument, "simulated bench: packet loss {} is outside 0..1", ratio);
   impl_->packetLoss = ratio;

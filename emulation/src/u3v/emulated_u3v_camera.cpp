@@ -44,8 +44,8 @@ void EmulatedU3vCamera::unplug() {
   d.node.unplug();
 }
 
-std::string EmulatedU3vCamera::deviceId() const {
-  return config_.vendor + "-" + impl_->guid + "-" + config_.serial;
+std::string emulatedU3vDeviceId(const EmulatedU3vCameraConfig& config) {
+  return config.vendor + "-" + emulatedU3vGuid(config) + "-" + config.serial;
 }
 
 EmulatedU3vCameraState EmulatedU3vCamera::state() const {

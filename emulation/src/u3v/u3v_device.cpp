@@ -50,23 +50,24 @@ void putU64(std::uint8_t* p, std::uint64_t v) {
   putU32(p, static_cast<std::uint32_t>(v)), putU32(p + 4, static_cast<std::uint32_t>(v >> 32));
 }
 
-// A 32-bit FNV-1a hash, for the default GUID.
-std::uint32_t fnv1a(const std::string& text) {
-  std::uint32_t h = 2166136261u;
-  for (char c : text) h = (h ^ static_cast<std::uint8_t>(c)) * 16777619u;
-  return h;
-}
-
 bool isPixelFormat(std::uint32_t v) {
   return v == kPfncMono8 || v == kPfncMono12 || v == kPfncMono12p || v == kPfncMono16;
 }
 
 }  // namespace
 
+// The default: the vendor id and a 32-bit FNV-1a hash of the serial, 12 hex digits as USB3 Vision GUIDs are.
+std::string emulatedU3vGuid(const EmulatedU3vCameraConfig& config) {
+  if (!config.guid.empty()) return config.guid;
+  std::uint32_t h = 2166136261u;
+  for (char c : config.serial) h = (h ^ static_cast<std::uint8_t>(c)) * 16777619u;
+  return fmt::format("{:04X}{:08X}", config.vendorId, h);
+}
+
 EmulatedU3vCamera::Impl::Impl(const EmulatedU3vCameraConfig& c, ServedFrameFiller f)
     : config(c),
       filler(std::move(f)),
-      guid(c.guid.empty() ? fmt::format("{:04X}{:08X}", c.vendorId, fnv1a(c.serial)) : c.guid),
+      guid(emulatedU3vGuid(c)),
       node(c.busNumber, c.deviceNumber, "emulated USB3 Vision camera", *this) {
   resetRegisters();
   frameThread = std::thread([this] { runFrames(); });

@@ -52,6 +52,11 @@ struct EmulatedU3vCameraConfig {
   std::uint32_t maxDeviceResponseTime_ms = 200;  // ABRM: how long a host waits for an ack
 };
 
+// The device's USB3 Vision GUID (config.guid, or its default) and the id Aravis
+// lists the device under, "<vendor>-<guid>-<serial>" (aravis:<id>).
+std::string emulatedU3vGuid(const EmulatedU3vCameraConfig& config);
+std::string emulatedU3vDeviceId(const EmulatedU3vCameraConfig& config);
+
 // What the device has seen and done.
 struct EmulatedU3vCameraState {
   bool plugged = false;
@@ -78,8 +83,8 @@ class EmulatedU3vCamera {
   void plug();
   void unplug();
 
-  // "<vendor>-<guid>-<serial>", the id Aravis lists it under (aravis:<id>).
-  std::string deviceId() const;
+  // emulatedU3vDeviceId(config()).
+  std::string deviceId() const { return emulatedU3vDeviceId(config_); }
   const EmulatedU3vCameraConfig& config() const { return config_; }
   EmulatedU3vCameraState state() const;
 

@@ -1,10 +1,11 @@
 // SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The simulated bench behind the real drivers: the ray-traced camera of a
-// scene file served as a GigE Vision device (GvCameraServer) and its display
-// emulated as an lfi USB display (EmulatedUsbDisplay), so that the `aravis:`
-// and `usb:` backends drive the simulation exactly as they drive a physical
-// bench. `lfi sim-bench` runs one for a program started under it.
+// scene file served as a GigE Vision device (GvCameraServer) or as a USB3
+// Vision device (EmulatedU3vCamera), and its display emulated as an lfi USB
+// display (EmulatedUsbDisplay), so that the `aravis:` and `usb:` backends
+// drive the simulation exactly as they drive a physical bench. `lfi
+// sim-bench` runs one for a program started under it.
 //
 // What the display is sent drives what the camera sees: every frame the USB
 // device presents, every brightness it is set to and every blank go to the
@@ -30,15 +31,17 @@
 // what the X server shows is what the tracer emits.
 //
 // Faults for tests: the camera off the network and back (its process killed
-// and restarted, as a client sees it), the display unplugged and plugged in
+// and restarted, as a client sees it; a USB3 Vision camera unplugged and
+// plugged in again), the display unplugged and plugged in
 // again (dark while unplugged; a monitor's X server killed and started again
 // on the same display number), GVSP packet loss, and every fault the emulated
 // USB display knows (display()).
 //
-// Thread-safe. The USB display needs umockdev's testbed (the `usb:` client
-// runs with its preload library: emulated_usb_display.h). Units: the scene's
+// Thread-safe. The USB display and the USB3 Vision camera need umockdev's
+// testbed (their clients run with its preload library: emulated_usb_display.h). Units: the scene's
 // (mm).
 
+#include "lfi/emulation/emulated_u3v_camera.h"
 #include "lfi/emulation/emulated_usb_display.h"
 #include "lfi/emulation/gv_camera_server.h"
 #include "lfi/emulation/xvfb_screen.h"
@@ -54,10 +57,14 @@ namespace lfi::emulation {
 
 // How the bench's display is served: as an lfi USB display (usb:) or as a monitor on an X server (window:).
 enum class ServedDisplay { Usb, Window };
+// How the bench's camera is served: as a GigE Vision device on the network or a USB3 Vision device on umockdev.
+enum class ServedCamera { GigE, U3v };
 
 struct ServedBenchOptions {
-  std::filesystem::path scene;   // the bench with its intact part: [camera], [display] and the part
-  GvCameraServerOptions camera;  // interface and identity; the sensor size is the scene's
+  std::filesystem::path scene;  // the bench with its intact part: [camera], [display] and the part
+  ServedCamera cameraKind = ServedCamera::GigE;
+  GvCameraServerOptions camera;  // GigE Vision: interface and identity; the sensor size is the scene's
+  EmulatedU3vCameraConfig u3v;   // USB3 Vision: identity and bus position; the sensor size is the scene's
   ServedDisplay displayKind = ServedDisplay::Usb;
   EmulatedDisplayConfig display;  // USB identity and bus position; panel, optics and brightness the scene's
   int renderThreads = 0;          // 0: all cores
@@ -105,7 +112,8 @@ class ServedBench {
   void stopCamera();
   void startCamera();
   bool cameraServing() const;
-  void setPacketLoss(double ratio);  // as GvCameraServer::setPacketLoss; kept across a restart
+  // As GvCameraServer::setPacketLoss; kept across a restart. Errc::InvalidArgument for a USB3 Vision camera.
+  void setPacketLoss(double ratio);
 
   // The display unplugged (its panel goes dark) and plugged in again. Idempotent.
   void unplugDisplay();
