@@ -1,7 +1,8 @@
 // SPDX-License-Identifier: Apache-2.0
 // lfi sim-bench BENCH [-- COMMAND ...]: the simulated bench of a bench file
-// behind the real drivers (served_bench.h): its camera as a GigE Vision device,
-// its display as an emulated lfi USB display, and a control socket that puts
+// behind the real drivers (served_bench.h): its camera as a GigE Vision device
+// (or a USB3 Vision one), its display as an emulated lfi USB display (or a
+// monitor), and a control socket that puts
 // another part under the camera and injects faults. With COMMAND, runs it with
 // the emulation in its environment (as umockdev-run does) and exits with its
 // status; without, prints how to attach and serves until SIGINT or SIGTERM.
@@ -192,6 +193,7 @@ int runSimBench(SimBenchArgs a) {
   const BenchFile file = readBenchFile(a.bench);
   const fs::path intact = benchScene(file);
   a.options.scene = intact;
+  a.options.u3v.serial = a.options.camera.serial;  // (one --camera-serial for either transport)
   std::optional<std::string> callerTmpDir;
   if (const char* tmp = std::getenv("TMPDIR")) callerTmpDir = tmp;
   lfi::emulation::usePrivateTmpDir();  // (the testbed's files, removed at exit)
@@ -256,8 +258,8 @@ int runSimBench(SimBenchArgs a) {
 Command addSimBenchCommand(CLI::App& app) {
   auto* command = app.add_subcommand(
       "sim-bench",
-      "Serve a simulated bench to the real drivers (GigE Vision camera; USB display or a monitor on an X server) and "
-      "run COMMAND against it");
+      "Serve a simulated bench to the real drivers (GigE Vision or USB3 Vision camera; USB display or a monitor on an "
+      "X server) and run COMMAND against it");
   auto a = std::make_shared<SimBenchArgs>();
   a->options.display.serial = "LFI-SIM-0001";
   addBenchArgument(*command, a->bench);
@@ -265,7 +267,15 @@ Command addSimBenchCommand(CLI::App& app) {
       ->check(CLI::ExistingFile);
   command->add_option("--interface", a->options.camera.interfaceAddress, "IPv4 address or interface to serve on")
       ->capture_default_str();
-  command->add_option("--camera-serial", a->options.camera.serial, "Camera serial (id: lfi-SimCamera-<serial>)")
+  command
+      ->add_option("--camera", a->options.cameraKind,
+                   "How the camera is served: gige (a GigE Vision device on the network) or u3v (a USB3 Vision device "
+                   "on the emulated USB bus)")
+      ->transform(CLI::CheckedTransformer(std::map<std::string, lfi::emulation::ServedCamera>{
+          {"gige", lfi::emulation::ServedCamera::GigE}, {"u3v", lfi::emulation::ServedCamera::U3v}}));
+  command
+      ->add_option("--camera-serial", a->options.camera.serial,
+                   "Camera serial (id: lfi-SimCamera-<serial>; over USB3 Vision lfi-<GUID>-<serial>)")
       ->capture_default_str();
   command->add_option("--display-serial", a->options.display.serial, "USB display serial")->capture_default_str();
   command

@@ -7,7 +7,9 @@
 // taking the reference: the simulated light field sensor and the coded
 // capture through the display and camera; and the coded capture once more
 // through the aravis: and window: backends against `lfi sim-bench --display
-// window`, whose display is an X server (data/benches/inspection_window.toml).
+// window`, whose display is an X server (data/benches/inspection_window.toml),
+// and through Aravis's USB3 Vision path against `lfi sim-bench --camera u3v`,
+// whose camera is a USB3 Vision device (data/benches/inspection_u3v.toml).
 // Under sim-bench one script takes the reference and inspects the parts one
 // after another, putting each under the camera with `lfi bench-control part`,
 // as a line would.
@@ -82,7 +84,8 @@ std::vector<TraceLine> readTrace(const fs::path& file) {
 }
 
 // Param: the reference's capture, "sim" (the simulated light field sensor) or "coded" (through the display),
-// with the usb: display; or "window": the coded capture with the window: display.
+// with the usb: display and a GigE Vision camera; "window": the coded capture with the window: display;
+// "u3v": the coded capture with a USB3 Vision camera.
 class LfiHilLoop : public testing::TestWithParam<std::string> {
  protected:
   void SetUp() override {
@@ -98,8 +101,8 @@ class LfiHilLoop : public testing::TestWithParam<std::string> {
                 "folder = \"" + (folder_ / "in-process" / "inspections").string());
     simBench_ = folder_.write("sim-bench.toml", text);
     // Through the real drivers: the shipped bench that names sim-bench's devices, with this capture.
-    const std::string served = window() ? "bench-window" : "bench-hil";
-    text = readText(source_ / "data" / "benches" / (window() ? "inspection_window.toml" : "inspection_hil.toml"));
+    const std::string served = "bench-" + hil();
+    text = readText(source_ / "data" / "benches" / ("inspection_" + hil() + ".toml"));
     replaceOnce(text, "folder = \"../../out/" + served + "/reference",
                 "folder = \"" + (folder_ / "hil" / "reference").string());
     replaceOnce(text, "folder = \"../../out/" + served + "/inspections",
@@ -138,8 +141,8 @@ class LfiHilLoop : public testing::TestWithParam<std::string> {
     }
     const fs::path file = folder_.write("hil.sh", script);
     const auto r = runLfi(
-        "-q sim-bench " + shellQuoted(simBench_.string()) + (window() ? " --display window" : "") + " -- sh " +
-            shellQuoted(file.string()),
+        "-q sim-bench " + shellQuoted(simBench_.string()) + (window() ? " --display window" : "") +
+            (GetParam() == "u3v" ? " --camera u3v" : "") + " -- sh " + shellQuoted(file.string()),
         true, "LFI_DRIVER_TRACE=" + shellQuoted(remoteTrace().string()) + " timeout --foreground --signal=KILL 600 ");
     EXPECT_EQ(r.status, 0) << r.output;
     std::map<std::string, Inspection> out;
@@ -211,6 +214,8 @@ class LfiHilLoop : public testing::TestWithParam<std::string> {
   }
 
   static bool window() { return GetParam() == "window"; }
+  // The shipped bench file that names sim-bench's devices: inspection_<hil()>.toml.
+  static std::string hil() { return GetParam() == "window" || GetParam() == "u3v" ? GetParam() : "hil"; }
 
   // The driver traces (driver_trace.h) of the two wirings' processes.
   fs::path localTrace() const { return folder_ / "in-process.trace"; }
@@ -223,17 +228,18 @@ class LfiHilLoop : public testing::TestWithParam<std::string> {
   std::map<std::string, fs::path> scenes_;
 };
 
-INSTANTIATE_TEST_SUITE_P(Captures, LfiHilLoop, testing::Values("sim", "coded", "window"),
+INSTANTIATE_TEST_SUITE_P(Captures, LfiHilLoop, testing::Values("sim", "coded", "window", "u3v"),
                          [](const testing::TestParamInfo<std::string>& p) {
-                           return p.param == "sim"     ? std::string("SimulatedSensor")
-                                  : p.param == "coded" ? std::string("Coded")
-                                                       : std::string("CodedOnAMonitor");
+                           return p.param == "sim"      ? std::string("SimulatedSensor")
+                                  : p.param == "coded"  ? std::string("Coded")
+                                  : p.param == "window" ? std::string("CodedOnAMonitor")
+                                                        : std::string("CodedThroughUsb3Vision");
                          });
 
 // The verdicts agree part by part, and are the truth: the intact part passes, every defect part fails.
 // Where a defect has a place, each wiring finds it there and nothing beside it, and the two wirings' positions
 // agree within a pixel: both image the same rendered radiance through the same detector, and only the
-// noise draw differs (frame ids, and Mono12 against Mono16's finer quantisation), which moves a
+// noise draw differs (frame ids; over GigE Vision also Mono16's finer quantisation against Mono12), which moves a
 // region's edge pixels in or out and its centroid by a fraction of a pixel.
 TEST_P(LfiHilLoop, TheRealDriversGiveTheVerdictsAndDefectsOfTheInProcessLoop) {
   const auto local = inProcess();
