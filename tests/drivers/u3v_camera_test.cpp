@@ -176,5 +176,26 @@ TEST_F(U3vCameraTest, EveryFrameTheBackendDeliversIsTheFrameTheDeviceMadeForIt) 
   EXPECT_EQ(device_->state().framesDropped, 0u);
 }
 
+// While it streams, the backend reads the settings from the device once (the
+// controller asks at every part; each read is a GenCP round trip), and again
+// after a feature written through it.
+TEST_F(U3vCameraTest, AStreamingCamerasSettingsAreReadOnceAndAgainAfterAFeatureWrite) {
+  auto camera = openCamera("aravis:" + device_->deviceId());
+  CameraSettings s;
+  s.trigger = TriggerMode::Software;
+  camera->configure(s);
+  camera->start(2);
+  EXPECT_DOUBLE_EQ(camera->settings().exposure_us, 10000);
+  const std::uint64_t commands = device_->state().commands;
+  for (int i = 0; i < 3; ++i) EXPECT_DOUBLE_EQ(camera->settings().exposure_us, 10000);
+  EXPECT_EQ(device_->state().commands, commands) << "settings() went to the device again";
+  camera->setFloatFeature("ExposureTime", 2500);
+  EXPECT_DOUBLE_EQ(camera->settings().exposure_us, 2500);
+  camera->stop();
+  camera->setFloatFeature("ExposureTime", 4000);
+  camera->start(2);
+  EXPECT_DOUBLE_EQ(camera->settings().exposure_us, 4000);
+}
+
 }  // namespace
 }  // namespace lfi

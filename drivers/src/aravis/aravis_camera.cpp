@@ -121,6 +121,7 @@ std::string AravisCamera::getFeature(const std::string& feature) {
 
 void AravisCamera::setFeature(const std::string& feature, const std::string& value) {
   ArvGcFeatureNode* node = featureNode("setFeature", feature);
+  streamSettings_.reset();  // (it may change what settings() reads)
   onDevice([&] {
     GError* error = nullptr;
     arv_gc_feature_node_set_value_from_string(node, value.c_str(), &error);
@@ -140,6 +141,7 @@ std::int64_t AravisCamera::getIntegerFeature(const std::string& feature) {
 
 void AravisCamera::setIntegerFeature(const std::string& feature, std::int64_t value) {
   featureNode("setIntegerFeature", feature);
+  streamSettings_.reset();  // (it may change what settings() reads)
   onDevice([&] {
     GError* error = nullptr;
     arv_camera_set_integer(camera_, feature.c_str(), value, &error);
@@ -159,6 +161,7 @@ double AravisCamera::getFloatFeature(const std::string& feature) {
 
 void AravisCamera::setFloatFeature(const std::string& feature, double value) {
   featureNode("setFloatFeature", feature);
+  streamSettings_.reset();  // (it may change what settings() reads)
   onDevice([&] {
     GError* error = nullptr;
     arv_camera_set_float(camera_, feature.c_str(), value, &error);
@@ -168,6 +171,7 @@ void AravisCamera::setFloatFeature(const std::string& feature, double value) {
 
 void AravisCamera::executeCommand(const std::string& feature) {
   featureNode("executeCommand", feature);
+  streamSettings_.reset();  // (it may change what settings() reads)
   GError* error = nullptr;
   arv_camera_execute_command(camera_, feature.c_str(), &error);
   check(error, name(), fmt::format("executing command '{}'", feature));

@@ -145,6 +145,10 @@ class AravisCamera final : public Camera {
   std::uint16_t gvcpPort_ = 3956;
   CameraInfo info_;
   CameraSettings settings_;
+  // What settings() read from the device while streaming: the region is locked then and the
+  // automatic controls are off, so it holds until stop() or a feature written through this object
+  // (a register read over USB3 Vision takes 0.1-0.2 ms, and the controller asks at every part).
+  mutable std::optional<CameraSettings> streamSettings_;
   StreamStatistics statistics_;
   int frameWidth_ = 0, frameHeight_ = 0;  // the region start() found: every frame must be of it
 };

@@ -63,6 +63,7 @@ void AravisCamera::apply(const CameraSettings& s) {
 
 CameraSettings AravisCamera::settings() const {
   requireCameraState(state_, {State::Configured, State::Streaming}, "settings", name());
+  if (state_ == State::Streaming && streamSettings_) return *streamSettings_;
   CameraSettings s = settings_;
   GError* error = nullptr;
   s.exposure_us = arv_camera_get_exposure_time(camera_, &error);
@@ -89,6 +90,7 @@ CameraSettings AravisCamera::settings() const {
   } catch (const Error& e) {
     fail(Errc::Device, "{} (as the device reports it)", e.what());
   }
+  if (state_ == State::Streaming) streamSettings_ = s;
   return s;
 }
 

@@ -74,6 +74,7 @@ void AravisCamera::start(int bufferCount) {
   requireCameraState(state_, {State::Configured}, "start", name());
   if (bufferCount < 1 || bufferCount > 1024)
     fail(Errc::InvalidArgument, "camera '{}': start(bufferCount = {}) needs 1..1024 buffers", name(), bufferCount);
+  streamSettings_.reset();
   onDevice([&] { startStream(bufferCount); });
 }
 
@@ -156,6 +157,7 @@ void AravisCamera::startStream(int bufferCount) {
 
 void AravisCamera::stop() {
   requireCameraState(state_, {State::Streaming}, "stop", name());
+  streamSettings_.reset();
   statistics_ = readStatistics();
   GError* error = nullptr;
   arv_camera_stop_acquisition(camera_, &error);

@@ -125,7 +125,8 @@ class Camera {
   virtual void configure(const CameraSettings& settings) = 0;
 
   // Configured, Streaming: the settings as the device applied them (exposure and
-  // frame rate may be rounded by the device).
+  // frame rate may be rounded by the device). While streaming, a backend may read
+  // them from the device once per stream: they change only through this object.
   virtual CameraSettings settings() const = 0;
 
   // Configured → Streaming with a pool of `bufferCount` (>= 1) frame buffers,
