@@ -151,6 +151,8 @@ class AravisCamera final : public Camera {
   mutable std::optional<CameraSettings> streamSettings_;
   StreamStatistics statistics_;
   int frameWidth_ = 0, frameHeight_ = 0;  // the region start() found: every frame must be of it
+  std::size_t framePayload_ = 0;          // and the bytes of each buffer
+  std::uint32_t framePixelFormat_ = 0;    // and the PFNC format the device sends
 };
 
 }  // namespace lfi::detail

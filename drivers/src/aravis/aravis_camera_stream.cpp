@@ -152,6 +152,8 @@ void AravisCamera::startStream(int bufferCount) {
                   fmt::format("({} buffers of {} bytes)", bufferCount, payload));
   statistics_ = {};
   frameWidth_ = width, frameHeight_ = height;
+  framePayload_ = payload;
+  framePixelFormat_ = arv_camera_get_pixel_format(camera_, nullptr);
   state_ = State::Streaming;
 }
 
@@ -260,6 +262,16 @@ bool AravisCamera::deviceAnswers() {
 // The buffer's image into `out` (imageFromPayload), or why the payload is not
 // the image the camera was configured for.
 std::optional<std::string> AravisCamera::copyImage(ArvBuffer* buffer, cv::Mat& out) const {
+  if (arv_buffer_get_status(buffer) != ARV_BUFFER_STATUS_SUCCESS) {
+    // Aravis describes only a complete buffer's image (its getters refuse the others): an incomplete one is
+    // the stream's region and format, in the buffer's bytes as far as they arrived.
+    ImagePayload payload{.data = static_cast<const std::uint8_t*>(arv_buffer_get_data(buffer, nullptr)),
+                         .size = framePayload_,
+                         .width = frameWidth_,
+                         .height = frameHeight_,
+                         .pixelFormat = framePixelFormat_};
+    return imageFromPayload(payload, settings_.pixelFormat, frameWidth_, frameHeight_, out);
+  }
   if (arv_buffer_get_payload_type(buffer) != ARV_BUFFER_PAYLOAD_TYPE_IMAGE) return "its payload is not an image";
   // A frame whose leader was lost has no image part (Aravis then asserts in the getters below).
   if (arv_buffer_get_n_parts(buffer) < 1 ||
