@@ -28,6 +28,9 @@ void EmulatedU3vCamera::plug() {
     d.queuedFrames = 0;
     d.streamHalted = false;
     d.pendingTriggers = d.framesLeft = 0;
+    d.stallAll = d.corruptTrailerNext = d.silent = false;  // (a device plugged in afresh)
+    d.shortNext = 0;
+    d.failNext = 0;
     d.state = {};
     d.state.plugged = true;
   }
@@ -62,6 +65,28 @@ bool EmulatedU3vCamera::fireLine() {
   ++d.pendingTriggers;
   d.wake.notify_all();
   return true;
+}
+
+void EmulatedU3vCamera::stallStream(bool on) {
+  std::lock_guard lock(impl_->node.mutex());
+  impl_->stallAll = on;
+  if (!on) impl_->deliverStream();
+}
+void EmulatedU3vCamera::shortenNextFrame(std::size_t bytes) {
+  std::lock_guard lock(impl_->node.mutex());
+  impl_->shortNext = bytes;
+}
+void EmulatedU3vCamera::corruptNextTrailer() {
+  std::lock_guard lock(impl_->node.mutex());
+  impl_->corruptTrailerNext = true;
+}
+void EmulatedU3vCamera::failNextCommand(std::uint16_t status) {
+  std::lock_guard lock(impl_->node.mutex());
+  impl_->failNext = status;
+}
+void EmulatedU3vCamera::setSilent(bool on) {
+  std::lock_guard lock(impl_->node.mutex());
+  impl_->silent = on;
 }
 
 }  // namespace lfi::emulation

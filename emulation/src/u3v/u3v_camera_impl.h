@@ -61,6 +61,10 @@ struct EmulatedU3vCamera::Impl final : detail::UsbdevfsDevice {
   std::uint64_t pendingTriggers = 0;
   std::uint64_t framesLeft = 0;  // SingleFrame / MultiFrame: frames still to make; 0 with Continuous
   bool stopThread = false;
+  // faults (emulated_u3v_camera.h)
+  bool stallAll = false, corruptTrailerNext = false, silent = false;
+  std::size_t shortNext = 0;
+  std::uint16_t failNext = 0;
   std::condition_variable wake;  // (with node.mutex()) the frame thread: acquisition, trigger, stop
   detail::UsbdevfsNode node;     // (its handler thread stops before what it calls goes)
   std::thread frameThread;       // (last: joined first)

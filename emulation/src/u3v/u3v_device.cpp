@@ -457,6 +457,7 @@ int EmulatedU3vCamera::Impl::clearHalt(unsigned endpoint) {
 void EmulatedU3vCamera::Impl::command(const std::uint8_t* bytes, int length) {
   if (length < 12 || getU32(bytes) != kGencpMagic) return;  // not GenCP: nothing to answer
   ++state.commands;
+  if (silent) return;
   const std::uint16_t flags = getU16(bytes + 4), id = getU16(bytes + 10);
   const std::uint16_t command = getU16(bytes + 6), size = getU16(bytes + 8);
   GencpStatus status = GencpStatus::Success;
@@ -473,6 +474,7 @@ void EmulatedU3vCamera::Impl::command(const std::uint8_t* bytes, int length) {
   } else {
     status = GencpStatus::NotImplemented;
   }
+  if (failNext != 0) status = static_cast<GencpStatus>(std::exchange(failNext, 0));
   if ((flags & kRequestAck) == 0) return;
   if (status != GencpStatus::Success && command == kReadMemory) data.clear();
   std::vector<std::uint8_t> ack(12 + data.size());

@@ -12,6 +12,7 @@
 
 #include <algorithm>
 #include <bit>
+#include <cerrno>
 #include <chrono>
 #include <cstring>
 #include <exception>
@@ -176,6 +177,7 @@ void EmulatedU3vCamera::Impl::queueFrame(const ServedFrameRequest& request, std:
   putU32(l + 40, static_cast<std::uint32_t>(request.offsetX_px));
   putU32(l + 44, static_cast<std::uint32_t>(request.offsetY_px));
   stream.push_back(std::move(leader));
+  payload.resize(payload.size() - std::min(payload.size(), std::exchange(shortNext, 0)));
   // The payload in the transfers the host asked for in SIRM: PayloadTransferSize
   // each, the rest in the final transfer (one transfer if SIRM says nothing).
   const std::uint8_t* sirm = memory.at(kSirm).data();
@@ -191,7 +193,7 @@ void EmulatedU3vCamera::Impl::queueFrame(const ServedFrameRequest& request, std:
   Transfer trailer;
   trailer.bytes.assign(32, 0);
   std::uint8_t* t = trailer.bytes.data();
-  putU32(t, kTrailerMagic);
+  putU32(t, std::exchange(corruptTrailerNext, false) ? 0 : kTrailerMagic);
   putU16(t + 6, 32);
   putU64(t + 8, request.frameId);
   putU64(t + 20, payload.size());
@@ -204,22 +206,28 @@ void EmulatedU3vCamera::Impl::queueFrame(const ServedFrameRequest& request, std:
   deliverStream();
 }
 
-// A URB completes when it is full or when the device's transfer ends in it (a
-// short packet), whichever comes first; the rest of the transfer goes to the
-// next URB.
+// The device sends each transfer in packets of kMaxPacket bytes, the last one
+// short (or a zero-length packet). A URB completes when a short packet ends the
+// transfer in it, or when it is full; the transfer's next packets go to the next
+// URB. A packet that does not fit the room left in a URB overflows it (babble):
+// the URB fails with -EOVERFLOW holding what fitted, the rest of that packet is lost.
 bool EmulatedU3vCamera::Impl::fillStream(Urb& u) {
-  if (streamHalted) {
+  constexpr std::size_t kMaxPacket = 1024;  // SuperSpeed bulk
+  if (streamHalted || stallAll) {
     u.status = -EPIPE;
     u.actualLength = 0;
     return true;
   }
   if (stream.empty()) return false;
   Transfer& t = stream.front();
-  const std::size_t n = std::min(static_cast<std::size_t>(u.length()), t.bytes.size() - t.sent);
+  const std::size_t room = static_cast<std::size_t>(u.length()), left = t.bytes.size() - t.sent;
+  const std::size_t fits = left <= room ? left : room / kMaxPacket * kMaxPacket;  // whole packets
+  const bool overflow = left > room && room % kMaxPacket != 0;
+  const std::size_t n = overflow ? room : fits;
   std::memcpy(u.bytes(), t.bytes.data() + t.sent, n);
-  t.sent += n;
-  u.status = 0;
+  u.status = overflow ? -EOVERFLOW : 0;
   u.actualLength = static_cast<int>(n);
+  t.sent += overflow ? std::min(left, (n / kMaxPacket + 1) * kMaxPacket) : n;
   if (t.sent == t.bytes.size()) {
     if (t.endsFrame) --queuedFrames;
     stream.pop_front();

@@ -32,6 +32,7 @@
 
 #include "lfi/emulation/gv_camera_server.h"
 
+#include <cstddef>
 #include <cstdint>
 #include <memory>
 #include <string>
@@ -91,6 +92,13 @@ class EmulatedU3vCamera {
   // An edge on input line 0: one frame if TriggerMode is On with TriggerSource
   // Line0 and the acquisition runs. Returns whether it triggered one.
   bool fireLine();
+
+  // Faults, each for the next frame or command only unless said otherwise.
+  void stallStream(bool on);                   // every stream transfer fails: the endpoint halted (until off)
+  void shortenNextFrame(std::size_t bytes);    // the next frame's payload arrives `bytes` short
+  void corruptNextTrailer();                   // the next frame's trailer arrives without its magic
+  void failNextCommand(std::uint16_t status);  // the next GenCP command is answered with this status
+  void setSilent(bool on);                     // GenCP commands are taken and never answered (until off)
 
   struct Impl;
 
