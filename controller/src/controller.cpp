@@ -146,14 +146,17 @@ cv::Mat Controller::inspect() {
   // free-running camera fills them; a late triggered frame may too): start a
   // new acquisition, so that every frame averaged is exposed after it, unless
   // the stream is a software-triggered one of ours that every trigger has been
-  // answered on (it holds no frame). The stream stays whoever's it was.
+  // answered on (it holds no frame). A trigger of ours still unanswered may be
+  // answered yet, by a frame of the part before: restart then too, new panel or
+  // not. The stream stays whoever's it was.
   // Frames are averaged as they arrive: a few buffers beyond them ride out a
   // stall of this thread; more would only hold memory (a 4K Mono16 frame is
   // 16 MB). A frame lost to a full pool is an underrun, not a bad frame.
   const int buffers = std::clamp(options_.frames, 2, 14) + 2;
   const bool streaming = camera_.state() == Camera::State::Streaming;
-  const bool empty = streaming && ownStream_ && ownSoftware_ && pendingFrames_ == 0;
-  const bool restart = streaming && staleFrames_ && !empty;
+  const bool ours = streaming && ownStream_ && ownSoftware_;
+  const bool empty = ours && pendingFrames_ == 0, late = ours && pendingFrames_ > 0;
+  const bool restart = (streaming && staleFrames_ && !empty) || late;
   if ((streaming && staleFrames_) || camera_.state() == Camera::State::Configured)
     std::this_thread::sleep_until(shown_ + options_.settle);  // the panel settles before the first exposure
   if (restart || camera_.state() == Camera::State::Configured) {

@@ -354,6 +354,31 @@ TEST_F(ControllerTest, ASoftwareTriggeredStreamRestartsForANewPanelOnlyAfterAnUn
   EXPECT_LT(dark, 0.05 * lit) << "the late frame of the lit panel was averaged into the dark one";
 }
 
+// The same on a line, with no new panel: a trigger that went unanswered may
+// still be answered, by a frame exposed before the next part came. The stream
+// restarts, and every frame averaged for the next part is exposed after its
+// inspect() began.
+TEST_F(ControllerTest, AFrameLateBeyondItsTimeoutIsNotTakenForTheNextPart) {
+  const Rig rig = intactRig(0);
+  CameraSettings settings = rig.camera->settings();
+  settings.trigger = TriggerMode::Software;
+  rig.camera->configure(settings);
+  RecordingCamera camera(*rig.camera);
+  Controller controller(*rig.capture, *rig.display, camera, {.frames = 2});
+  controller.emit(controller.captureReference());
+  controller.inspect();
+  camera.loseNextFrame = true;  // (its frame stays in the stream)
+  controller.inspect();
+  EXPECT_EQ(camera.starts, 1);
+  camera.timestamps_ns.clear();
+  const std::int64_t next =
+      std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now().time_since_epoch()).count();
+  controller.inspect();
+  EXPECT_EQ(camera.starts, 2) << "a trigger went unanswered: the stream restarts";
+  ASSERT_EQ(camera.timestamps_ns.size(), 2u);
+  for (const std::int64_t t : camera.timestamps_ns) EXPECT_GE(t, next) << "a frame exposed before this part's inspect";
+}
+
 // A camera the caller started stays the caller's after the controller restarted it.
 TEST_F(ControllerTest, ARestartedStreamStaysTheCallers) {
   const Rig rig = intactRig(25);
