@@ -25,6 +25,7 @@ namespace lfi {
 namespace {
 
 using namespace std::chrono_literals;
+using testing_support::throwsError;
 using testing_support::U3vCameraTest;
 
 // Aravis finds the device by its USB descriptors (class 0xEF/0x02/0x01, the
@@ -103,32 +104,37 @@ TEST_F(U3vCameraTest, AravisCommandLineToolsSeeAndStreamTheDevice) {
   }
 }
 
-// lfi's aravis: backend on the emulated device, in each pixel format: every
-// frame it delivers, software-triggered in a region of the sensor, is the one
-// the device made under that frame id, pixel for pixel.
+// lfi's aravis: backend on the emulated device, in each pixel format and in
+// both of Aravis's USB modes (aravis:<id>?usb_mode=sync|async): every frame it
+// delivers, software-triggered in a region of the sensor, is the one the device
+// made under that frame id, pixel for pixel.
 TEST_F(U3vCameraTest, EveryFrameTheBackendDeliversIsTheFrameTheDeviceMadeForIt) {
-  for (PixelFormat format : {PixelFormat::Mono8, PixelFormat::Mono12, PixelFormat::Mono16}) {
-    auto camera = openCamera("aravis:" + device_->deviceId());
-    CameraSettings s;
-    s.pixelFormat = format;
-    s.roiX_px = 13, s.roiY_px = 7, s.roiWidth_px = 200, s.roiHeight_px = 150;
-    s.trigger = TriggerMode::Software;
-    camera->configure(s);
-    camera->start(4);
-    for (int k = 0; k < 5; ++k) {
-      camera->softwareTrigger();
-      const Frame frame = camera->grab(5s);
-      ASSERT_EQ(frame.status, FrameStatus::Complete) << toString(format) << " frame " << k;
-      const cv::Mat expected = made(frame.frameId);
-      ASSERT_FALSE(expected.empty()) << "the device made no frame " << frame.frameId;
-      ASSERT_EQ(frame.image.size(), cv::Size(200, 150));
-      ASSERT_EQ(frame.image.type(), expected.type());
-      EXPECT_EQ(cv::norm(frame.image, expected, cv::NORM_INF), 0) << toString(format) << " frame " << frame.frameId;
+  for (const char* mode : {"sync", "async"})
+    for (PixelFormat format : {PixelFormat::Mono8, PixelFormat::Mono12, PixelFormat::Mono16}) {
+      SCOPED_TRACE(std::string(mode) + " " + toString(format));
+      auto camera = openCamera("aravis:" + device_->deviceId() + "?usb_mode=" + mode);
+      CameraSettings s;
+      s.pixelFormat = format;
+      s.roiX_px = 13, s.roiY_px = 7, s.roiWidth_px = 200, s.roiHeight_px = 150;
+      s.trigger = TriggerMode::Software;
+      camera->configure(s);
+      camera->start(4);
+      for (int k = 0; k < 5; ++k) {
+        camera->softwareTrigger();
+        const Frame frame = camera->grab(5s);
+        ASSERT_EQ(frame.status, FrameStatus::Complete) << "frame " << k;
+        const cv::Mat expected = made(frame.frameId);
+        ASSERT_FALSE(expected.empty()) << "the device made no frame " << frame.frameId;
+        ASSERT_EQ(frame.image.size(), cv::Size(200, 150));
+        ASSERT_EQ(frame.image.type(), expected.type());
+        EXPECT_EQ(cv::norm(frame.image, expected, cv::NORM_INF), 0) << "frame " << frame.frameId;
+      }
+      camera->stop();
+      camera->close();
     }
-    camera->stop();
-    camera->close();
-  }
   EXPECT_EQ(device_->state().framesDropped, 0u);
+  EXPECT_TRUE(throwsError([&] { openCamera("aravis:" + device_->deviceId() + "?usb_mode=bulk"); }, Errc::Config,
+                          {"usb_mode", "bulk", "sync or async"}));
 }
 
 // While it streams, the backend reads the settings from the device once (the

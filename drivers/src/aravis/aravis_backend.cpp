@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: Apache-2.0
-// The aravis: scheme in the camera registry: aravis:<device-id>[?packet_size_bytes=<bytes>].
+// The aravis: scheme in the camera registry: aravis:<device-id>[?packet_size_bytes=<bytes>&usb_mode=sync|async].
 #include "lfi/drivers/aravis/aravis_camera.h"
 #include "lfi/drivers/camera_registry.h"
 
@@ -13,9 +13,20 @@ const UriKey kPacketSize{.name = "packet_size_bytes",
                          .hi = 65'000,
                          .meaning = "fixed GigE Vision stream packet size (default: negotiated at start)"};
 
+const UriKey kUsbMode{.name = "usb_mode",
+                      .value = UriValue::Text,
+                      .meaning =
+                          "USB3 Vision stream reads: sync (one transfer at a time, Aravis's default) or async "
+                          "(a frame's transfers queued ahead)"};
+
 std::unique_ptr<Camera> openAravisFromUri(const DeviceUri& uri) {
   AravisOptions options;
   if (const auto size = uriNumber<int>(uri, kPacketSize)) options.packetSize_bytes = *size;
+  if (const std::string* mode = uri.find(kUsbMode.name)) {
+    if (*mode != "sync" && *mode != "async")
+      fail(Errc::Config, "camera URI '{}': usb_mode is '{}', not sync or async", uri.text(), *mode);
+    options.usbMode = *mode == "sync" ? AravisUsbMode::Sync : AravisUsbMode::Async;
+  }
   return openAravisCamera(uri.path, options);
 }
 
@@ -24,8 +35,8 @@ std::unique_ptr<Camera> openAravisFromUri(const DeviceUri& uri) {
 void registerAravisBackend() {
   backendRegistry<Camera>().addOnce(CameraBackend{
       .scheme = "aravis",
-      .keys = {kPacketSize},
-      .description = "aravis:<device-id>[?packet_size_bytes=<bytes>]  GenICam camera via Aravis",
+      .keys = {kPacketSize, kUsbMode},
+      .description = "aravis:<device-id>[?packet_size_bytes=<bytes>&usb_mode=sync|async]  GenICam camera via Aravis",
       .factory = openAravisFromUri,
   });
 }

@@ -81,6 +81,14 @@ void AravisCamera::open() {
     traceDriverCall("aravis", name(), "arv_camera_new");
     camera_ = throughLoopbackIfOwnAddress(std::exchange(camera_, nullptr), name());
   }
+  if (options_.usbMode) {  // (read when the stream is made; Aravis sets its default when the device is)
+    if (!arv_camera_is_uv_device(camera_)) {
+      releaseDevice();
+      fail(Errc::Config, "camera '{}': usb_mode applies to USB3 Vision devices; this one is not", name());
+    }
+    arv_camera_uv_set_usb_mode(
+        camera_, *options_.usbMode == AravisUsbMode::Async ? ARV_UV_USB_MODE_ASYNC : ARV_UV_USB_MODE_SYNC);
+  }
   try {
     connectDevice();
   } catch (...) {

@@ -39,8 +39,15 @@ struct AravisDeviceInfo {
 // takes up to about a second on a network with GigE Vision devices.
 std::vector<AravisDeviceInfo> listAravisDevices();
 
+// How Aravis reads a USB3 Vision stream: one transfer at a time, each as large as a
+// MiB (Sync, Aravis's default), or a frame's leader, payload and trailer transfers
+// queued ahead at their own sizes (Async: fewer bytes moved, more usbfs memory held;
+// docs/camera.md).
+enum class AravisUsbMode { Sync, Async };
+
 struct AravisOptions {
-  std::optional<int> packetSize_bytes;  // GigE Vision only; unset = negotiate
+  std::optional<int> packetSize_bytes;   // GigE Vision only; unset = negotiate
+  std::optional<AravisUsbMode> usbMode;  // USB3 Vision only; unset = Aravis's default (Sync)
 };
 
 // Opens the device (state Open). A device id that matches nothing throws
