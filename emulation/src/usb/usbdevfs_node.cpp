@@ -397,6 +397,8 @@ std::string recordText(const UsbdevfsNode& node, int busNumber, int deviceNumber
       "E: PRODUCT={:x}/{:x}/100\n"
       "E: BUSNUM={:03d}\n"
       "E: DEVNUM={:03d}\n"
+      "E: MAJOR=189\n"
+      "E: MINOR={}\n"
       "A: busnum={}\\n\n"
       "A: devnum={}\\n\n"
       "A: speed={}\\n\n"
@@ -411,8 +413,9 @@ std::string recordText(const UsbdevfsNode& node, int busNumber, int deviceNumber
       "A: dev=189:{}\\n\n"
       "H: descriptors={}\n",
       node.syspath().substr(4), node.devnode().substr(5), node.devnode(), r.vendorId, r.productId, busNumber,
-      deviceNumber, busNumber, deviceNumber, r.speed_mbps, r.vendorId, r.productId, r.interfaces, r.manufacturer,
-      r.product, r.serial, (busNumber - 1) * 128 + deviceNumber - 1, hex(r.descriptors));
+      deviceNumber, (busNumber - 1) * 128 + deviceNumber - 1, busNumber, deviceNumber, r.speed_mbps, r.vendorId,
+      r.productId, r.interfaces, r.manufacturer, r.product, r.serial, (busNumber - 1) * 128 + deviceNumber - 1,
+      hex(r.descriptors));
 }
 
 std::vector<std::uint8_t> stringDescriptor(const std::string& text) {
