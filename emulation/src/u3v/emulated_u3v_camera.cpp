@@ -47,6 +47,10 @@ void EmulatedU3vCamera::unplug() {
   d.node.unplug();
 }
 
+std::string EmulatedU3vCamera::record() const {
+  return impl_->record();
+}
+
 std::string emulatedU3vDeviceId(const EmulatedU3vCameraConfig& config) {
   return config.vendor + "-" + emulatedU3vGuid(config) + "-" + config.serial;
 }

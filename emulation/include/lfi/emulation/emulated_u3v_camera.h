@@ -87,6 +87,9 @@ class EmulatedU3vCamera {
   // emulatedU3vDeviceId(config()).
   std::string deviceId() const { return emulatedU3vDeviceId(config_); }
   const EmulatedU3vCameraConfig& config() const { return config_; }
+  // The device's sysfs record and descriptors in umockdev's text format, as plug()
+  // adds them to the testbed (also what udev's rules are tested on: tests/udev/).
+  std::string record() const;
   EmulatedU3vCameraState state() const;
 
   // An edge on input line 0: one frame if TriggerMode is On with TriggerSource
