@@ -30,26 +30,6 @@ constexpr std::uint32_t kMaxAckTransfer = 16384 + 12;           // a READMEM ack
 constexpr std::uint32_t kMaxCmdTransfer = kMaxAckTransfer + 8;  // a WRITEMEM command of as much
 constexpr std::uint32_t kLeaderSize = 52, kTrailerSize = 32;
 
-std::uint16_t getU16(const std::uint8_t* p) {
-  return static_cast<std::uint16_t>(p[0] | p[1] << 8);
-}
-std::uint32_t getU32(const std::uint8_t* p) {
-  return static_cast<std::uint32_t>(p[0]) | static_cast<std::uint32_t>(p[1]) << 8 |
-         static_cast<std::uint32_t>(p[2]) << 16 | static_cast<std::uint32_t>(p[3]) << 24;
-}
-std::uint64_t getU64(const std::uint8_t* p) {
-  return getU32(p) | static_cast<std::uint64_t>(getU32(p + 4)) << 32;
-}
-void putU16(std::uint8_t* p, std::uint16_t v) {
-  p[0] = static_cast<std::uint8_t>(v), p[1] = static_cast<std::uint8_t>(v >> 8);
-}
-void putU32(std::uint8_t* p, std::uint32_t v) {
-  for (int i = 0; i < 4; ++i) p[i] = static_cast<std::uint8_t>(v >> (8 * i));
-}
-void putU64(std::uint8_t* p, std::uint64_t v) {
-  putU32(p, static_cast<std::uint32_t>(v)), putU32(p + 4, static_cast<std::uint32_t>(v >> 32));
-}
-
 bool isPixelFormat(std::uint32_t v) {
   return v == kPfncMono8 || v == kPfncMono12 || v == kPfncMono12p || v == kPfncMono16;
 }
@@ -97,13 +77,13 @@ std::string EmulatedU3vCamera::Impl::record() const {
     d.push_back(0);
   };
   // Device: USB 3.0, miscellaneous class with an interface association.
-  d.insert(d.end(), {18, 1});
-  u16(0x0300);
-  d.insert(d.end(), {0xEF, 0x02, 0x01, 9});
-  u16(config.vendorId);
-  u16(config.productId);
-  u16(0x0100);
-  d.insert(d.end(), {1, 2, 3, 1});
+  detail::appendDeviceDescriptor(d, {.usbRelease = 0x0300,
+                                     .deviceClass = 0xEF,
+                                     .deviceSubclass = 0x02,
+                                     .deviceProtocol = 0x01,
+                                     .maxPacket0 = 9,
+                                     .vendorId = config.vendorId,
+                                     .productId = config.productId});
   // Configuration: the association, the control interface with the USB3 Vision
   // device info descriptor right after it (iDeviceGUID = string 4), the stream interface.
   const std::size_t configuration = d.size();

@@ -29,16 +29,6 @@ using Clock = std::chrono::steady_clock;
 constexpr std::uint32_t kLeaderMagic = 0x4C563355, kTrailerMagic = 0x54563355;  // "U3VL", "U3VT"
 constexpr std::uint16_t kPayloadImage = 0x0001;
 
-void putU16(std::uint8_t* p, std::uint16_t v) {
-  p[0] = static_cast<std::uint8_t>(v), p[1] = static_cast<std::uint8_t>(v >> 8);
-}
-void putU32(std::uint8_t* p, std::uint32_t v) {
-  for (int i = 0; i < 4; ++i) p[i] = static_cast<std::uint8_t>(v >> (8 * i));
-}
-void putU64(std::uint8_t* p, std::uint64_t v) {
-  putU32(p, static_cast<std::uint32_t>(v)), putU32(p + 4, static_cast<std::uint32_t>(v >> 32));
-}
-
 // The frame's pixels as the format lays them on the wire: Mono8 bytes, Mono12
 // and Mono16 little-endian 16-bit words, Mono12p two pixels in three bytes
 // (PFNC: the first pixel's 8 low bits, then its 4 high bits under the second's

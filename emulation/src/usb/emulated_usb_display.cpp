@@ -51,14 +51,9 @@ std::string EmulatedUsbDisplay::Impl::record() const {
     d.push_back(static_cast<std::uint8_t>(v));
     d.push_back(static_cast<std::uint8_t>(v >> 8));
   };
-  // device descriptor
-  d.insert(d.end(), {18, 1});
-  u16(0x0200);
-  d.insert(d.end(), {0, 0, 0, 64});
-  u16(config.vendorId);
-  u16(config.productId);
-  u16(0x0100);
-  d.insert(d.end(), {1, 2, static_cast<std::uint8_t>(config.serialDescriptor ? 3 : 0), 1});
+  detail::appendDeviceDescriptor(d, {.vendorId = config.vendorId,
+                                     .productId = config.productId,
+                                     .serialString = static_cast<std::uint8_t>(config.serialDescriptor ? 3 : 0)});
   // configuration, interface, bulk OUT endpoint (512 byte packets, high speed)
   d.insert(d.end(), {9, 2});
   u16(9 + 9 + 7);

@@ -418,6 +418,20 @@ std::string recordText(const UsbdevfsNode& node, int busNumber, int deviceNumber
       hex(r.descriptors));
 }
 
+void appendDeviceDescriptor(std::vector<std::uint8_t>& out, const UsbDeviceDescriptor& d) {
+  auto u16 = [&](std::uint16_t v) {
+    out.push_back(static_cast<std::uint8_t>(v));
+    out.push_back(static_cast<std::uint8_t>(v >> 8));
+  };
+  out.insert(out.end(), {18, 1});
+  u16(d.usbRelease);
+  out.insert(out.end(), {d.deviceClass, d.deviceSubclass, d.deviceProtocol, d.maxPacket0});
+  u16(d.vendorId);
+  u16(d.productId);
+  u16(d.deviceRelease);
+  out.insert(out.end(), {d.manufacturerString, d.productString, d.serialString, 1});
+}
+
 std::vector<std::uint8_t> stringDescriptor(const std::string& text) {
   std::vector<std::uint8_t> d{static_cast<std::uint8_t>(2 + 2 * text.size()), 3};
   for (char c : text) {

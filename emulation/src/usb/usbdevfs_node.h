@@ -130,6 +130,16 @@ class UsbdevfsNode {
   bool vanished_ = true;  // (until plugged)
 };
 
+// The 18 bytes of a USB device descriptor (one configuration), appended to `out`.
+struct UsbDeviceDescriptor {
+  std::uint16_t usbRelease = 0x0200;  // bcdUSB
+  std::uint8_t deviceClass = 0, deviceSubclass = 0, deviceProtocol = 0;
+  std::uint8_t maxPacket0 = 64;  // endpoint 0's packets: bytes (USB 2), or a power of two's exponent (USB 3)
+  std::uint16_t vendorId = 0, productId = 0, deviceRelease = 0x0100;
+  std::uint8_t manufacturerString = 1, productString = 2, serialString = 3;  // 0: none
+};
+void appendDeviceDescriptor(std::vector<std::uint8_t>& out, const UsbDeviceDescriptor& descriptor);
+
 // A USB device's sysfs record in umockdev's text format: what libusb reads
 // (busnum, devnum, speed, bConfigurationValue, the binary descriptors) and what
 // udev would have put there.
