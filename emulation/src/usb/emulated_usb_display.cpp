@@ -62,13 +62,12 @@ std::string EmulatedUsbDisplay::Impl::record() const {
   d.insert(d.end(), {7, 5, proto::kFrameEndpoint, 2});
   u16(512);
   d.push_back(0);
-  return detail::recordText(node, config.busNumber, config.deviceNumber,
-                            {.vendorId = config.vendorId,
-                             .productId = config.productId,
-                             .manufacturer = config.vendor,
-                             .product = config.model,
-                             .serial = config.serial,
-                             .descriptors = std::move(d)});
+  return detail::recordText(node, {.vendorId = config.vendorId,
+                                   .productId = config.productId,
+                                   .manufacturer = config.vendor,
+                                   .product = config.model,
+                                   .serial = config.serial,
+                                   .descriptors = std::move(d)});
 }
 
 // ---- the device side of its node, on the handler thread under node.mutex() ----

@@ -59,7 +59,9 @@ int Urb::length() const {
 }
 
 UsbdevfsNode::UsbdevfsNode(int busNumber, int deviceNumber, std::string name, UsbdevfsDevice& device)
-    : devnode_(fmt::format("/dev/bus/usb/{:03d}/{:03d}", busNumber, deviceNumber)),
+    : busNumber_(busNumber),
+      deviceNumber_(deviceNumber),
+      devnode_(fmt::format("/dev/bus/usb/{:03d}/{:03d}", busNumber, deviceNumber)),
       syspath_(fmt::format("/sys/devices/{}-{}", busNumber, deviceNumber)),
       name_(std::move(name)),
       device_(device),
@@ -387,7 +389,8 @@ void UsbdevfsNode::submit(UMockdevIoctlClient* client, UMockdevIoctlData* arg) {
   umockdev_ioctl_client_complete(client, 0, 0);
 }
 
-std::string recordText(const UsbdevfsNode& node, int busNumber, int deviceNumber, const UsbRecord& r) {
+std::string recordText(const UsbdevfsNode& node, const UsbRecord& r) {
+  const int busNumber = node.busNumber(), deviceNumber = node.deviceNumber();
   return fmt::format(
       "P: {}\n"
       "N: {}\n"

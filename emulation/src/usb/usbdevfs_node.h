@@ -76,6 +76,8 @@ class UsbdevfsNode {
   UsbdevfsNode(const UsbdevfsNode&) = delete;
   UsbdevfsNode& operator=(const UsbdevfsNode&) = delete;
 
+  int busNumber() const { return busNumber_; }
+  int deviceNumber() const { return deviceNumber_; }
   const std::string& devnode() const { return devnode_; }
   const std::string& syspath() const { return syspath_; }
 
@@ -113,6 +115,7 @@ class UsbdevfsNode {
   int onIoctl(UMockdevIoctlClient* client);
   void submit(UMockdevIoctlClient* client, UMockdevIoctlData* arg);
 
+  int busNumber_, deviceNumber_;
   std::string devnode_, syspath_, name_;
   UsbdevfsDevice& device_;
   UMockdevTestbed* testbed_;
@@ -150,7 +153,7 @@ struct UsbRecord {
   int interfaces = 1;
   std::vector<std::uint8_t> descriptors;  // device descriptor, then the whole configuration
 };
-std::string recordText(const UsbdevfsNode& node, int busNumber, int deviceNumber, const UsbRecord& record);
+std::string recordText(const UsbdevfsNode& node, const UsbRecord& record);
 
 // USB string descriptor `text` (ASCII) in UTF-16LE.
 std::vector<std::uint8_t> stringDescriptor(const std::string& text);
