@@ -26,6 +26,7 @@ using detail::Urb;
 namespace u3vusb {
 inline constexpr unsigned char kControlOut = 0x01, kControlIn = 0x81, kStreamIn = 0x82;
 inline constexpr unsigned kControlInterface = 0, kStreamInterface = 1;
+inline constexpr std::uint32_t kLeaderSize = 52, kTrailerSize = 32;  // an image's stream leader and trailer
 }  // namespace u3vusb
 
 // The little-endian fields of GenCP packets, stream leaders and trailers, and registers.

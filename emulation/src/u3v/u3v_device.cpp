@@ -28,7 +28,6 @@ constexpr std::uint16_t kReadMemory = 0x0800, kWriteMemory = 0x0802;
 constexpr std::uint16_t kRequestAck = 0x4000;
 constexpr std::uint32_t kMaxAckTransfer = 16384 + 12;           // a READMEM ack: 16 KiB of data
 constexpr std::uint32_t kMaxCmdTransfer = kMaxAckTransfer + 8;  // a WRITEMEM command of as much
-constexpr std::uint32_t kLeaderSize = 52, kTrailerSize = 32;
 
 bool isPixelFormat(std::uint32_t v) {
   return v == kPfncMono8 || v == kPfncMono12 || v == kPfncMono12p || v == kPfncMono16;
@@ -98,15 +97,14 @@ std::string EmulatedU3vCamera::Impl::record() const {
   d.insert(d.end(), {9, 4, u3vusb::kStreamInterface, 0, 1, 0xEF, 0x05, 0x02, 0});
   endpoint(u3vusb::kStreamIn);
   putU16(d.data() + configuration + 2, static_cast<std::uint16_t>(d.size() - configuration));
-  return detail::recordText(node, config.busNumber, config.deviceNumber,
-                            {.vendorId = config.vendorId,
-                             .productId = config.productId,
-                             .manufacturer = config.vendor,
-                             .product = config.model,
-                             .serial = config.serial,
-                             .speed_mbps = 5000,
-                             .interfaces = 2,
-                             .descriptors = std::move(d)});
+  return detail::recordText(node, {.vendorId = config.vendorId,
+                                   .productId = config.productId,
+                                   .manufacturer = config.vendor,
+                                   .product = config.model,
+                                   .serial = config.serial,
+                                   .speed_mbps = 5000,
+                                   .interfaces = 2,
+                                   .descriptors = std::move(d)});
 }
 
 // ---- registers ---------------------------------------------------------------
@@ -143,8 +141,8 @@ void EmulatedU3vCamera::Impl::resetRegisters() {
 
   auto& sirm = memory[kSirm];
   sirm.assign(0x30, 0);  // Info 0: no alignment
-  putU32(sirm.data() + (kSirmRequiredLeaderSize - kSirm), kLeaderSize);
-  putU32(sirm.data() + (kSirmRequiredTrailerSize - kSirm), kTrailerSize);
+  putU32(sirm.data() + (kSirmRequiredLeaderSize - kSirm), u3vusb::kLeaderSize);
+  putU32(sirm.data() + (kSirmRequiredTrailerSize - kSirm), u3vusb::kTrailerSize);
 
   auto& manifest = memory[kManifestTable];
   manifest.assign(8 + kManifestEntrySize, 0);

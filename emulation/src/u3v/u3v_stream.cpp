@@ -154,10 +154,10 @@ void EmulatedU3vCamera::Impl::runFrames() {
 void EmulatedU3vCamera::Impl::queueFrame(const ServedFrameRequest& request, std::uint32_t format,
                                          std::vector<std::uint8_t> payload, std::uint64_t timestamp_ns) {
   Transfer leader;
-  leader.bytes.assign(52, 0);
+  leader.bytes.assign(u3vusb::kLeaderSize, 0);
   std::uint8_t* l = leader.bytes.data();
   putU32(l, kLeaderMagic);
-  putU16(l + 6, 52);
+  putU16(l + 6, u3vusb::kLeaderSize);
   putU64(l + 8, request.frameId);
   putU16(l + 18, kPayloadImage);
   putU64(l + 20, timestamp_ns);
@@ -181,10 +181,10 @@ void EmulatedU3vCamera::Impl::queueFrame(const ServedFrameRequest& request, std:
     stream.push_back(std::move(t));
   }
   Transfer trailer;
-  trailer.bytes.assign(32, 0);
+  trailer.bytes.assign(u3vusb::kTrailerSize, 0);
   std::uint8_t* t = trailer.bytes.data();
   putU32(t, std::exchange(corruptTrailerNext, false) ? 0 : kTrailerMagic);
-  putU16(t + 6, 32);
+  putU16(t + 6, u3vusb::kTrailerSize);
   putU64(t + 8, request.frameId);
   putU64(t + 20, payload.size());
   putU32(t + 28, static_cast<std::uint32_t>(request.height_px));
