@@ -89,13 +89,21 @@ std::string ConfigTable::string(const std::string& key, std::optional<std::strin
 
 std::vector<double> ConfigTable::numbers(const std::string& key, size_t count,
                                          std::optional<std::vector<double>> fallback, double min, double max) {
+  return numbers(key, count, count, std::move(fallback), min, max);
+}
+
+std::vector<double> ConfigTable::numbers(const std::string& key, size_t minCount, size_t maxCount,
+                                         std::optional<std::vector<double>> fallback, double min, double max) {
   const toml::node* n = node(key);
   if (!n) {
     if (!fallback) fail(Errc::Config, "{} is missing", where(key));
     return *fallback;
   }
+  const std::string count =
+      minCount == maxCount ? fmt::format("{}", minCount) : fmt::format("{} to {}", minCount, maxCount);
   const toml::array* a = n->as_array();
-  if (!a || a->size() != count) fail(Errc::Config, "{} must be an array of {} numbers", where(key), count);
+  if (!a || a->size() < minCount || a->size() > maxCount)
+    fail(Errc::Config, "{} must be an array of {} numbers", where(key), count);
   std::vector<double> out;
   for (const toml::node& e : *a) {
     std::optional<double> v =

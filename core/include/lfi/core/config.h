@@ -35,6 +35,9 @@ class ConfigTable {
   std::vector<double> numbers(const std::string& key, size_t count,
                               std::optional<std::vector<double>> fallback = std::nullopt, double min = -1e300,
                               double max = 1e300);
+  // The same for an array of minCount .. maxCount numbers.
+  std::vector<double> numbers(const std::string& key, size_t minCount, size_t maxCount,
+                              std::optional<std::vector<double>> fallback, double min, double max);
   bool has(const std::string& key) const;
   ConfigTable table(const std::string& key);
   // An array of tables ([[key]] in TOML); empty when the key is absent.
