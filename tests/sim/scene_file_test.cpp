@@ -177,7 +177,19 @@ TEST_F(SceneFile, BadValuesAreErrors) {
   big = big.replace(big.find("width = 16"), 10, "width = 65536").replace(big.find("height = 16"), 11, "height = 16385");
   EXPECT_TRUE(throwsError([&] { loadSceneFile(write("big.toml", big)); }, Errc::Config,
                           {"big.toml:", "camera.height", "65536 x 16385 pixels", "2^30"}));
-  // Seeds: TOML's whole range of non-negative integers, the range `lfi render --seed` takes.
+  // A panel's response: a table that falls, that does not end at full light, or both a table and a gamma.
+  EXPECT_TRUE(refused("falling.toml", "[display]\nresponse_table = [0, 0.6, 0.5, 1]\n",
+                      {"display.response_table", "element 2 (0.5) is below element 1 (0.6)"}));
+  EXPECT_TRUE(refused("short.toml", "[display]\nresponse_table = [0, 0.5, 0.9]\n",
+                      {"display.response_table", "the last element is 0.9, not 1"}));
+  EXPECT_TRUE(refused("both.toml", "[display]\nresponse_table = [0, 1]\nresponse_gamma = 2.2\n",
+                      {"display.response_table", "not both"}));
+  EXPECT_TRUE(refused("one.toml", "[display]\nresponse_table = [1]\n",
+                      {"display.response_table", "an array of 2 to 4096 numbers"}));
+  // The camera's fixed pattern: a black level past half the ADC's range is a wrong unit.
+  EXPECT_TRUE(refused("black.toml", "[camera_sensor]\nbit_depth = 8\nblack_level_dn = 200\n",
+                      {"camera_sensor.black_level_dn", "outside [0, 127.5]"}));
+
   const std::string ball = "[[object]]\nname='b'\nshape='sphere'\nradius_mm=1\n";
   EXPECT_EQ(loadSceneFile(write("seed.toml", head + ball + "[render]\nseed = 9223372036854775807\n")).render.seed,
             9223372036854775807ull);

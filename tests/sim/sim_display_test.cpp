@@ -400,6 +400,73 @@ TEST_F(SimDisplayTest, SimCameraSeesWhatTheSimDisplayShows) {
   camera->stop();
 }
 
+// A panel's response curve (response_gamma, response_table) shapes the light
+// each drive level emits, seen through the camera: the mean DN at level v over
+// the mean at full drive is R(v / 255).
+TEST_F(SimDisplayTest, APanelsResponseCurveShapesTheLightItEmits) {
+  struct Case {
+    std::string keys;
+    std::vector<std::pair<int, double>> levels;  // drive level, R
+  };
+  const double table128 = 0.1 + (128.0 / 255 * 3 - 1) * 0.4;  // between the table's 0.1 at 85 and 0.5 at 170
+  const std::vector<Case> cases = {
+      {"response_gamma = 2.2\n", {{64, std::pow(64 / 255.0, 2.2)}, {128, std::pow(128 / 255.0, 2.2)}}},
+      {"response_table = [0, 0.1, 0.5, 1]\n", {{85, 0.1}, {170, 0.5}, {128, table128}}},
+  };
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.keys);
+    const fs::path file = write("curve.toml", sceneText("panel_width_px = 400\npanel_height_px = 300\n"
+                                                        "subpixels = \"mono\"\nbrightness = 1\n" +
+                                                        c.keys));
+    auto camera = openCamera(uri(file));
+    auto display = openDisplay(uri(file));
+    CameraSettings settings;
+    settings.exposure_us = 5000;
+    settings.pixelFormat = PixelFormat::Mono16;
+    settings.trigger = TriggerMode::Software;
+    camera->configure(settings);
+    camera->start(4);
+    auto meanDn = [&](int level) {
+      display->show(cv::Mat(300, 400, CV_8UC1, cv::Scalar(level)));
+      camera->softwareTrigger();
+      Frame frame;
+      camera->grabInto(frame, 2000ms);
+      EXPECT_EQ(frame.status, FrameStatus::Complete);
+      return cv::mean(frame.image)[0] / 16;
+    };
+    const double full = meanDn(255);
+    // As the linear panel's test: within 2 % and the few DN of a frame's mean.
+    for (const auto& [level, r] : c.levels)
+      EXPECT_NEAR(meanDn(level), full * r, 0.02 * full * r + 3) << "level " << level;
+    camera->stop();
+  }
+}
+
+// The backlight's fall-off (backlight_falloff): 1 - f (r / r_corner)^2 of the
+// level's light at a pixel r from the panel's centre, every subpixel alike.
+TEST_F(SimDisplayTest, TheBacklightFallsOffTowardsThePanelsCorners) {
+  DisplayInfo info;
+  info.panelWidth_px = 401;
+  info.panelHeight_px = 301;
+  info.subpixels = SubpixelLayout::RgbStripe;
+  PanelResponse response;
+  response.gamma = 2.2;
+  response.backlightFalloff = 0.2;
+  const cv::Mat levels = panelLevels(info, cv::Mat(301, 401, CV_8UC3, cv::Scalar::all(255)), response);
+  ASSERT_EQ(levels.size(), cv::Size(3 * 401, 301));
+  const double rc2 = 200.0 * 200 + 150.0 * 150;
+  for (int s = 0; s < 3; ++s) {
+    EXPECT_NEAR(levels.at<float>(150, 3 * 200 + s), 1.0, 1e-6) << "the centre";
+    EXPECT_NEAR(levels.at<float>(0, s), 0.8, 1e-6) << "a corner";
+    EXPECT_NEAR(levels.at<float>(300, 3 * 400 + s), 0.8, 1e-6) << "the opposite corner";
+    EXPECT_NEAR(levels.at<float>(150, s), 1 - 0.2 * 200 * 200 / rc2, 1e-6) << "the left edge's middle";
+    EXPECT_NEAR(levels.at<float>(0, 3 * 200 + s), 1 - 0.2 * 150 * 150 / rc2, 1e-6) << "the top edge's middle";
+  }
+  // The curve and the backlight multiply: level 128 at the corner.
+  const cv::Mat half = panelLevels(info, cv::Mat(301, 401, CV_8UC3, cv::Scalar::all(128)), response);
+  EXPECT_NEAR(half.at<float>(0, 0), 0.8 * std::pow(128 / 255.0, 2.2), 1e-6);
+}
+
 // Settings at which radiance 1 gives half the camera's 12-bit scale.
 CameraSettings streamingSettings(double frameRate_hz) {
   CameraSettings settings;

@@ -139,8 +139,8 @@ struct RowConstants {
 // transformed normal or, above the band, the full well; `exact` marks the
 // pixels the exact sampler must draw instead.
 LFI_SIMD_CLONES void transformedRow(const float* __restrict radiance, const float* __restrict z,
-                                    std::uint16_t* __restrict out, std::uint8_t* __restrict exact, int n,
-                                    const RowConstants& k) {
+                                    const float* __restrict offset, std::uint16_t* __restrict out,
+                                    std::uint8_t* __restrict exact, int n, const RowConstants& k) {
   const std::uint8_t allExact = k.transformed ? 0 : 1;
   for (int i = 0; i < n; ++i) {
     const double in = radiance[i];
@@ -150,7 +150,7 @@ LFI_SIMD_CLONES void transformedRow(const float* __restrict radiance, const floa
     const double full = k.fullWell + k.readNoise * zi;
     const double electrons = mean >= k.fullFrom ? full : t.electrons(zi);
     exact[i] = allExact | static_cast<std::uint8_t>((mean >= k.bandFrom) & (mean < k.fullFrom));
-    const double dn = std::min(std::max(electrons * k.scale, 0.0), k.maxDn);
+    const double dn = std::min(std::max(electrons * k.scale + offset[i], 0.0), k.maxDn);
     out[i] = static_cast<std::uint16_t>(static_cast<std::int32_t>(dn + 0.5));
   }
 }
@@ -160,6 +160,10 @@ LFI_SIMD_CLONES void transformedRow(const float* __restrict radiance, const floa
 cv::Mat CameraSensorModel::capture(const cv::Mat& radiance, std::uint64_t seed, int threads) const {
   validate();
   requireImageType(radiance, CV_32FC1, "radiance image for the camera sensor");
+  if (!offset_dn.empty() && (offset_dn.type() != CV_32FC1 || offset_dn.size() != radiance.size()))
+    fail(Errc::InvalidArgument, "camera sensor: offset_dn is {} x {} of type {}, the radiance {} x {} (CV_32FC1)",
+         offset_dn.cols, offset_dn.rows, offset_dn.type(), radiance.cols, radiance.rows);
+  const std::vector<float> noOffset(offset_dn.empty() ? static_cast<std::size_t>(radiance.cols) : 0, 0.0f);
   cv::Mat out(radiance.size(), CV_16UC1);
   const double scale = gain / fullWell_e * maxDigitalNumber();
   const double maxDn = maxDigitalNumber();
@@ -184,8 +188,9 @@ cv::Mat CameraSensorModel::capture(const cv::Mat& radiance, std::uint64_t seed, 
     std::vector<std::uint8_t> exact(static_cast<std::size_t>(width));
     standardNormals(uniforms, z.data(), blocks);
     const float* in = radiance.ptr<float>(r);
+    const float* offset = offset_dn.empty() ? noOffset.data() : offset_dn.ptr<float>(r);
     auto* o = out.ptr<std::uint16_t>(r);
-    transformedRow(in, z.data(), o, exact.data(), width, k);
+    transformedRow(in, z.data(), offset, o, exact.data(), width, k);
     // The exact sampler for the marked pixels (its own engine, made when first needed).
     std::optional<std::mt19937_64> engine;
     for (int c = 0; c < width; ++c) {
@@ -202,7 +207,7 @@ cv::Mat CameraSensorModel::capture(const cv::Mat& radiance, std::uint64_t seed, 
         }
       }
       electrons += readNoise_e * z[static_cast<std::size_t>(c)];
-      o[c] = static_cast<std::uint16_t>(std::clamp(std::round(electrons * scale), 0.0, maxDn));
+      o[c] = static_cast<std::uint16_t>(std::clamp(std::round(electrons * scale + offset[c]), 0.0, maxDn));
     }
   };
   detail::parallelFor(radiance.rows, threads, row);

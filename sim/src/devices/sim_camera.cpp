@@ -85,7 +85,13 @@ CameraSettings SimImager::resolve(const CameraSettings& s, const std::string& de
   return r;
 }
 
-CameraSensorModel SimImager::sensorModel(const CameraSettings& s) const {
+const SensorPattern& SimImager::pattern(int binning) {
+  if (auto it = patterns_.find(binning); it != patterns_.end()) return it->second;
+  return patterns_.emplace(binning, sensorPattern(description_.cameraSensor, camera_.width, camera_.height, binning))
+      .first->second;
+}
+
+CameraSensorModel SimImager::sensorModel(const CameraSettings& s) {
   const CameraSensorParameters& p = description_.cameraSensor;
   const double pixels = static_cast<double>(s.binning) * s.binning;
   CameraSensorModel model;
@@ -94,6 +100,8 @@ CameraSensorModel SimImager::sensorModel(const CameraSettings& s) const {
   model.bitDepth = p.bitDepth;
   model.electronsPerUnit = p.electronsPerUnitPerUs * s.exposure_us * pixels;
   model.gain = std::pow(10.0, s.gain / 20);
+  if (const cv::Mat& offset = pattern(s.binning).offset_dn; !offset.empty())
+    model.offset_dn = offset(cv::Rect(s.roiX_px, s.roiY_px, s.roiWidth_px, s.roiHeight_px));
   return model;
 }
 
@@ -116,6 +124,7 @@ const cv::Mat& SimImager::radiance(int binning, const SimBench::DisplayState* di
   options.progress = renderProgress_;
   const auto t0 = std::chrono::steady_clock::now();
   cv::Mat image = render(*scene_, binned, options);
+  if (const cv::Mat& response = pattern(binning).response; !response.empty()) image = image.mul(response);
   spdlog::debug("sim camera '{}': rendered {} x {} (binning {}) in {:.2f} s", sceneFile_.string(), binned.width,
                 binned.height, binning, std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
   return radiance_.emplace(key, std::move(image)).first->second;

@@ -71,6 +71,19 @@ DisplayParameters readDisplay(ConfigTable& t) {
          t.where(t.has("brightness_max") ? "brightness_max" : "brightness_min"), info.brightnessMax,
          info.brightnessMin);
   d.brightness = t.number("brightness", 1.0, 0, 1e12);
+  if (t.has("response_gamma") && t.has("response_table"))
+    fail(Errc::Config, "{}: give response_gamma or response_table, not both", t.where("response_table"));
+  d.response.gamma = t.number("response_gamma", 1.0, 0.1, 10);
+  d.response.table = t.numbers("response_table", 2, 4096, std::vector<double>{}, 0, 1);
+  for (std::size_t i = 1; i < d.response.table.size(); ++i)
+    if (d.response.table[i] < d.response.table[i - 1])
+      fail(Errc::Config,
+           "{}: element {} ({}) is below element {} ({}): a panel's light does not fall as its drive rises",
+           t.where("response_table"), i, d.response.table[i], i - 1, d.response.table[i - 1]);
+  if (!d.response.table.empty() && d.response.table.back() != 1)
+    fail(Errc::Config, "{}: the last element is {}, not 1 (brightness is the radiance at full drive)",
+         t.where("response_table"), d.response.table.back());
+  d.response.backlightFalloff = t.number("backlight_falloff", 0.0, 0, 0.9);
   t.finish();
   try {
     info.validate();
@@ -216,6 +229,12 @@ SceneDescription loadSceneFile(const fs::path& path) {
     d.cameraSensor.bitDepth = c.integer("bit_depth", d.cameraSensor.bitDepth, 8, 16);
     d.cameraSensor.electronsPerUnitPerUs =
         c.number("electrons_per_unit_per_us", d.cameraSensor.electronsPerUnitPerUs, 1e-12, 1e12);
+    const double maxDn = (1 << d.cameraSensor.bitDepth) - 1;
+    d.cameraSensor.blackLevel_dn = c.number("black_level_dn", 0.0, 0, maxDn / 2);
+    d.cameraSensor.darkFpn_dn = c.number("dark_fpn_dn", 0.0, 0, maxDn / 8);
+    d.cameraSensor.gainFpn = c.number("gain_fpn", 0.0, 0, 0.25);
+    d.cameraSensor.vignetting = c.number("vignetting", 0.0, 0, 0.9);
+    d.cameraSensor.patternSeed = static_cast<std::uint64_t>(c.integer64("pattern_seed", 1, 0, kLargestSeed));
     c.finish();
   }
   // Errors, the study's report and the tracer's messages name objects: one name each.

@@ -5,6 +5,7 @@
 #include "lfi/sim/scene.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <optional>
 
@@ -24,7 +25,46 @@ double PanelEmission::radiance(const Vec2& q, const Vec3& d) const {
   return brightness * levels->ptr<float>(row)[column];
 }
 
-cv::Mat panelLevels(const DisplayInfo& info, const cv::Mat& panel) {
+double PanelResponse::at(double level) const {
+  const double v = std::clamp(level, 0.0, 1.0);
+  if (table.empty()) return gamma == 1 ? v : std::pow(v, gamma);
+  const double x = v * static_cast<double>(table.size() - 1);
+  const auto i = std::min(static_cast<std::size_t>(x), table.size() - 2);
+  const double t = x - static_cast<double>(i);
+  return table[i] + t * (table[i + 1] - table[i]);
+}
+
+namespace {
+
+// Levels (CV_32FC1, subpixels side by side) to relative radiance, in place.
+void applyResponse(const DisplayInfo& info, const PanelResponse& response, bool eightBit, cv::Mat& levels) {
+  std::array<float, 256> lut{};
+  for (int i = 0; i < 256; ++i) lut[static_cast<std::size_t>(i)] = static_cast<float>(response.at(i / 255.0));
+  const int sub = info.subpixelsPerPixel();
+  const double cx = (info.panelWidth_px - 1) / 2.0, cy = (info.panelHeight_px - 1) / 2.0;
+  const double corner2 = std::max(cx * cx + cy * cy, 1e-30), f = response.backlightFalloff / corner2;
+  std::vector<float> columnLoss(static_cast<std::size_t>(levels.cols));
+  for (int c = 0; c < levels.cols; ++c) {
+    const double x = c / sub - cx;
+    columnLoss[static_cast<std::size_t>(c)] = static_cast<float>(f * x * x);
+  }
+  for (int r = 0; r < levels.rows; ++r) {
+    auto* row = levels.ptr<float>(r);
+    const double y = r - cy;
+    const float rowLoss = static_cast<float>(f * y * y);
+    for (int c = 0; c < levels.cols; ++c) {
+      const float v = row[c];
+      const float light = eightBit ? lut[static_cast<std::size_t>(std::lround(v * 255))]
+                          : v <= 1 ? static_cast<float>(response.at(v))
+                                   : v * lut[255];
+      row[c] = light * (1 - rowLoss - columnLoss[static_cast<std::size_t>(c)]);
+    }
+  }
+}
+
+}  // namespace
+
+cv::Mat panelLevels(const DisplayInfo& info, const cv::Mat& panel, const PanelResponse& response) {
   const int sub = info.subpixelsPerPixel();
   if (panel.empty()) return {};  // dark: no level image (a 16384² panel's would take 3.2 GB)
   if (panel.cols != info.panelWidth_px || panel.rows != info.panelHeight_px || panel.channels() != sub ||
@@ -40,6 +80,7 @@ cv::Mat panelLevels(const DisplayInfo& info, const cv::Mat& panel) {
     flat.convertTo(levels, CV_32F, 1.0 / 255.0);
   else
     cv::max(flat, 0.0, levels);
+  if (!response.linear()) applyResponse(info, response, panel.depth() == CV_8U, levels);
   return levels;
 }
 

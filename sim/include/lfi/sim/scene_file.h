@@ -26,6 +26,12 @@ struct CameraSensorParameters {
   double readNoise_e = 2.4;            // e- rms
   int bitDepth = 12;                   // ADC bits
   double electronsPerUnitPerUs = 0.7;  // e- per unit radiance per µs: 10 ms gives 7000 e- (2/3 of the well)
+  // The fixed pattern (sensor_pattern.h): none by default.
+  double blackLevel_dn = 0;       // DN at bit_depth added to every pixel
+  double darkFpn_dn = 0;          // rms spread of the pixels' dark offsets, DN
+  double gainFpn = 0;             // rms spread of the pixels' relative response (PRNU)
+  double vignetting = 0;          // relative loss of response at the sensor's corners
+  std::uint64_t patternSeed = 1;  // the pattern's draw
 };
 
 // [display]: the simulated light field display (the `sim:` display backend,
@@ -34,6 +40,7 @@ struct DisplayParameters {
   DisplayInfo info;         // vendor "lfi", model "SimDisplay"; optics from the file
   Rigid3 worldFromDisplay;  // placement of the display frame (display.h) in the world
   double brightness = 1;    // radiance at drive level 255 and backlight level brightnessMax
+  PanelResponse response;   // drive to light and the backlight's fall-off: linear and uniform by default
 };
 
 // The key that holds a lens value in a scene file's lens shape; the bench

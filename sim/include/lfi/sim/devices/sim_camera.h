@@ -36,6 +36,7 @@
 
 #include "lfi/drivers/camera.h"
 #include "lfi/sim/devices/camera_sensor_model.h"
+#include "lfi/sim/devices/sensor_pattern.h"
 #include "lfi/sim/devices/sim_bench.h"
 #include "lfi/sim/scene_file.h"
 
@@ -85,11 +86,15 @@ class SimImager {
   // default. Throws Errc::InvalidArgument naming `device`, the field and its limits.
   CameraSettings resolve(const CameraSettings& settings, const std::string& device) const;
 
-  // The sensor model for these (resolved) settings: exposure, gain and binning applied.
-  CameraSensorModel sensorModel(const CameraSettings& settings) const;
+  // The sensor model for these (resolved) settings: exposure, gain and binning
+  // applied, offset_dn the fixed pattern's over the settings' region.
+  CameraSensorModel sensorModel(const CameraSettings& settings);
 
-  // Relative radiance of the whole binned sensor (CV_32FC1) with the display as
-  // it is now, or as `display` was, rendered at the first call per binning and
+  // The sensor's fixed pattern at a binning (sensor_pattern.h), made at the first call per binning.
+  const SensorPattern& pattern(int binning);
+
+  // Relative radiance of the whole binned sensor (CV_32FC1, times the fixed
+  // pattern's response) with the display as it is now, or as `display` was, rendered at the first call per binning and
   // display version (this version's and the newest other one's stay cached). The
   // reference is valid until the next call.
   const cv::Mat& radiance(int binning, const SimBench::DisplayState* display = nullptr);
@@ -112,6 +117,7 @@ class SimImager {
   std::shared_ptr<SimBench> bench_;
   std::unique_ptr<Scene> scene_;
   std::map<std::pair<std::uint64_t, int>, cv::Mat> radiance_;  // by display version and binning
+  std::map<int, SensorPattern> patterns_;                      // by binning
   int renderThreads_ = 0;
   std::function<void(double)> renderProgress_;
 };
