@@ -46,6 +46,7 @@ constexpr const char* kPixelPitch = "lfi.pixelPitch_mm";
 constexpr const char* kDistance = "lfi.distance_mm";
 constexpr const char* kObjectPixel = "lfi.objectPixel_mm";
 constexpr const char* kDescription = "lfi.description";
+constexpr const char* kSettingsPrefix = "lfi.settings.";
 
 // The conventions in words (docs/file-formats.md), written into every file and
 // required of every file read: lfi reads no other parametrisation.
@@ -416,6 +417,12 @@ void writeRadianceExr(const fs::path& path, const cv::Mat& image, const Radiance
   header.insert(kObjectPixel, Imf::DoubleAttribute(info.objectPixel_mm));
   header.insert(kFrame, Imf::StringAttribute(kRadianceFrameText));
   header.insert(kDescription, Imf::StringAttribute(info.description));
+  for (const auto& [key, value] : info.settings) {
+    if (key.empty() || key.find_first_not_of("abcdefghijklmnopqrstuvwxyz0123456789_") != std::string::npos)
+      fail(Errc::InvalidArgument, "cannot write '{}': setting '{}' is not a key of a-z, 0-9 and '_'", path.string(),
+           shown(key));
+    header.insert(kSettingsPrefix + key, Imf::StringAttribute(value));
+  }
   if (info.pixelUnit.empty())
     fail(Errc::InvalidArgument, "cannot write '{}': the pixels' unit is empty", path.string());
   writeExr(path, image, std::move(header), overwrite, info.pixelUnit);
@@ -438,6 +445,16 @@ cv::Mat readRadianceExr(const fs::path& path, RadianceImageInfo* info) {
     const auto* d = exr.header.findTypedAttribute<Imf::StringAttribute>(kDescription);
     info->description = d ? d->value() : std::string();
     info->pixelUnit = units.substr(prefix.size());
+    info->settings.clear();
+    for (auto it = exr.header.begin(); it != exr.header.end(); ++it) {
+      const std::string_view name = it.name();
+      if (!name.starts_with(kSettingsPrefix)) continue;
+      const auto* value = dynamic_cast<const Imf::StringAttribute*>(&it.attribute());
+      if (!value)
+        fail(Errc::InvalidFile, "'{}': attribute '{}' has type '{}', expected 'string'", path.string(), shown(name),
+             shown(it.attribute().typeName()));
+      info->settings.emplace(std::string(name.substr(std::string_view(kSettingsPrefix).size())), value->value());
+    }
   }
   return exr.pixels;
 }

@@ -44,6 +44,21 @@ TEST_F(ExrIo, RadianceRoundTripKeepsPixelsAndInfo) {
   EXPECT_EQ(loadedInfo.pixelUnit, info.pixelUnit);
   EXPECT_EQ(Imf::InputFile(file("dn.exr").c_str()).header().typedAttribute<Imf::StringAttribute>("lfi.units").value(),
             "lengths mm, angles rad, pixels camera digital numbers (DN)");
+  // How it was taken travels as lfi.settings.* strings, under the checksum.
+  info.settings = {{"exposure_us", "10000"}, {"pixel_format", "Mono12"}};
+  lfi::writeRadianceExr(file("settings.exr"), image, info);
+  lfi::readRadianceExr(file("settings.exr"), &loadedInfo);
+  EXPECT_EQ(loadedInfo.settings, info.settings);
+  lfi::readRadianceExr(file("dn.exr"), &loadedInfo);
+  EXPECT_TRUE(loadedInfo.settings.empty()) << "none written, none read";
+  {
+    Imf::InputFile in(file("settings.exr").c_str());
+    EXPECT_EQ(in.header().typedAttribute<Imf::StringAttribute>("lfi.settings.pixel_format").value(), "Mono12");
+  }
+  info.settings = {{"Exposure us", "1"}};
+  EXPECT_TRUE(throwsError([&] { lfi::writeRadianceExr(file("key.exr"), image, info); }, Errc::InvalidArgument,
+                          {"key.exr", "'Exposure us'", "a-z"}));
+  info.settings.clear();
   info.pixelUnit.clear();
   EXPECT_TRUE(throwsError([&] { lfi::writeRadianceExr(file("none.exr"), image, info); }, Errc::InvalidArgument,
                           {"none.exr", "unit"}));

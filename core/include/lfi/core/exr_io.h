@@ -17,6 +17,7 @@
 #include <opencv2/core.hpp>
 
 #include <filesystem>
+#include <map>
 #include <string>
 #include <string_view>
 
@@ -42,6 +43,9 @@ struct RadianceImageInfo {
   double objectPixel_mm = 0;
   std::string description;
   std::string pixelUnit = "linear relative radiance";  // lfi.units: "lengths mm, angles rad, pixels <pixelUnit>"
+  // How the image was taken (a camera's frame: its device and settings), as
+  // string attributes lfi.settings.<key>; keys of a-z, 0-9 and '_'.
+  std::map<std::string, std::string> settings;
 };
 
 void writeRadianceExr(const std::filesystem::path& path, const cv::Mat& image, const RadianceImageInfo& info,
