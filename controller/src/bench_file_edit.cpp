@@ -207,6 +207,26 @@ void BenchFileEdit::set(const std::string& table, const std::string& key, const 
   text_ += "\n" + header;
 }
 
+void BenchFileEdit::remove(const std::string& table, const std::string& key) {
+  const toml::table root = parseText(text_, file_);
+  const std::vector<std::string> parts = splitPath(table);
+  const toml::table* t = findTable(root, parts, parts.size());
+  const toml::node* old = t ? t->get(key) : nullptr;
+  if (!old) return;
+  if (old->is_table() || old->is_array_of_tables())
+    fail(Errc::InvalidArgument, "bench file edit: {}.{} in '{}' is a table or an array of tables, not a value", table,
+         key, file_.string());
+  // The whole line, which must hold nothing but the key, its value and a comment.
+  const size_t begin = offsetOf(text_, old->source().begin), end = offsetOf(text_, old->source().end);
+  const size_t start = text_.rfind('\n', begin) == std::string::npos ? 0 : text_.rfind('\n', begin) + 1;
+  const size_t stop = lineEnd(text_, end), after = text_.find_first_not_of(" \t\r", end);
+  const std::string head = text_.substr(start, begin - start);
+  if (head.find_first_not_of(" \t") != head.find(key) || (after < stop && text_[after] != '#'))
+    fail(Errc::InvalidArgument, "bench file edit: {}.{} in '{}' shares its line with other keys: remove it by hand",
+         table, key, file_.string());
+  text_.erase(start, std::min(stop + 1, text_.size()) - start);
+}
+
 std::optional<std::string> BenchFileEdit::string(const std::string& table, const std::string& key) const {
   const std::vector<std::string> parts = splitPath(table);
   const toml::table root = parseText(text_, file_);
@@ -259,13 +279,19 @@ std::string BenchFileEdit::changes() const {
   return out;
 }
 
+fs::path calibrationFile(const fs::path& benchFile, const std::string& stampUtc, const std::string& what,
+                         const std::string& extension) {
+  std::string stamp = stampUtc;
+  std::erase(stamp, ':');
+  return benchFile.parent_path() / (benchFile.stem().string() + ".calibrations") / (stamp + "-" + what + extension);
+}
+
 PublishedCalibration publishCalibration(const BenchFileEdit& edit, const std::string& what, const std::string& stampUtc,
                                         const std::string& recordJson) {
   const fs::path& file = edit.file();
-  std::string stamp = stampUtc;
-  std::erase(stamp, ':');
-  const fs::path folder = file.parent_path() / (file.stem().string() + ".calibrations");
-  PublishedCalibration out{folder / (stamp + "-" + what + ".before.toml"), folder / (stamp + "-" + what + ".json")};
+  const fs::path folder = calibrationFile(file, stampUtc, what, "").parent_path();
+  PublishedCalibration out{calibrationFile(file, stampUtc, what, ".before.toml"),
+                           calibrationFile(file, stampUtc, what, ".json")};
   {
     if (readText(file) != edit.original())
       fail(Errc::Exists,

@@ -34,6 +34,19 @@ TEST_F(BenchFileEditTest, AValueIsReplacedWhereItStandsAndEverythingElseIsKept) 
                                         line, line));
 }
 
+TEST_F(BenchFileEditTest, AKeyIsRemovedWithItsLineAndNothingElse) {
+  const std::string text = replaced(kBench, "object_pixel_mm = 0.5", "object_pixel_mm = 0.5    # calibrated");
+  BenchFileEdit edit(write(text));
+  edit.remove("camera", "object_pixel_mm");
+  EXPECT_EQ(edit.text(), replaced(text, "object_pixel_mm = 0.5    # calibrated\n", ""));
+  edit.remove("camera", "object_pixel_mm");  // absent: nothing
+  edit.remove("nowhere", "object_pixel_mm");
+  EXPECT_EQ(edit.text(), replaced(text, "object_pixel_mm = 0.5    # calibrated\n", ""));
+  // A key that shares its line is left for a person.
+  BenchFileEdit inline_(write(replaced(kBench, "[output]\n", "[output]\nx = { a = 1 }\n")));
+  EXPECT_TRUE(throwsError([&] { inline_.remove("output.x", "a"); }, Errc::InvalidArgument, {"output.x.a", "by hand"}));
+}
+
 TEST_F(BenchFileEditTest, ValuesAfterTextOfManyBytesPerCharacterAndOverLinesAreFound) {
   // toml++ counts columns in characters: "µ" and "Δ" take two bytes each.
   const std::string text =

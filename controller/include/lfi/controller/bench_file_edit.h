@@ -32,6 +32,10 @@ class BenchFileEdit {
   // or for a key that holds a table.
   void set(const std::string& table, const std::string& key, const std::string& value, const std::string& comment = {});
 
+  // Removes the line of `key` in `table` (nothing when it is absent).
+  // Errc::InvalidArgument when the key holds a table or shares its line.
+  void remove(const std::string& table, const std::string& key);
+
   // The string `key` of `table` holds in the text as it is now; empty when the key is absent or not a string.
   std::optional<std::string> string(const std::string& table, const std::string& key) const;
 
@@ -54,6 +58,11 @@ struct PublishedCalibration {
   std::filesystem::path backup;  // the bench file as it was
   std::filesystem::path record;
 };
+
+// `<dir>/<name>.calibrations/<stamp>-<what><extension>` for the bench file
+// `<dir>/<name>.toml`: where a calibration keeps its files.
+std::filesystem::path calibrationFile(const std::filesystem::path& benchFile, const std::string& stampUtc,
+                                      const std::string& what, const std::string& extension);
 
 // Publishes `edit` as above: `what` names the calibration ("display"),
 // `stampUtc` its time (ISO 8601; colons are left out of the names),
