@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "lfi/controller/bench_devices.h"
 
+#include "lfi/controller/frame_correction.h"
+
 #include "lfi/core/error.h"
 #include "lfi/core/exr_io.h"
 #include "lfi/drivers/camera_registry.h"
@@ -91,13 +93,14 @@ std::unique_ptr<LightFieldCapture> openBenchCapture(const BenchFile& bench) {
   return capture;
 }
 
-ControllerOptions controllerOptions(const BenchFile& bench, int frames) {
+ControllerOptions controllerOptions(const BenchFile& bench, int frames, bool correctFrames) {
   ControllerOptions o;
   o.grabTimeout = std::chrono::milliseconds(bench.grabTimeout_ms);
   o.frames = frames;
   o.retries = bench.retries;
   o.white = bench.white;
   o.settle = std::chrono::milliseconds(bench.settle_ms);
+  if (correctFrames) o.correction = loadFrameCorrection(bench);
   return o;
 }
 

@@ -69,6 +69,12 @@ void readCamera(ConfigTable t, BenchFile& b) {
   b.noise.gain_dnPerElectron = t.number("dn_per_electron", std::nullopt, 0, 1e6);
   b.grabTimeout_ms = t.integer("grab_timeout_ms", 5000, 1, 86'400'000);
   b.retries = t.integer("retries", 3, 0, 1000);
+  if (t.has("dark_frame")) b.darkFrame = pathIn(t, "dark_frame");
+  if (t.has("flat_frame")) {
+    if (b.darkFrame.empty())
+      fail(Errc::Config, "{} needs a dark_frame: a flat frame is corrected by the dark one", t.where("flat_frame"));
+    b.flatFrame = pathIn(t, "flat_frame");
+  }
   t.finish();
 }
 
@@ -208,7 +214,8 @@ BenchFile readBenchFile(const fs::path& file) {
   };
   readCamera(*table("camera",
                     {"uri", "exposure_us", "gain", "pixel_format", "trigger", "trigger_line", "frame_rate_hz",
-                     "binning", "object_pixel_mm", "read_noise_dn", "dn_per_electron", "grab_timeout_ms", "retries"},
+                     "binning", "object_pixel_mm", "read_noise_dn", "dn_per_electron", "grab_timeout_ms", "retries",
+                     "dark_frame", "flat_frame"},
                     true),
              b);
   readDisplay(*table("display", {"uri", "settle_ms", "white", "optics"}, true), b);
@@ -244,8 +251,12 @@ std::string opticsIdentity(const std::optional<DisplayOpticsParams>& o) {
 }  // namespace
 
 std::string BenchFile::referenceIdentity() const {
+  // The frames that correct the camera's images (absent from the identity of a bench without them).
+  std::string frames;
+  if (!darkFrame.empty()) frames += "camera.dark_frame = " + fromBenchFolder(file, darkFrame) + "\n";
+  if (!flatFrame.empty()) frames += "camera.flat_frame = " + fromBenchFolder(file, flatFrame) + "\n";
   // (%.17g: a number reads back as the same double, so equal settings give equal text.)
-  return opticsIdentity(displayOptics) +
+  return opticsIdentity(displayOptics) + frames +
          fmt::format(
              "camera.uri = {}\ncamera.exposure_us = {:.17g}\ncamera.gain = {:.17g}\ncamera.pixel_format = {}\n"
              "camera.binning = {}\ncamera.object_pixel_mm = {:.17g}\ndisplay.uri = {}\ndisplay.white = {:.17g}\n"

@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "lfi/controller/controller.h"
 
+#include "lfi/controller/frame_correction.h"
+
 #include "lfi/core/error.h"
 #include "lfi/core/image.h"
 #include "lfi/core/log.h"
@@ -142,6 +144,12 @@ void Controller::requireShowing() {
 }
 
 cv::Mat Controller::inspect() {
+  cv::Mat image = meanOfFrames();
+  if (options_.correction) options_.correction->apply(image);
+  return image;
+}
+
+cv::Mat Controller::meanOfFrames() {
   // Frames exposed before the last emit() wait in the camera's buffers (a
   // free-running camera fills them; a late triggered frame may too): start a
   // new acquisition, so that every frame averaged is exposed after it, unless

@@ -98,6 +98,8 @@ TEST_F(BenchFileTest, ReferenceHashChangesWithWhatTheReferenceDependsOn) {
            {"mask_radius_mm = 12.2", "mask_radius_mm = 12"},
            {"mask_radius_mm = 12.2\n", ""},
            {"mask_lit_fraction = 0.25", "mask_lit_fraction = 0.3"},
+           {"exposure_us = 10000", "exposure_us = 10000\ndark_frame = \"dark.exr\""},
+           {"exposure_us = 10000", "exposure_us = 10000\ndark_frame = \"dark.exr\"\nflat_frame = \"flat.exr\""},
        }) {
     SCOPED_TRACE(e.to);
     EXPECT_NE(read(replaced(kBench, e.from, e.to)).referenceHash(), base);

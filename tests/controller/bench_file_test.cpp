@@ -111,6 +111,16 @@ TEST_F(BenchFileTest, RelativePathsAreRelativeToTheBenchFile) {
   EXPECT_EQ(f.lightFieldFile, folder_.path() / "light fields" / "lf.exr");
 }
 
+TEST_F(BenchFileTest, TheCamerasDarkAndFlatFramesAreRelativeToTheBenchFileAndTheFlatNeedsTheDark) {
+  const std::string dark = replaced(kBench, "exposure_us = 10000", "exposure_us = 10000\ndark_frame = \"c/dark.exr\"");
+  const BenchFile b = read(replaced(dark, "dark.exr\"", "dark.exr\"\nflat_frame = \"c/flat.exr\""));
+  EXPECT_EQ(b.darkFrame, folder_.path() / "benches" / "c" / "dark.exr");
+  EXPECT_EQ(b.flatFrame, folder_.path() / "benches" / "c" / "flat.exr");
+  EXPECT_TRUE(read(kBench).darkFrame.empty());
+  const std::string flatOnly = replaced(kBench, "exposure_us = 10000", "exposure_us = 10000\nflat_frame = \"f.exr\"");
+  EXPECT_TRUE(refusedAt(flatOnly, lineOf(flatOnly, "flat_frame"), "key 'camera.flat_frame' needs a dark_frame"));
+}
+
 TEST_F(BenchFileTest, AbsolutePathsAndUrisAreKept) {
   const std::string text =
       replaced(replaced(replaced(kBench, "folder = \"reference\"", "folder = \"/srv/lfi/reference\""),

@@ -60,8 +60,10 @@ std::unique_ptr<Display> openBenchDisplay(const BenchFile& bench);
 // handed the bench's Δ ([geometry] distance_mm). Errc::Config naming the bench
 // file when the capture cannot record at Δ, or the file was recorded at another.
 std::unique_ptr<LightFieldCapture> openBenchCapture(const BenchFile& bench);
-// The controller's options from the bench's [camera], [display] and `frames`.
-ControllerOptions controllerOptions(const BenchFile& bench, int frames);
+// The controller's options from the bench's [camera], [display] and `frames`;
+// with `correctFrames`, the correction of its dark and flat frames
+// (frame_correction.h).
+ControllerOptions controllerOptions(const BenchFile& bench, int frames, bool correctFrames = true);
 // "<vendor> <model> <serial> (<uri>)" for records.
 std::string describeCamera(Camera& camera, const DeviceUri& uri);
 

@@ -21,6 +21,9 @@
 //                  dn_per_electron        DN/e-  required    conversion gain (shot noise variance = this · level)
 //                  grab_timeout_ms        ms     5000        per frame, beyond twice the exposure
 //                  retries                -      3           bad or late frames tolerated per image
+//                  dark_frame             path   none        the camera's dark frame (frame_correction.h; `lfi
+//                                                             calibrate camera --dark` writes it)
+//                  flat_frame             path   none        its flat frame (needs dark_frame; `--flat`)
 //   [display]      uri                    -      required    usb:<vid>:<pid>[/<serial>], sim:<scene-file>
 //                  settle_ms              ms     0           the panel's response time after a show
 //                  white                  -      0           radiance at full drive; 0 = the reference's 99.9th
@@ -87,6 +90,7 @@ struct BenchFile {
   CameraNoise noise;
   int grabTimeout_ms = 5000;
   int retries = 3;
+  std::filesystem::path darkFrame, flatFrame;  // empty: none
   // [display]
   DeviceUri displayUri;
   int settle_ms = 0;

@@ -21,6 +21,8 @@
 //   settle         0 ms     after a show, before the first frame that counts may
 //                           start exposing (a panel's response time; the sim:
 //                           and usb: displays answer once the frame is shown)
+//   correction     none     the camera's dark and flat frames, applied to every
+//                           image inspect() returns (frame_correction.h)
 
 #include "lfi/core/light_field.h"
 #include "lfi/drivers/camera.h"
@@ -36,12 +38,15 @@
 
 namespace lfi {
 
+class FrameCorrection;
+
 struct ControllerOptions {
   std::chrono::milliseconds grabTimeout{5000};
   int frames = 1;
   int retries = 3;
   double white = 0;
   std::chrono::milliseconds settle{0};
+  std::shared_ptr<const FrameCorrection> correction;
 };
 
 class Controller {
@@ -89,7 +94,8 @@ class Controller {
   // and restarting a GigE camera's acquisition takes tens of milliseconds.
   // (The controller takes a stream it started to stay its own.) Returns the
   // mean of `frames` complete frames, CV_32FC1,
-  // in the camera's digital numbers. More than `retries` bad frames throw
+  // in the camera's digital numbers, corrected by the option's dark and flat
+  // frames. More than `retries` bad frames throw
   // Errc::Device (Errc::Timeout when nothing arrived at all).
   cv::Mat inspect();
   // Throws Errc::Device naming the display unless it still shows the frame the
@@ -110,6 +116,8 @@ class Controller {
 
  private:
   class Probe;
+  // inspect() but the correction.
+  cv::Mat meanOfFrames();
   // Throws Errc::Device unless `result` is Presented; returns its sequence.
   std::uint32_t shown(const PresentResult& result, const char* what);
   LightFieldCapture& capture_;
