@@ -13,6 +13,7 @@
 #include "lfi/controller/bench_devices.h"
 #include "lfi/controller/camera_calibration.h"
 #include "lfi/controller/display_calibration.h"
+#include "lfi/controller/frame_correction.h"
 #include "lfi/controller/inspection_record.h"
 #include "lfi/controller/part_calibration.h"
 #include "lfi/core/error.h"
@@ -21,6 +22,7 @@
 
 #include <fmt/format.h>
 
+#include <chrono>
 #include <cmath>
 #include <memory>
 #include <optional>
@@ -31,15 +33,20 @@ namespace lfi::cli {
 
 namespace {
 
+// Frames averaged into a dark or flat frame: its own noise, added to every
+// corrected image, is then 1/sqrt(64) = 1/8 of one frame's.
+constexpr int kFrameCalibrationFrames = 64;
+
 struct CalibrateArgs {
   std::string what;
   fs::path bench;
   fs::path part;   // a simulated bench's scene during the calibration
   fs::path model;  // the part's model (part)
   bool dryRun = false;
-  int frames = 0;        // 0: the bench's [inspection] frames
-  std::string corners;   // camera: the chessboard's inner corners, COLSxROWS
-  double square_mm = 0;  // camera: its squares' side
+  int frames = 0;                   // 0: the bench's [inspection] frames
+  std::string corners;              // camera: the chessboard's inner corners, COLSxROWS
+  double square_mm = 0;             // camera: its squares' side
+  bool dark = false, flat = false;  // camera: the dark or the flat frame
   lfi::DisplayCalibrationSettings settings;
   lfi::PartCalibrationSettings partSettings;
   lfi::CameraCalibrationSettings cameraSettings;
@@ -106,7 +113,97 @@ void printCameraCalibration(const lfi::CameraCalibration& c, const lfi::BenchFil
       c.frames, c.seconds, 1000 * c.computeSeconds);
 }
 
+// lfi calibrate camera --dark | --flat: the frame taken through the bench
+// without a correction, checked with the bench's dark frame (a flat one) or
+// flat frame (a dark one: a flat that no longer fits it leaves the bench),
+// written beside the bench file and named in it.
+int runCalibrateFrame(const CalibrateArgs& a, const GlobalOptions& global) {
+  using lfi::CalibrationFrameKind;
+  const CalibrationFrameKind kind = a.dark ? CalibrationFrameKind::Dark : CalibrationFrameKind::Flat;
+  const lfi::BenchFile bench = lfi::readBenchFile(a.bench);
+  lfi::BenchFileEdit edit(a.bench);
+  std::optional<lfi::CalibrationFrame> other;  // the bench's frame of the other kind
+  if (kind == CalibrationFrameKind::Flat) {
+    if (bench.darkFrame.empty())
+      lfi::fail(lfi::Errc::Config,
+                "{}: [camera] dark_frame is not set: a flat frame is corrected by the dark one; take it first (lfi "
+                "calibrate camera {} --dark)",
+                a.bench.string(), a.bench.string());
+    other = lfi::readCalibrationFrame(bench.darkFrame, CalibrationFrameKind::Dark);
+  } else if (!bench.flatFrame.empty()) {
+    other = lfi::readCalibrationFrame(bench.flatFrame, CalibrationFrameKind::Flat);
+  }
+  const lfi::BenchFile devices = a.part.empty() ? bench : withSimulatedPart(bench, a.part);
+  auto display = lfi::openBenchDisplay(devices);
+  auto camera = lfi::openBenchCamera(devices, lfi::BenchExposures::OnRequest);
+  lfi::NoCapture noCapture;
+  const int frames = a.frames > 0 ? a.frames : kFrameCalibrationFrames;
+  lfi::Controller controller(noCapture, *display, *camera, lfi::controllerOptions(bench, frames, false));
+  const auto t0 = std::chrono::steady_clock::now();
+  lfi::CalibrationFrame frame =
+      lfi::takeCalibrationFrame(controller.probe(), kind, camera->info().deviceId, camera->settings(), frames);
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  const std::string stamp = lfi::utcNow();
+  const fs::path file = lfi::calibrationFile(a.bench, stamp, lfi::toString(kind), ".exr");
+  frame.file = file;
+  std::optional<lfi::FrameCorrection> correction;
+  if (kind == CalibrationFrameKind::Flat) {
+    correction.emplace(*other, frame);  // the flat frame's refusals
+  } else {
+    correction.emplace(frame, std::nullopt);
+    if (other) try {
+        lfi::FrameCorrection kept(frame, *other);
+      } catch (const lfi::Error& e) {
+        spdlog::warn(
+            "calibrate: the bench's flat frame does not fit the new dark frame, and leaves the bench ({}): "
+            "take it again (lfi calibrate camera {} --flat)",
+            e.what(), a.bench.string());
+        edit.remove("camera", "flat_frame");
+      }
+  }
+  cv::Scalar mean, sigma;
+  cv::meanStdDev(frame.image, mean, sigma);
+  fmt::print("{} frame of camera {}: {} x {} px, the mean of {} frames in {:.2f} s: {:.2f} DN, spread {:.2f} DN\n",
+             lfi::toString(kind), frame.camera, frame.image.cols, frame.image.rows, frames, seconds, mean[0], sigma[0]);
+  if (kind == CalibrationFrameKind::Flat) {
+    double least = 0, most = 0;
+    cv::minMaxLoc(correction->gain(), &least, &most);
+    fmt::print("  response relative to the median pixel's: {:.3f} .. {:.3f}\n", 1 / most, 1 / least);
+  }
+  lfi::setCalibrationFrame(edit, kind, file, stamp);
+  if (a.dryRun) {
+    fmt::print("--dry-run: {} would change:\n{}", a.bench.string(), edit.changes());
+    return 0;
+  }
+  const std::string record =
+      lfi::calibrationFrameRecord(*correction, kind, bench, stamp, lfi::describeCamera(*camera, bench.cameraUri));
+  std::error_code ec;
+  fs::create_directories(file.parent_path(), ec);
+  if (ec)
+    lfi::fail(lfi::Errc::Io, "cannot create the calibration folder '{}': {}", file.parent_path().string(),
+              ec.message());
+  lfi::writeCalibrationFrame(file, frame);
+  try {
+    const lfi::PublishedCalibration published = lfi::publishCalibration(edit, lfi::toString(kind), stamp, record);
+    spdlog::info("calibrate: {} written with the {} frame {}; the file before is {}, the record {}", a.bench.string(),
+                 lfi::toString(kind), file.string(), published.backup.string(), published.record.string());
+  } catch (...) {
+    fs::remove(file, ec);  // no frame of a calibration not applied
+    throw;
+  }
+  spdlog::info(
+      "calibrate: the reference package depends on the camera's correction: take it again (lfi capture {} "
+      "--force)",
+      a.bench.string());
+  fmt::print("{}\n", a.bench.string());
+  return 0;
+}
+
 int runCalibrate(const CalibrateArgs& a, const GlobalOptions& global) {
+  if (a.dark || a.flat) {
+    if (a.what != "camera") lfi::fail(lfi::Errc::Config, "calibrate {}: --dark and --flat are for camera", a.what);
+    return runCalibrateFrame(a, global);
+  }
   const lfi::BenchFile bench = lfi::readBenchFile(a.bench);
   lfi::BenchFileEdit edit(a.bench);  // the text as it is now: a file edited meanwhile is not replaced
   std::unique_ptr<lfi::sim::ScenePartModel> model;
@@ -199,6 +296,14 @@ Command addCalibrateCommand(CLI::App& app) {
                    "part: the part's model, a scene file whose objects other than the display and emitters are "
                    "the part, its origin the part's reference point (data/scenes/inspection_bench.toml)")
       ->check(CLI::ExistingFile);
+  auto* dark = command->add_flag(
+      "--dark", a->dark,
+      "camera: take the dark frame instead, the display dark (cap the lens where room light reaches the camera)");
+  command
+      ->add_flag("--flat", a->flat,
+                 "camera: take the flat frame instead, of a uniform source filling the view (an opal diffuser in the "
+                 "part's place, lit by the display; a simulated bench: --part data/scenes/inspection_bench_flat.toml)")
+      ->excludes(dark);
   command->add_option("--corners", a->corners, "camera: the chessboard's inner corners, COLSxROWS (5x5)");
   command->add_option("--square-mm", a->square_mm, "camera: the chessboard's squares' side, mm")
       ->check(CLI::Range(0.001, 1000.0));
@@ -208,7 +313,11 @@ Command addCalibrateCommand(CLI::App& app) {
                    "pitch error)")
       ->check(CLI::Range(0.0, 0.1))
       ->capture_default_str();
-  command->add_option("--frames", a->frames, "Frames averaged per image (default: the bench's [inspection] frames)")
+  command
+      ->add_option("--frames", a->frames,
+                   fmt::format("Frames averaged per image (default: the bench's [inspection] frames; {} for a "
+                               "dark or flat frame)",
+                               kFrameCalibrationFrames))
       ->check(CLI::Range(1, 10000));
   command
       ->add_option("--spot-period", a->settings.spotPeriod,

@@ -8,7 +8,7 @@
 // view is refused and nothing is written; the calibrated bench captures its
 // reference and passes the intact part. Then the display is knocked further
 // from the part: the part calibration finds where it went. The camera's scale
-// on the shipped chessboard target.
+// on the shipped chessboard target; the camera's dark and flat frames.
 
 #include "lfi_process.h"
 #include "text_edit.h"
@@ -17,10 +17,12 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <string>
+#include <vector>
 
 namespace {
 
@@ -244,6 +246,80 @@ TEST_F(LfiCalibrate, CameraOnAChessboardWritesTheScaleWithABackupAndARecord) {
   const std::string text = readText(bench_);
   EXPECT_NE(text.find(fmt::format("object_pixel_mm = {:.9g}  # lfi calibrate camera", scale)), std::string::npos)
       << text;
+}
+
+// The camera's dark and flat frames: refused in the wrong order or from the
+// wrong light with the bench untouched; written beside the bench and named in
+// it; then every image the bench takes is corrected (its reference and
+// inspection), and a bench whose exposure changed since takes no reference
+// until they are taken again.
+TEST_F(LfiCalibrate, CameraDarkAndFlatFramesAreKeptBesideTheBenchAndCorrectItsImages) {
+  const std::string flatScene = readText(fs::path(LFI_SOURCE_DIR) / "data/scenes/inspection_bench_flat.toml");
+  const fs::path flat = write("flat.toml", flatScene);
+  std::string bright = flatScene, unlit = flatScene;
+  replaceOnce(bright, "radiance = 0.75", "radiance = 2");                 // 14 000 e- into the 10 500 e- well
+  replaceOnce(unlit, "emitter = \"lambertian\"\nradiance = 0.75\n", "");  // an opaque card: no light
+  const auto calibrate = [&](const std::string& arguments) {
+    return lfi("-q calibrate camera " + quoted(bench_) + " " + arguments);
+  };
+  const auto refused = [&](const Result& r, const std::vector<std::string>& fragments, const std::string& bench) {
+    EXPECT_EQ(r.status, 1) << r.output;
+    for (const std::string& f : fragments) EXPECT_NE(r.output.find(f), std::string::npos) << f << "\n" << r.output;
+    EXPECT_EQ(readText(bench_), bench);
+  };
+  refused(calibrate("--flat --part " + quoted(flat)), {"dark_frame is not set", "--dark"}, original_);
+  EXPECT_FALSE(fs::exists(dir_ / "bench.calibrations"));
+
+  ASSERT_EQ(calibrate("--dark").status, 0);
+  const std::string withDark = readText(bench_);
+  EXPECT_NE(withDark.find("dark_frame = \"bench.calibrations/"), std::string::npos) << withDark;
+  const auto files = [&] {
+    std::vector<std::string> names;
+    for (const auto& entry : fs::directory_iterator(dir_ / "bench.calibrations"))
+      names.push_back(entry.path().filename().string());
+    std::sort(names.begin(), names.end());
+    return names;
+  };
+  ASSERT_EQ(files().size(), 3u) << "the frame, the record and the bench before";
+  refused(calibrate("--flat --part " + quoted(write("bright.toml", bright))),
+          {"saturated pixels", "lower the exposure"}, withDark);
+  refused(calibrate("--flat --part " + quoted(write("unlit.toml", unlit))),
+          {"is no brighter than the dark frame", "was the light on"}, withDark);
+  EXPECT_EQ(files().size(), 3u) << "nothing kept of a refused frame";
+
+  const Result good = calibrate("--flat --part " + quoted(flat));
+  ASSERT_EQ(good.status, 0) << good.output;
+  const std::string withFlat = readText(bench_);
+  EXPECT_NE(withFlat.find("flat_frame = \"bench.calibrations/"), std::string::npos) << withFlat;
+  EXPECT_EQ(files().size(), 6u);
+  for (const std::string& name : files())
+    if (name.ends_with("-flat.json")) {
+      const auto r = nlohmann::json::parse(readText(dir_ / "bench.calibrations" / name));
+      EXPECT_EQ(r["what"], "flat");
+      EXPECT_EQ(r["frames"], 64);
+      EXPECT_EQ(r["camera"]["pixel_format"], "Mono12");
+      // The flat source at half scale: 0.75 of radiance 1's 7000 e- at 10 ms, in 4095 DN over 10 500 e-.
+      EXPECT_NEAR(r["frame_dn"]["mean"].get<double>(), 0.75 * 7000 * 4095 / 10500, 20);
+    }
+
+  // The corrected bench takes its reference and passes the intact part.
+  ASSERT_EQ(lfi("-q capture " + quoted(bench_)).status, 0);
+  const Result inspect = lfi("-q inspect " + quoted(bench_));
+  EXPECT_EQ(inspect.status, 0) << inspect.output;
+  std::string longer = withFlat;
+  replaceOnce(longer, "exposure_us = 10000", "exposure_us = 12000");
+  write("bench.toml", longer);
+  const Result stale = lfi("-q capture --force " + quoted(bench_));
+  EXPECT_EQ(stale.status, 1) << stale.output;
+  EXPECT_NE(stale.output.find("exposure_us 10000 against 12000"), std::string::npos) << stale.output;
+  EXPECT_NE(stale.output.find("take it again"), std::string::npos) << stale.output;
+  // A dark frame at the new exposure: the flat frame no longer fits it and leaves the bench, which says so.
+  const Result newDark = lfi("calibrate camera " + quoted(bench_) + " --dark");
+  ASSERT_EQ(newDark.status, 0) << newDark.output;
+  EXPECT_NE(newDark.output.find("the bench's flat frame does not fit the new dark frame"), std::string::npos)
+      << newDark.output;
+  EXPECT_EQ(readText(bench_).find("flat_frame"), std::string::npos) << readText(bench_);
+  EXPECT_EQ(lfi("-q capture --force " + quoted(bench_)).status, 0);
 }
 
 TEST_F(LfiCalibrate, PartWithoutTheCamerasMapOrAModelIsRefusedBeforeAnyFrame) {
