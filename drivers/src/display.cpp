@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "lfi/drivers/display.h"
+#include "lfi/drivers/panel_response.h"
 
 #include "lfi/core/error.h"
 
@@ -151,12 +152,15 @@ void requirePanelImage(const DisplayInfo& info, const cv::Mat& panel, const std:
          panel.rows, panel.type());
 }
 
-cv::Mat panelFromLevels(const cv::Mat& levels, const DisplayInfo& info) {
-  if (levels.type() != CV_8UC1 && levels.type() != CV_32FC1)
-    fail(Errc::InvalidArgument, "panel levels: {} is not CV_8UC1 or CV_32FC1", cv::typeToString(levels.type()));
+cv::Mat panelFromLevels(const cv::Mat& levels, const DisplayInfo& info, const PanelResponse* response) {
+  if (levels.type() != CV_8UC1 && levels.type() != CV_32FC1 && levels.type() != info.panelType())
+    fail(Errc::InvalidArgument, "panel levels: {} is not CV_8UC1, CV_32FC1 or the panel's {}",
+         cv::typeToString(levels.type()), cv::typeToString(info.panelType()));
   if (levels.cols != info.panelWidth_px || levels.rows != info.panelHeight_px)
     fail(Errc::InvalidArgument, "panel levels: {} x {}, the display {} has a {} x {} panel", levels.cols, levels.rows,
          info.deviceId, info.panelWidth_px, info.panelHeight_px);
+  if (levels.type() == info.panelType()) return levels;
+  if (levels.type() == CV_32FC1 && response) return response->drive(levels);
   cv::Mat mono;
   if (levels.type() == CV_8UC1) {
     mono = levels;

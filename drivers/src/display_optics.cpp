@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "lfi/drivers/display_optics.h"
+#include "lfi/drivers/panel_response.h"
 
 #include "lfi/core/error.h"
 
@@ -173,7 +174,7 @@ DisplayInfo defaultDisplay(OpticsType type) {
 }
 
 cv::Mat encodeLightField(const LightField& lightField, const DisplayOptics& optics, double white,
-                         LightFieldLookup lookup) {
+                         LightFieldLookup lookup, const PanelResponse* response) {
   if (!(white > 0) || !std::isfinite(white))
     fail(Errc::InvalidArgument, "encodeLightField: white = {} must be finite and > 0", white);
   if (lightField.lensletImage().empty()) fail(Errc::InvalidArgument, "encodeLightField: the light field is empty");
@@ -190,6 +191,10 @@ cv::Mat encodeLightField(const LightField& lightField, const DisplayOptics& opti
           const DisplayRay ray = optics.rayFromPixel(col, row, k);
           const double r = lightField.radianceFromDisc({ray.origin_mm.x, ray.origin_mm.y},
                                                        {-ray.direction.x, -ray.direction.y}, lookup);
+          if (response) {
+            out[col * sub + k] = response->driveLevel(r / white, col, row, k);  // (NaN: clamped to 0..1, then 1)
+            continue;
+          }
           const double level = r * scale + 0.5;  // rounded below; NaN gives 0
           out[col * sub + k] = !(level > 0) ? 0 : level >= 255 ? 255 : static_cast<std::uint8_t>(level);
         }

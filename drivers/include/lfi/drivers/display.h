@@ -39,6 +39,8 @@
 
 namespace lfi {
 
+class PanelResponse;
+
 // Order of the colour subpixels inside one panel pixel, left to right.
 enum class SubpixelLayout { Mono, RgbStripe, BgrStripe };
 // The optics over the panel (display_optics.h has the models, one header per class
@@ -191,9 +193,11 @@ void requirePanelImage(const DisplayInfo& info, const cv::Mat& panel, const std:
 
 // The panel image that drives every subpixel of each panel pixel at its level:
 // `levels` is CV_8UC1 (drive levels) or CV_32FC1 (fractions of full drive in
-// [0, 1], rounded to the nearest of 256 levels), the panel's size. Throws
+// [0, 1], rounded to the nearest of 256 levels; with a measured `response`,
+// fractions of the dimmest pixel's full light: panel_response.h), the panel's
+// size; a panel image of info.panelType() is returned as it is. Throws
 // Errc::InvalidArgument for another type or size or a level outside [0, 1].
-cv::Mat panelFromLevels(const cv::Mat& levels, const DisplayInfo& info);
+cv::Mat panelFromLevels(const cv::Mat& levels, const DisplayInfo& info, const PanelResponse* response = nullptr);
 
 // For backends: throws Errc::InvalidArgument "<device>: <method> is not allowed in
 // state <state> (allowed: ...)" unless `current` is one of `allowed`.

@@ -32,6 +32,8 @@
 
 namespace lfi {
 
+class PanelResponse;
+
 class DisplayOptics {
  public:
   // Validates `info` (throws Errc::InvalidArgument naming the field).
@@ -97,10 +99,13 @@ DisplayInfo defaultDisplay(OpticsType type);
 
 // Samples `lightField` along every subpixel's chief ray and returns the panel
 // image: CV_8UC1 or CV_8UC3 (channels in subpixel order), drive level =
-// round(255 · radiance / white) clamped to 0..255 (a linear panel). The light
-// field's plane frame is the display frame.
+// round(255 · radiance / white) clamped to 0..255 (a linear panel), or with a
+// measured `response` the level that emits radiance / white of the dimmest
+// pixel's full light (panel_response.h). The light field's plane frame is the
+// display frame.
 cv::Mat encodeLightField(const LightField& lightField, const DisplayOptics& optics, double white = 1.0,
-                         LightFieldLookup lookup = LightFieldLookup::Interpolated);
+                         LightFieldLookup lookup = LightFieldLookup::Interpolated,
+                         const PanelResponse* response = nullptr);
 
 // The inverse: a light field of `geometry` (plane frame = display frame) whose
 // every sample (element centre, angular pixel direction) holds the radiance
