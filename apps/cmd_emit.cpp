@@ -13,8 +13,11 @@
 #include "lfi/core/error.h"
 #include "lfi/core/exr_io.h"
 #include "lfi/drivers/display_optics.h"
+#include "lfi/drivers/panel_response.h"
 
 #include <fmt/format.h>
+
+#include <optional>
 
 #include <chrono>
 #include <memory>
@@ -46,9 +49,13 @@ int runEmit(const EmitArgs& a, const GlobalOptions&) {
   }
   if (!(white > 0)) white = lfi::Controller::defaultWhite(lightField);
   auto display = lfi::openBenchDisplay(bench);
+  std::optional<lfi::PanelResponse> response;  // the panel's measured response, when the bench has it
+  if (bench.panelResponse) response.emplace(*bench.panelResponse, display->info());
+  const lfi::PanelResponse* drive = response ? &*response : nullptr;
   const lfi::PresentResult r =
-      display->show(panel.empty() ? lfi::encodeLightField(lightField, lfi::DisplayOptics(display->info()), white)
-                                  : lfi::panelFromLevels(panel, display->info()));
+      display->show(panel.empty() ? lfi::encodeLightField(lightField, lfi::DisplayOptics(display->info()), white,
+                                                          lfi::LightFieldLookup::Interpolated, drive)
+                                  : lfi::panelFromLevels(panel, display->info(), drive));
   if (r.status != lfi::PresentStatus::Presented)
     lfi::fail(lfi::Errc::Device, "emit: display '{}' did not show the {} ({}{}{})", bench.displayUri,
               panel.empty() ? "light field" : "reference's panel image", lfi::toString(r.status),

@@ -101,6 +101,7 @@ ControllerOptions controllerOptions(const BenchFile& bench, int frames, bool cor
   o.white = bench.white;
   o.settle = std::chrono::milliseconds(bench.settle_ms);
   if (correctFrames) o.correction = loadFrameCorrection(bench);
+  o.panelResponse = bench.panelResponse;
   return o;
 }
 

@@ -7,6 +7,7 @@
 #include "lfi/drivers/display_calibration_file.h"
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include <algorithm>
 #include <cmath>
@@ -78,6 +79,32 @@ void readCamera(ConfigTable t, BenchFile& b) {
   t.finish();
 }
 
+// [display.response]: `lfi calibrate panel`'s curves (one, or red, green and blue) and backlight, each with
+// its uncertainty (`<key>_u`, the same length, expanded by the file's coverage factor).
+PanelResponseParams readPanelResponse(ConfigTable t) {
+  PanelResponseParams p;
+  p.levels = t.numbers("levels", 2, 256, std::nullopt, 0, 255);
+  const bool colours = t.has("red") || t.has("green") || t.has("blue");
+  if (colours && t.has("light"))
+    fail(Errc::Config, "{}: give light (every subpixel alike) or red, green and blue, not both", t.where("light"));
+  const std::vector<std::string> curves =
+      colours ? std::vector<std::string>{"red", "green", "blue"} : std::vector<std::string>{"light"};
+  for (const std::string& key : curves) {
+    p.light.push_back(t.numbers(key, p.levels.size(), std::nullopt, 0, 1));
+    t.numbers(key + "_u", p.levels.size(), std::vector<double>{}, 0, 1);
+  }
+  const std::vector<double> backlight = t.numbers("backlight", 6, std::vector<double>{1, 0, 0, 0, 0, 0}, -1e3, 1e3);
+  std::copy(backlight.begin(), backlight.end(), p.backlight.begin());
+  t.numbers("backlight_u", 6, std::vector<double>{}, 0, 1e3);
+  try {
+    PanelResponse::validate(p);
+  } catch (const Error& e) {
+    fail(Errc::Config, "{}: [display.response]: {}", t.file(), e.what());
+  }
+  t.finish();
+  return p;
+}
+
 void readDisplay(ConfigTable t, BenchFile& b) {
   b.displayUri = uriIn(t, "uri", "display");
   b.settle_ms = t.integer("settle_ms", 0, 0, 86'400'000);
@@ -98,6 +125,7 @@ void readDisplay(ConfigTable t, BenchFile& b) {
            "keep one",
            t.where("uri"), *b.displayUri.find("calibration"));
   }
+  if (t.has("response")) b.panelResponse = readPanelResponse(t.table("response"));
   t.finish();
 }
 
@@ -218,7 +246,7 @@ BenchFile readBenchFile(const fs::path& file) {
                      "dark_frame", "flat_frame"},
                     true),
              b);
-  readDisplay(*table("display", {"uri", "settle_ms", "white", "optics"}, true), b);
+  readDisplay(*table("display", {"uri", "settle_ms", "white", "optics", "response"}, true), b);
   readCapture(*table("capture", {"uri", "light_field"}, true), b);
   readGeometry(
       *table("geometry", {"distance_mm", "part_centre_px", "display_per_pixel_mm", "display_at_image_centre_mm"}, true),
@@ -251,12 +279,17 @@ std::string opticsIdentity(const std::optional<DisplayOpticsParams>& o) {
 }  // namespace
 
 std::string BenchFile::referenceIdentity() const {
-  // The frames that correct the camera's images (absent from the identity of a bench without them).
-  std::string frames;
-  if (!darkFrame.empty()) frames += "camera.dark_frame = " + fromBenchFolder(file, darkFrame) + "\n";
-  if (!flatFrame.empty()) frames += "camera.flat_frame = " + fromBenchFolder(file, flatFrame) + "\n";
+  // What corrects the camera's images and drives the panel (absent from the identity of a bench without it).
+  std::string calibrated;
+  if (!darkFrame.empty()) calibrated += "camera.dark_frame = " + fromBenchFolder(file, darkFrame) + "\n";
+  if (!flatFrame.empty()) calibrated += "camera.flat_frame = " + fromBenchFolder(file, flatFrame) + "\n";
+  if (panelResponse) {
+    calibrated += fmt::format("display.response = {:.17g} |", fmt::join(panelResponse->levels, " "));
+    for (const auto& curve : panelResponse->light) calibrated += fmt::format(" {:.17g} |", fmt::join(curve, " "));
+    calibrated += fmt::format(" {:.17g}\n", fmt::join(panelResponse->backlight, " "));
+  }
   // (%.17g: a number reads back as the same double, so equal settings give equal text.)
-  return opticsIdentity(displayOptics) + frames +
+  return opticsIdentity(displayOptics) + calibrated +
          fmt::format(
              "camera.uri = {}\ncamera.exposure_us = {:.17g}\ncamera.gain = {:.17g}\ncamera.pixel_format = {}\n"
              "camera.binning = {}\ncamera.object_pixel_mm = {:.17g}\ndisplay.uri = {}\ndisplay.white = {:.17g}\n"

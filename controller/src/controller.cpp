@@ -103,16 +103,29 @@ void Controller::emit(const LightField& reference, double white) {
   // of a stream started before the panel settles may too (the caller may start
   // one after this): inspect() waits for the panel and (re)starts the stream.
   staleFrames_ = true;
-  const cv::Mat panel = encodeLightField(reference, DisplayOptics(display_.info()), white_);
+  const cv::Mat panel = encodeLightField(reference, DisplayOptics(display_.info()), white_,
+                                         LightFieldLookup::Interpolated, panelResponse());
   const std::uint32_t sequence = shown(display_.show(panel), "the light field");
   spdlog::info("emit: light field shown (sequence {}, white = {:.4g})", sequence, white_);
 }
 
 void Controller::showPanel(const cv::Mat& levels) {
-  const cv::Mat panel = panelFromLevels(levels, display_.info());
+  const cv::Mat panel = panelFromLevels(levels, display_.info(), panelResponse());
   white_ = 1;
   staleFrames_ = true;  // (as emit())
   shown(display_.show(panel), "the panel image");
+}
+
+const PanelResponse* Controller::panelResponse() {
+  if (!options_.panelResponse) return nullptr;
+  if (!panelResponse_) {
+    try {
+      panelResponse_ = std::make_unique<const PanelResponse>(*options_.panelResponse, display_.info());
+    } catch (const Error& e) {
+      fail(Errc::Config, "display '{}': its panel response: {}", displayName(display_), e.what());
+    }
+  }
+  return panelResponse_.get();
 }
 
 void Controller::emitReference(const LightField& reference) {

@@ -100,6 +100,7 @@ TEST_F(BenchFileTest, ReferenceHashChangesWithWhatTheReferenceDependsOn) {
            {"mask_lit_fraction = 0.25", "mask_lit_fraction = 0.3"},
            {"exposure_us = 10000", "exposure_us = 10000\ndark_frame = \"dark.exr\""},
            {"exposure_us = 10000", "exposure_us = 10000\ndark_frame = \"dark.exr\"\nflat_frame = \"flat.exr\""},
+           {"\n[capture]", "\n[display.response]\nlevels = [0, 128, 255]\nlight = [0, 0.2, 1]\n\n[capture]"},
        }) {
     SCOPED_TRACE(e.to);
     EXPECT_NE(read(replaced(kBench, e.from, e.to)).referenceHash(), base);

@@ -32,6 +32,9 @@
 //                                                             display`), in place of what the device states: the
 //                                                             keys of display_calibration_file.h, the class and
 //                                                             every value it needs
+//   [display.response]  levels, light   -     none        the panel's drive-to-light curve (or red, green, blue)
+//                  (or red, green, blue),               and backlight as `lfi calibrate panel` measured them
+//                  backlight, <key>_u                   (panel_response.h), with their uncertainties
 //   [capture]      uri  | light_field     -      one of      the reference's capture (sim:, coded:), or a light field
 //                                                             file; the capture is handed Δ from [geometry]
 //   [geometry]     distance_mm            mm     required    Δ: display plane to the part's reference plane (its
@@ -68,6 +71,7 @@
 #include "lfi/drivers/camera.h"
 #include "lfi/drivers/device_uri.h"
 #include "lfi/drivers/display.h"
+#include "lfi/drivers/panel_response.h"
 #include "lfi/inspection/defects.h"
 #include "lfi/inspection/golden_model.h"
 #include "lfi/inspection/verdict.h"
@@ -96,6 +100,7 @@ struct BenchFile {
   int settle_ms = 0;
   double white = 0;
   std::optional<DisplayOpticsParams> displayOptics;  // [display.optics]
+  std::optional<PanelResponseParams> panelResponse;  // [display.response]
   // [capture]: exactly one of the two
   std::optional<DeviceUri> captureUri;
   std::filesystem::path lightFieldFile;

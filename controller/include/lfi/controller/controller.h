@@ -23,11 +23,15 @@
 //                           and usb: displays answer once the frame is shown)
 //   correction     none     the camera's dark and flat frames, applied to every
 //                           image inspect() returns (frame_correction.h)
+//   panelResponse  none     the panel's measured response: emit() and showPanel()
+//                           of CV_32FC1 light drive the levels that emit it
+//                           (panel_response.h); none: a linear, uniform panel
 
 #include "lfi/core/light_field.h"
 #include "lfi/drivers/camera.h"
 #include "lfi/drivers/display.h"
 #include "lfi/drivers/light_field_capture.h"
+#include "lfi/drivers/panel_response.h"
 
 #include <opencv2/core.hpp>
 
@@ -47,6 +51,7 @@ struct ControllerOptions {
   double white = 0;
   std::chrono::milliseconds settle{0};
   std::shared_ptr<const FrameCorrection> correction;
+  std::optional<PanelResponseParams> panelResponse;
 };
 
 class Controller {
@@ -74,8 +79,9 @@ class Controller {
   void emit(const LightField& reference);
   void emit(const LightField& lightField, double white);
   // Step 2 for a panel image: `levels` CV_8UC1 drive levels or CV_32FC1 in
-  // [0, 1] of full drive, the panel's size, every subpixel of a pixel alike.
-  // Throws as emit().
+  // [0, 1] of full light (of full drive on a panel without a measured
+  // response), the panel's size, every subpixel of a pixel alike; or a panel
+  // image of the display's panel type, shown as it is. Throws as emit().
   void showPanel(const cv::Mat& levels);
   // Step 2 for what captureReference() returned: its panel image when it
   // measured one, else the light field.
@@ -118,6 +124,8 @@ class Controller {
   class Probe;
   // inspect() but the correction.
   cv::Mat meanOfFrames();
+  // The option's panel response for this display, made at the first call; null without one.
+  const PanelResponse* panelResponse();
   // Throws Errc::Device unless `result` is Presented; returns its sequence.
   std::uint32_t shown(const PresentResult& result, const char* what);
   LightFieldCapture& capture_;
@@ -134,6 +142,7 @@ class Controller {
   double white_ = 0;
   cv::Mat referencePanel_;
   std::unique_ptr<Probe> probe_;
+  std::unique_ptr<const PanelResponse> panelResponse_;
 };
 
 }  // namespace lfi
