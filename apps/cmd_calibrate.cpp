@@ -15,6 +15,7 @@
 #include "lfi/controller/display_calibration.h"
 #include "lfi/controller/frame_correction.h"
 #include "lfi/controller/inspection_record.h"
+#include "lfi/controller/panel_calibration.h"
 #include "lfi/controller/part_calibration.h"
 #include "lfi/core/error.h"
 #include "lfi/core/log.h"
@@ -50,6 +51,7 @@ struct CalibrateArgs {
   lfi::DisplayCalibrationSettings settings;
   lfi::PartCalibrationSettings partSettings;
   lfi::CameraCalibrationSettings cameraSettings;
+  lfi::PanelCalibrationSettings panelSettings;
 };
 
 void printDisplayCalibration(const lfi::DisplayCalibration& c) {
@@ -91,6 +93,28 @@ void printPartCalibration(const lfi::PartCalibration& c) {
              c.nominal.optics.gap_mm);
   fmt::print("U: expanded uncertainty, k = {:g}; {} frames in {:.2f} s ({:.0f} ms of it decoding and fitting)\n", k,
              c.frames, c.seconds, 1000 * c.computeSeconds);
+}
+
+void printPanelCalibration(const lfi::PanelCalibration& c) {
+  const double k = c.coverageFactor;
+  const auto& r = c.response;
+  fmt::print(
+      "display {} ({} {}), through the camera with {} pixels on the panel: {:.1f} DN from dark to full, "
+      "the noise of a mean {:.2g} DN\n",
+      c.display.deviceId, c.display.vendor, c.display.model, c.pixels, c.fullLight_dn, c.meanNoise_dn);
+  const std::size_t curves = r.light.size();
+  fmt::print("  level {}\n", curves == 1 ? "  light      U" : "  red        U       green      U       blue       U");
+  for (std::size_t j = 0; j < r.levels.size(); ++j) {
+    fmt::print("  {:5g}", r.levels[j]);
+    for (std::size_t i = 0; i < curves; ++i) fmt::print("   {:.5f}  {:.1e}", r.light[i][j], k * c.lightSigma[i][j]);
+    fmt::print("\n");
+  }
+  const lfi::PanelResponse response(r, c.display);
+  const int w = c.display.panelWidth_px - 1, h = c.display.panelHeight_px - 1;
+  fmt::print("  backlight at the corners {:.3f} {:.3f} {:.3f} {:.3f} of the centre's (the fit's residual {:.2g})\n",
+             response.backlight(0, 0), response.backlight(w, 0), response.backlight(0, h), response.backlight(w, h),
+             c.backlightResidual);
+  fmt::print("U: expanded uncertainty, k = {:g}; {} frames in {:.2f} s\n", k, c.frames, c.seconds);
 }
 
 void printCameraCalibration(const lfi::CameraCalibration& c, const lfi::BenchFile& bench) {
@@ -241,6 +265,23 @@ int runCalibrate(const CalibrateArgs& a, const GlobalOptions& global) {
     printDisplayCalibration(c);
     lfi::setDisplayCalibration(edit, c, stamp);
     record = lfi::displayCalibrationRecord(c, bench, stamp, lfi::describeCamera(*camera, bench.cameraUri));
+  } else if (a.what == "panel") {
+    if (!bench.cameraOnDisplay)
+      lfi::fail(lfi::Errc::Config,
+                "{}: [geometry] display_per_pixel_mm and display_at_image_centre_mm (where the camera looks on the "
+                "display) are not set: run `lfi calibrate display` first, with the part taken away",
+                a.bench.string());
+    const lfi::PanelCalibration c = lfi::calibratePanel(controller.probe(), *bench.cameraOnDisplay,
+                                                        bench.cameraUri.text(), a.panelSettings, progress);
+    bar.finish();
+    printPanelCalibration(c);
+    if (c.darkClipped >= 0.01)
+      spdlog::warn(
+          "calibrate panel: {:.0f} % of the camera's pixels read 0 DN with the panel dark: it clips its "
+          "read noise, and the darkest levels read low; raise its black level (BlackLevel) and measure again",
+          100 * c.darkClipped);
+    lfi::setPanelCalibration(edit, c, stamp);
+    record = lfi::panelCalibrationRecord(c, bench, stamp, lfi::describeCamera(*camera, bench.cameraUri));
   } else if (a.what == "camera") {
     const lfi::CameraCalibration c =
         lfi::calibrateCamera(controller.probe(), *target, bench.cameraUri.text(), a.cameraSettings, progress);
@@ -277,17 +318,21 @@ Command addCalibrateCommand(CLI::App& app) {
       "Calibrate a bench with its own devices and write the result into its bench file (display: the "
       "display's lens array and the camera's scale, nothing in view; part: Δ, the part's place and the "
       "display's gap, through the intact part; camera: the camera's scale on a chessboard target in the "
-      "part's place)");
+      "part's place, or its dark and flat frames; panel: the panel's drive-to-light curve and backlight, nothing in "
+      "view)");
   auto a = std::make_shared<CalibrateArgs>();
-  command->add_option("what", a->what, "What to calibrate: display, then part; camera where a target is used")
+  command
+      ->add_option("what", a->what,
+                   "What to calibrate: camera --dark and --flat, display, panel, then part; camera on a "
+                   "chessboard where a target is used")
       ->required()
-      ->check(CLI::IsMember({"display", "part", "camera"}));
+      ->check(CLI::IsMember({"display", "part", "camera", "panel"}));
   addBenchArgument(*command, a->bench);
   command->add_flag("--dry-run", a->dryRun, "Measure and print what would change, write nothing");
   command
       ->add_option("--part", a->part,
-                   "A simulated bench: the scene under its camera during the calibration (display: one without the "
-                   "part, data/scenes/inspection_bench_empty.toml; camera: one with the target, "
+                   "A simulated bench: the scene under its camera during the calibration (display, panel: one without "
+                   "the part, data/scenes/inspection_bench_empty.toml; camera: one with the target, "
                    "data/scenes/inspection_bench_target.toml); a physical bench: take the part away (display), put "
                    "the intact part in place (part) or the target (camera)")
       ->check(CLI::ExistingFile);
@@ -304,6 +349,9 @@ Command addCalibrateCommand(CLI::App& app) {
                  "camera: take the flat frame instead, of a uniform source filling the view (an opal diffuser in the "
                  "part's place, lit by the display; a simulated bench: --part data/scenes/inspection_bench_flat.toml)")
       ->excludes(dark);
+  command->add_option("--level-step", a->panelSettings.levelStep, "panel: the drive levels 0, step, 2 step, .., 255")
+      ->check(CLI::Range(1, 128))
+      ->capture_default_str();
   command->add_option("--corners", a->corners, "camera: the chessboard's inner corners, COLSxROWS (5x5)");
   command->add_option("--square-mm", a->square_mm, "camera: the chessboard's squares' side, mm")
       ->check(CLI::Range(0.001, 1000.0));
