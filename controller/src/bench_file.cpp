@@ -314,7 +314,9 @@ std::string BenchFile::referenceHash() const {
 }
 
 PartFrame BenchFile::partFrame(int width_px, int height_px) const {
-  return {objectPixel_mm, partCentre_px.value_or(Vec2((width_px - 1) / 2.0, (height_px - 1) / 2.0))};
+  const Vec2 origin = partCentre_px.value_or(Vec2((width_px - 1) / 2.0, (height_px - 1) / 2.0));
+  if (cameraOnDisplay) return {cameraOnDisplay->perPixel_mm, origin};
+  return PartFrame::isotropic(objectPixel_mm, origin);
 }
 
 DetectionSettings BenchFile::detection() const {

@@ -10,12 +10,14 @@
 namespace lfi {
 
 PartVerdict judgePart(const std::vector<Defect>& defects, const PartFrame& frame, const PassRules& rules) {
-  if (!(frame.pixel_mm > 0) || !std::isfinite(frame.pixel_mm) || !std::isfinite(frame.origin_px.x) ||
+  const cv::Matx22d& a = frame.perPixel_mm;
+  const double det = cv::determinant(a);
+  if (!(std::abs(det) > 0) || !std::isfinite(det) || !std::isfinite(frame.origin_px.x) ||
       !std::isfinite(frame.origin_px.y))
     fail(Errc::InvalidArgument,
-         "verdict: the part's frame (pixel {} mm, origin ({}, {}) px) is not finite and "
-         "positive",
-         frame.pixel_mm, frame.origin_px.x, frame.origin_px.y);
+         "verdict: the part's frame (per pixel [{}, {}, {}, {}] mm, origin ({}, {}) px) is not finite or maps the "
+         "image onto a line",
+         a(0, 0), a(0, 1), a(1, 0), a(1, 1), frame.origin_px.x, frame.origin_px.y);
   if (rules.maxDefects < 0 || (rules.maxDefectArea_mm2 && !(*rules.maxDefectArea_mm2 >= 0)) ||
       (rules.maxTotalArea_mm2 && !(*rules.maxTotalArea_mm2 >= 0)))
     fail(Errc::InvalidArgument, "verdict: pass/fail limits must be >= 0");

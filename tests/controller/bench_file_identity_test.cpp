@@ -158,7 +158,7 @@ TEST(BenchFileDetection, MinimumAreaIsTheWholePixelsThatCoverItAndAtLeastOne) {
 TEST(BenchFilePartFrame, OriginIsTheImageCentreUnlessGiven) {
   BenchFile b = benchOf(0.5);
   const PartFrame even = b.partFrame(56, 40);
-  EXPECT_EQ(even.pixel_mm, 0.5);
+  EXPECT_EQ(even.perPixel_mm, cv::Matx22d(0.5, 0, 0, -0.5));
   EXPECT_EQ(even.origin_px.x, 27.5);
   EXPECT_EQ(even.origin_px.y, 19.5);
   const PartFrame odd = b.partFrame(5, 3);

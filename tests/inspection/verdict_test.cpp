@@ -28,7 +28,7 @@ Defect defectAt(double col, double row, double area_px) {
 }
 
 TEST(Verdict, DefectsArePlacedInThePartsFrameWithYUpTheImage) {
-  const lfi::PartFrame frame{0.5, {27.5, 27.5}};
+  const lfi::PartFrame frame = lfi::PartFrame::isotropic(0.5, {27.5, 27.5});
   const lfi::PartVerdict v = lfi::judgePart({defectAt(33.5, 23.5, 4)}, frame, {.maxDefects = 1});
   ASSERT_EQ(v.defects.size(), 1u);
   // 6 columns right of the origin and 4 rows above it, at 0.5 mm a pixel.
@@ -38,8 +38,18 @@ TEST(Verdict, DefectsArePlacedInThePartsFrameWithYUpTheImage) {
   EXPECT_TRUE(v.pass);
 }
 
+// A camera turned by 90° and seeing the part mirrored: its columns run down the part's y, its rows along x.
+TEST(Verdict, ACalibratedCameraMapPlacesDefectsOnThePartsAxes) {
+  const lfi::PartFrame frame{cv::Matx22d(0, 0.5, -0.25, 0), {10, 20}};
+  const lfi::PartVerdict v = lfi::judgePart({defectAt(14, 26, 8)}, frame, {.maxDefects = 1});
+  ASSERT_EQ(v.defects.size(), 1u);
+  EXPECT_DOUBLE_EQ(v.defects[0].centroid_mm.x, 0.5 * 6);    // six rows down
+  EXPECT_DOUBLE_EQ(v.defects[0].centroid_mm.y, -0.25 * 4);  // four columns right
+  EXPECT_DOUBLE_EQ(v.defects[0].area_mm2, 8 * 0.125) << "|det A| = 0.125 mm^2 a pixel";
+}
+
 TEST(Verdict, EachRuleFailsThePartOnItsOwnAndSaysWhy) {
-  const lfi::PartFrame frame{0.1, {0, 0}};
+  const lfi::PartFrame frame = lfi::PartFrame::isotropic(0.1, {0, 0});
   const std::vector<Defect> two{defectAt(10, 10, 300), defectAt(50, 50, 50)};  // 3 and 0.5 mm²
   EXPECT_TRUE(lfi::judgePart({}, frame, {}).pass) << "no defect passes the strictest rules";
   const auto count = lfi::judgePart(two, frame, {.maxDefects = 1});
@@ -56,10 +66,14 @@ TEST(Verdict, EachRuleFailsThePartOnItsOwnAndSaysWhy) {
 }
 
 TEST(Verdict, AFrameOrRuleOutOfRangeIsRefused) {
-  EXPECT_TRUE(throwsError([] { lfi::judgePart({}, {0, {0, 0}}, {}); }, Errc::InvalidArgument, {"frame"}));
   EXPECT_TRUE(throwsError(
       [] {
-        lfi::judgePart({}, {1, {0, 0}}, {.maxDefects = -1});
+        lfi::judgePart({}, lfi::PartFrame::isotropic(0, {0, 0}), {});
+      },
+      Errc::InvalidArgument, {"frame"}));
+  EXPECT_TRUE(throwsError(
+      [] {
+        lfi::judgePart({}, lfi::PartFrame::isotropic(1, {0, 0}), {.maxDefects = -1});
       },
       Errc::InvalidArgument, {"limits"}));
 }

@@ -137,7 +137,9 @@ struct BenchFile {
   std::string referenceIdentity() const;
   // A 64-bit FNV-1a hash of referenceIdentity(), 16 hex digits.
   std::string referenceHash() const;
-  // The part's frame on an image of the given size.
+  // The part's frame on an image of the given size: the display calibration's
+  // camera map where the bench has one (the camera's rotation, mirroring and
+  // per-axis scale), else object_pixel_mm on the image's axes.
   PartFrame partFrame(int width_px, int height_px) const;
   // The detection settings in camera pixels.
   DetectionSettings detection() const;

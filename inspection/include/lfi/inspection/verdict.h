@@ -4,11 +4,17 @@
 // placed in the part's frame in millimetres, and pass/fail by the bench's rules.
 //
 // The part's frame, seen through an object-side telecentric camera: origin at
-// the image point `origin_px` (the part's nominal position), x along the
-// image's columns, y against its rows (up in the image), one camera pixel =
-// `pixel_mm` on the part (sensor pitch / magnification):
-//   x_mm = (column - origin.x) · pixel_mm,   y_mm = -(row - origin.y) · pixel_mm
-// Pixel coordinates are OpenCV's: the top-left pixel's centre is (0, 0).
+// the image point `origin_px` (the part's nominal position), its axes the
+// bench's (the display's x and y, world +z towards the camera), reached from
+// the image by the camera's linear map A (`perPixel_mm`, the part's (x, y)
+// per image column and row: its scale, rotation and mirroring, as `lfi
+// calibrate display` measures them):
+//   (x_mm, y_mm) = A · (column - origin.x, row - origin.y)
+// An uncalibrated camera is taken to look down the axis with its rows along
+// +x: A = [[p, 0], [0, -p]] for one camera pixel = p mm on the part (sensor
+// pitch / magnification), x along the columns and y up the image
+// (PartFrame::isotropic). Areas scale by |det A|. Pixel coordinates are
+// OpenCV's: the top-left pixel's centre is (0, 0).
 //
 //   rule                 units  a part fails when
 //   maxDefects           -      it shows more defects than this (0: any defect fails it)
@@ -18,6 +24,10 @@
 #include "lfi/core/geometry.h"
 #include "lfi/inspection/defects.h"
 
+#include <opencv2/core.hpp>
+
+#include <cmath>
+
 #include <optional>
 #include <string>
 #include <vector>
@@ -25,11 +35,20 @@
 namespace lfi {
 
 struct PartFrame {
-  double pixel_mm = 1;
+  cv::Matx22d perPixel_mm = cv::Matx22d(1, 0, 0, -1);
   Vec2 origin_px;
 
-  Vec2 toPart(const Vec2& px) const { return {(px.x - origin_px.x) * pixel_mm, -(px.y - origin_px.y) * pixel_mm}; }
-  double area_mm2(double area_px) const { return area_px * pixel_mm * pixel_mm; }
+  static PartFrame isotropic(double pixel_mm, const Vec2& origin_px) {
+    return {cv::Matx22d(pixel_mm, 0, 0, -pixel_mm), origin_px};
+  }
+  Vec2 toPart(const Vec2& px) const {
+    const Vec2 d = px - origin_px;
+    return {perPixel_mm(0, 0) * d.x + perPixel_mm(0, 1) * d.y, perPixel_mm(1, 0) * d.x + perPixel_mm(1, 1) * d.y};
+  }
+  double area_mm2(double area_px) const {
+    const cv::Matx22d& a = perPixel_mm;
+    return std::abs(area_px * a(0, 0) * a(1, 1) - area_px * a(0, 1) * a(1, 0));
+  }
 };
 
 struct PassRules {
