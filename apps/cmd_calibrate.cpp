@@ -223,12 +223,15 @@ int runCalibrateFrame(const CalibrateArgs& a, const GlobalOptions& global) {
   return 0;
 }
 
-int runCalibrate(const CalibrateArgs& a, const GlobalOptions& global) {
+int runCalibrate(CalibrateArgs a, const GlobalOptions& global) {
   if (a.dark || a.flat) {
     if (a.what != "camera") lfi::fail(lfi::Errc::Config, "calibrate {}: --dark and --flat are for camera", a.what);
     return runCalibrateFrame(a, global);
   }
   const lfi::BenchFile bench = lfi::readBenchFile(a.bench);
+  // Uncertainties at the file's coverage factor, which every <key>_u in it shares.
+  a.settings.coverageFactor = a.partSettings.coverageFactor = a.cameraSettings.coverageFactor =
+      a.panelSettings.coverageFactor = bench.coverageFactor;
   lfi::BenchFileEdit edit(a.bench);  // the text as it is now: a file edited meanwhile is not replaced
   std::unique_ptr<lfi::sim::ScenePartModel> model;
   if (a.what == "part") {

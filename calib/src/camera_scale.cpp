@@ -175,6 +175,11 @@ CameraScaleFit fitCameraScale(const std::vector<CameraPoint>& points, cv::Size i
   unit[4] = 0;
   unit[5] = 1;
   fit.centreSigma_mm.y = std::hypot(affine.sigma(unit), display.shift_mm.y);
+  for (int i = 0; i < 4; ++i) {
+    unit = cv::Vec<double, kParameters>::all(0);
+    unit[i] = 1;
+    fit.perPixelSigma_mm(i / 2, i % 2) = std::hypot(affine.sigma(unit), display.scale * p[i]);
+  }
   fit.residualRms_mm = std::sqrt(affine.rss / (2 * static_cast<double>(points.size())));
   return fit;
 }

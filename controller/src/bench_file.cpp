@@ -45,6 +45,17 @@ std::optional<double> optionalNumber(ConfigTable& t, const std::string& key, dou
   return t.number(key, std::nullopt, min, max);
 }
 
+// A calibrated value's expanded uncertainty, `<key>_u` beside `key` in [table]: as many numbers as the value
+// holds (`count`; a number: 1), each >= 0, kept as "<table>.<key>".
+void readUncertainty(ConfigTable& t, const std::string& table, const std::string& key, std::size_t count,
+                     BenchFile& b) {
+  const std::string u = key + "_u";
+  if (!t.has(u)) return;
+  if (!t.has(key)) fail(Errc::Config, "{} is the uncertainty of {}, which [{}] does not give", t.where(u), key, table);
+  b.uncertainty[table + "." + key] =
+      count == 1 ? std::vector<double>{t.number(u, std::nullopt, 0, 1e6)} : t.numbers(u, count, std::nullopt, 0, 1e6);
+}
+
 void readCamera(ConfigTable t, BenchFile& b) {
   b.cameraUri = uriIn(t, "uri", "camera");
   CameraSettings& c = b.camera;
@@ -66,6 +77,7 @@ void readCamera(ConfigTable t, BenchFile& b) {
   c.frameRate_hz = t.number("frame_rate_hz", 0.0, 0, 1e6);
   c.binning = t.integer("binning", 1, 1, 16);
   b.objectPixel_mm = t.number("object_pixel_mm", std::nullopt, 1e-6, 1e3);
+  readUncertainty(t, "camera", "object_pixel_mm", 1, b);
   b.noise.read_dn = t.number("read_noise_dn", std::nullopt, 0, 1e6);
   b.noise.gain_dnPerElectron = t.number("dn_per_electron", std::nullopt, 0, 1e6);
   b.grabTimeout_ms = t.integer("grab_timeout_ms", 5000, 1, 86'400'000);
@@ -117,6 +129,10 @@ void readDisplay(ConfigTable t, BenchFile& b) {
            "\"pinhole_array\", \"lenticular\", \"line_barrier\") and every value the class takes",
            t.file());
     b.displayOptics = readDisplayOpticsTable(optics, DisplayOpticsParams{});
+    for (const char* key : {"array_pitch_mm", "rotation_rad", "gap_mm", "focal_length_mm", "lens_pitch_px", "slant_rad",
+                            "offset_px", "slit_width_mm", "fill_factor", "pinhole_diameter_mm"})
+      readUncertainty(optics, "display.optics", key, 1, b);
+    readUncertainty(optics, "display.optics", "array_offset_mm", 2, b);
     optics.finish();
     // One place for the display's optics: the table, or a calibration file the URI names, not both.
     if (b.displayUri.find("calibration"))
@@ -163,6 +179,10 @@ void readGeometry(ConfigTable t, BenchFile& b) {
            a[1], a[2], a[3]);
     b.cameraOnDisplay = m;
   }
+  readUncertainty(t, "geometry", "distance_mm", 1, b);
+  readUncertainty(t, "geometry", "part_centre_px", 2, b);
+  readUncertainty(t, "geometry", "display_per_pixel_mm", 4, b);
+  readUncertainty(t, "geometry", "display_at_image_centre_mm", 2, b);
   t.finish();
 }
 
@@ -227,12 +247,13 @@ std::string portableUri(const fs::path& benchFile, const DeviceUri& uri) {
 
 BenchFile readBenchFile(const fs::path& file) {
   ConfigTable root = ConfigTable::parseFile(file);
-  root.requireKnownKeys(
-      {"format", "version", "camera", "display", "capture", "geometry", "reference", "inspection", "output", "run"});
+  root.requireKnownKeys({"format", "version", "coverage_factor", "camera", "display", "capture", "geometry",
+                         "reference", "inspection", "output", "run"});
   root.string("format", std::nullopt, {"lfi-inspection-bench"});
   root.integer("version", std::nullopt, 1, 1);
   BenchFile b;
   b.file = file;
+  b.coverageFactor = root.number("coverage_factor", 2.0, 1, 10);
   const auto table = [&](const char* name, const std::vector<std::string>& keys, bool required) {
     if (!required && !root.has(name)) return std::optional<ConfigTable>();
     if (!root.has(name)) fail(Errc::Config, "{}: the table [{}] is missing", file.string(), name);
@@ -242,15 +263,17 @@ BenchFile readBenchFile(const fs::path& file) {
   };
   readCamera(*table("camera",
                     {"uri", "exposure_us", "gain", "pixel_format", "trigger", "trigger_line", "frame_rate_hz",
-                     "binning", "object_pixel_mm", "read_noise_dn", "dn_per_electron", "grab_timeout_ms", "retries",
-                     "dark_frame", "flat_frame"},
+                     "binning", "object_pixel_mm", "object_pixel_mm_u", "read_noise_dn", "dn_per_electron",
+                     "grab_timeout_ms", "retries", "dark_frame", "flat_frame"},
                     true),
              b);
   readDisplay(*table("display", {"uri", "settle_ms", "white", "optics", "response"}, true), b);
   readCapture(*table("capture", {"uri", "light_field"}, true), b);
-  readGeometry(
-      *table("geometry", {"distance_mm", "part_centre_px", "display_per_pixel_mm", "display_at_image_centre_mm"}, true),
-      b);
+  readGeometry(*table("geometry",
+                      {"distance_mm", "distance_mm_u", "part_centre_px", "part_centre_px_u", "display_per_pixel_mm",
+                       "display_per_pixel_mm_u", "display_at_image_centre_mm", "display_at_image_centre_mm_u"},
+                      true),
+               b);
   readReference(*table("reference", {"folder", "frames", "mask_radius_mm", "mask_lit_fraction"}, true), b);
   if (auto t = table("inspection",
                      {"frames", "absolute_dn", "relative", "smallest_defect_mm", "closing_mm", "min_defect_area_mm2",

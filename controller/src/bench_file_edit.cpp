@@ -148,7 +148,7 @@ BenchFileEdit::BenchFileEdit(fs::path file) : file_(std::move(file)) {
 
 void BenchFileEdit::set(const std::string& table, const std::string& key, const std::string& value,
                         const std::string& comment) {
-  const std::vector<std::string> parts = splitPath(table);
+  const std::vector<std::string> parts = table.empty() ? std::vector<std::string>{} : splitPath(table);
   if (!bareKey(key)) fail(Errc::InvalidArgument, "bench file edit: '{}' is not a bare key", key);
   if (comment.find('\n') != std::string::npos || value.find('\n') != std::string::npos)
     fail(Errc::InvalidArgument, "bench file edit: a value or comment of more than one line for {}.{}", table, key);
@@ -165,6 +165,10 @@ void BenchFileEdit::set(const std::string& table, const std::string& key, const 
     inlined = inlined || (t && t->is_inline());
   }
   const std::string line = withComment(fmt::format("{} = {}", key, value), comment);
+  if (parts.empty() && !t->get(key)) {  // a new key of the file's own: after its last one, before any table
+    insertLines(text_, afterLastKey(text_, root), line + "\n");
+    return;
+  }
   if (t) {
     if (const toml::node* old = t->get(key)) {
       if (old->is_table() || old->is_array_of_tables())

@@ -115,7 +115,11 @@ TEST_F(LfiCalibrate, DisplayWritesTheMeasuredArrayAndScaleIntoTheBenchWithABacku
   EXPECT_NE(line("object_pixel_mm").find(fmt::format("{:.9g}", value("camera_scale", "object_pixel"))),
             std::string::npos)
       << line("object_pixel_mm");
-  EXPECT_NE(line("array_pitch_mm").find("U = "), std::string::npos) << line("array_pitch_mm");
+  // Each value's uncertainty as a key beside it, at the coverage factor the file states once.
+  EXPECT_EQ(line("array_pitch_mm_u"),
+            fmt::format("array_pitch_mm_u = {:.2g}", r["lens_array"]["pitch"]["expanded_uncertainty"].get<double>()));
+  EXPECT_NE(line("display_per_pixel_mm_u").find("["), std::string::npos) << text;
+  EXPECT_NE(text.find("\nversion = 1\ncoverage_factor = 2  # k of every"), std::string::npos) << text;
   // Where the camera looks on the display: the scene's camera axis is the display's centre.
   EXPECT_NE(line("display_per_pixel_mm").find("["), std::string::npos) << text;
   EXPECT_NEAR(r["camera_scale"]["image_centre_on_display_mm"][0].get<double>(), 0, 0.1 * kObjectPixel_mm);

@@ -34,6 +34,14 @@ TEST_F(BenchFileEditTest, AValueIsReplacedWhereItStandsAndEverythingElseIsKept) 
                                         line, line));
 }
 
+TEST_F(BenchFileEditTest, AKeyOfTheFilesOwnGoesAfterItsLastOneBeforeAnyTable) {
+  BenchFileEdit edit(write(kBench));
+  edit.set("", "coverage_factor", "2", "k of every <key>_u");
+  EXPECT_EQ(edit.text(), replaced(kBench, "version = 1\n", "version = 1\ncoverage_factor = 2  # k of every <key>_u\n"));
+  edit.set("", "coverage_factor", "3");
+  EXPECT_EQ(edit.text(), replaced(kBench, "version = 1\n", "version = 1\ncoverage_factor = 3  # k of every <key>_u\n"));
+}
+
 TEST_F(BenchFileEditTest, AKeyIsRemovedWithItsLineAndNothingElse) {
   const std::string text = replaced(kBench, "object_pixel_mm = 0.5", "object_pixel_mm = 0.5    # calibrated");
   BenchFileEdit edit(write(text));

@@ -111,6 +111,33 @@ TEST_F(BenchFileTest, RelativePathsAreRelativeToTheBenchFile) {
   EXPECT_EQ(f.lightFieldFile, folder_.path() / "light fields" / "lf.exr");
 }
 
+TEST_F(BenchFileTest, CalibratedValuesCarryTheirUncertaintiesAsKeysAtTheFilesCoverageFactor) {
+  std::string text = replaced(kBench, "version = 1\n", "version = 1\ncoverage_factor = 3\n");
+  text = replaced(text, "object_pixel_mm = 0.5", "object_pixel_mm = 0.5\nobject_pixel_mm_u = 0.002");
+  text = replaced(text, "distance_mm = 30", "distance_mm = 30\ndistance_mm_u = 0.4");
+  text =
+      replaced(text, "part_centre_px = [27.5, 27.5]", "part_centre_px = [27.5, 27.5]\npart_centre_px_u = [0.1, 0.2]");
+  const BenchFile b = read(text);
+  EXPECT_EQ(b.coverageFactor, 3);
+  EXPECT_EQ(b.uncertainty.at("camera.object_pixel_mm"), std::vector<double>{0.002});
+  EXPECT_EQ(b.uncertainty.at("geometry.distance_mm"), std::vector<double>{0.4});
+  EXPECT_EQ(b.uncertainty.at("geometry.part_centre_px"), (std::vector<double>{0.1, 0.2}));
+  EXPECT_EQ(read(kBench).coverageFactor, 2) << "the default";
+  EXPECT_TRUE(read(kBench).uncertainty.empty());
+  // Read and checked like every key: the value's shape, >= 0, beside its value.
+  const std::string two = replaced(kBench, "distance_mm = 30", "distance_mm = 30\ndistance_mm_u = [0.4, 0.1]");
+  EXPECT_TRUE(refusedAt(two, lineOf(two, "distance_mm_u"), "key 'geometry.distance_mm_u'"));
+  const std::string negative =
+      replaced(kBench, "object_pixel_mm = 0.5", "object_pixel_mm = 0.5\nobject_pixel_mm_u = -1");
+  EXPECT_TRUE(refusedAt(negative, lineOf(negative, "object_pixel_mm_u"), "key 'camera.object_pixel_mm_u' = -1"));
+  const std::string alone =
+      replaced(kBench, "distance_mm = 30", "distance_mm = 30\ndisplay_per_pixel_mm_u = [0, 0, 0, 0]");
+  EXPECT_TRUE(refusedAt(alone, lineOf(alone, "display_per_pixel_mm_u"),
+                        "key 'geometry.display_per_pixel_mm_u' is the uncertainty of display_per_pixel_mm"));
+  const std::string k = replaced(kBench, "version = 1\n", "version = 1\ncoverage_factor = 0.5\n");
+  EXPECT_TRUE(refusedAt(k, lineOf(k, "coverage_factor"), "key 'coverage_factor' = 0.5 is outside"));
+}
+
 TEST_F(BenchFileTest, TheCamerasDarkAndFlatFramesAreRelativeToTheBenchFileAndTheFlatNeedsTheDark) {
   const std::string dark = replaced(kBench, "exposure_us = 10000", "exposure_us = 10000\ndark_frame = \"c/dark.exr\"");
   const BenchFile b = read(replaced(dark, "dark.exr\"", "dark.exr\"\nflat_frame = \"c/flat.exr\""));

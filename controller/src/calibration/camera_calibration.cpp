@@ -51,9 +51,8 @@ CameraCalibration calibrateCamera(BenchProbe& bench, const calib::ChessboardTarg
 
 void setCameraCalibration(BenchFileEdit& edit, const CameraCalibration& c, const std::string& stampUtc) {
   const double k = c.coverageFactor;
-  edit.set("camera", "object_pixel_mm", detail::tomlNumber(c.camera.objectPixel_mm),
-           fmt::format("lfi calibrate camera {} on a chessboard of {}: U = {:.2g} mm (k = {:g})", stampUtc,
-                       c.target.describe(), k * c.camera.objectPixelSigma_mm, k));
+  detail::setMeasured(edit, "camera", "object_pixel_mm", {c.camera.objectPixel_mm}, {c.camera.objectPixelSigma_mm}, k,
+                      fmt::format("lfi calibrate camera {} on a chessboard of {}", stampUtc, c.target.describe()));
 }
 
 std::string cameraCalibrationRecord(const CameraCalibration& c, const BenchFile& bench, const std::string& stampUtc,

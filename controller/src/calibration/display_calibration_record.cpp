@@ -12,33 +12,26 @@
 namespace lfi {
 
 using detail::measured;
-using detail::tomlNumber;
 
 void setDisplayCalibration(BenchFileEdit& edit, const DisplayCalibration& c, const std::string& stampUtc) {
   const double k = c.coverageFactor;
-  const auto within = [&](double sigma, const char* unit) {
-    return fmt::format("lfi calibrate display {}: U = {:.2g} {} (k = {:g})", stampUtc, k * sigma, unit, k);
-  };
-  edit.set("camera", "object_pixel_mm", tomlNumber(c.camera.objectPixel_mm),
-           within(c.camera.objectPixelSigma_mm, "mm"));
-  const cv::Matx22d& a = c.camera.map.perPixel_mm;
-  edit.set("geometry", "display_per_pixel_mm",
-           fmt::format("[{}, {}, {}, {}]", tomlNumber(a(0, 0)), tomlNumber(a(0, 1)), tomlNumber(a(1, 0)),
-                       tomlNumber(a(1, 1))),
-           within(c.camera.objectPixelSigma_mm, "mm (scale)"));
-  edit.set(
-      "geometry", "display_at_image_centre_mm",
-      fmt::format("[{}, {}]", tomlNumber(c.camera.map.atImageCentre_mm.x), tomlNumber(c.camera.map.atImageCentre_mm.y)),
-      fmt::format("lfi calibrate display {}: U = [{:.2g}, {:.2g}] mm (k = {:g})", stampUtc,
-                  k * c.camera.centreSigma_mm.x, k * c.camera.centreSigma_mm.y, k));
+  const std::string comment = fmt::format("lfi calibrate display {}", stampUtc);
+  const calib::CameraScaleFit& m = c.camera;
+  detail::setMeasured(edit, "camera", "object_pixel_mm", {m.objectPixel_mm}, {m.objectPixelSigma_mm}, k, comment);
+  const cv::Matx22d &a = m.map.perPixel_mm, &as = m.perPixelSigma_mm;
+  detail::setMeasured(edit, "geometry", "display_per_pixel_mm", {a(0, 0), a(0, 1), a(1, 0), a(1, 1)},
+                      {as(0, 0), as(0, 1), as(1, 0), as(1, 1)}, k, comment);
+  detail::setMeasured(edit, "geometry", "display_at_image_centre_mm",
+                      {m.map.atImageCentre_mm.x, m.map.atImageCentre_mm.y}, {m.centreSigma_mm.x, m.centreSigma_mm.y}, k,
+                      comment);
   const DisplayOpticsParams& o = c.optics;
   detail::setOpticsTable(edit, o, "as the display states it (not measured)");
-  edit.set("display.optics", "array_pitch_mm", tomlNumber(o.arrayPitch_mm), within(c.lattice.pitchSigma_mm, "mm"));
-  edit.set("display.optics", "rotation_rad", tomlNumber(o.rotation_rad), within(c.lattice.rotationSigma_rad, "rad"));
-  edit.set("display.optics", "array_offset_mm",
-           fmt::format("[{}, {}]", tomlNumber(o.arrayOffsetX_mm), tomlNumber(o.arrayOffsetY_mm)),
-           fmt::format("lfi calibrate display {}: U = [{:.2g}, {:.2g}] mm (k = {:g})", stampUtc,
-                       k * c.lattice.offsetSigma_mm.x, k * c.lattice.offsetSigma_mm.y, k));
+  detail::setMeasured(edit, "display.optics", "array_pitch_mm", {o.arrayPitch_mm}, {c.lattice.pitchSigma_mm}, k,
+                      comment);
+  detail::setMeasured(edit, "display.optics", "rotation_rad", {o.rotation_rad}, {c.lattice.rotationSigma_rad}, k,
+                      comment);
+  detail::setMeasured(edit, "display.optics", "array_offset_mm", {o.arrayOffsetX_mm, o.arrayOffsetY_mm},
+                      {c.lattice.offsetSigma_mm.x, c.lattice.offsetSigma_mm.y}, k, comment);
 }
 
 std::string displayCalibrationRecord(const DisplayCalibration& c, const BenchFile& bench, const std::string& stampUtc,

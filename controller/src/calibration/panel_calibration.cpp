@@ -5,6 +5,7 @@
 
 #include "lfi/core/error.h"
 
+#include "optics_table.h"
 #include "record_json.h"
 
 #include <fmt/format.h>
@@ -171,24 +172,18 @@ PanelCalibration calibratePanel(BenchProbe& bench, const calib::CameraMap& map, 
 
 void setPanelCalibration(BenchFileEdit& edit, const PanelCalibration& c, const std::string& stampUtc) {
   const double k = c.coverageFactor;
-  const auto list = [](const auto& values) { return fmt::format("[{:.6g}]", fmt::join(values, ", ")); };
-  const auto expanded = [&](const auto& sigmas) {
-    std::vector<double> u;
-    for (const double s : sigmas) u.push_back(k * s);
-    return list(u);
-  };
   const std::string comment = fmt::format("lfi calibrate panel, {}", stampUtc);
-  edit.set("display.response", "levels", list(c.response.levels), comment);
+  edit.set("display.response", "levels", fmt::format("[{:g}]", fmt::join(c.response.levels, ", ")), comment);
   const std::size_t curves = c.response.light.size();
   const std::vector<std::string> names =
       curves == 1 ? std::vector<std::string>{"light"} : std::vector<std::string>{"red", "green", "blue"};
-  for (std::size_t i = 0; i < curves; ++i) {
-    edit.set("display.response", names[i], list(c.response.light[i]), "relative light at each level");
-    edit.set("display.response", names[i] + "_u", expanded(c.lightSigma[i]), fmt::format("U, k = {:g}", k));
-  }
-  edit.set("display.response", "backlight", list(c.response.backlight),
-           "B = b0 + b1 x + b2 y + b3 x^2 + b4 x y + b5 y^2, x, y in mm from the panel's centre");
-  edit.set("display.response", "backlight_u", expanded(c.backlightSigma), fmt::format("U, k = {:g}", k));
+  for (std::size_t i = 0; i < curves; ++i)
+    detail::setMeasured(edit, "display.response", names[i], c.response.light[i], c.lightSigma[i], k,
+                        "relative light at each level");
+  detail::setMeasured(edit, "display.response", "backlight",
+                      std::vector<double>(c.response.backlight.begin(), c.response.backlight.end()),
+                      std::vector<double>(c.backlightSigma.begin(), c.backlightSigma.end()), k,
+                      "B = b0 + b1 x + b2 y + b3 x^2 + b4 x y + b5 y^2, x, y in mm from the panel's centre");
 }
 
 std::string panelCalibrationRecord(const PanelCalibration& c, const BenchFile& bench, const std::string& stampUtc,

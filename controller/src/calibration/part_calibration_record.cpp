@@ -20,20 +20,16 @@ using detail::tomlNumber;
 void setPartCalibration(BenchFileEdit& edit, const BenchFile& bench, const PartCalibration& c,
                         const std::string& stampUtc) {
   const double k = c.coverageFactor;
-  const auto within = [&](double sigma, const char* unit) {
-    return fmt::format("lfi calibrate part {}: U = {:.2g} {} (k = {:g})", stampUtc, k * sigma, unit, k);
-  };
-  edit.set("geometry", "distance_mm", tomlNumber(c.distance_mm), within(c.distanceSigma_mm, "mm"));
+  const std::string comment = fmt::format("lfi calibrate part {}", stampUtc);
+  detail::setMeasured(edit, "geometry", "distance_mm", {c.distance_mm}, {c.distanceSigma_mm}, k, comment);
   const double perPixel = bench.cameraOnDisplay->objectPixel_mm();
-  edit.set("geometry", "part_centre_px",
-           fmt::format("[{}, {}]", tomlNumber(c.partCentre_px.x), tomlNumber(c.partCentre_px.y)),
-           fmt::format("lfi calibrate part {}: U = [{:.2g}, {:.2g}] px (k = {:g})", stampUtc,
-                       k * c.lateralSigma_mm.x / perPixel, k * c.lateralSigma_mm.y / perPixel, k));
+  detail::setMeasured(edit, "geometry", "part_centre_px", {c.partCentre_px.x, c.partCentre_px.y},
+                      {c.lateralSigma_mm.x / perPixel, c.lateralSigma_mm.y / perPixel}, k, comment);
   if (!bench.displayOptics) detail::setOpticsTable(edit, c.nominal.optics, "as the display states it (not measured)");
-  edit.set("display.optics", "gap_mm", tomlNumber(c.gap_mm), within(c.gapSigma_mm, "mm"));
+  detail::setMeasured(edit, "display.optics", "gap_mm", {c.gap_mm}, {c.gapSigma_mm}, k, comment);
   if (c.nominal.optics.type == OpticsType::LensletArray)
-    edit.set("display.optics", "focal_length_mm", tomlNumber(c.gap_mm),
-             fmt::format("lfi calibrate part {}: the gap (the lenses focused on the panel)", stampUtc));
+    detail::setMeasured(edit, "display.optics", "focal_length_mm", {c.gap_mm}, {c.gapSigma_mm}, k,
+                        comment + ": the gap (the lenses focused on the panel)");
 }
 
 std::string partCalibrationRecord(const PartCalibration& c, const BenchFile& bench, const PartModel& part,

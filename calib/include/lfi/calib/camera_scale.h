@@ -77,7 +77,8 @@ struct CameraScaleFit {
   double objectPixelSigma_mm = 0;  // with the display scale's own
   double distortionSigma_px = 0;
   Vec2 centreSigma_mm{0, 0};
-  double residualRms_mm = 0;  // per axis
+  cv::Matx22d perPixelSigma_mm = cv::Matx22d::zeros();  // each element of A's, with the display scale's own
+  double residualRms_mm = 0;                            // per axis
   int points = 0;
 };
 

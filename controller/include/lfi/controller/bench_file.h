@@ -8,6 +8,13 @@
 //
 //   table          key                    units  default     meaning
 //   (top)          format, version        -      required    "lfi-inspection-bench", 1
+//                  coverage_factor        -      2           k of every calibrated value's uncertainty `<key>_u`
+//   any table      <key>_u                as key none        the expanded uncertainty (k = coverage_factor) of a
+//                                                             calibrated value: [camera] object_pixel_mm; [geometry]
+//                                                             distance_mm, part_centre_px, display_per_pixel_mm,
+//                                                             display_at_image_centre_mm; [display.optics] the
+//                                                             optics' numbers; [display.response] its curves and
+//                                                             backlight. As many numbers as the value, each >= 0
 //   [camera]       uri                    -      required    aravis:<id>, sim:<scene-file>
 //                  exposure_us            µs     required
 //                  gain                   dev.   0           device unit (SFNC: dB)
@@ -77,8 +84,10 @@
 #include "lfi/inspection/verdict.h"
 
 #include <filesystem>
+#include <map>
 #include <optional>
 #include <string>
+#include <vector>
 
 namespace lfi {
 
@@ -87,6 +96,10 @@ enum class OnDeviceLoss { Stop, Wait };
 
 struct BenchFile {
   std::filesystem::path file;  // as given
+  double coverageFactor = 2;
+  // The calibrated values' expanded uncertainties by "<table>.<key>" ("geometry.distance_mm"), as the file's
+  // `<key>_u` give them ([display.response]'s stay with it).
+  std::map<std::string, std::vector<double>> uncertainty;
   // [camera]
   DeviceUri cameraUri;
   CameraSettings camera;

@@ -25,7 +25,7 @@ class BenchFileEdit {
   // Reads the file. Errc::NotFound; Errc::Config when it is not TOML.
   explicit BenchFileEdit(std::filesystem::path file);
 
-  // Sets `key` of `table` (dotted: "camera", "display.optics") to `value`,
+  // Sets `key` of `table` (dotted: "camera", "display.optics"; "": the file's own keys) to `value`,
   // TOML text (a number, a quoted string, an array), with "  # comment" after
   // it when `comment` is not empty (replacing the comment the line had).
   // Errc::InvalidArgument for a key or table name that is not a bare TOML key,
