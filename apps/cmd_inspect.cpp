@@ -54,8 +54,9 @@ int runInspect(const InspectArgs& a, const GlobalOptions&) {
     for (const std::string& reason : part.verdict.reasons) fmt::print("  {}\n", reason);
     int n = 0;
     for (const lfi::PartDefect& d : part.verdict.defects)
-      fmt::print("  defect {}: ({:.2f}, {:.2f}) mm, {:.3g} mm², contrast {:+.2f}\n", ++n, d.centroid_mm.x,
-                 d.centroid_mm.y, d.area_mm2, d.image.peakContrast);
+      fmt::print("  defect {}: ({:.2f}, {:.2f}) mm ± ({:.2f}, {:.2f}), {:.3g} mm², contrast {:+.2f}\n", ++n,
+                 d.centroid_mm.x, d.centroid_mm.y, d.centroidU_mm.x, d.centroidU_mm.y, d.area_mm2,
+                 d.image.peakContrast);
   }
   return part.verdict.pass ? 0 : kExitPartFailed;
 }

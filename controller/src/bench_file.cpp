@@ -338,8 +338,16 @@ std::string BenchFile::referenceHash() const {
 
 PartFrame BenchFile::partFrame(int width_px, int height_px) const {
   const Vec2 origin = partCentre_px.value_or(Vec2((width_px - 1) / 2.0, (height_px - 1) / 2.0));
-  if (cameraOnDisplay) return {cameraOnDisplay->perPixel_mm, origin};
-  return PartFrame::isotropic(objectPixel_mm, origin);
+  PartFrame frame =
+      cameraOnDisplay ? PartFrame{cameraOnDisplay->perPixel_mm, origin} : PartFrame::isotropic(objectPixel_mm, origin);
+  if (const auto a = uncertainty.find("geometry.display_per_pixel_mm"); cameraOnDisplay && a != uncertainty.end())
+    frame.perPixelU_mm = cv::Matx22d(a->second[0], a->second[1], a->second[2], a->second[3]);
+  else if (const auto s = uncertainty.find("camera.object_pixel_mm"); !cameraOnDisplay && s != uncertainty.end())
+    frame.perPixelU_mm = cv::Matx22d(s->second[0], 0, 0, s->second[0]);
+  if (const auto o = uncertainty.find("geometry.part_centre_px"); partCentre_px && o != uncertainty.end())
+    frame.originU_px = Vec2(o->second[0], o->second[1]);
+  frame.centroidU_px = coverageFactor / std::sqrt(12.0);
+  return frame;
 }
 
 DetectionSettings BenchFile::detection() const {

@@ -24,7 +24,7 @@ PartVerdict judgePart(const std::vector<Defect>& defects, const PartFrame& frame
   PartVerdict verdict;
   double total_mm2 = 0;
   for (const Defect& d : defects) {
-    PartDefect p{d, frame.toPart(d.centroid_px), frame.area_mm2(d.area_px)};
+    PartDefect p{d, frame.toPart(d.centroid_px), frame.area_mm2(d.area_px), frame.toPartU(d.centroid_px)};
     total_mm2 += p.area_mm2;
     verdict.defects.push_back(p);
   }

@@ -46,6 +46,18 @@ TEST(Verdict, ACalibratedCameraMapPlacesDefectsOnThePartsAxes) {
   EXPECT_DOUBLE_EQ(v.defects[0].centroid_mm.x, 0.5 * 6);    // six rows down
   EXPECT_DOUBLE_EQ(v.defects[0].centroid_mm.y, -0.25 * 4);  // four columns right
   EXPECT_DOUBLE_EQ(v.defects[0].area_mm2, 8 * 0.125) << "|det A| = 0.125 mm^2 a pixel";
+  // Its uncertainty: A's elements', the origin's and the centroid's, each through A, in quadrature.
+  lfi::PartFrame uncertain = frame;
+  uncertain.perPixelU_mm = cv::Matx22d(0.01, 0.02, 0.03, 0.04);
+  uncertain.originU_px = {0.5, 0.25};
+  uncertain.centroidU_px = 0.1;
+  const lfi::Vec2 u = uncertain.toPartU({14, 26});  // d = (4, 6) px
+  EXPECT_NEAR(
+      u.x, std::sqrt(std::pow(4 * 0.01, 2) + std::pow(6 * 0.02, 2) + std::pow(0.5 * 0.25, 2) + std::pow(0.5 * 0.1, 2)),
+      1e-12);
+  EXPECT_NEAR(
+      u.y, std::sqrt(std::pow(4 * 0.03, 2) + std::pow(6 * 0.04, 2) + std::pow(0.25 * 0.5, 2) + std::pow(0.25 * 0.1, 2)),
+      1e-12);
 }
 
 TEST(Verdict, EachRuleFailsThePartOnItsOwnAndSaysWhy) {

@@ -19,6 +19,7 @@ InspectionRecord recordStart(const BenchFile& bench, std::uint64_t number, const
   r.benchFile = fs::absolute(bench.file).string();
   r.benchHash = bench.referenceHash();
   r.reference = fs::absolute(bench.referenceFolder).string();
+  r.coverageFactor = bench.coverageFactor;
   return r;
 }
 

@@ -37,6 +37,7 @@ struct InspectionRecord {
   std::string error;
   std::map<std::string, std::string> images;  // role ("image", "overlay") → file
   double analysis_ms = 0;
+  double coverageFactor = 2;  // k of the defects' centroid_u_mm (the bench file's)
 };
 
 nlohmann::ordered_json recordJson(const InspectionRecord& record);

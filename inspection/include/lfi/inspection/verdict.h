@@ -37,6 +37,12 @@ namespace lfi {
 struct PartFrame {
   cv::Matx22d perPixel_mm = cv::Matx22d(1, 0, 0, -1);
   Vec2 origin_px;
+  // Expanded uncertainties, at one coverage factor: of A's elements, of the
+  // origin, and of a centroid on the image per axis (a region's centroid is
+  // known to within its pixel: k / sqrt(12) px).
+  cv::Matx22d perPixelU_mm = cv::Matx22d::zeros();
+  Vec2 originU_px{0, 0};
+  double centroidU_px = 0;
 
   static PartFrame isotropic(double pixel_mm, const Vec2& origin_px) {
     return {cv::Matx22d(pixel_mm, 0, 0, -pixel_mm), origin_px};
@@ -45,6 +51,20 @@ struct PartFrame {
     const Vec2 d = px - origin_px;
     return {perPixel_mm(0, 0) * d.x + perPixel_mm(0, 1) * d.y, perPixel_mm(1, 0) * d.x + perPixel_mm(1, 1) * d.y};
   }
+  // The expanded uncertainty of toPart(px) per axis: A's, the origin's and
+  // the centroid's, independent and propagated linearly.
+  Vec2 toPartU(const Vec2& px) const {
+    const Vec2 d = px - origin_px;
+    const cv::Matx22d &a = perPixel_mm, &ua = perPixelU_mm;
+    const auto axis = [&](int i) {
+      const double fromA = std::hypot(d.x * ua(i, 0), d.y * ua(i, 1));
+      const double fromOrigin = std::hypot(a(i, 0) * originU_px.x, a(i, 1) * originU_px.y);
+      const double fromCentroid = std::hypot(a(i, 0), a(i, 1)) * centroidU_px;
+      return std::sqrt(fromA * fromA + fromOrigin * fromOrigin + fromCentroid * fromCentroid);
+    };
+    return {axis(0), axis(1)};
+  }
+
   double area_mm2(double area_px) const {
     const cv::Matx22d& a = perPixel_mm;
     return std::abs(area_px * a(0, 0) * a(1, 1) - area_px * a(0, 1) * a(1, 0));
@@ -61,6 +81,7 @@ struct PartDefect {
   Defect image;      // in camera pixels
   Vec2 centroid_mm;  // in the part's frame
   double area_mm2 = 0;
+  Vec2 centroidU_mm;  // its expanded uncertainty per axis (PartFrame::toPartU)
 };
 
 struct PartVerdict {
