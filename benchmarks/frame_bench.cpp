@@ -7,6 +7,9 @@
 //                         sized radiance image (the sim: camera's    radiance scaled into 16-bit DN
 //                         and the study's shot + read noise), 1      (convertTo), 1 thread; and the exact
 //                         thread and all                             sampler on every pixel, for comparison
+//   frame correction      FrameCorrection::apply: every image the    cv::subtract of the dark frame (the
+//                         controller takes, less the dark frame,     same image in, one pass out)
+//                         times the flat frame's gain
 //   Mono12 unpack         unpackMono12, both packings (the aravis:   memcpy of the unpacked bytes
 //                         backend's Mono12Packed / Mono12p frames)
 //   light field EXR       writeLightFieldExr / readLightFieldExr     OpenEXR alone: one FLOAT channel, ZIP,
@@ -16,7 +19,8 @@
 // A ratio is the median of the turns' ratios, printed with their range
 // (bench_util.h); a speed is the best run's. Self-checks before the figures:
 // the unpacked pixels against a packer written from the formats' byte tables,
-// the files' pixels read back bit for bit, the sensor's mean against its exposure.
+// the files' pixels read back bit for bit, the sensor's mean against its exposure,
+// the corrected frame against the correction's formula.
 //
 // Sizes: camera frames 2448 x 2048 (a Sony IMX264's full frame); the light field
 // of a 4K panel (292 x 164 spatial x 16^2 angular, 4672 x 2624 pixels, 49 MB).
@@ -24,6 +28,7 @@
 //
 // Usage: lfi-frame-bench [--quick] [--turns N] [--dir FOLDER]
 
+#include "lfi/controller/frame_correction.h"
 #include "lfi/core/exr_io.h"
 #include "lfi/core/light_field.h"
 #include "lfi/drivers/pixel_unpack.h"
@@ -112,6 +117,44 @@ void sensorModel(int width, int height, int turns) {
   printRatio("capture (1 thread) / one pass", s, 0, 3);
   printRatio("capture (all threads) / one pass", s, 1, 3);
   printRatio("exact draws / capture (1 thread)", s, 2, 0);
+}
+
+// ---- frame correction -------------------------------------------------------
+
+void frameCorrection(int width, int height, int turns) {
+  CalibrationFrame dark, flat;
+  dark.kind = CalibrationFrameKind::Dark;
+  flat.kind = CalibrationFrameKind::Flat;
+  dark.settings.pixelFormat = flat.settings.pixelFormat = PixelFormat::Mono12;
+  dark.image = cv::Mat(height, width, CV_32FC1);
+  flat.image = cv::Mat(height, width, CV_32FC1);
+  cv::RNG(17).fill(dark.image, cv::RNG::UNIFORM, 60.0, 70.0);
+  cv::RNG(19).fill(flat.image, cv::RNG::UNIFORM, 1800.0, 2200.0);
+  const FrameCorrection correction(dark, flat);
+  cv::Mat frame(height, width, CV_32FC1);
+  cv::RNG(23).fill(frame, cv::RNG::UNIFORM, 0.0, 4000.0);
+  // Self-check: one pixel against the formula.
+  cv::Mat check = frame.clone();
+  correction.apply(check);
+  const double expected = (frame.at<float>(5, 7) - dark.image.at<float>(5, 7)) * correction.gain().at<float>(5, 7);
+  if (std::abs(check.at<float>(5, 7) - expected) > 1e-3 * std::abs(expected) + 1e-3)
+    throw std::runtime_error(fmt::format("self-check: corrected {} DN, expected {}", check.at<float>(5, 7), expected));
+
+  cv::Mat image = frame.clone(), out(frame.size(), CV_32FC1);
+  const auto s = secondsInTurns(turns, {[&] {
+                                          frame.copyTo(image);  // (the bound copies too: the same work beside)
+                                          correction.apply(image);
+                                          keep(image.data);
+                                        },
+                                        [&] {
+                                          frame.copyTo(image);
+                                          cv::subtract(image, dark.image, out);
+                                          keep(out.data);
+                                        }});
+  fmt::print("frame correction, {} x {} float frame (dark and flat)\n", width, height);
+  fmt::print("  copy + FrameCorrection::apply       {:8.2f} ms\n", 1e3 * bestOf(s, 0));
+  fmt::print("  bound: copy + cv::subtract of dark  {:8.2f} ms\n", 1e3 * bestOf(s, 1));
+  printRatio("correction / subtract", s, 0, 1);
 }
 
 // ---- Mono12 unpack ----------------------------------------------------------
@@ -251,7 +294,9 @@ int run(int argc, char** argv) {
   bool quick = false;
   int turns = 7;
   std::string parent = fs::temp_directory_path().string();
-  CLI::App app("lfi-frame-bench: sensor model, Mono12 unpacking and EXR files against bounds measured in the same run");
+  CLI::App app(
+      "lfi-frame-bench: sensor model, frame correction, Mono12 unpacking and EXR files against bounds measured in "
+      "the same run");
   app.add_flag("--quick", quick, "Small frames and the study's light field, 2 turns (a smoke run)");
   app.add_option("--turns", turns, "Turns of each step and its bound; a ratio is their median")
       ->check(CLI::Range(1, 1000));
@@ -263,6 +308,7 @@ int run(int argc, char** argv) {
   const int width = quick ? 256 : 2448, height = quick ? 256 : 2048;
   fmt::print("lfi-frame-bench: {} turns, {} hardware threads\n", turns, std::thread::hardware_concurrency());
   sensorModel(width, height, turns);
+  frameCorrection(width, height, turns);
   mono12(width, height, turns);
 
   const lfi::bench::TemporaryFolder dir(parent, "lfi-frame-bench");
