@@ -13,6 +13,7 @@
 #include "lfi/controller/bench_devices.h"
 #include "lfi/controller/camera_calibration.h"
 #include "lfi/controller/display_calibration.h"
+#include "lfi/controller/exposure_calibration.h"
 #include "lfi/controller/frame_correction.h"
 #include "lfi/controller/inspection_record.h"
 #include "lfi/controller/panel_calibration.h"
@@ -52,6 +53,7 @@ struct CalibrateArgs {
   lfi::PartCalibrationSettings partSettings;
   lfi::CameraCalibrationSettings cameraSettings;
   lfi::PanelCalibrationSettings panelSettings;
+  lfi::ExposureCalibrationSettings exposureSettings;
 };
 
 void printDisplayCalibration(const lfi::DisplayCalibration& c) {
@@ -223,7 +225,49 @@ int runCalibrateFrame(const CalibrateArgs& a, const GlobalOptions& global) {
   return 0;
 }
 
+// lfi calibrate exposure: the camera reconfigured round by round, outside one controller.
+int runCalibrateExposure(const CalibrateArgs& a, const GlobalOptions& global) {
+  const lfi::BenchFile bench = lfi::readBenchFile(a.bench);
+  lfi::BenchFileEdit edit(a.bench);
+  const lfi::BenchFile devices = a.part.empty() ? bench : withSimulatedPart(bench, a.part);
+  auto display = lfi::openBenchDisplay(devices);
+  auto camera = lfi::openBenchCamera(devices, lfi::BenchExposures::OnRequest);
+  ProgressBar bar;
+  const lfi::ExposureCalibration c =
+      lfi::calibrateExposure(*camera, *display, camera->settings(),
+                             lfi::controllerOptions(bench, a.frames > 0 ? a.frames : bench.inspectionFrames, false),
+                             a.exposureSettings, [&](double f) {
+                               if (!global.quiet) bar("calibrate exposure", f);
+                             });
+  bar.finish();
+  fmt::print(
+      "camera {}: exposure {:.6g} us (was {:.6g}): the brightest pixels (99.9th percentile) at {:.1f} DN of "
+      "{:g} over a dark of {:.1f} DN, in {} rounds, {:.2f} s\n",
+      camera->info().deviceId, c.exposure_us, c.startExposure_us, c.brightest_dn + c.dark_dn, c.fullScale_dn, c.dark_dn,
+      c.rounds, c.seconds);
+  const std::string stamp = lfi::utcNow();
+  lfi::setExposureCalibration(edit, c, a.exposureSettings.fraction, stamp);
+  if (a.dryRun) {
+    fmt::print("--dry-run: {} would change:\n{}", a.bench.string(), edit.changes());
+    return 0;
+  }
+  const lfi::PublishedCalibration published =
+      lfi::publishCalibration(edit, "exposure", stamp,
+                              lfi::exposureCalibrationRecord(c, a.exposureSettings.fraction, bench, stamp,
+                                                             lfi::describeCamera(*camera, bench.cameraUri)));
+  spdlog::info("calibrate: {} written; the file before is {}, the record {}", a.bench.string(),
+               published.backup.string(), published.record.string());
+  if (!bench.darkFrame.empty())
+    spdlog::warn(
+        "calibrate: the dark and flat frames were taken at the exposure before and left the bench: take "
+        "them again (lfi calibrate camera {} --dark, then --flat)",
+        a.bench.string());
+  fmt::print("{}\n", a.bench.string());
+  return 0;
+}
+
 int runCalibrate(CalibrateArgs a, const GlobalOptions& global) {
+  if (a.what == "exposure") return runCalibrateExposure(a, global);
   if (a.dark || a.flat) {
     if (a.what != "camera") lfi::fail(lfi::Errc::Config, "calibrate {}: --dark and --flat are for camera", a.what);
     return runCalibrateFrame(a, global);
@@ -322,14 +366,14 @@ Command addCalibrateCommand(CLI::App& app) {
       "display's lens array and the camera's scale, nothing in view; part: Δ, the part's place and the "
       "display's gap, through the intact part; camera: the camera's scale on a chessboard target in the "
       "part's place, or its dark and flat frames; panel: the panel's drive-to-light curve and backlight, nothing in "
-      "view)");
+      "view; exposure: the camera's exposure, the intact part in view and the display all white)");
   auto a = std::make_shared<CalibrateArgs>();
   command
       ->add_option("what", a->what,
                    "What to calibrate: camera --dark and --flat, display, panel, then part; camera on a "
                    "chessboard where a target is used")
       ->required()
-      ->check(CLI::IsMember({"display", "part", "camera", "panel"}));
+      ->check(CLI::IsMember({"exposure", "display", "part", "camera", "panel"}));
   addBenchArgument(*command, a->bench);
   command->add_flag("--dry-run", a->dryRun, "Measure and print what would change, write nothing");
   command
@@ -352,6 +396,11 @@ Command addCalibrateCommand(CLI::App& app) {
                  "camera: take the flat frame instead, of a uniform source filling the view (an opal diffuser in the "
                  "part's place, lit by the display; a simulated bench: --part data/scenes/inspection_bench_flat.toml)")
       ->excludes(dark);
+  command
+      ->add_option("--fraction", a->exposureSettings.fraction,
+                   "exposure: where the brightest pixels sit, a fraction of full scale")
+      ->check(CLI::Range(0.05, 0.98))
+      ->capture_default_str();
   command->add_option("--level-step", a->panelSettings.levelStep, "panel: the drive levels 0, step, 2 step, .., 255")
       ->check(CLI::Range(1, 128))
       ->capture_default_str();
