@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "bench_cli.h"
 
+#include "lfi/sim/scene_part_model.h"
+
 #include "lfi/core/error.h"
 #include "lfi/drivers/device_uri.h"
 
@@ -47,6 +49,11 @@ std::string timedFolderName(const char* prefix, const std::string& timeUtc) {
   std::string name = std::string(prefix) + "-" + timeUtc;
   name.erase(std::remove(name.begin(), name.end(), ':'), name.end());
   return name;
+}
+
+std::shared_ptr<const PartModel> benchPartModel(const BenchFile& bench) {
+  if (bench.partModel.empty()) return nullptr;
+  return std::make_shared<const sim::ScenePartModel>(bench.partModel);
 }
 
 BenchFile withSimulatedPart(BenchFile bench, const fs::path& scene) {

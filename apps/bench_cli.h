@@ -5,11 +5,13 @@
 // exit status of a verdict, and a stop request from the terminal.
 
 #include "lfi/controller/bench_file.h"
+#include "lfi/core/part_model.h"
 
 #include <CLI/CLI.hpp>
 
 #include <atomic>
 #include <filesystem>
+#include <memory>
 #include <string>
 
 namespace lfi::cli {
@@ -29,6 +31,9 @@ std::string timedFolderName(const char* prefix, const std::string& timeUtc);
 // still the bench's). Throws Errc::Config for a bench whose camera or display
 // is not sim: (a physical bench inspects the part that is under its camera).
 BenchFile withSimulatedPart(BenchFile bench, const std::filesystem::path& scene);
+
+// The part's model the bench names ([geometry] part_model, a scene file), or null.
+std::shared_ptr<const PartModel> benchPartModel(const BenchFile& bench);
 
 // Turns SIGINT and SIGTERM into a request that stopRequested() reports, so
 // that a loop ends after the part in hand; a second signal ends the process.

@@ -38,7 +38,7 @@ int runInspect(const InspectArgs& a, const GlobalOptions&) {
   const lfi::ReferencePackage package = lfi::readReferencePackage(bench.referenceFolder, &bench);
   auto display = lfi::openBenchDisplay(devices);
   auto camera = lfi::openBenchCamera(devices);
-  lfi::Inspector inspector(devices, package, *display, *camera);
+  lfi::Inspector inspector(devices, package, *display, *camera, benchPartModel(bench));
   inspector.showReference();
   const lfi::PartInspection part = inspector.inspectPart();
   const std::string time = lfi::utcNow();
@@ -53,10 +53,14 @@ int runInspect(const InspectArgs& a, const GlobalOptions&) {
     fmt::print("{}: {}\n", part.verdict.pass ? "PASS" : "FAIL", (folder / "record.json").string());
     for (const std::string& reason : part.verdict.reasons) fmt::print("  {}\n", reason);
     int n = 0;
-    for (const lfi::PartDefect& d : part.verdict.defects)
+    for (const lfi::PartDefect& d : part.verdict.defects) {
       fmt::print("  defect {}: ({:.2f}, {:.2f}) mm ± ({:.2f}, {:.2f}), {:.3g} mm², contrast {:+.2f}\n", ++n,
                  d.centroid_mm.x, d.centroid_mm.y, d.centroidU_mm.x, d.centroidU_mm.y, d.area_mm2,
                  d.image.peakContrast);
+      if (d.inside_mm)
+        fmt::print("    inside the part at z = {:g} mm: ({:.2f}, {:.2f}) mm\n", bench.defectDepth_mm, d.inside_mm->x,
+                   d.inside_mm->y);
+    }
   }
   return part.verdict.pass ? 0 : kExitPartFailed;
 }

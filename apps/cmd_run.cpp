@@ -36,6 +36,7 @@ int runRun(const RunArgs& a, const GlobalOptions& global) {
   const BenchFile devices = a.part.empty() ? bench : withSimulatedPart(bench, a.part);
   const ReferencePackage package = readReferencePackage(bench.referenceFolder, &bench);
   RunOptions options;
+  options.partModel = benchPartModel(bench);
   options.folder = a.out.empty() ? bench.outputFolder / timedFolderName("run", utcNow()) : a.out;
   options.parts = a.parts;
   options.seconds = a.seconds;

@@ -179,6 +179,10 @@ void readGeometry(ConfigTable t, BenchFile& b) {
            a[1], a[2], a[3]);
     b.cameraOnDisplay = m;
   }
+  if (t.has("part_model")) b.partModel = pathIn(t, "part_model");
+  if (t.has("defect_depth_mm") && b.partModel.empty())
+    fail(Errc::Config, "{} places defects inside the part's model: it needs part_model", t.where("defect_depth_mm"));
+  b.defectDepth_mm = t.number("defect_depth_mm", 0.0, -1e4, 1e4);
   readUncertainty(t, "geometry", "distance_mm", 1, b);
   readUncertainty(t, "geometry", "part_centre_px", 2, b);
   readUncertainty(t, "geometry", "display_per_pixel_mm", 4, b);
@@ -271,7 +275,8 @@ BenchFile readBenchFile(const fs::path& file) {
   readCapture(*table("capture", {"uri", "light_field"}, true), b);
   readGeometry(*table("geometry",
                       {"distance_mm", "distance_mm_u", "part_centre_px", "part_centre_px_u", "display_per_pixel_mm",
-                       "display_per_pixel_mm_u", "display_at_image_centre_mm", "display_at_image_centre_mm_u"},
+                       "display_per_pixel_mm_u", "display_at_image_centre_mm", "display_at_image_centre_mm_u",
+                       "part_model", "defect_depth_mm"},
                       true),
                b);
   readReference(*table("reference", {"folder", "frames", "mask_radius_mm", "mask_lit_fraction"}, true), b);

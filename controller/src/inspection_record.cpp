@@ -26,12 +26,14 @@ nlohmann::ordered_json recordJson(const InspectionRecord& r) {
   j["verdict"] = r.verdict ? ordered_json(r.verdict->pass ? "pass" : "fail") : ordered_json(nullptr);
   j["reasons"] = r.verdict ? r.verdict->reasons : std::vector<std::string>{};
   j["coverage_factor"] = r.coverageFactor;
+  j["inside_depth_mm"] = r.insideDepth_mm ? ordered_json(*r.insideDepth_mm) : ordered_json();
   ordered_json defects = ordered_json::array();
   if (r.verdict)
     for (const PartDefect& d : r.verdict->defects) {
       const Defect& px = d.image;
       defects.push_back({{"centroid_mm", {d.centroid_mm.x, d.centroid_mm.y}},
                          {"centroid_u_mm", {d.centroidU_mm.x, d.centroidU_mm.y}},
+                         {"inside_mm", d.inside_mm ? ordered_json{d.inside_mm->x, d.inside_mm->y} : ordered_json()},
                          {"centroid_px", {px.centroid_px.x, px.centroid_px.y}},
                          {"area_mm2", d.area_mm2},
                          {"area_px", px.area_px},

@@ -13,11 +13,13 @@ CameraNoise noiseOfMean(const CameraNoise& perFrame, int frames) {
   return {perFrame.read_dn / std::sqrt(frames), perFrame.gain_dnPerElectron / frames};
 }
 
-Inspector::Inspector(const BenchFile& bench, const ReferencePackage& package, Display& display, Camera& camera)
+Inspector::Inspector(const BenchFile& bench, const ReferencePackage& package, Display& display, Camera& camera,
+                     std::shared_ptr<const PartModel> part)
     : bench_(bench),
       white_(package.info.white),
       mask_(package.mask),
       frame_(bench.partFrame(package.mask.cols, package.mask.rows)),
+      part_(std::move(part)),
       finder_(package.trainer.model(noiseOfMean(bench.noise, bench.inspectionFrames)), package.mask, bench.detection()),
       panel_(package.panel),
       reference_(std::make_unique<StoredLightField>(package.lightField, "the reference package's light field")),
@@ -62,7 +64,10 @@ PartVerdict Inspector::judge(const cv::Mat& image) const {
          "inspect: the camera's image is {} x {}, the reference's {} x {} (a changed camera region or "
          "binning? take a new reference with `lfi capture`)",
          image.cols, image.rows, mask_.cols, mask_.rows);
-  return judgePart(finder_.find(image), frame_, bench_.rules);
+  PartVerdict verdict = judgePart(finder_.find(image), frame_, bench_.rules);
+  if (part_)
+    for (PartDefect& d : verdict.defects) d.inside_mm = part_->atDepth(d.centroid_mm, bench_.defectDepth_mm);
+  return verdict;
 }
 
 }  // namespace lfi

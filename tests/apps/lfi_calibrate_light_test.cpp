@@ -135,6 +135,11 @@ TEST_F(LfiCalibrateLight, TheCalibratedBenchImagesTheIntactPartUniformlyAndPlace
         "[[object]]\nname = \"particle at {0}, {1}\"\nshape = \"sphere\"\nradius_mm = 0.5\n"
         "position_mm = [{0}, {1}, 0]\nmaterial = \"absorber\"\n",
         x, y);
+  // With the part's model in the bench, each is placed inside the lens too, at its centre plane (z = 0).
+  std::string text = readText(bench_);
+  replaceOnce(text, "part_centre_px = [27.5, 27.5]",
+              "part_centre_px = [27.5, 27.5]\npart_model = \"inspection_bench.toml\"");
+  write("bench.toml", text);
   const Result inspect = lfi("-q inspect " + quoted(bench_) + " --part " + quoted(write("particles.toml", particles)));
   EXPECT_EQ(inspect.status, 3) << inspect.output;
   const std::size_t at = inspect.output.find("FAIL: ");
@@ -157,7 +162,19 @@ TEST_F(LfiCalibrateLight, TheCalibratedBenchImagesTheIntactPartUniformlyAndPlace
     ASSERT_NE(nearest, nullptr);
     EXPECT_LE(std::abs((*nearest)["centroid_mm"][0].get<double>() - x), (*nearest)["centroid_u_mm"][0].get<double>());
     EXPECT_LE(std::abs((*nearest)["centroid_mm"][1].get<double>() - y), (*nearest)["centroid_u_mm"][1].get<double>());
+    // Inside the lens: the apparent position moved towards the axis by the front face's refraction (Snell's law at
+    // the face's normal, asin(r / R), over the face's height above z = 0), and within the same U of the truth.
+    const auto& apparent = (*nearest)["centroid_mm"];
+    const auto& inside = (*nearest)["inside_mm"];
+    ASSERT_TRUE(inside.is_array());
+    const double r = std::hypot(apparent[0].get<double>(), apparent[1].get<double>());
+    const double theta = std::asin(r / 51.5), bent = std::asin(std::sin(theta) / 1.5168);
+    const double face = 2.5 - (51.5 - std::sqrt(51.5 * 51.5 - r * r));
+    EXPECT_NEAR(r - std::hypot(inside[0].get<double>(), inside[1].get<double>()), face * std::tan(theta - bent), 1e-6);
+    EXPECT_LE(std::abs(inside[0].get<double>() - x), (*nearest)["centroid_u_mm"][0].get<double>());
+    EXPECT_LE(std::abs(inside[1].get<double>() - y), (*nearest)["centroid_u_mm"][1].get<double>());
   }
+  EXPECT_EQ(found["inside_depth_mm"], 0);
 }
 
 TEST_F(LfiCalibrateLight, AResponseThatIsNotMonotonicIsRefusedByName) {

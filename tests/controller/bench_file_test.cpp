@@ -138,6 +138,17 @@ TEST_F(BenchFileTest, CalibratedValuesCarryTheirUncertaintiesAsKeysAtTheFilesCov
   EXPECT_TRUE(refusedAt(k, lineOf(k, "coverage_factor"), "key 'coverage_factor' = 0.5 is outside"));
 }
 
+TEST_F(BenchFileTest, ThePartsModelIsRelativeToTheBenchFileAndTheDefectDepthNeedsIt) {
+  const std::string model = replaced(kBench, "distance_mm = 30",
+                                     "distance_mm = 30\npart_model = \"../scenes/lens.toml\"\ndefect_depth_mm = -1.5");
+  const BenchFile b = read(model);
+  EXPECT_EQ(b.partModel, folder_.path() / "scenes" / "lens.toml");
+  EXPECT_EQ(b.defectDepth_mm, -1.5);
+  EXPECT_TRUE(read(kBench).partModel.empty());
+  const std::string depth = replaced(kBench, "distance_mm = 30", "distance_mm = 30\ndefect_depth_mm = 1");
+  EXPECT_TRUE(refusedAt(depth, lineOf(depth, "defect_depth_mm"), "key 'geometry.defect_depth_mm' places defects"));
+}
+
 TEST_F(BenchFileTest, TheCamerasDarkAndFlatFramesAreRelativeToTheBenchFileAndTheFlatNeedsTheDark) {
   const std::string dark = replaced(kBench, "exposure_us = 10000", "exposure_us = 10000\ndark_frame = \"c/dark.exr\"");
   const BenchFile b = read(replaced(dark, "dark.exr\"", "dark.exr\"\nflat_frame = \"c/flat.exr\""));

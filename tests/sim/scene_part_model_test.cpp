@@ -54,6 +54,34 @@ TEST(ScenePartModel, BendsARayAsTheThickLensFormulasSay) {
   EXPECT_NE(model.description().find("lens"), std::string::npos);
 }
 
+// Inside the part: the downward ray at x refracts at the front face (its normal
+// at asin(x / R) from the axis; Snell's law), then runs straight to the depth
+// asked for. Above the part it has not bent; past a totally absorbing object
+// or beside the part it is where it was.
+TEST(ScenePartModel, PlacesARayInsideThePartBySnellsLaw) {
+  const TestFolder dir("scene_part_model_depth");
+  const sim::ScenePartModel model(dir.write(
+      "lens.toml",
+      cameraSceneText({}) + "[display]\nposition_mm = [0, 0, -30]\n" +
+          lensObject({.radius_mm = kRadius, .centreThickness_mm = kThickness, .diameter_mm = 25.4, .ior = kIor})));
+  for (const double x : {1.0, 6.4, 10.0}) {
+    SCOPED_TRACE(x);
+    const double theta = std::asin(x / kRadius), refracted = std::asin(std::sin(theta) / kIor);
+    const double face = kThickness / 2 - (kRadius - std::sqrt(kRadius * kRadius - x * x));  // the front face's z
+    for (const double z : {0.0, -1.0}) {
+      const auto inside = model.atDepth({x, 0}, z);
+      ASSERT_TRUE(inside);
+      // The refracted ray leans towards the axis by theta - refracted from the vertical.
+      EXPECT_NEAR(inside->x, x - (face - z) * std::tan(theta - refracted), 1e-9);
+      EXPECT_NEAR(inside->y, 0, 1e-12);
+    }
+  }
+  // At 6.4 mm from the axis and the lens's centre plane: 0.09 mm nearer the axis than seen (1.4 %).
+  EXPECT_NEAR(model.atDepth({6.4, 0}, 0)->x, 6.4 * (1 - 0.014), 0.001);
+  EXPECT_EQ(model.atDepth({6.4, 3}, 10)->x, 6.4) << "above the part: not bent";
+  EXPECT_EQ(model.atDepth({20, 0}, 0)->x, 20) << "beside the part: not bent";
+}
+
 TEST(ScenePartModel, ASceneWithoutAPartIsNamed) {
   const TestFolder dir("scene_part_model_empty");
   const auto file = dir.write("empty.toml", cameraSceneText({}) + "[display]\nposition_mm = [0, 0, -30]\n");

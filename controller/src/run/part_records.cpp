@@ -20,6 +20,7 @@ InspectionRecord recordStart(const BenchFile& bench, std::uint64_t number, const
   r.benchHash = bench.referenceHash();
   r.reference = fs::absolute(bench.referenceFolder).string();
   r.coverageFactor = bench.coverageFactor;
+  if (!bench.partModel.empty()) r.insideDepth_mm = bench.defectDepth_mm;
   return r;
 }
 

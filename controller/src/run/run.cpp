@@ -64,11 +64,12 @@ struct Station {
   }
 };
 
-Station openStation(const BenchFile& bench, const ReferencePackage& package) {
+Station openStation(const BenchFile& bench, const ReferencePackage& package,
+                    const std::shared_ptr<const PartModel>& part) {
   Station s;
   s.display = openBenchDisplay(bench);
   s.camera = openBenchCamera(bench);
-  s.inspector = std::make_unique<Inspector>(bench, package, *s.display, *s.camera);
+  s.inspector = std::make_unique<Inspector>(bench, package, *s.display, *s.camera, part);
   s.inspector->showReference();
   return s;
 }
@@ -84,7 +85,7 @@ class Run {
       : bench_(bench), devices_(devices), package_(package), options_(options) {}
 
   RunResult operator()() {
-    Station station = openStation(devices_, package_);
+    Station station = openStation(devices_, package_, options_.partModel);
     requireOutputFolder(options_.folder / "images", "run", "its records and images");
     RecordLog log(options_.folder / "records.jsonl");
     log_ = &log;
@@ -168,7 +169,7 @@ class Run {
           std::this_thread::sleep_for(pause);
         waited += pause;
         try {
-          return openStation(devices_, package_);
+          return openStation(devices_, package_, options_.partModel);
         } catch (const Error& e) {
           if (!deviceTrouble(e)) throw;
           last = e.what();

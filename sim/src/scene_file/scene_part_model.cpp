@@ -55,4 +55,17 @@ std::optional<PartRay> ScenePartModel::exit(const Vec2& x) const {
   return PartRay{from, direction};
 }
 
+std::optional<Vec2> ScenePartModel::atDepth(const Vec2& x, double z) const {
+  if (!(z < top_mm_)) return x;  // above the part: the ray is still straight
+  const std::vector<Vec3> path = refractionPath(*scene_, Ray{Vec3(x.x, x.y, top_mm_), Vec3(0, 0, -1)}, 64, kEscape_mm);
+  for (std::size_t i = 1; i < path.size(); ++i) {
+    const Vec3 &from = path[i - 1], &to = path[i];
+    if ((from.z - z) * (to.z - z) > 0 || from.z == to.z) continue;
+    if (!(to.z < from.z)) return std::nullopt;  // the first crossing goes up: turned back above the plane
+    const double t = (from.z - z) / (from.z - to.z);
+    return Vec2(from.x + t * (to.x - from.x), from.y + t * (to.y - from.y));
+  }
+  return std::nullopt;  // absorbed, or stopped, above it
+}
+
 }  // namespace lfi::sim

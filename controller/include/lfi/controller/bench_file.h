@@ -52,6 +52,11 @@
 //                                                             next key, (u0, v0) the image's centre (both keys or
 //                                                             neither; `lfi calibrate display` writes them)
 //                  display_at_image_centre_mm mm none        [x, y]: the display point the image's centre sees
+//                  part_model             path   none        the part's model, a scene file (ScenePartModel): each
+//                                                             defect is also placed inside the part, traced back
+//                                                             through its surfaces
+//                  defect_depth_mm        mm     0           the height in the part's frame, above its reference
+//                                                             point, at which the defects inside it are placed
 //   [reference]    folder                 path   required    the reference package (reference_package.h)
 //                  frames                 -      16          frames of the intact part the golden model starts from
 //                  mask_radius_mm         mm     none        the part: a disc around part_centre_px (none: whole image)
@@ -121,6 +126,8 @@ struct BenchFile {
   double distance_mm = 0;
   std::optional<Vec2> partCentre_px;                // none: the image's centre
   std::optional<calib::CameraMap> cameraOnDisplay;  // where the camera looks on the display
+  std::filesystem::path partModel;                  // the part's model (a scene file); empty: none
+  double defectDepth_mm = 0;  // the height in the part's frame at which defects are placed inside it
   // [reference]
   std::filesystem::path referenceFolder;
   int referenceFrames = 16;

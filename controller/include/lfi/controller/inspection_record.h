@@ -37,7 +37,8 @@ struct InspectionRecord {
   std::string error;
   std::map<std::string, std::string> images;  // role ("image", "overlay") → file
   double analysis_ms = 0;
-  double coverageFactor = 2;  // k of the defects' centroid_u_mm (the bench file's)
+  double coverageFactor = 2;             // k of the defects' centroid_u_mm (the bench file's)
+  std::optional<double> insideDepth_mm;  // the depth of the defects' inside_mm (with the part's model)
 };
 
 nlohmann::ordered_json recordJson(const InspectionRecord& record);

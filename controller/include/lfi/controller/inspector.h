@@ -12,6 +12,7 @@
 #include "lfi/controller/bench_file.h"
 #include "lfi/controller/controller.h"
 #include "lfi/controller/reference_package.h"
+#include "lfi/core/part_model.h"
 #include "lfi/inspection/defects.h"
 #include "lfi/inspection/golden_model.h"
 #include "lfi/inspection/verdict.h"
@@ -30,7 +31,10 @@ class Inspector {
  public:
   // The devices stay the caller's; the camera must be Configured or Streaming.
   // Errc::Config when the package's panel image does not fit the display's panel.
-  Inspector(const BenchFile& bench, const ReferencePackage& package, Display& display, Camera& camera);
+  // With the part's model (the bench's [geometry] part_model, which the
+  // caller loads), each defect is placed inside the part too.
+  Inspector(const BenchFile& bench, const ReferencePackage& package, Display& display, Camera& camera,
+            std::shared_ptr<const PartModel> part = nullptr);
   ~Inspector();
 
   // Shows the reference: the package's panel image when it has one, else its
@@ -52,6 +56,7 @@ class Inspector {
   double white_;
   cv::Mat mask_;
   PartFrame frame_;
+  std::shared_ptr<const PartModel> part_;
   DefectFinder finder_;
   cv::Mat panel_;                                // the package's panel image, or empty
   std::unique_ptr<StoredLightField> reference_;  // else its light field (also the controller's capture)

@@ -15,8 +15,11 @@
 #include "lfi/controller/reference_package.h"
 #include "lfi/controller/run_summary.h"
 
+#include "lfi/core/part_model.h"
+
 #include <chrono>
 #include <cstdint>
+
 #include <filesystem>
 #include <functional>
 #include <string>
@@ -53,6 +56,8 @@ struct RunOptions {
   std::function<void(const RunCounts& counts, double seconds)> onPart;
   // The back-off's pause before reopening the devices (this thread sleeps by default).
   std::function<void(std::chrono::milliseconds pause)> pause;
+  // The part's model (the bench's [geometry] part_model, loaded by the caller): defects placed inside the part too.
+  std::shared_ptr<const PartModel> partModel;
 };
 
 struct RunResult {

@@ -1,7 +1,8 @@
 // SPDX-License-Identifier: Apache-2.0
 #pragma once
-// A part's optics as a calibration traces them: where a ray that comes down
-// the optical axis's direction at a lateral position leaves the part. The
+// A part's optics as a calibration and the inspection trace them: where a
+// ray that comes down the optical axis's direction at a lateral position
+// leaves the part, and where it is at a depth inside it. The
 // simulation implements it from a scene file's objects
 // (lfi/sim/scene_part_model.h); the calibration through the part
 // (controller/part_calibration.h) only asks.
@@ -31,6 +32,12 @@ class PartModel {
   // totally); empty when it misses the part, or the part absorbs it or sends
   // it back up. Safe to call from several threads at once.
   virtual std::optional<PartRay> exit(const Vec2& x) const = 0;
+  // Where that ray crosses the plane at height `z` on its way down, through
+  // the part's surfaces: the lateral position inside the part that the
+  // camera pixel seeing `x` sees at that depth. Empty when the ray does not
+  // reach the plane (it misses nothing: a ray that meets no part crosses at
+  // `x` itself; it is absorbed, or turned back, above it). Thread-safe.
+  virtual std::optional<Vec2> atDepth(const Vec2& x, double z) const = 0;
   // One line naming the model, for records.
   virtual std::string description() const = 0;
 };

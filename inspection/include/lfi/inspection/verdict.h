@@ -82,6 +82,10 @@ struct PartDefect {
   Vec2 centroid_mm;  // in the part's frame
   double area_mm2 = 0;
   Vec2 centroidU_mm;  // its expanded uncertainty per axis (PartFrame::toPartU)
+  // Where the defect is inside the part, at the bench's defect depth, traced
+  // back through the part's surfaces (controller/inspector.h); none without
+  // the part's model, or where the camera's ray does not reach that depth.
+  std::optional<Vec2> inside_mm;
 };
 
 struct PartVerdict {

@@ -25,6 +25,7 @@ class ScenePartModel final : public PartModel {
   ~ScenePartModel() override;
 
   std::optional<PartRay> exit(const Vec2& x) const override;
+  std::optional<Vec2> atDepth(const Vec2& x, double z) const override;
   std::string description() const override { return description_; }
 
  private:
