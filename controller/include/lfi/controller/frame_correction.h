@@ -59,8 +59,9 @@ struct CalibrationFrame {
 };
 
 // Takes the frame through `bench` (Controller::probe() of a controller
-// without a correction): the panel dark for a dark frame, all white for a flat
-// one; `camera` and `settings` are recorded with it.
+// without a correction, averaging `frames` frames an image): the panel dark
+// for a dark frame, all white for a flat one; `camera`, `settings` and
+// `frames` are recorded with it.
 CalibrationFrame takeCalibrationFrame(BenchProbe& bench, CalibrationFrameKind kind, const std::string& camera,
                                       const CameraSettings& settings, int frames);
 
