@@ -63,17 +63,15 @@ PanelCalibration calibratePanel(BenchProbe& bench, const calib::CameraMap& map, 
     if (progress) progress(static_cast<double>(++taken) / images);
     return image;
   };
-  // One curve's subpixels at `level`, the others dark (curve -1: every subpixel).
+  // One colour's subpixels at `level`, the others dark (curve -1: every subpixel, as on a mono panel).
   const auto panel = [&](int level, int curve) {
     cv::Mat p(info.panelHeight_px, info.panelWidth_px, info.panelType(), cv::Scalar::all(curve < 0 ? level : 0));
-    if (curve >= 0 && sub == 3) {
+    if (curve >= 0) {
       const int channel = info.subpixels == SubpixelLayout::BgrStripe ? 2 - curve : curve;
       std::vector<cv::Mat> planes;
       cv::split(p, planes);
       planes[static_cast<std::size_t>(channel)].setTo(level);
       cv::merge(planes, p);
-    } else if (curve >= 0) {
-      p.setTo(level);
     }
     return p;
   };
