@@ -192,7 +192,7 @@ cv::Mat encodeLightField(const LightField& lightField, const DisplayOptics& opti
           const double r = lightField.radianceFromDisc({ray.origin_mm.x, ray.origin_mm.y},
                                                        {-ray.direction.x, -ray.direction.y}, lookup);
           if (response) {
-            out[col * sub + k] = response->driveLevel(r / white, col, row, k);  // (NaN: clamped to 0..1, then 1)
+            out[col * sub + k] = response->driveLevel(r / white, col, row, k);  // (NaN: level 0)
             continue;
           }
           const double level = r * scale + 0.5;  // rounded below; NaN gives 0
