@@ -449,7 +449,7 @@ TEST_F(SimDisplayTest, TheBacklightFallsOffTowardsThePanelsCorners) {
   info.panelWidth_px = 401;
   info.panelHeight_px = 301;
   info.subpixels = SubpixelLayout::RgbStripe;
-  PanelResponse response;
+  PanelLight response;
   response.gamma = 2.2;
   response.backlightFalloff = 0.2;
   const cv::Mat levels = panelLevels(info, cv::Mat(301, 401, CV_8UC3, cv::Scalar::all(255)), response);

@@ -98,7 +98,7 @@ void SimBench::showPanel(const cv::Mat& panel) {
   if (!hasDisplay()) fail(Errc::InvalidArgument, "'{}': the scene has no [display]", sceneFile_.string());
   // Convert outside the lock: a 4K panel takes milliseconds.
   auto levels =
-      std::make_shared<const cv::Mat>(panelLevels(description_.display->info, panel, description_.display->response));
+      std::make_shared<const cv::Mat>(panelLevels(description_.display->info, panel, description_.display->light));
   change([&] {
     levels_ = std::move(levels);
     lit_ = true;

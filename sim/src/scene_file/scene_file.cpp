@@ -73,17 +73,17 @@ DisplayParameters readDisplay(ConfigTable& t) {
   d.brightness = t.number("brightness", 1.0, 0, 1e12);
   if (t.has("response_gamma") && t.has("response_table"))
     fail(Errc::Config, "{}: give response_gamma or response_table, not both", t.where("response_table"));
-  d.response.gamma = t.number("response_gamma", 1.0, 0.1, 10);
-  d.response.table = t.numbers("response_table", 2, 4096, std::vector<double>{}, 0, 1);
-  for (std::size_t i = 1; i < d.response.table.size(); ++i)
-    if (d.response.table[i] < d.response.table[i - 1])
+  d.light.gamma = t.number("response_gamma", 1.0, 0.1, 10);
+  d.light.table = t.numbers("response_table", 2, 4096, std::vector<double>{}, 0, 1);
+  for (std::size_t i = 1; i < d.light.table.size(); ++i)
+    if (d.light.table[i] < d.light.table[i - 1])
       fail(Errc::Config,
            "{}: element {} ({}) is below element {} ({}): a panel's light does not fall as its drive rises",
-           t.where("response_table"), i, d.response.table[i], i - 1, d.response.table[i - 1]);
-  if (!d.response.table.empty() && d.response.table.back() != 1)
+           t.where("response_table"), i, d.light.table[i], i - 1, d.light.table[i - 1]);
+  if (!d.light.table.empty() && d.light.table.back() != 1)
     fail(Errc::Config, "{}: the last element is {}, not 1 (brightness is the radiance at full drive)",
-         t.where("response_table"), d.response.table.back());
-  d.response.backlightFalloff = t.number("backlight_falloff", 0.0, 0, 0.9);
+         t.where("response_table"), d.light.table.back());
+  d.light.backlightFalloff = t.number("backlight_falloff", 0.0, 0, 0.9);
   t.finish();
   try {
     info.validate();

@@ -25,7 +25,7 @@ double PanelEmission::radiance(const Vec2& q, const Vec3& d) const {
   return brightness * levels->ptr<float>(row)[column];
 }
 
-double PanelResponse::at(double level) const {
+double PanelLight::at(double level) const {
   const double v = std::clamp(level, 0.0, 1.0);
   if (table.empty()) return gamma == 1 ? v : std::pow(v, gamma);
   const double x = v * static_cast<double>(table.size() - 1);
@@ -36,35 +36,42 @@ double PanelResponse::at(double level) const {
 
 namespace {
 
-// Levels (CV_32FC1, subpixels side by side) to relative radiance, in place.
-void applyResponse(const DisplayInfo& info, const PanelResponse& response, bool eightBit, cv::Mat& levels) {
+// The relative radiance of `panel` (viewed as one channel: subpixels side by
+// side) through `light`: 8-bit levels through a table of the 256, float ones
+// through the curve (above 1: R(1) times the level).
+cv::Mat lightOfPanel(const DisplayInfo& info, const PanelLight& light, const cv::Mat& flat) {
   std::array<float, 256> lut{};
-  for (int i = 0; i < 256; ++i) lut[static_cast<std::size_t>(i)] = static_cast<float>(response.at(i / 255.0));
+  for (int i = 0; i < 256; ++i) lut[static_cast<std::size_t>(i)] = static_cast<float>(light.at(i / 255.0));
   const int sub = info.subpixelsPerPixel();
   const double cx = (info.panelWidth_px - 1) / 2.0, cy = (info.panelHeight_px - 1) / 2.0;
-  const double corner2 = std::max(cx * cx + cy * cy, 1e-30), f = response.backlightFalloff / corner2;
-  std::vector<float> columnLoss(static_cast<std::size_t>(levels.cols));
-  for (int c = 0; c < levels.cols; ++c) {
+  const double corner2 = std::max(cx * cx + cy * cy, 1e-30), f = light.backlightFalloff / corner2;
+  std::vector<float> columnLoss(static_cast<std::size_t>(flat.cols));
+  for (int c = 0; c < flat.cols; ++c) {
     const double x = c / sub - cx;
     columnLoss[static_cast<std::size_t>(c)] = static_cast<float>(f * x * x);
   }
-  for (int r = 0; r < levels.rows; ++r) {
-    auto* row = levels.ptr<float>(r);
+  cv::Mat levels(flat.size(), CV_32FC1);
+  for (int r = 0; r < flat.rows; ++r) {
+    auto* out = levels.ptr<float>(r);
     const double y = r - cy;
     const float rowLoss = static_cast<float>(f * y * y);
-    for (int c = 0; c < levels.cols; ++c) {
-      const float v = row[c];
-      const float light = eightBit ? lut[static_cast<std::size_t>(std::lround(v * 255))]
-                          : v <= 1 ? static_cast<float>(response.at(v))
-                                   : v * lut[255];
-      row[c] = light * (1 - rowLoss - columnLoss[static_cast<std::size_t>(c)]);
+    for (int c = 0; c < flat.cols; ++c) {
+      float radiance = 0;
+      if (flat.depth() == CV_8U) {
+        radiance = lut[flat.ptr<std::uint8_t>(r)[c]];
+      } else {
+        const float v = std::max(flat.ptr<float>(r)[c], 0.0f);  // (NaN: 0)
+        radiance = v <= 1 ? static_cast<float>(light.at(v)) : v * lut[255];
+      }
+      out[c] = radiance * (1 - rowLoss - columnLoss[static_cast<std::size_t>(c)]);
     }
   }
+  return levels;
 }
 
 }  // namespace
 
-cv::Mat panelLevels(const DisplayInfo& info, const cv::Mat& panel, const PanelResponse& response) {
+cv::Mat panelLevels(const DisplayInfo& info, const cv::Mat& panel, const PanelLight& light) {
   const int sub = info.subpixelsPerPixel();
   if (panel.empty()) return {};  // dark: no level image (a 16384² panel's would take 3.2 GB)
   if (panel.cols != info.panelWidth_px || panel.rows != info.panelHeight_px || panel.channels() != sub ||
@@ -75,12 +82,12 @@ cv::Mat panelLevels(const DisplayInfo& info, const cv::Mat& panel, const PanelRe
          info.panelWidth_px, info.panelHeight_px, sub, panel.cols, panel.rows, panel.channels(), panel.depth());
   // Interleaved channels are already the subpixels left to right: view as one channel.
   const cv::Mat flat = panel.reshape(1, panel.rows);
+  if (!light.linear()) return lightOfPanel(info, light, flat);
   cv::Mat levels;  // allocated by the conversion: not zero-filled first
   if (panel.depth() == CV_8U)
     flat.convertTo(levels, CV_32F, 1.0 / 255.0);
   else
     cv::max(flat, 0.0, levels);
-  if (!response.linear()) applyResponse(info, response, panel.depth() == CV_8U, levels);
   return levels;
 }
 

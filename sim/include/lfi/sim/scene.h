@@ -102,14 +102,15 @@ struct PanelEmission {
   double radiance(const Vec2& q, const Vec3& d) const;
 };
 
-// How a panel turns drive into light: relative radiance R(v) at drive level v
+// How the simulated panel turns drive into light (the truth a measured
+// lfi::PanelResponse is tested against, kept apart from it): relative radiance R(v) at drive level v
 // (0..1 of full drive; an 8-bit level / 255), from a power law v^gamma or a
 // table of R at equally spaced levels 0, 1/(n-1), .., 1 (linear between,
 // non-decreasing, R(1) = 1), times the backlight, 1 - f (r / r_corner)^2 at a
 // pixel whose centre is r from the panel's centre (r_corner: its half
 // diagonal; 1 at the centre, 1 - f at the corners). The default is linear and
 // uniform.
-struct PanelResponse {
+struct PanelLight {
   double gamma = 1;
   std::vector<double> table;  // used when not empty
   double backlightFalloff = 0;
@@ -120,10 +121,10 @@ struct PanelResponse {
 
 // `panel`: panelWidth x panelHeight, channels = subpixels per pixel in subpixel order,
 // CV_8U (level / 255) or CV_32F (level as is, clamped to >= 0); empty = a dark panel,
-// whose level image is empty too. With a response, each level becomes the
+// whose level image is empty too. With `light`, each level becomes the
 // relative radiance it drives (levels above 1 take R(1) · level). Throws
 // Errc::InvalidArgument for a wrong size or type.
-cv::Mat panelLevels(const DisplayInfo& info, const cv::Mat& panel, const PanelResponse& response = {});
+cv::Mat panelLevels(const DisplayInfo& info, const cv::Mat& panel, const PanelLight& light = {});
 PanelEmission makePanelEmission(std::shared_ptr<const PanelOptics> optics, const cv::Mat& panel, double brightness);
 
 using Emission = std::variant<ParallelEmission, LambertianEmission, LightFieldEmission, PanelEmission>;

@@ -40,7 +40,7 @@ struct DisplayParameters {
   DisplayInfo info;         // vendor "lfi", model "SimDisplay"; optics from the file
   Rigid3 worldFromDisplay;  // placement of the display frame (display.h) in the world
   double brightness = 1;    // radiance at drive level 255 and backlight level brightnessMax
-  PanelResponse response;   // drive to light and the backlight's fall-off: linear and uniform by default
+  PanelLight light;         // drive to light and the backlight's fall-off: linear and uniform by default
 };
 
 // The key that holds a lens value in a scene file's lens shape; the bench
