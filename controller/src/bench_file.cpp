@@ -129,10 +129,8 @@ void readDisplay(ConfigTable t, BenchFile& b) {
            "\"pinhole_array\", \"lenticular\", \"line_barrier\") and every value the class takes",
            t.file());
     b.displayOptics = readDisplayOpticsTable(optics, DisplayOpticsParams{});
-    for (const char* key : {"array_pitch_mm", "rotation_rad", "gap_mm", "focal_length_mm", "lens_pitch_px", "slant_rad",
-                            "offset_px", "slit_width_mm", "fill_factor", "pinhole_diameter_mm"})
-      readUncertainty(optics, "display.optics", key, 1, b);
-    readUncertainty(optics, "display.optics", "array_offset_mm", 2, b);
+    for (const auto& [key, count] : opticsNumberKeys(b.displayOptics->type))
+      readUncertainty(optics, "display.optics", key, count, b);
     optics.finish();
     // One place for the display's optics: the table, or a calibration file the URI names, not both.
     if (b.displayUri.find("calibration"))

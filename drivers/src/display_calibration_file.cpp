@@ -35,6 +35,13 @@ std::vector<std::string> keysOf(OpticsType type) {
 
 }  // namespace
 
+std::vector<std::pair<std::string, std::size_t>> opticsNumberKeys(OpticsType type) {
+  std::vector<std::pair<std::string, std::size_t>> keys{{"gap_mm", 1}};
+  for (const std::string& key : keysOf(type))
+    if (key != "packing") keys.emplace_back(key, key == "array_offset_mm" ? 2 : 1);
+  return keys;
+}
+
 OpticsType readOpticsClass(ConfigTable& t, OpticsType fallback) {
   std::vector<std::string> names;
   for (OpticsType c : kClasses) names.emplace_back(toString(c));

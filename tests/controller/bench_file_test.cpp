@@ -136,6 +136,16 @@ TEST_F(BenchFileTest, CalibratedValuesCarryTheirUncertaintiesAsKeysAtTheFilesCov
                         "key 'geometry.display_per_pixel_mm_u' is the uncertainty of display_per_pixel_mm"));
   const std::string k = replaced(kBench, "version = 1\n", "version = 1\ncoverage_factor = 0.5\n");
   EXPECT_TRUE(refusedAt(k, lineOf(k, "coverage_factor"), "key 'coverage_factor' = 0.5 is outside"));
+  // [display.optics]: the numbers of its class take a U; another class's key does not.
+  const std::string optics =
+      replaced(kBench, "\n[capture]",
+               "\n[display.optics]\noptics = \"lenslet_array\"\narray_pitch_mm = 1.0\narray_pitch_mm_u = 0.0004\n"
+               "array_offset_mm = [0, 0]\narray_offset_mm_u = [0.003, 0.004]\ngap_mm = 1.37\n\n[capture]");
+  const BenchFile o = read(optics);
+  EXPECT_EQ(o.uncertainty.at("display.optics.array_pitch_mm"), std::vector<double>{0.0004});
+  EXPECT_EQ(o.uncertainty.at("display.optics.array_offset_mm"), (std::vector<double>{0.003, 0.004}));
+  const std::string slant = replaced(optics, "gap_mm = 1.37\n", "gap_mm = 1.37\nslant_rad_u = 0.001\n");
+  EXPECT_TRUE(refusedAt(slant, lineOf(slant, "slant_rad_u"), "unknown key 'display.optics.slant_rad_u'"));
 }
 
 TEST_F(BenchFileTest, ThePartsModelIsRelativeToTheBenchFileAndTheDefectDepthNeedsIt) {

@@ -12,7 +12,7 @@
 //   any table      <key>_u                as key none        the expanded uncertainty (k = coverage_factor) of a
 //                                                             calibrated value: [camera] object_pixel_mm; [geometry]
 //                                                             distance_mm, part_centre_px, display_per_pixel_mm,
-//                                                             display_at_image_centre_mm; [display.optics] the
+//                                                             display_at_image_centre_mm; [display.optics] its class's
 //                                                             optics' numbers; [display.response] its curves and
 //                                                             backlight. As many numbers as the value, each >= 0
 //   [camera]       uri                    -      required    aravis:<id>, sim:<scene-file>

@@ -32,12 +32,19 @@
 #include "lfi/drivers/display.h"
 
 #include <filesystem>
+#include <string>
+#include <utility>
+#include <vector>
 
 namespace lfi {
 
 // The keys present in the file replace those of `base`; throws Errc::NotFound
 // or Errc::Config (file, line, key).
 DisplayOpticsParams readDisplayOpticsFile(const std::filesystem::path& path, const DisplayOpticsParams& base);
+
+// The keys of a class's optics that hold numbers (its own but `packing`, and
+// gap_mm), each with how many: 2 for array_offset_mm, else 1.
+std::vector<std::pair<std::string, std::size_t>> opticsNumberKeys(OpticsType type);
 
 // The class the table's "optics" key names, or `fallback` without the key;
 // Errc::Config listing the classes for another name.
