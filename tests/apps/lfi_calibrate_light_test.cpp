@@ -36,12 +36,8 @@ using lfi::testing_support::replaceAll;
 using lfi::testing_support::replaceOnce;
 using Result = lfi::testing_support::LfiResult;
 
-Result lfi(const std::string& arguments) {
-  return lfi::testing_support::runLfi(arguments);
-}
-std::string quoted(const fs::path& p) {
-  return "'" + p.string() + "'";
-}
+using lfi::testing_support::runLfi;
+using lfi::testing_support::shellQuoted;
 
 constexpr double kGamma = 2.2, kFalloff = 0.2;
 
@@ -72,12 +68,13 @@ class LfiCalibrateLight : public testing::Test {
   }
   // `lfi calibrate ARGUMENTS` on the bench, which must succeed.
   void calibrate(const std::string& what, const std::string& part) {
-    const Result r = lfi("-q calibrate " + what + " " + quoted(bench_) + " --part " + quoted(dir_ / part));
+    const Result r = runLfi("-q calibrate " + what + " " + shellQuoted(bench_.string()) + " --part " +
+                            shellQuoted((dir_ / part).string()));
     ASSERT_EQ(r.status, 0) << what << "\n" << r.output;
   }
   // The intact part's image's cv over the part, as `lfi capture` reports it.
   double capturedCv() {
-    const Result r = lfi("capture --force " + quoted(bench_));
+    const Result r = runLfi("capture --force " + shellQuoted(bench_.string()));
     EXPECT_EQ(r.status, 0) << r.output;
     std::smatch m;
     const std::regex cv("the intact part's image there: mean [0-9.]+ DN, cv ([0-9.]+)");
@@ -140,7 +137,8 @@ TEST_F(LfiCalibrateLight, TheCalibratedBenchImagesTheIntactPartUniformlyAndPlace
   replaceOnce(text, "part_centre_px = [27.5, 27.5]",
               "part_centre_px = [27.5, 27.5]\npart_model = \"inspection_bench.toml\"");
   write("bench.toml", text);
-  const Result inspect = lfi("-q inspect " + quoted(bench_) + " --part " + quoted(write("particles.toml", particles)));
+  const Result inspect = runLfi("-q inspect " + shellQuoted(bench_.string()) + " --part " +
+                                shellQuoted(write("particles.toml", particles).string()));
   EXPECT_EQ(inspect.status, 3) << inspect.output;
   const std::size_t at = inspect.output.find("FAIL: ");
   ASSERT_NE(at, std::string::npos) << inspect.output;
@@ -182,7 +180,7 @@ TEST_F(LfiCalibrateLight, AResponseThatIsNotMonotonicIsRefusedByName) {
   replaceOnce(text, "\n[capture]",
               "\n[display.response]\nlevels = [0, 64, 128, 255]\nlight = [0, 0.3, 0.2, 1]\n\n[capture]");
   write("bench.toml", text);
-  const Result r = lfi("-q capture --force " + quoted(bench_));
+  const Result r = runLfi("-q capture --force " + shellQuoted(bench_.string()));
   EXPECT_EQ(r.status, 1) << r.output;
   EXPECT_NE(r.output.find("bench.toml"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("[display.response]: panel response: light is not monotonic: 0.2 at level 128 after 0.3"),
