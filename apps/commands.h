@@ -33,7 +33,6 @@ Command addInspectCommand(CLI::App& app);
 Command addRunCommand(CLI::App& app);
 Command addEmitCommand(CLI::App& app);
 Command addCalibrateCommand(CLI::App& app);
-Command addCalibrateDistanceCommand(CLI::App& app);
 Command addLfInfoCommand(CLI::App& app);
 Command addDevicesCommand(CLI::App& app);
 Command addSimBenchCommand(CLI::App& app);

@@ -23,8 +23,8 @@ constexpr lfi::cli::Command (*kCommands[])(CLI::App&) = {
     lfi::cli::addStudyCommand,    lfi::cli::addRenderCommand,       lfi::cli::addServeCameraCommand,
     lfi::cli::addSimBenchCommand, lfi::cli::addBenchControlCommand, lfi::cli::addCaptureCommand,
     lfi::cli::addTrainCommand,    lfi::cli::addInspectCommand,      lfi::cli::addRunCommand,
-    lfi::cli::addEmitCommand,     lfi::cli::addCalibrateCommand,    lfi::cli::addCalibrateDistanceCommand,
-    lfi::cli::addLfInfoCommand,   lfi::cli::addDevicesCommand,
+    lfi::cli::addEmitCommand,     lfi::cli::addCalibrateCommand,    lfi::cli::addLfInfoCommand,
+    lfi::cli::addDevicesCommand,
 };
 
 }  // namespace

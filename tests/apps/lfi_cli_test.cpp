@@ -7,14 +7,10 @@
 #include "lfi_process.h"
 #include "text_edit.h"
 
-#include <fmt/format.h>
 #include <gtest/gtest.h>
 #include <unistd.h>
-#include <nlohmann/json.hpp>
 #include <opencv2/core.hpp>
 
-#include <cmath>
-#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <string>
@@ -31,8 +27,6 @@ Result lfi(const std::string& arguments) {
 }
 
 using lfi::testing_support::readText;
-using lfi::testing_support::replaceAll;
-using lfi::testing_support::replaceOnce;
 
 class LfiCli : public testing::Test {
  protected:
@@ -181,126 +175,6 @@ TEST_F(LfiCli, BadSceneFilesAreNamedWithTheLineOrKey) {
   EXPECT_NE(run.status, 0);
   EXPECT_NE(run.output.find((dir_ / "absent.toml").string()), std::string::npos) << run.output;
   EXPECT_FALSE(fs::exists(out));
-}
-
-// The inspection bench (data/scenes/inspection_bench.toml) with its display
-// moved by `error` mm away from the lens, and with the lenticular display of
-// the default class: the distance scan's criterion and tolerances
-// (docs/calibration.md) are those of that display.
-fs::path inspectionBench(const fs::path& dir, double error) {
-  std::string text = readText(fs::path(LFI_SOURCE_DIR) / "data" / "scenes" / "inspection_bench.toml");
-  replaceOnce(text, "position_mm = [0, 0, -30]", fmt::format("position_mm = [0, 0, {}]", -30 - error));
-  replaceOnce(text, "optics = \"lenslet_array\"\npanel_width_px = 800\npanel_height_px = 800",
-              "optics = \"lenticular\"\npanel_width_px = 640\npanel_height_px = 400");
-  const fs::path scene = dir / fmt::format("bench{:+}.toml", error);
-  std::ofstream(scene) << text;
-  return scene;
-}
-
-// A bench file beside `scene` (data/benches/inspection_sim.toml with `scene`'s sim: devices), with a quick
-// reference capture (`spp` samples) and a 2 ms exposure.
-fs::path scanBench(const fs::path& scene, int spp) {
-  std::string text = readText(fs::path(LFI_SOURCE_DIR) / "data" / "benches" / "inspection_sim.toml");
-  const std::string uri = "sim:" + scene.string();
-  replaceOnce(text, "[capture]\nuri = \"sim:../scenes/inspection_bench.toml\"",
-              fmt::format("[capture]\nuri = \"{}?spatial=16&angular=16&spp={}\"", uri, spp));
-  replaceAll(text, "uri = \"sim:../scenes/inspection_bench.toml\"", "uri = \"" + uri + "\"");  // camera, display
-  replaceOnce(text, "exposure_us = 10000", "exposure_us = 2000");
-  replaceOnce(text, "\"../../out/bench/reference\"", "\"reference\"");
-  replaceOnce(text, "\"../../out/bench/inspections\"", "\"inspections\"");
-  const fs::path bench = fs::path(scene).replace_extension(".bench.toml");
-  std::ofstream(bench) << text;
-  return bench;
-}
-
-// The whole calibration through the sim: devices a user would name: the
-// reference captured with the display where it belongs (30 mm), then shown
-// with the display moved. The estimate must find the move: the physical
-// display's depth of field gives a flat-topped peak whose centre, unlike its
-// brightest point, has no offset (docs/calibration.md).
-TEST_F(LfiCli, CalibrateDistanceFindsHowFarTheDisplayMoved) {
-  for (const double error : {0.0, 2.5, -1.0}) {
-    const fs::path scene = inspectionBench(dir_, error), out = dir_ / fmt::format("scan{:+}.json", error);
-    const fs::path bench = scanBench(scene, 32);
-    const Result run = lfi("-q calibrate-distance " + quoted(bench) + " --from -6 --to 6 --out " + quoted(out));
-    ASSERT_EQ(run.status, 0) << run.output;
-    const auto result = nlohmann::json::parse(readText(out));
-    EXPECT_EQ(result["format"], "lfi-display-distance-scan");
-    EXPECT_EQ(result["bench"], bench.string());
-    EXPECT_EQ(result["camera"]["exposure_us"], 2000.0);
-    EXPECT_EQ(result["camera"]["pixel_format"], "Mono12");
-    EXPECT_EQ(result["reference"]["distance_mm"], 30.0);
-    EXPECT_EQ(result["reference"]["file"], fs::path(out).replace_extension(".lightfield.exr").string());
-    EXPECT_TRUE(fs::exists(result["reference"]["file"].get<std::string>()));
-    ASSERT_EQ(result["candidates_mm"].size(), 13u);
-    ASSERT_EQ(result["brightness"].size(), 13u);
-    // Two dark images of a noisy sensor differ (the controller restarts the
-    // stream for each: frame ids, and the sensor noise, go on); the noise is
-    // at least the quantisation floor (1/√12 DN over 56 x 56 px).
-    EXPECT_GT(result["dark_noise"].get<double>(), 0) << "two identical dark images";
-    EXPECT_GE(result["noise"].get<double>(), 1 / std::sqrt(12.0) / 56);
-    const double estimate = result["estimate_mm"];
-    std::printf("display moved %+.1f mm: estimate %+.3f mm, peak %.2f mm wide\n", error, estimate,
-                result["peak_width_mm"].get<double>());
-    EXPECT_NEAR(estimate, error, 0.35);
-    EXPECT_NE(run.output.find(fmt::format("estimate {:+.3f} mm", estimate)), std::string::npos) << run.output;
-  }
-}
-
-TEST_F(LfiCli, CalibrateDistanceRefusesBadScansAndKeepsResults) {
-  const fs::path scene = inspectionBench(dir_, 0), out = dir_ / "scan.json";
-  const std::string devices = quoted(scanBench(scene, 8));
-  std::ofstream(out) << "an earlier result";
-  Result run = lfi("calibrate-distance " + devices + " --out " + quoted(out));
-  EXPECT_NE(run.status, 0);
-  EXPECT_NE(run.output.find("--force"), std::string::npos) << run.output;
-  EXPECT_EQ(readText(out), "an earlier result");
-  for (const auto& [arguments, message] :
-       {std::pair<std::string, std::string>{"--step 0.7", "a whole number of steps"},
-        {"--from 1 --to 2", "3 to 1001 candidates"},
-        {"--step 0", "3 to 1001 candidates"},
-        {"--roi 50,50,10,10", "not inside the camera's 56 x 56 image"},
-        {"--roi 10,10,2147483647,10", "not inside the camera's 56 x 56 image"},
-        {"--roi 2147483647,0,1,1", "not inside the camera's 56 x 56 image"},
-        // The peak's high flank is beyond a scan that ends at the display's true place.
-        {"--from -6 --to 0", "scan further"},
-        // 0.1 to 0.3 by 0.1 is 1.9999999999999998 steps: three candidates all the same (the scan runs, and
-        // is refused with its table of brightness per candidate: too narrow to see the peak).
-        {"--from 0.1 --to 0.3 --step 0.1", "+0.3 mm: "},
-        {"--from -40 --to -20 --step 10", "past the part"}}) {
-    // (Refused before the reference is captured, but the scans that run.)
-    const bool beforeCapture = message != "scan further" && message != "+0.3 mm: ";
-    run = lfi("calibrate-distance " + devices + " " + arguments + " --out " + quoted(dir_ / "new.json"));
-    EXPECT_NE(run.status, 0) << arguments;
-    EXPECT_NE(run.output.find(message), std::string::npos) << arguments << ": " << run.output;
-    EXPECT_FALSE(fs::exists(dir_ / "new.json")) << arguments;
-    EXPECT_EQ(fs::exists(dir_ / "new.lightfield.exr"), !beforeCapture) << arguments;
-    // A scan refused after the capture keeps the captured reference and says how to scan it again.
-    if (fs::exists(dir_ / "new.lightfield.exr")) {
-      EXPECT_NE(run.output.find("--light-field " + (dir_ / "new.lightfield.exr").string()), std::string::npos)
-          << arguments << ": " << run.output;
-      fs::remove(dir_ / "new.lightfield.exr");
-    }
-  }
-  EXPECT_TRUE(lfi("calibrate-distance " + devices + " --from -6 --to 0 --out " + quoted(dir_ / "new.json"))
-                  .output.find("scan further") != std::string::npos);
-  ASSERT_TRUE(fs::exists(dir_ / "new.lightfield.exr"));
-  run = lfi("calibrate-distance " + devices + " --from -6 --to 0 --out " + quoted(dir_ / "new.json"));
-  EXPECT_NE(run.output.find("new.lightfield.exr' exists"), std::string::npos) << run.output;
-  run = lfi("calibrate-distance " + devices + " --out " + quoted(dir_));
-  EXPECT_NE(run.output.find("must name a file, not a folder"), std::string::npos) << run.output;
-  // A result that could not be written is known before the scan, not after it.
-  run = lfi("calibrate-distance " + devices + " --out /proc/lfi/scan.json");
-  EXPECT_NE(run.status, 0);
-  EXPECT_NE(run.output.find("'/proc/lfi' for --out"), std::string::npos) << run.output;
-  EXPECT_EQ(run.output.find("image 1 of"), std::string::npos) << run.output;
-  // A scan again on the kept reference: no capture, the reference named in the result.
-  run = lfi("-q calibrate-distance " + devices + " --light-field " + quoted(dir_ / "new.lightfield.exr") + " --out " +
-            quoted(dir_ / "again.json"));
-  ASSERT_EQ(run.status, 0) << run.output;
-  EXPECT_EQ(nlohmann::json::parse(readText(dir_ / "again.json"))["reference"]["file"],
-            (dir_ / "new.lightfield.exr").string());
-  EXPECT_FALSE(fs::exists(dir_ / "again.lightfield.exr"));
 }
 
 }  // namespace
