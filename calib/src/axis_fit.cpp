@@ -9,6 +9,7 @@
 #include <cmath>
 #include <complex>
 #include <map>
+#include <set>
 
 namespace lfi::calib {
 
@@ -89,30 +90,45 @@ Solution solve(const std::vector<Point>& points, const std::vector<int>& index, 
   struct Group {
     cv::Vec3d score{0, 0, 0}, rows{0, 0, 0};
   };
-  std::map<int, Group> groups;
+  std::map<int, Group> axes;
+  std::map<int, std::set<long>> columns;  // the pixel columns each axis's points lie in
   for (size_t k : use) {
     const Point& q = points[k];
     const cv::Vec3d j(q.y, 1, index[k]);
     const double r = s.axes.residual(q, index[k]);
     s.rss += q.w * r * r;
     s.weight += q.w;
-    Group& g = groups[index[k]];
+    Group& g = axes[index[k]];
     g.score += q.w * r * j;
     g.rows += q.w * j;
+    columns[index[k]].insert(std::lround(std::floor(q.x)));
   }
+  // An axis's points share the mean of their quantisation errors: a sawtooth over the N columns the axis crosses,
+  // whose whole periods average out; what is left, at most one period's, shared: (1/√12) / N.
   cv::Matx33d meat = cv::Matx33d::zeros(), shared = cv::Matx33d::zeros();
-  for (const auto& [m, g] : groups) {
+  for (const auto& [m, g] : axes) {
     meat += g.score * g.score.t();
-    shared += g.rows * g.rows.t();
+    const double n = static_cast<double>(columns[m].size());
+    shared += 1.0 / (n * n) * g.rows * g.rows.t();
   }
-  const double n = static_cast<double>(use.size()), groupCount = static_cast<double>(groups.size());
+  const double n = static_cast<double>(use.size()), groupCount = static_cast<double>(axes.size());
   // The weights have mean 1 over the points: Σ w r² / (n − 3) is the residual variance of a point of mean weight.
   const cv::Matx33d plain = s.rss / std::max(1.0, n - 3) * inverse;
   const cv::Matx33d clustered = groupCount / std::max(1.0, groupCount - 3) * inverse * meat * inverse;
   const cv::Matx33d quantisation = 1.0 / 12 * inverse * shared * inverse;
   s.covariance = plain;
   for (int a = 0; a < 3; ++a) s.covariance(a, a) = std::max({plain(a, a), clustered(a, a), quantisation(a, a)});
-  s.axesUsed = static_cast<int>(groups.size());
+  // The sawtooths of all the axes lie alike on the grid: at their ends what is left of them tilts every axis the
+  // same way, by up to (1/√12) / N over half the points' height h (an axis along the columns: N = 1, no tilt).
+  double columnsPerAxis = 0, yMin = 1e300, yMax = -1e300;
+  for (const auto& [m, c] : columns)
+    columnsPerAxis += static_cast<double>(c.size()) / static_cast<double>(columns.size());
+  for (size_t k : use) yMin = std::min(yMin, points[k].y), yMax = std::max(yMax, points[k].y);
+  if (columnsPerAxis >= 2 && yMax > yMin) {
+    const double tilt = 1 / std::sqrt(12.0) / columnsPerAxis / (0.5 * (yMax - yMin));
+    s.covariance(0, 0) = std::max(s.covariance(0, 0), tilt * tilt);
+  }
+  s.axesUsed = static_cast<int>(axes.size());
   return s;
 }
 
@@ -190,6 +206,22 @@ AxisFit fitLensAxes(const std::vector<WeightedPoint>& in, double pixelPitch_mm, 
   const double t = axes.t;
   fit.slant_rad = std::atan(t);
   fit.pitch_px = axes.p;
+  // The axes' own errors: each axis's mean residual. They are not independent (a slit's edges step through the
+  // pixels' phase from one axis to the next), so the offset is known no better than their RMS, and the pitch no
+  // better than that over half the span of the axes.
+  std::map<int, std::pair<double, double>> perAxis;  // Σ w r, Σ w
+  for (size_t k : kept) {
+    auto& [sum, weight] = perAxis[index[k]];
+    sum += points[k].w * axes.residual(points[k], index[k]);
+    weight += points[k].w;
+  }
+  double axisRms = 0;
+  for (const auto& [m, sw] : perAxis)
+    axisRms += std::pow(sw.first / sw.second, 2) / static_cast<double>(perAxis.size());
+  axisRms = std::sqrt(axisRms);
+  const double halfSpan = 0.5 * (perAxis.rbegin()->first - perAxis.begin()->first);
+  solution.covariance(1, 1) = std::max(solution.covariance(1, 1), axisRms * axisRms);
+  solution.covariance(2, 2) = std::max(solution.covariance(2, 2), std::pow(axisRms / halfSpan, 2));
   const double shift = std::round(axes.c / axes.p);  // axis 0 → the axis nearest the centre
   fit.offset_px = axes.c - shift * axes.p;
   fit.slantSigma_rad = std::sqrt(solution.covariance(0, 0)) / (1 + t * t);

@@ -29,12 +29,21 @@
 // are left out as outliers and the fit repeated until the points kept do not
 // change. The offset is given for the axis nearest the panel's centre.
 //
-// Uncertainty: the points of one axis share errors (a lens's axis crosses
-// the panel's pixels at one phase where the slant is small; a slit's points
-// fill its width unevenly), so for each quantity the largest of (1) the
+// Uncertainty: the points of one axis share errors (they sit on the
+// panel's pixel grid at phases that step along the axis; a slit's points fill
+// its width unevenly), so for each quantity the largest of (1) the
 // least-squares covariance, (2) the same clustered by axis (the sandwich
 // H⁻¹ (Σ_m s_m s_mᵀ) H⁻¹ · G / (G − 3) over the G axes' scores), and (3) that
-// of an error of a pixel / √12 shared by all the points of an axis.
+// of an error shared by all the points of an axis: the mean of their
+// quantisation errors, a sawtooth over the N pixel columns the axis crosses
+// whose whole periods average out, at most (1 px / √12) / N (an axis along
+// the columns: a pixel's / √12, which no residual shows); and for the slant,
+// a tilt shared by all the axes (their sawtooths lie alike on the grid) of
+// that error over half the points' height. And the axes' own errors, each
+// axis's mean residual, vary smoothly from axis to axis rather than
+// independently (a slit's edges step through the pixels' phase from one axis
+// to the next): the offset is given no better than their RMS, the pitch no
+// better than that over half the span of the axes.
 
 #include "lfi/calib/lattice_fit.h"
 
