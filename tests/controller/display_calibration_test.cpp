@@ -20,6 +20,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <functional>
 #include <random>
 #include <string>
 
@@ -50,6 +51,10 @@ struct Truth {
   Vec2 offset_mm{0, 0};
   double sensorPixel_mm = kBenchSensorPixel_mm;
   Vec2 cameraAxis_mm{0, 0};
+  // Lenticular sheets and line barriers.
+  double lensPitch_px = 32, slant_rad = 0.1, offset_px = 0, slit_mm = 0.13, gap_mm = 1.37;
+  int panel_px = kPanel_px, camera_px = 56;
+  double displayZ_mm = -30;
   int seed = 1;
   bool part = false;
 
@@ -57,16 +62,24 @@ struct Truth {
 };
 
 std::string sceneText(const Truth& t) {
+  testing_support::SceneCamera camera = inspectionBenchCamera(t.optics == "pinhole_array" ? 256 : 8, t.seed,
+                                                              t.sensorPixel_mm, t.cameraAxis_mm.x, t.cameraAxis_mm.y);
+  camera.width_px = camera.height_px = t.camera_px;
   std::string text =
-      cameraSceneText(inspectionBenchCamera(t.optics == "pinhole_array" ? 256 : 8, t.seed, t.sensorPixel_mm,
-                                            t.cameraAxis_mm.x, t.cameraAxis_mm.y)) +
-      fmt::format("[display]\nposition_mm = [0, 0, -30]\noptics = \"{}\"\npanel_width_px = {}\npanel_height_px = {}\n",
-                  t.optics, kPanel_px, kPanel_px);
-  if (t.optics != "lenticular")
+      cameraSceneText(camera) +
+      fmt::format(
+          "[display]\nposition_mm = [0, 0, {}]\noptics = \"{}\"\npanel_width_px = {}\npanel_height_px = {}\n"
+          "pixel_pitch_mm = {}\n",
+          t.displayZ_mm, t.optics, t.panel_px, t.panel_px, kPanelPixel_mm);
+  if (t.optics == "lenticular" || t.optics == "line_barrier")
+    text += fmt::format("lens_pitch_px = {:.17g}\nslant_rad = {:.17g}\noffset_px = {:.17g}\ngap_mm = {:.17g}\n",
+                        t.lensPitch_px, t.slant_rad, t.offset_px, t.gap_mm);
+  else
     text += fmt::format(
         "packing = \"{}\"\narray_pitch_mm = {:.17g}\nrotation_rad = {:.17g}\n"
         "array_offset_mm = [{:.17g}, {:.17g}]\n",
         t.packing, t.pitch_mm, t.rotation_rad, t.offset_mm.x, t.offset_mm.y);
+  if (t.optics == "line_barrier") text += fmt::format("slit_width_mm = {:.17g}\n", t.slit_mm);
   // A pinhole array passes the light of a hole, 0.8 % of a lens's: its panel is that much brighter, and it takes
   // that many more samples for a camera pixel's rays to find the holes.
   if (t.optics == "pinhole_array") text += "brightness = 100\n";
@@ -74,13 +87,35 @@ std::string sceneText(const Truth& t) {
   return text;
 }
 
+// A probe that states the display otherwise than it is (what a display's maker states is its design's value).
+class Stated final : public BenchProbe {
+ public:
+  Stated(BenchProbe& inner, std::function<void(DisplayInfo&)> state) : inner_(inner), state_(std::move(state)) {}
+  DisplayInfo display() const override {
+    DisplayInfo info = inner_.display();
+    state_(info);
+    return info;
+  }
+  double cameraFullScale_dn() const override { return inner_.cameraFullScale_dn(); }
+  cv::Mat take(const cv::Mat& levels) override { return inner_.take(levels); }
+
+ private:
+  BenchProbe& inner_;
+  std::function<void(DisplayInfo&)> state_;
+};
+
 class DisplayCalibrationTest : public testing::Test {
  protected:
   void SetUp() override { sim::registerSimBackends(); }
 
-  DisplayCalibration calibrate(const Truth& truth, const DisplayCalibrationSettings& settings = {}) {
+  DisplayCalibration calibrate(const Truth& truth, const DisplayCalibrationSettings& settings = {},
+                               const std::function<void(DisplayInfo&)>& state = {}) {
     const std::string uri = "sim:" + dir_.write("scene.toml", sceneText(truth)).string();
-    return throughSimBench(uri, [&](BenchProbe& probe) { return calibrateDisplay(probe, settings); });
+    return throughSimBench(uri, [&](BenchProbe& probe) {
+      if (!state) return calibrateDisplay(probe, settings);
+      Stated stated(probe, state);
+      return calibrateDisplay(stated, settings);
+    });
   }
 
   TestFolder dir_{"display_calibration"};
@@ -207,37 +242,122 @@ TEST_F(DisplayCalibrationTest, APartInViewLeavesTheLensCentresOffTheLatticeAndIs
 TEST_F(DisplayCalibrationTest, AnotherPackingThanTheDisplayStatesIsRefused) {
   Truth truth;
   truth.packing = "hexagonal";  // the scene's truth; the display states the same: the fit is told square below
-  const std::string uri = "sim:" + dir_.write("scene.toml", sceneText(truth)).string();
-  auto display = openDisplay(uri);
-  auto camera = openCamera(uri);
-  CameraSettings settings;
-  settings.exposure_us = 10000;
-  camera->configure(settings);
-  // A probe that states a square array for the hexagonal one.
-  class Misstated final : public BenchProbe {
-   public:
-    explicit Misstated(BenchProbe& inner) : inner_(inner) {}
-    DisplayInfo display() const override {
-      DisplayInfo info = inner_.display();
-      info.optics.packing = LensPacking::Square;
-      return info;
-    }
-    double cameraFullScale_dn() const override { return inner_.cameraFullScale_dn(); }
-    cv::Mat take(const cv::Mat& levels) override { return inner_.take(levels); }
-
-   private:
-    BenchProbe& inner_;
-  };
-  NoCapture nothing;
-  Controller controller(nothing, *display, *camera);
-  Misstated probe(controller.probe());
-  EXPECT_TRUE(throwsError([&] { calibrateDisplay(probe); }, Errc::Device, {"square lattice"}));
+  EXPECT_TRUE(
+      throwsError([&] { calibrate(truth, {}, [](DisplayInfo& info) { info.optics.packing = LensPacking::Square; }); },
+                  Errc::Device, {"square lattice"}));
 }
 
-TEST_F(DisplayCalibrationTest, ALenticularDisplayIsRefusedByName) {
+// Lenticular sheets and line barriers as displays of the class have them: 8 (lenticular) and 12 (barrier) panel
+// pixels a lens, over their ranges: pitch ±1 %, slant 0.1 rad ± 1°, offset ± half a pitch, a slit of 0.13 mm
+// ± 15 %, camera scale ±2 %, camera axis ±0.1 mm; the display states its design (8 or 12 px, 0.1 rad, offset 0,
+// 0.13 mm). A 128 x 128 panel (4 mm) under a 256 x 256 camera of 16 µm object pixels: a lens along its axis
+// shows one panel point per direction, so a camera pixel decodes one panel pixel only where it is no longer
+// along the axis than a panel pixel (the reference bench's 5 MP camera has 11 µm). Tolerances, each what a
+// display calibrated that well would still get right: no axis moved by more than half a panel pixel at the
+// panel's edge by the pitch's or the slant's error, nor by the offset's (the Gray code names pixels, and an axis
+// of a few dozen of them keeps their quantisation); each slit edge within a quarter of a panel pixel; the
+// camera's scale, rotation and centre moving no point of the field by more than a quarter of a panel pixel (the
+// arrays' offset tolerance: the panel's pixels are what the camera is measured against).
+TEST_F(DisplayCalibrationTest, RecoversLenticularAndLineBarrierAxesOverTheirRanges) {
+  std::mt19937 random(20261205);
+  std::uniform_real_distribution<double> unit(-1, 1);
+  for (const std::string optics : {"line_barrier", "lenticular"}) {
+    struct Coverage {
+      int trials = 0, pitch = 0, slant = 0, offset = 0, slit = 0, scale = 0, centre = 0;
+    } covered;
+    const int trials = 10;
+    for (int trial = 0; trial < trials; ++trial) {
+      Truth truth;
+      truth.optics = optics;
+      truth.seed = trial + 1;
+      const double design_px = optics == "lenticular" ? 8 : 12;
+      truth.panel_px = 128;
+      truth.camera_px = 256;
+      truth.gap_mm = optics == "lenticular" ? 0.3 : 1.0;  // view cones of 45° and 21°
+      truth.displayZ_mm = 0;
+      truth.lensPitch_px = design_px * (1 + 0.01 * unit(random));
+      truth.slant_rad = 0.1 + unit(random) * M_PI / 180;
+      truth.offset_px = 0.5 * truth.lensPitch_px * unit(random);
+      truth.slit_mm = 0.13 * (1 + 0.15 * unit(random));
+      // 16 µm object pixels ± 2 %.
+      truth.sensorPixel_mm = kBenchSensorPixel_mm * 0.016 / testing_support::objectPixel_mm(kBenchSensorPixel_mm) *
+                             (1 + 0.02 * unit(random));
+      truth.cameraAxis_mm = {0.1 * unit(random), 0.1 * unit(random)};
+      SCOPED_TRACE(
+          fmt::format("{} trial {}: pitch {} px, slant {} rad, offset {} px, slit {} mm, object pixel {} mm, "
+                      "camera axis at ({}, {}) mm",
+                      optics, trial, truth.lensPitch_px, truth.slant_rad, truth.offset_px, truth.slit_mm,
+                      truth.objectPixel_mm(), truth.cameraAxis_mm.x, truth.cameraAxis_mm.y));
+      const DisplayCalibration c = calibrate(truth, {}, [&](DisplayInfo& info) {
+        info.optics.lensPitch_px = design_px;
+        info.optics.slant_rad = 0.1;
+        info.optics.offset_px = 0;
+        if (info.optics.type == OpticsType::LineBarrier) info.optics.slitWidth_mm = 0.13;
+      });
+      const double k = c.coverageFactor;
+      const calib::AxisFit& axes = c.axes;
+      const double edge_px = 0.5 * truth.panel_px;
+      const double pitchError = axes.pitch_px - truth.lensPitch_px;
+      EXPECT_LE(std::abs(pitchError) * edge_px / truth.lensPitch_px, 0.5);
+      const double slantError = axes.slant_rad - truth.slant_rad;
+      EXPECT_LE(std::abs(std::tan(axes.slant_rad) - std::tan(truth.slant_rad)) * edge_px, 0.5);
+      // The offset names an axis; the truth's axis nearest to it.
+      const double offsetError = std::remainder(axes.offset_px - truth.offset_px, truth.lensPitch_px);
+      EXPECT_LE(std::abs(offsetError), 0.5);
+      EXPECT_EQ(c.optics.lensPitch_px, axes.pitch_px);
+      // The camera against the panel's pixels: the field's edge and its centre within a quarter of one.
+      const double fieldEdge_mm = 0.5 * truth.camera_px * truth.objectPixel_mm();
+      const double scaleError = c.camera.objectPixel_mm - truth.objectPixel_mm();
+      EXPECT_LE(std::abs(scaleError) / truth.objectPixel_mm() * fieldEdge_mm, 0.25 * kPanelPixel_mm);
+      EXPECT_TRUE(c.camera.mirrored);
+      EXPECT_LE(std::abs(c.camera.rotation_rad) * fieldEdge_mm, 0.25 * kPanelPixel_mm);
+      const Vec2 centreError = c.camera.map.atImageCentre_mm - truth.cameraAxis_mm;
+      EXPECT_LE(centreError.length(), 0.25 * kPanelPixel_mm);
+      covered.centre += std::abs(centreError.x) <= k * c.camera.centreSigma_mm.x &&
+                        std::abs(centreError.y) <= k * c.camera.centreSigma_mm.y;
+      ++covered.trials;
+      covered.pitch += std::abs(pitchError) <= k * axes.pitchSigma_px;
+      covered.slant += std::abs(slantError) <= k * axes.slantSigma_rad;
+      covered.offset += std::abs(offsetError) <= k * axes.offsetSigma_px;
+      covered.scale += std::abs(scaleError) <= k * c.camera.objectPixelSigma_mm;
+      if (optics == "line_barrier") {
+        const double slitError = c.optics.slitWidth_mm - truth.slit_mm;
+        EXPECT_LE(std::abs(slitError), 0.5 * kPanelPixel_mm);  // each edge within a quarter pixel
+        covered.slit += std::abs(slitError) <= k * c.slitWidthSigma_mm;
+        std::printf("[ info     ] slit %.4f mm (truth %.4f), U %.4f mm\n", c.optics.slitWidth_mm, truth.slit_mm,
+                    k * c.slitWidthSigma_mm);
+      }
+      std::printf(
+          "[ info     ] %s: pitch err %.4f (U %.4f) px, slant err %.5f (U %.5f) rad, offset err %.3f (U %.3f) "
+          "px, scale err %.2e (U %.2e) mm\n",
+          optics.c_str(), pitchError, k * axes.pitchSigma_px, slantError, k * axes.slantSigma_rad, offsetError,
+          k * axes.offsetSigma_px, scaleError, k * c.camera.objectPixelSigma_mm);
+    }
+    // The stated uncertainties (k = 2) cover the error in at least 90 % of the trials.
+    const int least = static_cast<int>(std::ceil(0.9 * covered.trials));
+    EXPECT_GE(covered.pitch, least);
+    EXPECT_GE(covered.slant, least);
+    EXPECT_GE(covered.offset, least);
+    EXPECT_GE(covered.scale, least);
+    EXPECT_GE(covered.centre, least);
+    if (optics == "line_barrier") {
+      EXPECT_GE(covered.slit, least);
+    }
+  }
+}
+
+TEST_F(DisplayCalibrationTest, ALenticularSheetOutOfTheCamerasFocusIsRefusedByName) {
+  // The lens array bench's geometry: the camera focused 30 mm above the display. Along a lens axis the camera's
+  // blur (its 0.015 aperture over 30 mm: 0.9 mm) runs over 29 panel rows, and the rows' codes do not decode.
   Truth truth;
   truth.optics = "lenticular";
-  EXPECT_TRUE(throwsError([&] { calibrate(truth); }, Errc::Device, {"lenticular"}));
+  truth.gap_mm = 0.3;
+  truth.lensPitch_px = 8;
+  truth.panel_px = 128;
+  truth.camera_px = 256;
+  truth.sensorPixel_mm = kBenchSensorPixel_mm * 0.016 / testing_support::objectPixel_mm(kBenchSensorPixel_mm);
+  truth.displayZ_mm = -30;
+  EXPECT_TRUE(throwsError([&] { calibrate(truth); }, Errc::Device, {"lenticular", "focus"}));
 }
 
 TEST_F(DisplayCalibrationTest, SettingsOutOfRangeAreNamed) {

@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "lfi/controller/display_calibration.h"
 
-#include "gray_code_view.h"
+#include "display_calibration_steps.h"
 
 #include "lfi/calib/coded_patterns.h"
 #include "lfi/calib/coded_reference.h"
@@ -31,16 +31,7 @@ void checkSettings(const DisplayCalibrationSettings& s) {
 }
 
 using LensIndex = std::array<int, 2>;
-
-// What a fit throws, with the display named.
-template <typename Fit>
-auto named(const std::string& display, Fit&& fit) {
-  try {
-    return fit();
-  } catch (const Error& e) {
-    fail(e.code(), "display calibration of display '{}': {}", display, e.what());
-  }
-}
+using detail::named;
 
 // The decoded panel pixels, weighted by the light each link carries, clustered per lens; clusters of little
 // light (a misdecoded pixel, not a lens) left out.
@@ -116,38 +107,15 @@ cv::Mat spotPanel(const DisplayInfo& info, const calib::LatticeFit& lattice, int
   return levels;
 }
 
-}  // namespace
-
-DisplayCalibration calibrateDisplay(BenchProbe& bench, const DisplayCalibrationSettings& settings,
-                                    const std::function<void(double)>& progress) {
-  checkSettings(settings);
-  const auto start = Clock::now();
-  Clock::duration compute{};
-  DisplayCalibration out;
-  out.coverageFactor = settings.coverageFactor;
-  const DisplayInfo info = bench.display();
-  info.validate();
-  out.nominal = info;
+// A lens or pinhole array's steps after the Gray code: the lattice, the spots, the camera's scale.
+void measureArray(DisplayCalibration& out, detail::FrameTaker& take, const detail::GrayCodeView& view,
+                  const DisplayInfo& info, const DisplayCalibrationSettings& settings, Clock::duration& compute) {
   const std::string& name = info.deviceId;
-  detail::requireLensArray(info, "display calibration");
   const cv::Size panel(info.panelWidth_px, info.panelHeight_px);
-  const int totalFrames = calib::GrayCodeLayout::forPanel(panel.width, panel.height).frameCount() +
-                          settings.spotPeriod * settings.spotPeriod;
-  detail::FrameTaker take(bench, "display calibration", name, totalFrames, progress);
-
-  // Which panel pixels each camera pixel sees along the axis.
-  const detail::GrayCodeView view = detail::takeGrayCode(
-      take, info, bench.cameraFullScale_dn(), settings.secondShare, settings.minDecoded, "display calibration",
-      "the patterns blur, or something in the camera's view scatters the light");
   auto computeStart = Clock::now();
-  compute += std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(view.decodeSeconds));
   const calib::PanelCorrespondence& c = view.correspondence;
   const cv::Mat& black = view.black;
   const cv::Mat& light = view.light;
-  out.image = view.white.size();
-  out.lit = c.lit;
-  out.decoded = c.decoded;
-
   calib::PanelLinks links(out.image, panel);
   links.add(c, {}, 0);
   const std::vector<calib::WeightedPoint> centres = lensCentres(links, light, info);
@@ -163,7 +131,6 @@ DisplayCalibration calibrateDisplay(BenchProbe& bench, const DisplayCalibrationS
   // Spots: every s-th lens along each lattice axis, s² frames; each found about where the first scale puts it.
   const int s = settings.spotPeriod;
   const double radius_mm = std::max(settings.spotRadius * lattice.pitch_mm, 1.5 * info.pixelPitch_mm);
-  const Vec2 imageCentre(0.5 * (out.image.width - 1), 0.5 * (out.image.height - 1));
   const double window_px = std::max(1.5, 0.45 * s * lattice.pitch_mm / first.objectPixel_mm);
   std::vector<std::pair<calib::CameraPoint, double>> spots;  // and each one's light
   std::vector<LensIndex> lit;
@@ -200,6 +167,40 @@ DisplayCalibration calibrateDisplay(BenchProbe& bench, const DisplayCalibrationS
   out.optics.rotation_rad = lattice.rotation_rad;
   out.optics.arrayOffsetX_mm = lattice.offset_mm.x;
   out.optics.arrayOffsetY_mm = lattice.offset_mm.y;
+}
+
+}  // namespace
+
+DisplayCalibration calibrateDisplay(BenchProbe& bench, const DisplayCalibrationSettings& settings,
+                                    const std::function<void(double)>& progress) {
+  checkSettings(settings);
+  const auto start = Clock::now();
+  Clock::duration compute{};
+  DisplayCalibration out;
+  out.coverageFactor = settings.coverageFactor;
+  const DisplayInfo info = bench.display();
+  info.validate();
+  out.nominal = info;
+  const bool array = fullParallax(info.optics.type);
+  const int totalFrames = calib::GrayCodeLayout::forPanel(info.panelWidth_px, info.panelHeight_px).frameCount() +
+                          (array ? settings.spotPeriod * settings.spotPeriod : detail::axesFrames(info, settings));
+  detail::FrameTaker take(bench, "display calibration", info.deviceId, totalFrames, progress);
+
+  // Which panel pixels each camera pixel sees along the axis.
+  const detail::GrayCodeView view = detail::takeGrayCode(
+      take, info, bench.cameraFullScale_dn(), settings.secondShare, settings.minDecoded, "display calibration",
+      array ? "the patterns blur, or something in the camera's view scatters the light"
+            : "a lenticular sheet or line barrier must lie in the camera's focus for this step, and the camera's "
+              "pixels must be no larger than the panel's: along its axes nothing else keeps the panel's pixels "
+              "apart (or something in the camera's view scatters the light)");
+  compute += std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(view.decodeSeconds));
+  out.image = view.white.size();
+  out.lit = view.correspondence.lit;
+  out.decoded = view.correspondence.decoded;
+  if (array)
+    measureArray(out, take, view, info, settings, compute);
+  else
+    detail::measureAxes(out, take, view, info, settings, compute);
   out.frames = take.frames();
   if (progress) progress(1);
   out.seconds = seconds(Clock::now() - start);

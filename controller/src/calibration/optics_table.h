@@ -3,8 +3,8 @@
 // What the calibrations write into a bench file (bench_file.h): a measured
 // value with its expanded uncertainty beside it as `<key>_u`, at the file's
 // coverage factor, which the file states once; and the [display.optics]
-// table: every key of a lens or pinhole array's class, each with the comment
-// given (a calibration then sets the values it measured again).
+// table: every key of the display's class, each with the comment given (a
+// calibration then sets the values it measured again).
 
 #include "lfi/controller/bench_file_edit.h"
 #include "lfi/drivers/display.h"
@@ -45,18 +45,33 @@ inline void setMeasured(BenchFileEdit& edit, const std::string& table, const std
 }
 
 inline void setOpticsTable(BenchFileEdit& edit, const DisplayOpticsParams& o, const std::string& comment) {
-  edit.set("display.optics", "optics", fmt::format("\"{}\"", toString(o.type)), comment);
-  edit.set("display.optics", "packing", fmt::format("\"{}\"", toString(o.packing)), comment);
-  edit.set("display.optics", "array_pitch_mm", tomlNumber(o.arrayPitch_mm), comment);
-  edit.set("display.optics", "rotation_rad", tomlNumber(o.rotation_rad), comment);
-  edit.set("display.optics", "array_offset_mm",
-           fmt::format("[{}, {}]", tomlNumber(o.arrayOffsetX_mm), tomlNumber(o.arrayOffsetY_mm)), comment);
-  edit.set("display.optics", "gap_mm", tomlNumber(o.gap_mm), comment);
-  if (o.type == OpticsType::LensletArray) {
-    edit.set("display.optics", "focal_length_mm", tomlNumber(o.focalLength_mm), comment);
-    edit.set("display.optics", "fill_factor", tomlNumber(o.fillFactor), comment);
+  const auto set = [&](const char* key, const std::string& value) { edit.set("display.optics", key, value, comment); };
+  set("optics", fmt::format("\"{}\"", toString(o.type)));
+  if (fullParallax(o.type)) {
+    set("packing", fmt::format("\"{}\"", toString(o.packing)));
+    set("array_pitch_mm", tomlNumber(o.arrayPitch_mm));
+    set("rotation_rad", tomlNumber(o.rotation_rad));
+    set("array_offset_mm", fmt::format("[{}, {}]", tomlNumber(o.arrayOffsetX_mm), tomlNumber(o.arrayOffsetY_mm)));
   } else {
-    edit.set("display.optics", "pinhole_diameter_mm", tomlNumber(o.pinholeDiameter_mm), comment);
+    set("lens_pitch_px", tomlNumber(o.lensPitch_px));
+    set("slant_rad", tomlNumber(o.slant_rad));
+    set("offset_px", tomlNumber(o.offset_px));
+  }
+  set("gap_mm", tomlNumber(o.gap_mm));
+  switch (o.type) {
+    case OpticsType::LensletArray:
+      set("focal_length_mm", tomlNumber(o.focalLength_mm));
+      set("fill_factor", tomlNumber(o.fillFactor));
+      break;
+    case OpticsType::PinholeArray:
+      set("pinhole_diameter_mm", tomlNumber(o.pinholeDiameter_mm));
+      break;
+    case OpticsType::Lenticular:
+      set("focal_length_mm", tomlNumber(o.focalLength_mm));
+      break;
+    case OpticsType::LineBarrier:
+      set("slit_width_mm", tomlNumber(o.slitWidth_mm));
+      break;
   }
 }
 
