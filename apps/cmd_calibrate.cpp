@@ -58,18 +58,35 @@ struct CalibrateArgs {
 
 void printDisplayCalibration(const lfi::DisplayCalibration& c) {
   const double k = c.coverageFactor;
-  const calib::LatticeFit& l = c.lattice;
   const calib::CameraScaleFit& m = c.camera;
-  fmt::print("display {} ({} {}), {} array: {} lens centres ({} left out), residual {:.2g} mm\n", c.nominal.deviceId,
-             c.nominal.vendor, c.nominal.model, toString(c.optics.type), l.centres, l.outliers, l.residualRms_mm);
-  fmt::print("  pitch      {:.6f} mm    U {:.2g} mm   (stated {:.6f})\n", l.pitch_mm, k * l.pitchSigma_mm,
-             c.nominal.optics.arrayPitch_mm);
-  fmt::print("  rotation   {:+.6f} rad  U {:.2g} rad  (stated {:+.6f})\n", l.rotation_rad, k * l.rotationSigma_rad,
-             c.nominal.optics.rotation_rad);
-  fmt::print("  offset     [{:+.5f}, {:+.5f}] mm  U [{:.2g}, {:.2g}] mm  (stated [{:+.5f}, {:+.5f}])\n", l.offset_mm.x,
-             l.offset_mm.y, k * l.offsetSigma_mm.x, k * l.offsetSigma_mm.y, c.nominal.optics.arrayOffsetX_mm,
-             c.nominal.optics.arrayOffsetY_mm);
-  fmt::print("camera: {} spots, residual {:.2g} mm\n", c.spots, m.residualRms_mm);
+  const lfi::DisplayOpticsParams& stated = c.nominal.optics;
+  if (lfi::fullParallax(c.optics.type)) {
+    const calib::LatticeFit& l = c.lattice;
+    fmt::print("display {} ({} {}), {} array: {} lens centres ({} left out), residual {:.2g} mm\n", c.nominal.deviceId,
+               c.nominal.vendor, c.nominal.model, toString(c.optics.type), l.centres, l.outliers, l.residualRms_mm);
+    fmt::print("  pitch      {:.6f} mm    U {:.2g} mm   (stated {:.6f})\n", l.pitch_mm, k * l.pitchSigma_mm,
+               stated.arrayPitch_mm);
+    fmt::print("  rotation   {:+.6f} rad  U {:.2g} rad  (stated {:+.6f})\n", l.rotation_rad, k * l.rotationSigma_rad,
+               stated.rotation_rad);
+    fmt::print("  offset     [{:+.5f}, {:+.5f}] mm  U [{:.2g}, {:.2g}] mm  (stated [{:+.5f}, {:+.5f}])\n",
+               l.offset_mm.x, l.offset_mm.y, k * l.offsetSigma_mm.x, k * l.offsetSigma_mm.y, stated.arrayOffsetX_mm,
+               stated.arrayOffsetY_mm);
+  } else {
+    const calib::AxisFit& a = c.axes;
+    fmt::print("display {} ({} {}), {}: {} lens axes from {} points ({} left out), residual {:.2g} px\n",
+               c.nominal.deviceId, c.nominal.vendor, c.nominal.model, toString(c.optics.type), a.axes, a.points,
+               a.outliers, a.residualRms_px);
+    fmt::print("  lens pitch {:.5f} px    U {:.2g} px   (stated {:.5f})\n", a.pitch_px, k * a.pitchSigma_px,
+               stated.lensPitch_px);
+    fmt::print("  slant      {:+.6f} rad  U {:.2g} rad  (stated {:+.6f})\n", a.slant_rad, k * a.slantSigma_rad,
+               stated.slant_rad);
+    fmt::print("  offset     {:+.4f} px    U {:.2g} px   (stated {:+.4f})\n", a.offset_px, k * a.offsetSigma_px,
+               stated.offset_px);
+    if (c.optics.type == lfi::OpticsType::LineBarrier)
+      fmt::print("  slit width {:.5f} mm    U {:.2g} mm   (stated {:.5f})\n", c.optics.slitWidth_mm,
+                 k * c.slitWidthSigma_mm, stated.slitWidth_mm);
+  }
+  fmt::print("camera: {} points, residual {:.2g} mm\n", c.spots, m.residualRms_mm);
   fmt::print("  object pixel  {:.6f} mm  U {:.2g} mm  (along a row {:.6f}, down a column {:.6f})\n", m.objectPixel_mm,
              k * m.objectPixelSigma_mm, m.pixelX_mm, m.pixelY_mm);
   fmt::print("  rotation {:+.5f} rad{}; the image's centre sees the display at [{:+.4f}, {:+.4f}] mm\n", m.rotation_rad,
