@@ -105,9 +105,14 @@ void printPartCalibration(const lfi::PartCalibration& c) {
       c.nominal.deviceId, c.nominal.vendor, c.nominal.model, c.pixels, c.outliers, c.offsetRms_mm, c.otherLens);
   fmt::print("  Δ          {:.4f} mm  U {:.2g} mm  (stated {:.4f})\n", c.distance_mm, k * c.distanceSigma_mm,
              c.statedDistance_mm);
-  fmt::print("  lateral    [{:+.4f}, {:+.4f}] mm  U [{:.2g}, {:.2g}] mm: the part's centre at [{:.2f}, {:.2f}] px\n",
-             c.lateral_mm.x, c.lateral_mm.y, k * c.lateralSigma_mm.x, k * c.lateralSigma_mm.y, c.partCentre_px.x,
-             c.partCentre_px.y);
+  if (c.lateralMeasured)
+    fmt::print("  lateral    [{:+.4f}, {:+.4f}] mm  U [{:.2g}, {:.2g}] mm: the part's centre at [{:.2f}, {:.2f}] px\n",
+               c.lateral_mm.x, c.lateral_mm.y, k * c.lateralSigma_mm.x, k * c.lateralSigma_mm.y, c.partCentre_px.x,
+               c.partCentre_px.y);
+  else
+    fmt::print(
+        "  lateral    [{:+.4f}, {:+.4f}] mm, moved only across the lens axes (the bench's part_centre_px kept)\n",
+        c.lateral_mm.x, c.lateral_mm.y);
   fmt::print("  gap        {:.5f} mm  U {:.2g} mm  (stated {:.5f})\n", c.gap_mm, k * c.gapSigma_mm,
              c.nominal.optics.gap_mm);
   fmt::print("U: expanded uncertainty, k = {:g}; {} frames in {:.2f} s ({:.0f} ms of it decoding and fitting)\n", k,

@@ -48,16 +48,24 @@ struct Truth {
   bool part = true;
   double partIor = 1.5168;
   double tilt_deg = 0;  // about the x axis
+  // The display: the lenslet array of data/scenes/inspection_bench.toml, or a lenticular sheet of the same 1 mm
+  // pitch (32 panel pixels), slant 0.1 rad (a line barrier, refused: 1 mm pitch, 0.25 mm slits).
+  std::string optics = "lenslet_array";
+  double offset_px = 0;
 };
 
 // data/scenes/inspection_bench.toml's bench: the lens (its reference point, the centre, at the origin when in
 // place) over the 800 x 800 lenslet display, 56 x 56 camera of 0.5 mm object pixels.
 std::string sceneText(const Truth& t) {
+  const bool barrier = t.optics == "line_barrier";
   std::string text = cameraSceneText(inspectionBenchCamera(8, t.seed)) +
                      fmt::format(
-                         "[display]\nposition_mm = [0, 0, {:.17g}]\noptics = \"lenslet_array\"\npanel_width_px = 800\n"
-                         "panel_height_px = 800\ngap_mm = {:.17g}\n",
-                         -t.distance_mm, t.gap_mm);
+                         "[display]\nposition_mm = [0, 0, {:.17g}]\noptics = \"{}\"\npanel_width_px = 800\n"
+                         "panel_height_px = 800\npixel_pitch_mm = 0.0315\ngap_mm = {:.17g}\n",
+                         -t.distance_mm, t.optics, t.gap_mm);
+  if (t.optics != "lenslet_array")
+    text += fmt::format("lens_pitch_px = 32\nslant_rad = 0.1\noffset_px = {:.17g}\n", t.offset_px);
+  if (barrier) text += "slit_width_mm = 0.25\n";
   if (t.part) {
     text += lensObject({.radius_mm = 51.5, .centreThickness_mm = 5, .diameter_mm = 25.4, .ior = t.partIor});
     text += fmt::format("position_mm = [{:.17g}, {:.17g}, 0]\nrotation_deg = [{}, 0, 0]\n", t.lateral_mm.x,
@@ -91,7 +99,7 @@ class PartCalibrationTest : public testing::Test {
   // The camera's map is the same on every bench here (the camera and the display's place across the axis do not
   // change; a telecentric camera sees the display's plane at one scale whatever its height): measured once.
   PartCalibration calibrate(const Truth& truth, const PartCalibrationSettings& settings = {}) {
-    if (!camera_) camera_ = cameraMap(truth);
+    if (!camera_) camera_ = cameraMap(Truth{});  // (through the lens array: a sheet's calibration wants focus)
     const calib::CameraMap camera = *camera_;
     return measure(truth, [&](BenchProbe& probe) {
       return calibratePart(probe, *model_, camera, kStatedDistance_mm, std::nullopt, settings);
@@ -163,6 +171,51 @@ TEST_F(PartCalibrationTest, RecoversDistanceLateralPositionAndGapOverTheirRanges
   // of σ (docs/calibration.md).
   std::printf("[ info     ] rms z of Δ: %.2f over %d\n", spread.rms(), spread.n);
   EXPECT_GE(spread.sum2, chiSquareLower1e3(spread.n) / maxOfEstimatesInflation(99)) << "rms z " << spread.rms();
+}
+
+// A lenticular sheet over the same ranges, its axes' offset anywhere in a pitch; the same tolerances for Δ and
+// the gap. The code across the axes (calib/axis_code.h) is what a camera focused 30 mm above it decodes; the
+// part's place is a step of the fit, across the axes only, and not written: its error across (x, the axes 0.1
+// rad off the panel's columns) within its U.
+TEST_F(PartCalibrationTest, RecoversDistanceAndGapThroughALenticularSheet) {
+  std::mt19937 random(20261205);
+  std::uniform_real_distribution<double> unit(-1, 1);
+  const int trials = 10;
+  int coveredDistance = 0, coveredLateral = 0, coveredGap = 0;
+  for (int trial = 0; trial < trials; ++trial) {
+    Truth truth;
+    truth.optics = "lenticular";
+    truth.seed = trial + 1;
+    truth.distance_mm = kStatedDistance_mm * (1 + 0.2 * unit(random));
+    truth.lateral_mm = {unit(random), unit(random)};
+    truth.gap_mm = kStatedGap_mm * (1 + 0.1 * unit(random));
+    truth.offset_px = 16 * unit(random);
+    SCOPED_TRACE(fmt::format("trial {}: Δ {} mm, lateral ({}, {}) mm, gap {} mm, offset {} px", trial,
+                             truth.distance_mm, truth.lateral_mm.x, truth.lateral_mm.y, truth.gap_mm, truth.offset_px));
+    const PartCalibration c = calibrate(truth);
+    const double k = c.coverageFactor;
+    const double distanceError = c.distance_mm - truth.distance_mm, gapError = c.gap_mm - truth.gap_mm;
+    const Vec2 lateralError = c.lateral_mm - truth.lateral_mm;
+    EXPECT_LE(std::abs(distanceError), kDistanceTolerance_mm);
+    EXPECT_LE(std::abs(gapError), kGapTolerance * truth.gap_mm);
+    EXPECT_FALSE(c.lateralMeasured);
+    coveredDistance += std::abs(distanceError) <= k * c.distanceSigma_mm;
+    coveredLateral += std::abs(lateralError.x) <= k * c.lateralSigma_mm.x;
+    coveredGap += std::abs(gapError) <= k * c.gapSigma_mm;
+    std::printf("[ info     ] Δ err %+.4f (U %.4f) mm, across err %+.4f (U %.4f) mm, gap err %+.5f (U %.5f) mm\n",
+                distanceError, k * c.distanceSigma_mm, lateralError.x, k * c.lateralSigma_mm.x, gapError,
+                k * c.gapSigma_mm);
+  }
+  const int least = static_cast<int>(std::ceil(0.9 * trials));
+  EXPECT_GE(coveredDistance, least);
+  EXPECT_GE(coveredLateral, least);
+  EXPECT_GE(coveredGap, least);
+}
+
+TEST_F(PartCalibrationTest, ALineBarrierIsRefusedByName) {
+  Truth truth;
+  truth.optics = "line_barrier";
+  EXPECT_TRUE(throwsError([&] { calibrate(truth); }, Errc::Device, {"line barrier", "not built"}));
 }
 
 TEST_F(PartCalibrationTest, NoPartInViewIsRefused) {

@@ -1,10 +1,12 @@
 // SPDX-License-Identifier: Apache-2.0
 #pragma once
 // What the calibrations through the bench share: frames taken and counted,
-// all white, all black and the Gray code patterns shown and decoded per camera
-// pixel with the refusals every one of them makes (the display not in view,
-// too few pixels decoded), and small helpers.
+// all white, all black and the Gray code patterns (or the code across a
+// sheet's or barrier's axes) shown and decoded per camera pixel with the
+// refusals every one of them makes (the display not in view, too few pixels
+// decoded), and small helpers.
 
+#include "lfi/calib/axis_code.h"
 #include "lfi/calib/coded_patterns.h"
 #include "lfi/drivers/display.h"
 #include "lfi/drivers/light_field_capture.h"
@@ -37,9 +39,6 @@ class FrameTaker {
   std::function<void(double)> progress_;
 };
 
-// Errc::Device naming the display unless its optics are a lens or pinhole array.
-void requireLensArray(const DisplayInfo& info, const char* who);
-
 struct GrayCodeView {
   cv::Mat white, black;  // CV_32FC1, DN
   cv::Mat light;         // white − black, at least 0
@@ -53,6 +52,16 @@ struct GrayCodeView {
 // decoded (`why` says what to look at then).
 GrayCodeView takeGrayCode(FrameTaker& take, const DisplayInfo& info, double fullScale_dn, double secondShare,
                           double minDecoded, const char* who, const char* why);
+
+// The code across a lenticular sheet's or line barrier's axes (calib/axis_code.h), shown and decoded with the
+// same refusals as takeGrayCode's.
+struct AxisCodeView {
+  cv::Mat white, black;  // CV_32FC1, DN
+  calib::AxisCorrespondence correspondence;
+  double decodeSeconds = 0;
+};
+AxisCodeView takeAxisCode(FrameTaker& take, const DisplayInfo& info, double fullScale_dn, double minDecoded,
+                          const char* who, const char* why);
 
 using Clock = std::chrono::steady_clock;
 inline double seconds(Clock::duration d) {

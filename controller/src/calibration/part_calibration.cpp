@@ -3,6 +3,8 @@
 
 #include "gray_code_view.h"
 
+#include "lfi/calib/axis_code.h"
+
 #include "lfi/core/error.h"
 #include "lfi/drivers/display_optics.h"
 
@@ -74,11 +76,37 @@ struct Row {
   cv::Vec3d jx, jy;
 };
 
-std::optional<Row> row(const Pixel& pixel, double gap, const Traces& t, size_t i) {
+// The directions the offsets are measured in: both for a lens or pinhole array; across the axes (its normal n)
+// for a lenticular sheet or line barrier, whose lenses (slits) say nothing along them. For the latter a
+// residual's and a row's first component is along n, the second 0.
+// The part's place is fitted in x and y for an array; for a sheet or barrier only across its axes (θ's second
+// component along n, the third held at 0): the slopes across tell where the part lies across them, hardly where
+// along.
+struct Directions {
+  bool across = false;
+  Vec2 n{1, 0};
+  Vec2 project(const Vec2& v) const { return across ? Vec2(v.dot(n), 0) : v; }
+  int count() const { return across ? 1 : 2; }
+  // The part's move for θ's lateral components (a, b), and the derivatives in them from those in x and y.
+  Vec2 move(double a, double b) const { return across ? a * n : Vec2(a, b); }
+  std::pair<Vec2, Vec2> lateralDerivatives(const Vec2& dx, const Vec2& dy) const {
+    if (!across) return {dx, dy};
+    return {n.x * dx + n.y * dy, Vec2(0, 0)};
+  }
+  // The normal matrix with the held component's zero row and column made regular (its step and covariance are
+  // then 0 and unused).
+  void hold(cv::Matx33d& jtj) const {
+    if (across) jtj(2, 2) = 1;
+  }
+};
+
+std::optional<Row> row(const Pixel& pixel, double gap, const Traces& t, size_t i, const Directions& d) {
   if (!t.at[i] || !t.x[i] || !t.y[i]) return std::nullopt;
   const Vec2 m = slope(*t.at[i]);
   const Vec2 dmx = (slope(*t.x[i]) - m) / kLateralStep_mm, dmy = (slope(*t.y[i]) - m) / kLateralStep_mm;
-  return Row{pixel.offset + gap * m, {m.x, gap * dmx.x, gap * dmy.x}, {m.y, gap * dmx.y, gap * dmy.y}};
+  const auto [da, db] = d.lateralDerivatives(dmx, dmy);
+  const Vec2 pm = d.project(m), px = d.project(da), py = d.project(db);
+  return Row{d.project(pixel.offset + gap * m), {pm.x, gap * px.x, gap * py.x}, {pm.y, gap * px.y, gap * py.y}};
 }
 
 // The offsets' fit: θ = (g, L_x, L_y).
@@ -92,7 +120,7 @@ struct OffsetFit {
 };
 
 OffsetFit fitOffsets(const PartModel& part, const std::vector<Pixel>& pixels, const Vec2& lateral0, double gap0,
-                     double pixelPitch_mm, const std::string& display) {
+                     double pixelPitch_mm, const std::string& display, const Directions& d) {
   OffsetFit fit;
   fit.gap = gap0;
   fit.lateral = lateral0;
@@ -105,13 +133,27 @@ OffsetFit fitOffsets(const PartModel& part, const std::vector<Pixel>& pixels, co
       cv::Matx33d jtj = cv::Matx33d::zeros();
       cv::Vec3d jtr(0, 0, 0);
       for (size_t i : fit.kept)
-        if (const auto w = row(pixels[i], fit.gap, t, i)) {
+        if (const auto w = row(pixels[i], fit.gap, t, i, d)) {
           jtj += w->jx * w->jx.t() + w->jy * w->jy.t();
           jtr += w->jx * w->r.x + w->jy * w->r.y;
         }
-      const cv::Vec3d delta = -(jtj.inv(cv::DECOMP_SVD) * jtr);
+      d.hold(jtj);
+      cv::Vec3d delta = -(jtj.inv(cv::DECOMP_SVD) * jtr);
+      // A step that raises the offsets' squared residual (the pixels the part takes change as it moves) halved,
+      // up to 6 times.
+      const auto cost = [&](double gap, const Vec2& lateral) {
+        const auto rays = traceAll(part, pixels, lateral);
+        double sum = 0;
+        for (size_t i : fit.kept)
+          if (rays[i]) sum += d.project(pixels[i].offset + gap * slope(*rays[i])).length2();
+        return sum;
+      };
+      const double before = cost(fit.gap, fit.lateral);
+      for (int halving = 0; halving < 6 && cost(fit.gap + delta[0], fit.lateral + d.move(delta[1], delta[2])) > before;
+           ++halving)
+        delta *= 0.5;
       fit.gap += delta[0];
-      fit.lateral += Vec2(delta[1], delta[2]);
+      fit.lateral += d.move(delta[1], delta[2]);
       if (!(fit.gap > 0.5 * gap0 && fit.gap < 2 * gap0) || !std::isfinite(fit.lateral.x) ||
           !std::isfinite(fit.lateral.y))
         fail(Errc::Device,
@@ -119,7 +161,8 @@ OffsetFit fitOffsets(const PartModel& part, const std::vector<Pixel>& pixels, co
              "outside half to twice the stated {:.4g} mm): the part is not the model's, or not where the bench "
              "expects it",
              display, fit.gap, gap0);
-      converged = std::abs(delta[0]) < 1e-9 && std::abs(delta[1]) < 1e-7 && std::abs(delta[2]) < 1e-7;
+      // Converged: a step of less than 10 nm, far below what the offsets tell (a panel pixel is 30 µm).
+      converged = std::abs(delta[0]) < 1e-5 && std::abs(delta[1]) < 1e-5 && std::abs(delta[2]) < 1e-5;
     }
     if (!converged)
       fail(Errc::Device, "part calibration of display '{}': the fit did not converge in {} steps", display, kMostSteps);
@@ -128,14 +171,15 @@ OffsetFit fitOffsets(const PartModel& part, const std::vector<Pixel>& pixels, co
     std::vector<double> components;
     for (size_t i = 0; i < pixels.size(); ++i)
       if (fit.rays[i] && pixels[i].confident) {
-        const Vec2 r = pixels[i].offset + fit.gap * slope(*fit.rays[i]);
+        const Vec2 r = d.project(pixels[i].offset + fit.gap * slope(*fit.rays[i]));
         components.push_back(std::abs(r.x));
-        components.push_back(std::abs(r.y));
+        if (!d.across) components.push_back(std::abs(r.y));
       }
     const double limit = std::max(5 * 1.4826 * detail::median(components), 0.5 * pixelPitch_mm);
     std::vector<size_t> kept;
     for (size_t i = 0; i < pixels.size(); ++i)
-      if (fit.rays[i] && pixels[i].confident && (pixels[i].offset + fit.gap * slope(*fit.rays[i])).length() <= limit)
+      if (fit.rays[i] && pixels[i].confident &&
+          d.project(pixels[i].offset + fit.gap * slope(*fit.rays[i])).length() <= limit)
         kept.push_back(i);
     const bool same = kept == fit.kept;
     fit.kept = std::move(kept);
@@ -155,7 +199,7 @@ OffsetFit fitOffsets(const PartModel& part, const std::vector<Pixel>& pixels, co
   std::map<int, Lens> lenses;
   size_t n = 0;
   for (size_t i : fit.kept)
-    if (const auto w = row(pixels[i], fit.gap, t, i)) {
+    if (const auto w = row(pixels[i], fit.gap, t, i, d)) {
       jtj += w->jx * w->jx.t() + w->jy * w->jy.t();
       rss += w->r.length2();
       Lens& lens = lenses[pixels[i].lensId];
@@ -168,13 +212,15 @@ OffsetFit fitOffsets(const PartModel& part, const std::vector<Pixel>& pixels, co
     meat += lens.score * lens.score.t();
     shared += lens.jx * lens.jx.t() + lens.jy * lens.jy.t();
   }
+  d.hold(jtj);
   const cv::Matx33d inverse = jtj.inv(cv::DECOMP_SVD);
   const double groups = static_cast<double>(lenses.size());
-  const cv::Matx33d plain = rss / std::max(1.0, 2.0 * static_cast<double>(n) - 3) * inverse;
+  const double components = d.count() * static_cast<double>(n);
+  const cv::Matx33d plain = rss / std::max(1.0, components - 3) * inverse;
   const cv::Matx33d clustered = groups / std::max(1.0, groups - 3) * inverse * meat * inverse;
   const cv::Matx33d quantisation = pixelPitch_mm * pixelPitch_mm / 12 * inverse * shared * inverse;
   for (int a = 0; a < 3; ++a) fit.sigma[a] = std::sqrt(std::max({plain(a, a), clustered(a, a), quantisation(a, a)}));
-  fit.rms = std::sqrt(rss / (2.0 * static_cast<double>(std::max<size_t>(n, 1))));
+  fit.rms = std::sqrt(rss / std::max(1.0, components));
   return fit;
 }
 
@@ -194,8 +240,14 @@ struct Cells {
   }
 };
 
-Cells cellsOf(const DisplayOpticsParams& o) {
+Cells cellsOf(const DisplayInfo& info, const Directions& d) {
+  const DisplayOpticsParams& o = info.optics;
   Cells cells;
+  if (d.across) {  // a sheet's lens, a barrier's slit: the strip half a pitch either side of its axis
+    cells.normals = {d.n};
+    cells.half = 0.5 * o.lensPitch_px * info.pixelPitch_mm * std::cos(o.slant_rad);
+    return cells;
+  }
   cells.half = 0.5 * o.arrayPitch_mm;
   const int sides = o.packing == LensPacking::Square ? 2 : 3;
   const double step = o.packing == LensPacking::Square ? M_PI / 2 : M_PI / 3;
@@ -239,28 +291,33 @@ struct Membership {
   }
 };
 
+// A decoded camera pixel: the panel point its light comes from (for a sheet or barrier a point of the line
+// across its axes the code names), and how surely.
+struct Decoded {
+  Vec2 camera_px;
+  Vec2 panel;
+  float confidence = 0;
+};
+
 // Each decoded camera pixel's place on the display's plane, its panel point
 // within its lens, and its lens (ids in `lensIds`). Errc::Device when no ray
 // is deflected: the part is missing.
-std::vector<Pixel> decodedPixels(const calib::PanelCorrespondence& c, const DisplayInfo& info,
+std::vector<Pixel> decodedPixels(const std::vector<Decoded>& decoded, const DisplayInfo& info, const Directions& d,
                                  const calib::CameraMap& camera, cv::Size image, double minConfidence,
                                  std::map<std::pair<long long, long long>, int>& lensIds) {
   const DisplayOptics optics(info);
   std::vector<Pixel> pixels;
   int deflected = 0;
-  for (int row = 0; row < image.height; ++row)
-    for (int col = 0; col < image.width; ++col) {
-      const cv::Vec2i p = c.panel.at<cv::Vec2i>(row, col);
-      if (p[0] < 0) continue;
-      const Vec2 panel = detail::panelPixelCentre(info, p[0], p[1]);
-      const Vec2 lens = optics.apertureCentre(panel);
-      const Vec2 offset = panel - lens;
-      if (offset.length() > 2 * info.pixelPitch_mm) ++deflected;
-      const auto key = std::make_pair(std::llround(lens.x * 1e6), std::llround(lens.y * 1e6));
-      const int id = lensIds.try_emplace(key, static_cast<int>(lensIds.size())).first->second;
-      pixels.push_back({camera.displayPoint(Vec2(col, row), image), offset, lens, id,
-                        c.confidence.at<float>(row, col) >= minConfidence});
-    }
+  for (const Decoded& p : decoded) {
+    const Vec2 lens = optics.apertureCentre(p.panel);
+    const Vec2 offset = p.panel - lens;
+    if (offset.length() > 2 * info.pixelPitch_mm) ++deflected;
+    // A lens by its centre; a sheet's lens or a barrier's slit by its axis's place across.
+    const auto key = d.across ? std::make_pair(std::llround(lens.dot(d.n) * 1e6), 0LL)
+                              : std::make_pair(std::llround(lens.x * 1e6), std::llround(lens.y * 1e6));
+    const int id = lensIds.try_emplace(key, static_cast<int>(lensIds.size())).first->second;
+    pixels.push_back({camera.displayPoint(p.camera_px, image), offset, lens, id, p.confidence >= minConfidence});
+  }
   if (deflected <= 0.01 * static_cast<double>(pixels.size()))
     fail(Errc::Device,
          "part calibration: every ray the camera sees leaves display '{}' within two panel pixels of "
@@ -285,9 +342,10 @@ std::vector<Pixel> throughThePart(const PartModel& part, const std::vector<Pixel
 }
 
 // Δ's objective from the rays the offset fit traced.
-Membership membership(const std::vector<Pixel>& pixels, const OffsetFit& fit, const DisplayOpticsParams& optics) {
+Membership membership(const std::vector<Pixel>& pixels, const OffsetFit& fit, const DisplayInfo& info,
+                      const Directions& d) {
   Membership m;
-  m.cells = cellsOf(optics);
+  m.cells = cellsOf(info, d);
   for (size_t i = 0; i < pixels.size(); ++i) {
     if (!fit.rays[i]) continue;
     const PartRay& ray = *fit.rays[i];
@@ -337,30 +395,68 @@ PartCalibration calibratePart(BenchProbe& bench, const PartModel& part, const ca
   info.validate();
   out.nominal = info;
   const std::string& name = info.deviceId;
-  detail::requireLensArray(info, "part calibration");
-  const int totalFrames = calib::GrayCodeLayout::forPanel(info.panelWidth_px, info.panelHeight_px).frameCount();
+  if (info.optics.type == OpticsType::LineBarrier)
+    fail(Errc::Device,
+         "part calibration: display '{}' is a line barrier: the light a camera pixel takes through the part passes "
+         "a slit narrower than the camera's blur at the display, along other rays than the model traces from the "
+         "pixel; its part calibration is not built",
+         name);
+  // A lens or pinhole array: the panel pixel each camera pixel sees (coded_patterns.h). A sheet: the
+  // band across its axes (axis_code.h), which the camera's blur along them leaves whole.
+  Directions d;
+  if (!fullParallax(info.optics.type)) d = {true, {std::cos(info.optics.slant_rad), -std::sin(info.optics.slant_rad)}};
+  const int totalFrames =
+      d.across
+          ? 2 + static_cast<int>(calib::axisCodePatterns(info.panelWidth_px, info.panelHeight_px, info.optics.slant_rad)
+                                     .patterns.size())
+          : calib::GrayCodeLayout::forPanel(info.panelWidth_px, info.panelHeight_px).frameCount();
   detail::FrameTaker take(bench, "part calibration", name, totalFrames, progress);
-  const detail::GrayCodeView view =
-      detail::takeGrayCode(take, info, bench.cameraFullScale_dn(), 0, settings.minDecoded, "part calibration",
-                           "the patterns blur, or the part scatters more light than it refracts");
+  const char* why = "the patterns blur, or the part scatters more light than it refracts";
+  std::vector<Decoded> decoded;
+  cv::Size image;
+  double decodeSeconds = 0;
+  if (d.across) {
+    const detail::AxisCodeView view =
+        detail::takeAxisCode(take, info, bench.cameraFullScale_dn(), settings.minDecoded, "part calibration", why);
+    out.lit = view.correspondence.lit;
+    out.decoded = view.correspondence.decoded;
+    image = view.white.size();
+    decodeSeconds = view.decodeSeconds;
+    for (int row = 0; row < image.height; ++row)
+      for (int col = 0; col < image.width; ++col)
+        if (const float xi = view.correspondence.xi.at<float>(row, col); !std::isnan(xi))
+          decoded.push_back(
+              {Vec2(col, row), Vec2(xi * info.pixelPitch_mm, 0), view.correspondence.confidence.at<float>(row, col)});
+  } else {
+    const detail::GrayCodeView view =
+        detail::takeGrayCode(take, info, bench.cameraFullScale_dn(), 0, settings.minDecoded, "part calibration", why);
+    const calib::PanelCorrespondence& c = view.correspondence;
+    out.lit = c.lit;
+    out.decoded = c.decoded;
+    image = view.white.size();
+    decodeSeconds = view.decodeSeconds;
+    for (int row = 0; row < image.height; ++row)
+      for (int col = 0; col < image.width; ++col)
+        if (const cv::Vec2i p = c.panel.at<cv::Vec2i>(row, col); p[0] >= 0)
+          decoded.push_back(
+              {Vec2(col, row), detail::panelPixelCentre(info, p[0], p[1]), c.confidence.at<float>(row, col)});
+  }
   const auto computeStart = Clock::now();
-  const calib::PanelCorrespondence& c = view.correspondence;
-  out.lit = c.lit;
-  out.decoded = c.decoded;
 
-  const cv::Size image = view.white.size();
   std::map<std::pair<long long, long long>, int> lensIds;
   const Vec2 stated =
       camera.displayPoint(statedPartCentre_px.value_or(Vec2(0.5 * (image.width - 1), 0.5 * (image.height - 1))), image);
   const std::vector<Pixel> pixels =
-      throughThePart(part, decodedPixels(c, info, camera, image, settings.minConfidence, lensIds), stated);
+      throughThePart(part, decodedPixels(decoded, info, d, camera, image, settings.minConfidence, lensIds), stated);
 
   // g and L from the offsets within each lens.
-  const OffsetFit fit = fitOffsets(part, pixels, stated, info.optics.gap_mm, info.pixelPitch_mm, name);
+  const OffsetFit fit = fitOffsets(part, pixels, stated, info.optics.gap_mm, info.pixelPitch_mm, name, d);
   out.gap_mm = fit.gap;
   out.lateral_mm = fit.lateral;
+  out.lateralMeasured = !d.across;
   out.gapSigma_mm = fit.sigma[0];
-  out.lateralSigma_mm = {fit.sigma[1], fit.sigma[2]};
+  out.lateralSigma_mm = d.across ? Vec2(std::abs(d.n.x) * fit.sigma[1], std::abs(d.n.y) * fit.sigma[1])
+                                 : Vec2(fit.sigma[1], fit.sigma[2]);
   out.offsetRms_mm = fit.rms;
   out.pixels = static_cast<int>(fit.kept.size());
   out.outliers = static_cast<int>(
@@ -373,7 +469,7 @@ PartCalibration calibratePart(BenchProbe& bench, const PartModel& part, const ca
          name, fit.rms);
 
   // Δ from which lens each ray lands in.
-  const Membership m = membership(pixels, fit, info.optics);
+  const Membership m = membership(pixels, fit, info, d);
   const double from = statedDistance_mm * (1 - settings.search), to = statedDistance_mm * (1 + settings.search);
   const double step = std::min(0.05, 0.01 * statedDistance_mm);
   const std::vector<double> ones(m.a.size(), 1.0);
@@ -384,8 +480,7 @@ PartCalibration calibratePart(BenchProbe& bench, const PartModel& part, const ca
          "of the search ({:.3f} .. {:.3f} mm, the stated {} mm ± {} %)",
          name, out.distance_mm, from, to, statedDistance_mm, 100 * settings.search);
   for (size_t i = 0; i < m.a.size(); ++i)
-    if (m.cells.outside(m.a[i] + out.distance_mm * m.b[i], m.lens[i]) > 0.25 * info.optics.arrayPitch_mm)
-      ++out.otherLens;
+    if (m.cells.outside(m.a[i] + out.distance_mm * m.b[i], m.lens[i]) > 0.5 * m.cells.half) ++out.otherLens;
   if (out.otherLens > static_cast<int>(m.a.size()) / 3)
     fail(Errc::Device,
          "part calibration of display '{}': at the best Δ = {:.3f} mm, {} of {} rays land in another "
@@ -396,7 +491,7 @@ PartCalibration calibratePart(BenchProbe& bench, const PartModel& part, const ca
   out.partCentre_px = camera.cameraPoint(out.lateral_mm, image);
   out.frames = take.frames();
   if (progress) progress(1);
-  out.computeSeconds = seconds(Clock::now() - computeStart) + view.decodeSeconds;
+  out.computeSeconds = seconds(Clock::now() - computeStart) + decodeSeconds;
   out.seconds = seconds(Clock::now() - start);
   return out;
 }

@@ -23,11 +23,12 @@ void setPartCalibration(BenchFileEdit& edit, const BenchFile& bench, const PartC
   const std::string comment = fmt::format("lfi calibrate part {}", stampUtc);
   detail::setMeasured(edit, "geometry", "distance_mm", {c.distance_mm}, {c.distanceSigma_mm}, k, comment);
   const double perPixel = bench.cameraOnDisplay->objectPixel_mm();
-  detail::setMeasured(edit, "geometry", "part_centre_px", {c.partCentre_px.x, c.partCentre_px.y},
-                      {c.lateralSigma_mm.x / perPixel, c.lateralSigma_mm.y / perPixel}, k, comment);
+  if (c.lateralMeasured)
+    detail::setMeasured(edit, "geometry", "part_centre_px", {c.partCentre_px.x, c.partCentre_px.y},
+                        {c.lateralSigma_mm.x / perPixel, c.lateralSigma_mm.y / perPixel}, k, comment);
   if (!bench.displayOptics) detail::setOpticsTable(edit, c.nominal.optics, "as the display states it (not measured)");
   detail::setMeasured(edit, "display.optics", "gap_mm", {c.gap_mm}, {c.gapSigma_mm}, k, comment);
-  if (c.nominal.optics.type == OpticsType::LensletArray)
+  if (c.nominal.optics.type == OpticsType::LensletArray || c.nominal.optics.type == OpticsType::Lenticular)
     detail::setMeasured(edit, "display.optics", "focal_length_mm", {c.gap_mm}, {c.gapSigma_mm}, k,
                         comment + ": the gap (the lenses focused on the panel)");
 }

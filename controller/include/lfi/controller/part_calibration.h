@@ -35,7 +35,18 @@
 // a bootstrap over the decoded lenses (each resampled set of lenses fitted
 // again, its Δ's standard deviation), L held.
 //
-// Refusals (Errc::Device, naming the display): no lens or pinhole array;
+// A lenticular sheet: the code across its axes (calib/axis_code.h; the
+// camera, focused on the part, sees the display blurred along them) gives,
+// per camera pixel, the band of panel points parallel to the axes its light
+// comes from; o is the band's offset across its lens from the axis, the
+// offsets' fit takes only their component across (n · (o + g m)), and the
+// part moves in it only across the axes (lateralMeasured false: where along
+// them the slopes across hardly tell, and part_centre_px is not written); Δ
+// from the strip of the decoded lens that q falls in.
+//
+// Refusals (Errc::Device, naming the display): a line barrier (the light a
+// camera pixel takes passes a slit narrower than the camera's blur at the
+// display, along other rays than the model traces);
 // the display out of view; fewer than `min_decoded` of the lit pixels decoded;
 // no part in view (no decoded pixel's offset beyond two panel pixels: nothing
 // deflects the rays); fewer than 50 decoded pixels through the part; a fit that
@@ -74,6 +85,9 @@ struct PartCalibration {
   double statedDistance_mm = 0;
   double distance_mm = 0, distanceSigma_mm = 0;  // Δ
   Vec2 lateral_mm{0, 0}, lateralSigma_mm{0, 0};  // the part's reference point, display frame
+  // False through a lenticular sheet or line barrier: the fit moved the part only across the axes (lateralSigma_mm
+  // the x and y parts of that move's σ), and the bench's part_centre_px is kept.
+  bool lateralMeasured = true;
   double gap_mm = 0, gapSigma_mm = 0;
   Vec2 partCentre_px{0, 0};  // L's image
   double coverageFactor = 2;
