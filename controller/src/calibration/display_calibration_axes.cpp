@@ -1,15 +1,18 @@
 // SPDX-License-Identifier: Apache-2.0
 // A lenticular sheet's or line barrier's display calibration after the Gray
-// code (display_calibration.h): the axes, the stripes that give the camera's
-// scale, a barrier's slit.
+// code (display_calibration.h): the axes; the camera's scale from a sheet's
+// stripes or a barrier's decoded pixels; a barrier's slit.
 
 #include "display_calibration_steps.h"
 
 #include "lfi/calib/axis_fit.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <map>
+#include <optional>
+#include <vector>
 
 namespace lfi::detail {
 

@@ -38,20 +38,21 @@
 //                                        parallel, equally spaced lines
 //                                        (calib/axis_fit.h): lens pitch, slant
 //                                        and offset on the panel
-//   stripes  s                           the cells of every s-th axis lit, one
+//   stripes  s (lenticular sheet)        the cells of every s-th axis lit, one
 //                                        phase per frame: one stripe per lit
 //                                        axis in the image, as wide as its
 //                                        lens (a lens focused on the panel
-//                                        shows its axis at every point of it;
-//                                        a slit shows the cell under it),
-//                                        symmetric about the axis. Each cut
-//                                        into segments s lens pitches long;
+//                                        shows its axis at every point of
+//                                        it), symmetric about the axis. Each
+//                                        cut into segments two pitches long;
 //                                        a segment's centroid lies on the
 //                                        axis, and the panel points its pixels
 //                                        decoded tell where along it (nothing
 //                                        bends the light along an axis): points
 //                                        of known display position for the
-//                                        camera's scale
+//                                        camera's scale. A barrier's slit shows
+//                                        the panel straight under it: every
+//                                        decoded pixel is such a point
 //   slit     1 (line barrier)            a band of n panel pixels along every
 //                                        axis (n a third of the stated slit,
 //                                        at least 1): behind each slit the band
