@@ -12,6 +12,7 @@
 #include <cmath>
 #include <map>
 #include <optional>
+#include <set>
 #include <vector>
 
 namespace lfi::detail {
@@ -246,16 +247,14 @@ void measureAxes(DisplayCalibration& out, FrameTaker& take, const GrayCodeView& 
       return calib::fitLensAxes(points, info.pixelPitch_mm, info.optics.lensPitch_px, info.optics.slant_rad);
     });
   };
-  const calib::AxisFit named0 = fit(nullptr);
-  out.axes = fit(&named0);
+  const calib::AxisFit firstFit = fit(nullptr);
+  out.axes = fit(&firstFit);
   const int s = settings.spotPeriod;
   // A stripe's window: a lens pitch about the axis holds the stripe (half a pitch each side) and what the rough
   // scale misplaces; its corners stay clear of the next lit stripe, s pitches away. Segments a window long.
   const AxisFrame frame(out.axes, info.pixelPitch_mm);
   const double halfWindow_mm = std::min(1.0, 0.45 * s) * frame.perpPitch_mm();
   const double length = 2 * halfWindow_mm;
-  const calib::CameraScaleFit first =
-      named(name, [&] { return calib::fitCameraScale(roughPoints(c, view.light, info, frame, length), out.image); });
   compute += Clock::now() - computeStart;
 
   // The points' places on the panel are as good as the axes they give: their pitch's and offset's uncertainties.
@@ -277,20 +276,24 @@ void measureAxes(DisplayCalibration& out, FrameTaker& take, const GrayCodeView& 
     compute += Clock::now() - computeStart;
   } else {
     // Stripes: the cells of every s-th axis lit, s frames; each stripe's points found about the segments' rough
-    // places.
+    // places, which a first camera scale from the decoded pixels gives.
+    computeStart = Clock::now();
+    const calib::CameraScaleFit first =
+        named(name, [&] { return calib::fitCameraScale(roughPoints(c, view.light, info, frame, length), out.image); });
+    compute += Clock::now() - computeStart;
     const double window_px = std::max(1.5, halfWindow_mm / first.objectPixel_mm);
     std::vector<std::pair<calib::CameraPoint, double>> found;  // and each one's light
     for (int a = 0; a < s; ++a) {
       const cv::Mat image = take(stripePanel(info, frame, s, a), "stripes") - view.black;
       computeStart = Clock::now();
-      std::map<Segment, bool> seen;
+      std::set<Segment> seen;
       for (int row = 0; row < image.rows; ++row)
         for (int col = 0; col < image.cols; ++col)
           if (const cv::Vec2i p = c.panel.at<cv::Vec2i>(row, col); p[0] >= 0) {
             const Segment segment = segmentOf(frame, panelPixelCentre(info, p[0], p[1]), length);
-            if (((segment[0] % s) + s) % s == a) seen[segment] = true;
+            if (((segment[0] % s) + s) % s == a) seen.insert(segment);
           }
-      for (const auto& [segment, unused] : seen) {
+      for (const Segment& segment : seen) {
         const int m = segment[0];
         const Vec2 middle = frame.point(m, (segment[1] + 0.5) * length);
         if (auto point = stripeCentroid(image, c, info, frame, first.map.cameraPoint(middle, out.image), window_px))
