@@ -141,15 +141,15 @@ OffsetFit fitOffsets(const PartModel& part, const std::vector<Pixel>& pixels, co
       cv::Vec3d delta = -(jtj.inv(cv::DECOMP_SVD) * jtr);
       // A step that raises the offsets' squared residual (the pixels the part takes change as it moves) halved,
       // up to 6 times.
-      const auto cost = [&](double gap, const Vec2& lateral) {
-        const auto rays = traceAll(part, pixels, lateral);
+      const auto cost = [&](const std::vector<std::optional<PartRay>>& rays, double gap) {
         double sum = 0;
         for (size_t i : fit.kept)
           if (rays[i]) sum += d.project(pixels[i].offset + gap * slope(*rays[i])).length2();
         return sum;
       };
-      const double before = cost(fit.gap, fit.lateral);
-      for (int halving = 0; halving < 6 && cost(fit.gap + delta[0], fit.lateral + d.move(delta[1], delta[2])) > before;
+      const double before = cost(t.at, fit.gap);  // (the rays at the start of the step, traced already)
+      for (int halving = 0; halving < 6 && cost(traceAll(part, pixels, fit.lateral + d.move(delta[1], delta[2])),
+                                                fit.gap + delta[0]) > before;
            ++halving)
         delta *= 0.5;
       fit.gap += delta[0];
