@@ -115,10 +115,16 @@ class Run {
            (options_.seconds > 0 && seconds() >= options_.seconds);
   }
 
+  // The part's record to the log, then to the caller.
+  void record(const InspectionRecord& r) {
+    log_->append(r);
+    if (options_.onRecord) options_.onRecord(r);
+  }
+
   void inspect(Inspector& inspector) {
     const PartInspection result = inspector.inspectPart();
-    log_->append(partRecord(bench_, inspector, result, part_, utcNow(), options_.folder / "images",
-                            fmt::format("part-{:06d}", part_)));
+    record(partRecord(bench_, inspector, result, part_, utcNow(), options_.folder / "images",
+                      fmt::format("part-{:06d}", part_)));
     (result.verdict.pass ? counts_.passed : counts_.failed) += 1;
   }
 
@@ -128,7 +134,7 @@ class Run {
     if (!deviceTrouble(e)) {
       // Not the devices (a full disk, a file that cannot be written): record what can be, and stop.
       try {
-        log_->append(errorRecord(bench_, part_, utcNow(), e.what()));
+        record(errorRecord(bench_, part_, utcNow(), e.what()));
         writeRunSummary(log_->file(), page_, false);
       } catch (const Error&) {
         // (the disk may take nothing more: the records before this part are on it)
@@ -140,7 +146,7 @@ class Run {
       --part_;
       return false;
     }
-    log_->append(errorRecord(bench_, part_, utcNow(), e.what()));
+    record(errorRecord(bench_, part_, utcNow(), e.what()));
     ++counts_.errors;
     if (bench_.onDeviceLoss == OnDeviceLoss::Stop) {
       writeRunSummary(log_->file(), page_, false);

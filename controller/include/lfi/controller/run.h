@@ -54,6 +54,8 @@ struct RunOptions {
   std::function<bool()> stopRequested;
   // After each part: the counts so far and the seconds since the start.
   std::function<void(const RunCounts& counts, double seconds)> onPart;
+  // Each part's record, once it is in the log.
+  std::function<void(const InspectionRecord& record)> onRecord;
   // The back-off's pause before reopening the devices (this thread sleeps by default).
   std::function<void(std::chrono::milliseconds pause)> pause;
   // The part's model (the bench's [geometry] part_model, loaded by the caller): defects placed inside the part too.
