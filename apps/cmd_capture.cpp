@@ -7,11 +7,8 @@
 #include "cli_util.h"
 #include "commands.h"
 
-#include "lfi/controller/bench_devices.h"
-#include "lfi/controller/reference_capture.h"
 #include "lfi/core/error.h"
 #include "lfi/core/log.h"
-#include "lfi/core/output_folder.h"
 
 #include <fmt/format.h>
 
@@ -31,26 +28,21 @@ struct CaptureArgs {
 
 int runCapture(const CaptureArgs& a, const GlobalOptions& global) {
   const lfi::BenchFile bench = lfi::readBenchFile(a.bench);
-  refuseExisting({bench.referenceFolder}, a.force ? Overwrite::Allow : Overwrite::Refuse, "capture");
-  auto capture = lfi::openBenchCapture(bench);
-  auto display = lfi::openBenchDisplay(bench);
-  auto camera = lfi::openBenchCamera(bench, lfi::BenchExposures::OnRequest);
-  requireOutputFolder(bench.referenceFolder.parent_path(), "capture", "[reference] folder");
   ProgressBar bar;
   const auto progress = [&](const char* step, double f) {
     if (!global.quiet) bar(step, f);
   };
-  lfi::ReferenceCoverage coverage;
-  const lfi::ReferencePackage package = lfi::takeReference(bench, *capture, *display, *camera, progress, &coverage);
+  const lfi::CaptureResult r =
+      lfi::captureReference(bench, a.force ? lfi::Overwrite::Allow : lfi::Overwrite::Refuse, progress);
   bar.finish();
-  spdlog::info("capture: {}", capture->description());
+  spdlog::info("capture: {}", r.captureDevice);
+  const lfi::ReferenceCoverage& coverage = r.coverage;
   spdlog::info(
       "capture: the reference lights {} of the part's {} pixels ({:.1f} %) to at least {} of its 99th "
       "percentile: defects are looked for there; the intact part's image there: mean {:.1f} DN, cv {:.3f}",
       coverage.inspectedPixels, coverage.partPixels,
       100.0 * coverage.inspectedPixels / std::max(coverage.partPixels, 1), bench.maskLitFraction, coverage.mean_dn,
       coverage.cv);
-  lfi::writeReferencePackage(bench.referenceFolder, package, a.force ? lfi::Overwrite::Allow : lfi::Overwrite::Refuse);
   fmt::print("{}\n", bench.referenceFolder.string());
   return 0;
 }

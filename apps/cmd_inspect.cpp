@@ -6,14 +6,8 @@
 #include "bench_cli.h"
 #include "cli_util.h"
 #include "commands.h"
-#include "lfi/controller/part_records.h"
 
-#include "lfi/controller/bench_devices.h"
-#include "lfi/controller/inspector.h"
-#include "lfi/controller/reference_package.h"
-#include "lfi/core/atomic_file.h"
 #include "lfi/core/error.h"
-#include "lfi/core/output_folder.h"
 
 #include <fmt/format.h>
 
@@ -34,19 +28,11 @@ int runInspect(const InspectArgs& a, const GlobalOptions&) {
   const lfi::BenchFile bench = lfi::readBenchFile(a.bench);
   // The devices: the bench's, or those of --part's scene on a simulated bench (a bench that cannot take
   // --part is the first thing to say).
-  const lfi::BenchFile devices = a.part.empty() ? bench : withSimulatedPart(bench, a.part);
-  const lfi::ReferencePackage package = lfi::readReferencePackage(bench.referenceFolder, &bench);
-  auto display = lfi::openBenchDisplay(devices);
-  auto camera = lfi::openBenchCamera(devices);
-  lfi::Inspector inspector(devices, package, *display, *camera, benchPartModel(bench));
-  inspector.showReference();
-  const lfi::PartInspection part = inspector.inspectPart();
-  const std::string time = lfi::utcNow();
-  const fs::path folder = a.out.empty() ? bench.outputFolder / timedFolderName("inspect", time) : a.out;
-  requireOutputFolder(folder, "inspect", a.out.empty() ? "[output] folder" : "--out");
-  const lfi::InspectionRecord record = partRecord(bench, inspector, part, 1, time, folder, "part");
-  const std::string json = lfi::recordText(record, 2) + "\n";
-  lfi::writeFileAtomically(folder / "record.json", lfi::Overwrite::Refuse, json);
+  const lfi::BenchFile devices = a.part.empty() ? bench : lfi::withSimulatedPart(bench, a.part);
+  const lfi::InspectResult r = lfi::inspectOnePart(bench, devices, a.out);
+  const lfi::PartInspection& part = r.part;
+  const fs::path& folder = r.folder;
+  const std::string json = lfi::recordText(r.record, 2) + "\n";
   if (a.json) {
     fmt::print("{}", json);
   } else {

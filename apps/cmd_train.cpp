@@ -35,28 +35,19 @@ int runTrain(const TrainArgs& a, const GlobalOptions& global) {
   const lfi::BenchFile bench = lfi::readBenchFile(a.bench);
   // The devices: the bench's, or those of --part's scene on a simulated bench (a bench that cannot take
   // --part is the first thing to say).
-  const lfi::BenchFile devices = a.part.empty() ? bench : withSimulatedPart(bench, a.part);
-  lfi::ReferencePackage package = lfi::readReferencePackage(bench.referenceFolder, &bench);
-  auto display = lfi::openBenchDisplay(devices);
-  auto camera = lfi::openBenchCamera(devices);
-  lfi::Inspector inspector(bench, package, *display, *camera);
-  inspector.showReference();
+  const lfi::BenchFile devices = a.part.empty() ? bench : lfi::withSimulatedPart(bench, a.part);
   ProgressBar bar;
-  for (int i = 0; i < a.images; ++i) {
+  const int count = lfi::trainGoldenModel(bench, devices, a.images, [&](int i) {
     if (a.prompt) {
       fmt::print(stderr, "Put good part {} of {} in place and press Enter (end of input stops): ", i + 1, a.images);
       std::string line;
-      if (!std::getline(std::cin, line))
-        lfi::fail(lfi::Errc::Cancelled, "train: stopped at part {}; nothing written", i + 1);
-    } else if (!global.quiet) {
-      bar("golden model", static_cast<double>(i) / a.images);
+      return static_cast<bool>(std::getline(std::cin, line));
     }
-    package.trainer.add(inspector.takeImage());
-  }
+    if (!global.quiet) bar("golden model", static_cast<double>(i) / a.images);
+    return true;
+  });
   if (!a.prompt && !global.quiet) bar("golden model", 1);
-  package.info.updated_utc = lfi::utcNow();
-  lfi::writeReferencePackage(bench.referenceFolder, package, lfi::Overwrite::Allow);
-  fmt::print("{} ({} images trained)\n", bench.referenceFolder.string(), package.trainer.count());
+  fmt::print("{} ({} images trained)\n", bench.referenceFolder.string(), count);
   return 0;
 }
 
