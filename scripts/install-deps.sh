@@ -32,6 +32,8 @@ PACKAGES=(
   clang libclang-rt-14-dev
   # the formatting check (make check-format, CI)
   clang-format
+  # the Python package (python/: pybind11) and its tests (pytest, numpy)
+  pybind11-dev python3-dev python3-pytest python3-numpy
 )
 
 if [[ ! -r /etc/os-release ]] || ! grep -qE '^ID=debian' /etc/os-release \
