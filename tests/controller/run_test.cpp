@@ -5,14 +5,10 @@
 // back-off's pauses are recorded, not slept.
 
 #include "lfi/controller/run.h"
-#include "lfi/controller/bench_devices.h"
-#include "lfi/controller/bench_file.h"
-#include "lfi/controller/reference_capture.h"
 #include "lfi/drivers/camera_registry.h"
 #include "lfi/sim/devices/sim_camera.h"
 #include "lfi_test_support.h"
-#include "test_folder.h"
-#include "text_edit.h"
+#include "quick_run_bench.h"
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -24,9 +20,6 @@ namespace lfi {
 namespace {
 
 namespace fs = std::filesystem;
-using testing_support::readText;
-using testing_support::replaceAll;
-using testing_support::replaceOnce;
 using testing_support::TestFolder;
 using testing_support::throwsError;
 
@@ -93,24 +86,8 @@ class RunTest : public ::testing::Test {
     sim::registerSimBackends();
     registerFlakyCamera();
     folder_ = new TestFolder("lfi-run");
-    const fs::path scene = fs::path(LFI_SOURCE_DIR) / "data" / "scenes" / "inspection_bench.toml";
-    std::string text = readText(fs::path(LFI_SOURCE_DIR) / "data" / "benches" / "inspection_sim.toml");
-    replaceOnce(text, "[camera]\nuri = \"sim:../scenes/inspection_bench.toml\"",
-                "[camera]\nuri = \"test-flaky:" + scene.string() + "\"");
-    replaceOnce(text, "[capture]\nuri = \"sim:../scenes/inspection_bench.toml\"",
-                "[capture]\nuri = \"sim:" + scene.string() + "?spatial=16&angular=16&spp=8\"");
-    replaceAll(text, "sim:../scenes/inspection_bench.toml", "sim:" + scene.string());
-    replaceOnce(text, "exposure_us = 10000", "exposure_us = 2000");
-    replaceOnce(text, "frames = 16 ", "frames = 4 ");
-    replaceOnce(text, "\"../../out/bench/reference\"", "\"reference\"");
-    replaceOnce(text, "\"../../out/bench/inspections\"", "\"inspections\"");
-    replaceOnce(text, "[run]\non_device_loss = \"stop\"\n", "");  // (each test states its own)
-    benchText_ = new std::string(text);
-    const BenchFile bench = readBenchFile(folder_->write("bench.toml", text));
-    auto capture = openBenchCapture(bench);
-    auto display = openBenchDisplay(bench);
-    auto camera = openBenchCamera(bench, BenchExposures::OnRequest);
-    package_ = new ReferencePackage(takeReference(bench, *capture, *display, *camera));
+    benchText_ = new std::string(testing_support::quickRunBenchText("test-flaky"));
+    package_ = new ReferencePackage(testing_support::quickRunReference(*folder_, *benchText_));
   }
   static void TearDownTestSuite() {
     delete package_;

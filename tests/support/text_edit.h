@@ -1,14 +1,13 @@
 // SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Reading a text file whole and editing shipped bench and scene files' text in
-// tests: an edit whose text is not there fails the test (the file changed
-// under it), never passes unedited.
-
-#include <gtest/gtest.h>
+// tests and benchmarks: an edit whose text is not there throws (the file
+// changed under it), which fails the test; it never passes unedited.
 
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <stdexcept>
 #include <string>
 
 namespace lfi::testing_support {
@@ -22,12 +21,12 @@ inline std::string readText(const std::filesystem::path& p) {
 
 inline void replaceOnce(std::string& text, const std::string& from, const std::string& to) {
   const auto at = text.find(from);
-  ASSERT_NE(at, std::string::npos) << from;
+  if (at == std::string::npos) throw std::runtime_error("the text to replace is not there: " + from);
   text.replace(at, from.size(), to);
 }
 
 inline void replaceAll(std::string& text, const std::string& from, const std::string& to) {
-  ASSERT_NE(text.find(from), std::string::npos) << from;
+  if (text.find(from) == std::string::npos) throw std::runtime_error("the text to replace is not there: " + from);
   for (size_t at = 0; (at = text.find(from, at)) != std::string::npos; at += to.size())
     text.replace(at, from.size(), to);
 }
