@@ -319,6 +319,24 @@ bool ServedBench::fireLine() {
   return impl_->camera && impl_->camera->fireLine();
 }
 
+namespace {
+const GvCameraServer& gigeCamera(const ServedBench::Impl& impl) {
+  if (impl.u3v) fail(Errc::InvalidArgument, "served bench: its camera is USB3 Vision, whose outputs are not served");
+  if (!impl.camera) fail(Errc::Device, "served bench: the camera is off");
+  return *impl.camera;
+}
+}  // namespace
+
+bool ServedBench::cameraUserOutput(int index) const {
+  std::lock_guard lock(impl_->devicesMutex);
+  return gigeCamera(*impl_).userOutput(index);
+}
+
+std::string ServedBench::cameraLineSource(int line) const {
+  std::lock_guard lock(impl_->devicesMutex);
+  return gigeCamera(*impl_).lineSource(line);
+}
+
 fs::path ServedBench::part() const {
   std::lock_guard lock(impl_->partMutex);
   return impl_->part;

@@ -14,9 +14,13 @@
 #include <netinet/in.h>
 #include <spdlog/spdlog.h>
 
+#include <unistd.h>
+
 #include <cerrno>
 #include <chrono>
+#include <cstdio>
 #include <cstring>
+#include <filesystem>
 #include <mutex>
 #include <thread>
 
@@ -35,6 +39,30 @@ constexpr std::size_t kNameSize = 32;
 constexpr guint32 kHeartbeatTimeoutOffset = 0x0938;
 constexpr guint32 kHeartbeatTimeout_ms = 10'000;
 constexpr double kTriggerCheckRate_hz = 200;
+
+// The served camera's GenICam description in a file of its own, which Aravis's fake camera reads when it
+// is made (detail::servedGenicamXml); written once per process.
+const std::string& servedGenicamFile() {
+  static const std::string file = [] {
+    ArvFakeCamera* plain = arv_fake_camera_new("LFIXML");
+    std::size_t size = 0;
+    const char* xml = arv_fake_camera_get_genicam_xml(plain, &size);
+    const std::string text = detail::servedGenicamXml(std::string(xml, size));
+    g_object_unref(plain);
+    std::string name = (std::filesystem::temp_directory_path() / "lfi-served-camera-XXXXXX.xml").string();
+    const int fd = ::mkstemps(name.data(), 4);
+    if (fd < 0) fail(Errc::Io, "served camera: cannot write its GenICam file '{}': {}", name, std::strerror(errno));
+    const bool written = ::write(fd, text.data(), text.size()) == static_cast<ssize_t>(text.size());
+    ::close(fd);
+    if (!written) fail(Errc::Io, "served camera: cannot write its GenICam file '{}'", name);
+    static struct Remove {
+      std::string file;
+      ~Remove() { std::remove(file.c_str()); }
+    } remove{name};
+    return name;
+  }();
+  return file;
+}
 
 guint32 readRegister(ArvFakeCamera* camera, guint32 address) {
   guint32 value = 0;
@@ -223,7 +251,8 @@ GvCameraServer::GvCameraServer(const GvCameraServerOptions& options, ServedFrame
   if (!filler) fail(Errc::InvalidArgument, "served camera: no frame filler");
   impl_->options = options;
 
-  impl_->gvCamera = arv_gv_fake_camera_new(options.interfaceAddress.c_str(), options.serial.c_str());
+  impl_->gvCamera = arv_gv_fake_camera_new_full(options.interfaceAddress.c_str(), options.serial.c_str(),
+                                                servedGenicamFile().c_str());
   if (impl_->gvCamera == nullptr || !arv_gv_fake_camera_is_running(impl_->gvCamera)) {
     if (impl_->gvCamera != nullptr) g_object_unref(impl_->gvCamera);
     fail(Errc::Device,
@@ -287,6 +316,22 @@ bool GvCameraServer::fireLine(int timeout_ms) {
   if (readRegister(camera, ARV_FAKE_CAMERA_REGISTER_TRIGGER_SOURCE) == kSoftware)
     arv_fake_camera_write_register(camera, ARV_FAKE_CAMERA_REGISTER_TRIGGER_SOURCE, kLine0);
   return taken;
+}
+
+bool GvCameraServer::userOutput(int index) const {
+  if (index < 0 || index > 2)
+    fail(Errc::InvalidArgument, "served camera '{}': it has UserOutput0 to UserOutput2, not {}", impl_->deviceId(),
+         index);
+  return readRegister(impl_->camera(), detail::kUserOutputValueRegister + 4 * static_cast<guint32>(index)) != 0;
+}
+
+std::string GvCameraServer::lineSource(int line) const {
+  if (line < 0 || line > 2)
+    fail(Errc::InvalidArgument, "served camera '{}': it has Line0 to Line2, not {}", impl_->deviceId(), line);
+  const guint32 mode = readRegister(impl_->camera(), detail::kLineModeRegister + 4 * static_cast<guint32>(line));
+  const guint32 source = readRegister(impl_->camera(), detail::kLineSourceRegister + 4 * static_cast<guint32>(line));
+  if (mode != 1) return "Input";
+  return source == 0 ? "Off" : "UserOutput" + std::to_string(source - 1);
 }
 
 void GvCameraServer::setPacketLoss(double ratio) {

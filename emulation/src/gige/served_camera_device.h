@@ -43,6 +43,21 @@ class ServedCameraDevice {
   std::atomic<bool> published_{false};
 };
 
+// The digital outputs' registers (SFNC's DigitalIOControl), in the device's
+// own register space above GigE Vision's bootstrap registers (0x0000 to
+// 0x9FFF), where Aravis's fake camera keeps nothing. LineMode and LineSource
+// are one register per line, UserOutputValue one per user output, 4 bytes apart.
+constexpr guint32 kLineSelectorRegister = 0xA000;
+constexpr guint32 kLineModeRegister = 0xA010;
+constexpr guint32 kLineSourceRegister = 0xA020;
+constexpr guint32 kUserOutputSelectorRegister = 0xA030;
+constexpr guint32 kUserOutputValueRegister = 0xA040;
+
+// The served camera's GenICam description: `fakeCameraXml` (Aravis's fake
+// camera's) with the category DigitalIOControl added (LineSelector, LineMode,
+// LineSource, UserOutputSelector, UserOutputValue on the registers above).
+std::string servedGenicamXml(const std::string& fakeCameraXml);
+
 // "<vendor>-<model>-<serial>", what Aravis's discovery reports.
 std::string servedDeviceId(const GvCameraServerOptions& options);
 

@@ -94,6 +94,14 @@ class GvCameraServer {
   // TriggerSource reads Software for the instant until it takes it, at most
   // one trigger period, 5 ms.)
   bool fireLine(int timeout_ms = 200);
+  // The camera's outputs as a client left them in its registers (SFNC's
+  // DigitalIOControl, which the served camera's description adds to
+  // Aravis's): whether UserOutput<index> is set, and what drives Line<line>
+  // ("Input" for a line not in LineMode Output, else "Off" or
+  // "UserOutput<n>"). Lines and user outputs 0 to 2; others throw
+  // Errc::InvalidArgument.
+  bool userOutput(int index) const;
+  std::string lineSource(int line) const;
 
   // The constructor's checks of `options` that need no frame filler nor
   // sensor size, for a check before slow work that precedes serving: the

@@ -106,6 +106,10 @@ class ServedBench {
   // An edge on the camera's Line0 (GvCameraServer::fireLine); false when the camera is off.
   bool fireLine();
   std::filesystem::path part() const;
+  // The GigE Vision camera's outputs as the client set them (GvCameraServer::userOutput, lineSource).
+  // Errc::InvalidArgument for a USB3 Vision camera, Errc::Device while the camera is off.
+  bool cameraUserOutput(int index) const;
+  std::string cameraLineSource(int line) const;
 
   // The camera leaves the network (no answer to anything, the stream stops) and comes back as a freshly
   // started device. Idempotent.
