@@ -53,6 +53,8 @@ int runRun(const RunArgs& a, const GlobalOptions& global) {
   fmt::print("{} parts in {:.1f} s ({:.2f} parts/s): {} passed, {} failed, {} not inspected\n{}\n{}\n", r.counts.parts,
              r.seconds, r.counts.parts / std::max(r.seconds, 1e-9), r.counts.passed, r.counts.failed, r.counts.errors,
              r.records.string(), r.page.string());
+  // The outputs' trouble ([output.mqtt]) does not fail the run: its records are all in its file.
+  for (const std::string& problem : r.outputProblems) fmt::print(stderr, "run: output: {}\n", problem);
   return 0;
 }
 

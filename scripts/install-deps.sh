@@ -34,6 +34,8 @@ PACKAGES=(
   clang-format
   # the Python package (python/: pybind11) and its tests (pytest, numpy)
   pybind11-dev python3-dev python3-pytest python3-numpy
+  # a run's records over MQTT ([output.mqtt]: libmosquitto) and the broker its tests start (mosquitto, mosquitto_passwd)
+  libmosquitto-dev mosquitto
 )
 
 if [[ ! -r /etc/os-release ]] || ! grep -qE '^ID=debian' /etc/os-release \

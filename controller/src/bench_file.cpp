@@ -216,10 +216,71 @@ void readInspection(ConfigTable t, BenchFile& b) {
          t.file(), b.smallestDefect_mm, b.closing_mm, 4 * d.smoothing_px, d.closing_px, b.objectPixel_mm);
 }
 
+// [output.mqtt]. The broker's secrets stay in files of their own (credentials_file, key_file), never here.
+MqttOutputSettings readMqtt(ConfigTable t) {
+  t.requireKnownKeys({"broker", "topic", "qos", "client_id", "credentials_file", "ca_file", "cert_file", "key_file",
+                      "queue_limit", "keepalive_s", "drain_s"});
+  MqttOutputSettings m;
+  m.broker = t.string("broker");
+  const auto scheme = m.broker.find("://");
+  const std::string kind = scheme == std::string::npos ? "" : m.broker.substr(0, scheme);
+  if (kind != "mqtt" && kind != "mqtts")
+    fail(Errc::Config, "{}: '{}' is not mqtt://host[:port] or mqtts://host[:port]", t.where("broker"), m.broker);
+  m.tls = kind == "mqtts";
+  m.port = m.tls ? 8883 : 1883;
+  std::string rest = m.broker.substr(scheme + 3);
+  if (!rest.empty() && rest.back() == '/') rest.pop_back();
+  const auto colon = rest.rfind(':');
+  m.host = rest.substr(0, colon);
+  if (colon != std::string::npos) {
+    const std::string port = rest.substr(colon + 1);
+    char* end = nullptr;
+    const long value = std::strtol(port.c_str(), &end, 10);
+    if (port.empty() || *end != '\0' || value < 1 || value > 65535)
+      fail(Errc::Config, "{}: '{}' is not a port (1 to 65535)", t.where("broker"), port);
+    m.port = static_cast<int>(value);
+  }
+  if (m.host.empty() || m.host.find_first_of("/@?# ") != std::string::npos)
+    fail(Errc::Config, "{}: '{}' names no host (mqtt://host[:port])", t.where("broker"), m.broker);
+  m.topic = t.string("topic");
+  if (m.topic.empty() || m.topic.find_first_of("+#") != std::string::npos || m.topic.back() == '/')
+    fail(Errc::Config, "{}: '{}' is not a topic prefix (not empty, no wildcards + or #, no trailing /)",
+         t.where("topic"), m.topic);
+  m.qos = t.integer("qos", 1, 0, 2);
+  m.clientId = t.string("client_id", "");
+  if (t.has("credentials_file")) m.credentialsFile = pathIn(t, "credentials_file");
+  if (t.has("ca_file")) m.caFile = pathIn(t, "ca_file");
+  if (t.has("cert_file")) m.certFile = pathIn(t, "cert_file");
+  if (t.has("key_file")) m.keyFile = pathIn(t, "key_file");
+  if (m.certFile.empty() != m.keyFile.empty())
+    fail(Errc::Config, "{}: cert_file and key_file go together (the client's certificate and its key)", t.file());
+  if (!m.tls && (!m.caFile.empty() || !m.certFile.empty()))
+    fail(Errc::Config, "{}: ca_file, cert_file and key_file need an mqtts:// broker", t.where("broker"));
+  m.queueLimit = t.integer("queue_limit", 1000, 1, 1'000'000);
+  m.keepalive_s = t.integer("keepalive_s", 10, 5, 3600);
+  m.drain_s = t.number("drain_s", 5.0, 0, 3600);
+  t.finish();
+  return m;
+}
+
+LineOutputSettings readLine(ConfigTable t) {
+  t.requireKnownKeys({"line", "user_output", "pulse_ms"});
+  LineOutputSettings l;
+  l.line = t.string("line", l.line);
+  l.userOutput = t.string("user_output", l.userOutput);
+  for (const auto& [key, value] : {std::pair{"line", l.line}, std::pair{"user_output", l.userOutput}})
+    if (value.empty()) fail(Errc::Config, "{} is empty", t.where(key));
+  l.pulse_ms = t.number("pulse_ms", l.pulse_ms, 1, 10'000);
+  t.finish();
+  return l;
+}
+
 void readOutput(ConfigTable t, BenchFile& b) {
   b.outputFolder = pathIn(t, "folder");
   const std::string save = t.string("save_images", "failed", {"all", "failed", "none"});
   b.saveImages = save == "all" ? SaveImages::All : save == "none" ? SaveImages::None : SaveImages::Failed;
+  if (t.has("mqtt")) b.mqtt = readMqtt(t.table("mqtt"));
+  if (t.has("line")) b.line = readLine(t.table("line"));
   t.finish();
 }
 
@@ -283,7 +344,7 @@ BenchFile readBenchFile(const fs::path& file) {
                       "max_defects", "max_defect_area_mm2", "max_total_area_mm2"},
                      false))
     readInspection(*t, b);
-  readOutput(*table("output", {"folder", "save_images"}, true), b);
+  readOutput(*table("output", {"folder", "save_images", "mqtt", "line"}, true), b);
   if (auto t = table("run", {"on_device_loss", "wait_limit_s"}, false)) readRun(*t, b);
   root.finish();
   return b;

@@ -84,6 +84,9 @@ PyRecord PyRun::next() {
   }
   stop();
   if (error_) std::rethrow_exception(std::exchange(error_, nullptr));
+  // The outputs' trouble ([output.mqtt]) as warnings: the run's records are all in its file.
+  for (const std::string& problem : std::exchange(result_.outputProblems, {}))
+    if (PyErr_WarnEx(PyExc_RuntimeWarning, problem.c_str(), 1) != 0) throw py::error_already_set();
   throw py::stop_iteration();
 }
 

@@ -19,6 +19,7 @@
 #include "lfi/controller/coded_capture.h"
 #include "lfi/controller/inspector.h"
 #include "lfi/controller/reference_capture.h"
+#include "lfi/controller/run.h"
 #include "lfi/drivers/builtin_backends.h"
 #include "lfi/emulation/served_bench.h"
 #include "lfi/sim/devices/sim_camera.h"
@@ -43,10 +44,11 @@ using testing_support::readText;
 using testing_support::StudyPart;
 using testing_support::studyParts;
 
-enum class Wiring { AllSim, ServedCamera, ServedDisplay };
+enum class Wiring { AllSim, ServedCamera, ServedDisplay, AllServed };
 void PrintTo(Wiring w, std::ostream* os) {
   *os << (w == Wiring::AllSim         ? "sim: camera and display"
           : w == Wiring::ServedCamera ? "aravis: camera, sim: display"
+          : w == Wiring::AllServed    ? "aravis: camera, usb: display"
                                       : "sim: camera, usb: display");
 }
 
@@ -73,10 +75,12 @@ class MixedWiring : public testing::TestWithParam<std::tuple<Wiring, std::string
     served_ = std::make_unique<emulation::ServedBench>(emulation::ServedBenchOptions{.scene = scenes_["intact"]});
   }
 
-  // The bench with the part of `scene` in place: the served devices by their URIs, the simulated ones on `scene`.
-  BenchFile bench(Wiring wiring, const std::string& capture, const fs::path& scene) const {
+  // The bench with the part of `scene` in place: the served devices by their URIs, the simulated ones on `scene`;
+  // `more` after its tables.
+  BenchFile bench(Wiring wiring, const std::string& capture, const fs::path& scene,
+                  const std::string& more = "") const {
     const std::string sim = "sim:" + scene.string();
-    const bool servedCamera = wiring == Wiring::ServedCamera;
+    const bool servedCamera = wiring == Wiring::ServedCamera || wiring == Wiring::AllServed;
     return readBenchFile(folder_.write(
         "bench.toml",
         fmt::format(R"(format = "lfi-inspection-bench"
@@ -103,26 +107,30 @@ smallest_defect_mm = 1.0
 closing_mm = 0.5
 [output]
 folder = "out"
+{6}
 )",
                     servedCamera ? served_->cameraUri().text() : sim,
                     // The served camera's format is Mono16 (the scene's 12 bits x 16); the sim: camera's Mono12.
                     servedCamera ? "Mono16" : "Mono12", servedCamera ? 6.24 : 0.39, servedCamera ? 15.7 : 0.98,
-                    wiring == Wiring::ServedDisplay ? served_->displayUri().text() : sim,
+                    wiring == Wiring::ServedDisplay || wiring == Wiring::AllServed ? served_->displayUri().text() : sim,
                     capture == "coded" ? std::string("coded:")
-                                       : DeviceUri{.scheme = "sim", .path = scenes_.at("intact").string()}.text())));
+                                       : DeviceUri{.scheme = "sim", .path = scenes_.at("intact").string()}.text(),
+                    more)));
+  }
+
+  // The reference with the intact part.
+  ReferencePackage reference(Wiring wiring, const std::string& capture) {
+    served_->putPart(scenes_.at("intact"));
+    const BenchFile b = bench(wiring, capture, scenes_.at("intact"));
+    auto c = openBenchCapture(b);
+    auto display = openBenchDisplay(b);
+    auto camera = openBenchCamera(b);
+    return takeReference(b, *c, *display, *camera);
   }
 
   // Capture → emit → inspect: the reference with the intact part, then each part of the study in turn.
   std::map<std::string, Outcome> loop(Wiring wiring, const std::string& capture) {
-    served_->putPart(scenes_.at("intact"));
-    ReferencePackage package;
-    {
-      const BenchFile b = bench(wiring, capture, scenes_.at("intact"));
-      auto c = openBenchCapture(b);
-      auto display = openBenchDisplay(b);
-      auto camera = openBenchCamera(b);
-      package = takeReference(b, *c, *display, *camera);
-    }
+    const ReferencePackage package = reference(wiring, capture);
     std::map<std::string, Outcome> out;
     for (const StudyPart& part : studyParts()) {
       served_->putPart(scenes_.at(part.name));
@@ -193,6 +201,45 @@ TEST_P(MixedWiring, OneRealDriverGivesTheVerdictsAndDefectsOfTheSimulatedLoop) {
   const auto counts = served_->counters();
   // (and the served device took part)
   EXPECT_GT(wiring == Wiring::ServedCamera ? counts.framesServed : counts.panelsPresented, 0u);
+}
+
+// [output.line] on the served camera, through Aravis: a run of intact and defect parts raises the camera's
+// UserOutput0 on Line1 at each failed part's verdict (high in the device's registers while its record is written)
+// and lowers it before the next part; a passed part leaves it low. So it toggles once per failed part.
+class RejectLineOnTheServedCamera : public MixedWiring {};
+
+TEST_F(RejectLineOnTheServedCamera, TogglesOncePerFailedPart) {
+  // (both devices served, so that the parts change under the devices the run keeps open)
+  const ReferencePackage package = reference(Wiring::AllServed, "sim");
+  std::string defect;
+  for (const StudyPart& part : studyParts())
+    if (!part.intact && defect.empty()) defect = part.name;
+  const std::vector<std::string> parts = {"intact", defect, defect, "intact", defect, "intact"};
+  const BenchFile b = bench(Wiring::AllServed, "sim", scenes_.at("intact"),
+                            "[output.line]\nline = \"Line1\"\nuser_output = \"UserOutput0\"\npulse_ms = 5\n");
+  served_->putPart(scenes_.at(parts[0]));
+  RunOptions o;
+  o.folder = folder_.path() / "run";
+  o.parts = static_cast<long>(parts.size());
+  std::vector<bool> failed, highAtRecord, highAfterPart;
+  o.onRecord = [&](const InspectionRecord& r) {
+    ASSERT_TRUE(r.verdict.has_value()) << r.error;
+    failed.push_back(!r.verdict->pass);
+    highAtRecord.push_back(served_->cameraUserOutput(0));
+    if (r.part < parts.size()) served_->putPart(scenes_.at(parts[r.part]));
+  };
+  o.onPart = [&](const RunCounts&, double) { highAfterPart.push_back(served_->cameraUserOutput(0)); };
+  const RunResult r = runParts(b, b, package, o);
+  EXPECT_EQ(served_->cameraLineSource(1), "UserOutput0");
+  ASSERT_EQ(failed.size(), parts.size());
+  ASSERT_EQ(highAfterPart.size(), parts.size());
+  for (std::size_t i = 0; i < parts.size(); ++i) {
+    SCOPED_TRACE(i + 1);
+    EXPECT_EQ(failed[i], parts[i] != "intact");
+    EXPECT_EQ(highAtRecord[i], failed[i]);
+    EXPECT_FALSE(highAfterPart[i]);
+  }
+  EXPECT_EQ(r.counts.failed, 3);
 }
 
 }  // namespace

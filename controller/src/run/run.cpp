@@ -3,7 +3,9 @@
 
 #include "lfi/controller/bench_devices.h"
 #include "lfi/controller/inspector.h"
+#include "lfi/controller/mqtt_output.h"
 #include "lfi/controller/part_records.h"
+#include "lfi/controller/reject_line.h"
 #include "lfi/core/error.h"
 #include "lfi/core/log.h"
 #include "lfi/core/output_folder.h"
@@ -56,8 +58,10 @@ struct Station {
   std::unique_ptr<Display> display;
   std::unique_ptr<Camera> camera;
   std::unique_ptr<Inspector> inspector;
+  std::unique_ptr<RejectLine> line;  // [output.line]
 
   void close() {
+    line.reset();
     inspector.reset();
     camera.reset();
     display.reset();
@@ -65,12 +69,13 @@ struct Station {
 };
 
 Station openStation(const BenchFile& bench, const ReferencePackage& package,
-                    const std::shared_ptr<const PartModel>& part) {
+                    const std::shared_ptr<const PartModel>& part, const std::optional<LineOutputSettings>& line) {
   Station s;
   s.display = openBenchDisplay(bench);
   s.camera = openBenchCamera(bench);
   s.inspector = std::make_unique<Inspector>(bench, package, *s.display, *s.camera, part);
   s.inspector->showReference();
+  if (line) s.line = std::make_unique<RejectLine>(*s.camera, *line);
   return s;
 }
 
@@ -85,16 +90,20 @@ class Run {
       : bench_(bench), devices_(devices), package_(package), options_(options) {}
 
   RunResult operator()() {
-    Station station = openStation(devices_, package_, options_.partModel);
+    Station station = open();
     requireOutputFolder(options_.folder / "images", "run", "its records and images");
     RecordLog log(options_.folder / "records.jsonl");
     log_ = &log;
+    if (bench_.mqtt) {
+      mqtt_ = std::make_unique<MqttOutput>(*bench_.mqtt);
+      mqtt_->publishState(RunState::Running);
+    }
     page_ = options_.folder / "summary.html";
     start_ = lastPage_ = Clock::now();
     while (!done()) {
       ++part_;
       try {
-        inspect(*station.inspector);
+        inspect(station);
       } catch (const Error& e) {
         if (!onError(e)) continue;  // no part came
         station.close();
@@ -104,7 +113,9 @@ class Run {
       if (options_.onPart) options_.onPart(counts_, seconds());
       refreshPage();
     }
-    return {writeRunSummary(log.file(), page_, false), seconds(), log.file(), page_};
+    RunResult result{writeRunSummary(log.file(), page_, false), seconds(), log.file(), page_, {}};
+    if (mqtt_) result.outputProblems = mqtt_->finish();
+    return result;
   }
 
  private:
@@ -115,17 +126,23 @@ class Run {
            (options_.seconds > 0 && seconds() >= options_.seconds);
   }
 
-  // The part's record to the log, then to the caller.
+  Station open() const { return openStation(devices_, package_, options_.partModel, bench_.line); }
+
+  // The part's record to the log, then to the broker and the caller.
   void record(const InspectionRecord& r) {
     log_->append(r);
+    if (mqtt_) mqtt_->publishRecord(r.part, recordText(r, -1));
     if (options_.onRecord) options_.onRecord(r);
   }
 
-  void inspect(Inspector& inspector) {
-    const PartInspection result = inspector.inspectPart();
-    record(partRecord(bench_, inspector, result, part_, utcNow(), options_.folder / "images",
+  // A failed part raises the output line at its verdict; the line is low again before the next part.
+  void inspect(Station& station) {
+    const PartInspection result = station.inspector->inspectPart();
+    if (station.line && !result.verdict.pass) station.line->raise();
+    record(partRecord(bench_, *station.inspector, result, part_, utcNow(), options_.folder / "images",
                       fmt::format("part-{:06d}", part_)));
     (result.verdict.pass ? counts_.passed : counts_.failed) += 1;
+    if (station.line) station.line->lower();
   }
 
   // Records a part that failed; throws when the run stops, and returns false
@@ -164,6 +181,7 @@ class Run {
       std::chrono::duration<double> waited{};
       const std::chrono::duration<double> limit(bench_.waitLimit_s);
       std::string last = why;
+      if (mqtt_) mqtt_->publishState(RunState::Waiting);
       while (!stopRequested()) {
         if (waited + pause > limit)
           fail(Errc::Device, "run: the devices did not come back within {} s ([run] wait_limit_s): {}",
@@ -175,7 +193,9 @@ class Run {
           std::this_thread::sleep_for(pause);
         waited += pause;
         try {
-          return openStation(devices_, package_, options_.partModel);
+          Station station = open();
+          if (mqtt_) mqtt_->publishState(RunState::Running);
+          return station;
         } catch (const Error& e) {
           if (!deviceTrouble(e)) throw;
           last = e.what();
@@ -203,6 +223,7 @@ class Run {
   const ReferencePackage& package_;
   const RunOptions& options_;
   RecordLog* log_ = nullptr;
+  std::unique_ptr<MqttOutput> mqtt_;  // [output.mqtt]
   fs::path page_;
   Clock::time_point start_, lastPage_;
   Clock::duration pageTime_{};

@@ -75,6 +75,20 @@
 //                  save_images            -      "failed"    all | failed | none: the part images kept
 //   [run]          on_device_loss         -      "stop"      stop | wait: wait for the device to come back
 //                  wait_limit_s           s      60          how long to wait, with a bounded back-off
+//   [output.mqtt]  broker                 -      required    mqtt://host[:port] (1883) or mqtts://host[:port] (8883)
+//   (a run's       topic                  -      required    topic prefix: <topic>/record, <topic>/state
+//   records and    qos                    -      1           0 | 1 | 2 for the records (the state: 1)
+//   state to an    client_id              -      "lfi-<host>-<pid>"
+//   MQTT broker,   credentials_file       path   none        a file holding "<username>:<password>" on its first line
+//   mqtt_output.h) ca_file                path   none        mqtts: the CA certificates (PEM); none: the system's
+//                  cert_file, key_file    path   none        mqtts: the client's certificate and key (PEM), both or
+//                  neither queue_limit            -      1000        records held while the broker is away keepalive_s
+//                  s      10          the MQTT keep-alive, and so how soon the last will fires drain_s                s
+//                  5           at the end of a run, how long to wait for the queue
+//   [output.line]  line                   -      "Line1"     the camera's output line (LineSelector) pulsed on a
+//   (reject_line.h)                                           failed part
+//                  user_output            -      "UserOutput0"  its source (LineSource; UserOutputSelector)
+//                  pulse_ms               ms     50          how long the line stays high
 //
 // Units: mm, rad, µs; frames: image pixels (OpenCV's: top-left centre (0, 0)),
 // the part's frame as verdict.h defines it.
@@ -98,6 +112,28 @@ namespace lfi {
 
 enum class SaveImages { All, Failed, None };
 enum class OnDeviceLoss { Stop, Wait };
+
+// [output.mqtt]: where a run publishes its records and state (mqtt_output.h).
+struct MqttOutputSettings {
+  std::string broker;  // mqtt://host[:port] or mqtts://host[:port]
+  std::string host;
+  int port = 1883;
+  bool tls = false;
+  std::string topic;  // the prefix: <topic>/record, <topic>/state
+  int qos = 1;
+  std::string clientId;                                              // empty: lfi-<host name>-<process id>
+  std::filesystem::path credentialsFile, caFile, certFile, keyFile;  // empty: none
+  int queueLimit = 1000;
+  int keepalive_s = 10;
+  double drain_s = 5;
+};
+
+// [output.line]: the camera's output line pulsed on a failed part (reject_line.h).
+struct LineOutputSettings {
+  std::string line = "Line1";
+  std::string userOutput = "UserOutput0";
+  double pulse_ms = 50;
+};
 
 struct BenchFile {
   std::filesystem::path file;  // as given
@@ -144,6 +180,8 @@ struct BenchFile {
   // [output]
   std::filesystem::path outputFolder;
   SaveImages saveImages = SaveImages::Failed;
+  std::optional<MqttOutputSettings> mqtt;  // [output.mqtt]
+  std::optional<LineOutputSettings> line;  // [output.line]
   // [run]
   OnDeviceLoss onDeviceLoss = OnDeviceLoss::Stop;
   double waitLimit_s = 60;

@@ -8,7 +8,10 @@
 // in hand; the run then stops, or, with [run] on_device_loss = "wait",
 // reopens the devices with a doubling back-off (0.5 s to 8 s) whose pauses
 // add up to at most [run] wait_limit_s. A hardware-triggered camera that saw
-// no trigger in time means no part came: nothing is recorded.
+// no trigger in time means no part came: nothing is recorded. The bench's
+// [output.mqtt] publishes each record and the run's state as they happen
+// (mqtt_output.h); its [output.line] pulses the camera's output line on each
+// failed part (reject_line.h).
 
 #include "lfi/controller/bench_file.h"
 #include "lfi/controller/inspection_record.h"
@@ -23,6 +26,7 @@
 #include <filesystem>
 #include <functional>
 #include <string>
+#include <vector>
 
 namespace lfi {
 
@@ -66,6 +70,9 @@ struct RunResult {
   RunCounts counts;  // as the records say (the summary's)
   double seconds = 0;
   std::filesystem::path records, page;
+  // What went wrong with the outputs ([output.mqtt]: an unreachable broker, a refused connection, records
+  // not published or not acknowledged), each naming the broker; the records are in `records` all the same.
+  std::vector<std::string> outputProblems;
 };
 
 // Runs parts on `devices` (the bench's, or a simulated bench's with another
