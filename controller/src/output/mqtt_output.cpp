@@ -61,6 +61,11 @@ void requireReadable(const fs::path& file, const char* key) {
 std::pair<std::string, std::string> readCredentials(const fs::path& file) {
   std::ifstream in(file);
   if (!in) fail(Errc::NotFound, "[output.mqtt] credentials_file: cannot read '{}'", file.string());
+  std::error_code error;
+  const fs::perms mode = fs::status(file, error).permissions();
+  if (!error && (mode & fs::perms::others_read) != fs::perms::none)
+    spdlog::warn("[output.mqtt] credentials_file '{}' can be read by every user of this machine (chmod 600 it)",
+                 file.string());
   std::string line;
   std::getline(in, line);
   if (!line.empty() && line.back() == '\r') line.pop_back();
