@@ -71,6 +71,7 @@ other_lane() {
   run usb_display 300 "$umockdev" "$tests/test_display" || status=1
   run tile_renderer 120 "$tests/test_sim" --gtest_filter='Render.*:CameraSensorModel.*' || status=1
   run sim_camera 120 "$tests/test_sim_camera" || status=1
+  run run_output 180 "$tests/test_run_output" || status=1
   return $status
 }
 gige_lane &
