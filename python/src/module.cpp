@@ -3,8 +3,10 @@
 
 #include "bindings.h"
 
+#include "lfi/controller/coded_capture.h"  // registerControllerBackends
 #include "lfi/core/error.h"
-#include "lfi/sim/devices/sim_camera.h"  // registerSimBackends
+#include "lfi/drivers/builtin_backends.h"  // registerDriverBackends
+#include "lfi/sim/devices/sim_camera.h"    // registerSimBackends
 
 #include <pybind11/stl.h>
 #include <pybind11/stl/filesystem.h>
@@ -63,7 +65,10 @@ PYBIND11_MODULE(_lfi, m) {
   using namespace lfi::python;
   m.doc() = "lfi's native module: the Python package lfi re-exports it (docs/python.md).";
   m.attr("__version__") = LFI_VERSION;
+  // Every backend the command line has: aravis:, usb:, window:, sim:, coded:.
+  registerDriverBackends();
   sim::registerSimBackends();
+  registerControllerBackends();
 
   // lfi::Error as lfi.Error (a RuntimeError), its code as a string attribute.
   static py::exception<Error> error(m, "Error", PyExc_RuntimeError);
@@ -81,6 +86,7 @@ PYBIND11_MODULE(_lfi, m) {
   bindRecords(m);
   bindRun(m);
   bindDevices(m);
+  bindLightFields(m);
 
   py::class_<PyBench>(m, "Bench", "A bench file, read and checked (docs/inspection.md).")
       .def(py::init([](const fs::path& path) { return PyBench{readBenchFile(path)}; }), py::arg("path"),
