@@ -6,7 +6,8 @@ the same errors raised as :class:`Error` (its ``code`` the kind: ``"Config"``, `
 Units: mm, µs, DN; image pixels with the top-left pixel's centre at (0, 0).
 """
 
-from ._lfi import Bench, Camera, Defect, Display, Error, Record, Run, __version__, open_camera, open_display
+from ._lfi import (Bench, Camera, Defect, Display, Error, FrameView, LightField, Record, Run, __version__,
+                   open_camera, open_display, read_light_field, render, write_light_field)
 
-__all__ = ["Bench", "Camera", "Defect", "Display", "Error", "Record", "Run", "__version__", "open_camera",
-           "open_display"]
+__all__ = ["Bench", "Camera", "Defect", "Display", "Error", "FrameView", "LightField", "Record", "Run",
+           "__version__", "open_camera", "open_display", "read_light_field", "render", "write_light_field"]

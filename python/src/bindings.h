@@ -67,7 +67,10 @@ class PyRun {
 // Binds Run.
 void bindRun(py::module_& m);
 
-// Binds Camera, Display, open_camera and open_display (devices.cpp).
+// Binds Camera, FrameView, Display, open_camera and open_display (devices.cpp).
 void bindDevices(py::module_& m);
+
+// Binds LightField, read_light_field, write_light_field and render (light_fields.cpp).
+void bindLightFields(py::module_& m);
 
 }  // namespace lfi::python

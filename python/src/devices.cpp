@@ -34,7 +34,55 @@ TriggerMode triggerMode(const std::string& name) {
 struct PyCamera {
   std::unique_ptr<Camera> camera;
   int buffers = 4;
+  Frame viewFrame;        // what fetch() grabs into, its memory reused from frame to frame
+  bool viewOpen = false;  // a FrameView over viewFrame is inside its with block
+
+  // The next frame into `frame` (a software trigger first when the camera is so triggered), the GIL released.
+  void grabInto(Frame& frame, double timeout_ms) {
+    {
+      py::gil_scoped_release release;
+      if (camera->state() != Camera::State::Streaming) camera->start(buffers);
+      if (camera->settings().trigger == TriggerMode::Software) camera->softwareTrigger();
+      camera->grabInto(frame, std::chrono::milliseconds(static_cast<long>(timeout_ms)));
+    }
+    if (frame.status == FrameStatus::Timeout)
+      fail(Errc::Timeout, "camera '{}': no frame within {} ms", camera->info().deviceId, timeout_ms);
+  }
 };
+
+// A frame fetched without a copy: its image a numpy view of the camera's own buffer, read inside the with
+// block. Each view holds a reference to the buffer, and a camera never writes into a buffer someone else
+// holds (camera.h's grabInto reuses it only when it is the last), so a view kept past its block stays its
+// frame and memory-safe; once the views are gone, the next fetch reuses the memory.
+struct PyFrameView {
+  PyCamera* camera;
+  py::object owner;  // the Python camera, kept alive while the view is
+  bool open = true;
+
+  const Frame& frame() const {
+    if (!open) fail(Errc::InvalidArgument, "this frame view is closed: its with block ended (grab() copies)");
+    return camera->viewFrame;
+  }
+  void close() {
+    if (open) camera->viewOpen = false;
+    open = false;
+  }
+};
+
+// A numpy view of `image` (no copy) whose base keeps its memory alive.
+py::array imageView(const cv::Mat& image) {
+  auto* held = new cv::Mat(image);  // (one more reference to the buffer, released with the array)
+  const py::capsule base(held, [](void* p) { delete static_cast<cv::Mat*>(p); });
+  const auto view = [&](auto tag) {
+    using T = decltype(tag);
+    return py::array(py::array_t<T>({image.rows, image.cols},
+                                    {static_cast<py::ssize_t>(image.step[0]), static_cast<py::ssize_t>(sizeof(T))},
+                                    reinterpret_cast<const T*>(image.data), base));
+  };
+  if (image.depth() == CV_8U) return view(std::uint8_t{});
+  if (image.depth() == CV_16U) return view(std::uint16_t{});
+  fail(Errc::InvalidArgument, "a frame of OpenCV depth {}, not 8 or 16 bits", image.depth());
+}
 
 py::dict frameDict(Frame& frame) {
   py::dict d;
@@ -64,14 +112,7 @@ void bindDevices(py::module_& m) {
           "grab",
           [](PyCamera& c, double timeout_ms) {
             Frame frame;
-            {
-              py::gil_scoped_release release;
-              if (c.camera->state() != Camera::State::Streaming) c.camera->start(c.buffers);
-              if (c.camera->settings().trigger == TriggerMode::Software) c.camera->softwareTrigger();
-              c.camera->grabInto(frame, std::chrono::milliseconds(static_cast<long>(timeout_ms)));
-            }
-            if (frame.status == FrameStatus::Timeout)
-              fail(Errc::Timeout, "camera '{}': no frame within {} ms", c.camera->info().deviceId, timeout_ms);
+            c.grabInto(frame, timeout_ms);
             return frameDict(frame);
           },
           py::arg("timeout_ms") = 1000.0,
@@ -79,9 +120,42 @@ void bindDevices(py::module_& m) {
           "uint8 for Mono8, uint16 for Mono12 and Mono16, a copy), frame_id, timestamp_ns and status "
           "(\"Complete\", \"Incomplete\"). lfi.Error (code \"Timeout\") when none comes in time.")
       .def(
+          "fetch",
+          [](py::object self, double timeout_ms) {
+            PyCamera& c = self.cast<PyCamera&>();
+            if (c.viewOpen)
+              fail(Errc::InvalidArgument,
+                   "camera '{}': a frame view is open; leave its with block before the next fetch()",
+                   c.camera->info().deviceId);
+            c.grabInto(c.viewFrame, timeout_ms);
+            c.viewOpen = true;
+            return PyFrameView{&c, self};
+          },
+          py::arg("timeout_ms") = 1000.0,
+          "The next frame without a copy, for a with block: `with camera.fetch() as frame: frame.image` is a "
+          "numpy view of the camera's own buffer. The next fetch() reuses that memory, unless a view of it is "
+          "still held: the camera then takes other memory and never overwrites it. grab() copies. One "
+          "FrameView at a time.")
+      .def(
           "close", [](PyCamera& c) { c.camera->close(); }, "Closes the camera.")
       .def("__enter__", [](py::object self) { return self; })
       .def("__exit__", [](PyCamera& c, py::args) { c.camera->close(); });
+
+  py::class_<PyFrameView>(m, "FrameView", "A frame fetched without a copy (Camera.fetch), valid in its with block.")
+      .def_property_readonly(
+          "image", [](const PyFrameView& v) { return imageView(v.frame().image); },
+          "The frame as a numpy view (uint8 for Mono8, uint16 for Mono12 and Mono16), no copy.")
+      .def_property_readonly(
+          "frame_id", [](const PyFrameView& v) { return v.frame().frameId; }, "The device's frame counter.")
+      .def_property_readonly(
+          "timestamp_ns", [](const PyFrameView& v) { return v.frame().timestamp_ns; },
+          "The device's clock at the frame, ns.")
+      .def_property_readonly(
+          "status", [](const PyFrameView& v) { return std::string(toString(v.frame().status)); },
+          "\"Complete\" or \"Incomplete\".")
+      .def("__enter__", [](py::object self) { return self; })
+      .def("__exit__", [](PyFrameView& v, py::args) { v.close(); })
+      .def("close", &PyFrameView::close, "Ends the view, as leaving its with block does.");
 
   m.def(
       "open_camera",
