@@ -36,6 +36,8 @@ PACKAGES=(
   pybind11-dev python3-dev python3-pytest python3-numpy
   # a run's records over MQTT ([output.mqtt]: libmosquitto) and the broker its tests start (mosquitto, mosquitto_passwd)
   libmosquitto-dev mosquitto
+  # the certificates of the MQTT tests' TLS broker
+  openssl
 )
 
 if [[ ! -r /etc/os-release ]] || ! grep -qE '^ID=debian' /etc/os-release \

@@ -193,6 +193,49 @@ TEST_F(RunOutputTest, AnUnreachableBrokerIsNamedAndTheRunsRecordsAreKept) {
     EXPECT_NE(all.find(part), std::string::npos) << part << " not in:\n" << all;
 }
 
+// A certificate authority, a certificate for 127.0.0.1 it signed (server.pem, server.key) and a stranger's
+// self-signed one (stranger.pem), made by openssl in `folder`; false when openssl fails.
+bool makeCertificates(const fs::path& folder) {
+  const std::string key = " -newkey ec -pkeyopt ec_paramgen_curve:prime256v1 -nodes -days 2";
+  const std::string script = "cd '" + folder.string() +
+                             "' && printf 'subjectAltName=IP:127.0.0.1,DNS:localhost\\n' > san" +
+                             " && openssl req -x509" + key + " -keyout ca.key -out ca.pem -subj /CN=lfi-test-ca" +
+                             " && openssl req" + key + " -keyout server.key -out server.csr -subj /CN=127.0.0.1" +
+                             " && openssl x509 -req -in server.csr -CA ca.pem -CAkey ca.key -CAcreateserial" +
+                             " -out server.pem -days 2 -extfile san" + " && openssl req -x509" + key +
+                             " -keyout stranger.key -out stranger.pem -subj /CN=stranger >/dev/null 2>&1";
+  return std::system(("(" + script + ") >/dev/null 2>&1").c_str()) == 0;
+}
+
+TEST_F(RunOutputTest, AnMqttsBrokerIsReachedThroughItsAuthorityAndAnotherIsNamed) {
+  if (std::system("command -v openssl >/dev/null 2>&1") != 0) LFI_SKIP_WITHOUT_TOOL("no openssl (Debian: openssl)");
+  const fs::path tls = folder_->path() / "tls";
+  fs::create_directories(tls);
+  ASSERT_TRUE(makeCertificates(tls));
+  // The broker's TLS listener, and a plain one for the test's listener.
+  const int plain = testing_support::freeLoopbackPort();
+  MosquittoBroker broker(tls / "broker", "allow_anonymous true\ncafile " + (tls / "ca.pem").string() + "\ncertfile " +
+                                             (tls / "server.pem").string() + "\nkeyfile " +
+                                             (tls / "server.key").string() + "\nlistener " + std::to_string(plain) +
+                                             " 127.0.0.1");
+  MqttListener listener(plain, prefix() + "/#", "listener-tls");
+  const std::string url = "mqtts://127.0.0.1:" + std::to_string(broker.port());
+  const BenchFile b = bench(url, "ca_file = \"" + (tls / "ca.pem").string() + "\"\n");
+  const RunResult r = runParts(b, b, *package_, options(2));
+  EXPECT_TRUE(r.outputProblems.empty()) << r.outputProblems.front();
+  EXPECT_TRUE(
+      listener.waitFor([&](const auto& m) { return recordParts(m, prefix()).size() == 2; }, std::chrono::seconds(10)));
+  // A broker whose certificate another authority signed is not trusted, and the run says so.
+  const BenchFile stranger = bench(url, "drain_s = 0\nca_file = \"" + (tls / "stranger.pem").string() + "\"\n");
+  RunOptions o = options(1);
+  o.folder += "-stranger";
+  const RunResult refused = runParts(stranger, stranger, *package_, o);
+  EXPECT_EQ(lines(refused.records).size(), 1u);
+  const std::string all = fmt::format("{}", fmt::join(refused.outputProblems, "\n"));
+  for (const std::string& part : {url + ": cannot connect", std::string("certificate verify failed")})
+    EXPECT_NE(all.find(part), std::string::npos) << part << " not in:\n" << all;
+}
+
 TEST_F(RunOutputTest, ARunThatDiesLeavesItsLastWill) {
   MosquittoBroker broker(folder_->path() / "broker-will");
   MqttListener listener(broker.port(), prefix() + "/state", "listener-will");

@@ -97,6 +97,7 @@ struct MqttOutput::Impl {
   int pendingRecords = 0;
   std::set<int> ackedEarly;                     // acknowledged before mosquitto_publish returned their mid
   std::map<std::string, std::string> failures;  // the last failure of each kind ("connect", "refused", ...)
+  std::string clientError;                      // the client's last error log line (a TLS handshake's failure, say)
   std::uint64_t dropped = 0, firstDropped = 0;
   bool droppingNow = false;
 
@@ -150,6 +151,16 @@ struct MqttOutput::Impl {
     if (rc != 0 && wasUp && !self.finished)  // (a refused connection is named as such)
       self.failure(
           "lost", fmt::format("connection lost ({}); reconnecting, records wait in the queue", mosquitto_strerror(rc)));
+  }
+
+  static void onLog(mosquitto*, void* data, int level, const char* text) {
+    if (level != MOSQ_LOG_ERR || !text) return;
+    Impl& self = of(data);
+    {
+      std::lock_guard lock(self.mutex);
+      self.clientError = text;
+    }
+    self.changed.notify_all();
   }
 
   static void onPublish(mosquitto*, void* data, int mid, int, const mosquitto_property*) {
@@ -228,6 +239,7 @@ MqttOutput::MqttOutput(const MqttOutputSettings& settings) : impl_(std::make_uni
   mosquitto_connect_v5_callback_set(m.client, &Impl::onConnect);
   mosquitto_disconnect_v5_callback_set(m.client, &Impl::onDisconnect);
   mosquitto_publish_v5_callback_set(m.client, &Impl::onPublish);
+  mosquitto_log_callback_set(m.client, &Impl::onLog);
 
   const int rc = mosquitto_connect_async(m.client, settings.host.c_str(), settings.port, settings.keepalive_s);
   if (rc != MOSQ_ERR_SUCCESS)
@@ -235,11 +247,15 @@ MqttOutput::MqttOutput(const MqttOutputSettings& settings) : impl_(std::make_uni
                                      rc == MOSQ_ERR_ERRNO ? std::strerror(errno) : mosquitto_strerror(rc)));
   check(mosquitto_loop_start(m.client), "the network thread");
   std::unique_lock lock(m.mutex);
-  const bool answered = m.changed.wait_for(lock, std::chrono::seconds(3), [&] {
-    return m.up || m.failures.count("refused") || m.failures.count("connect");
+  m.changed.wait_for(lock, std::chrono::seconds(3), [&] {
+    return m.up || m.failures.count("refused") || m.failures.count("connect") || !m.clientError.empty();
   });
+  const bool named = m.up || m.failures.count("refused") || m.failures.count("connect");
+  const std::string clientError = m.clientError;
   lock.unlock();
-  if (!answered) m.failure("connect", "cannot connect: no answer within 3 s; retrying, records wait in the queue");
+  if (!named)
+    m.failure("connect", fmt::format("cannot connect: {}; retrying, records wait in the queue",
+                                     clientError.empty() ? "no answer within 3 s" : clientError));
 }
 
 MqttOutput::~MqttOutput() {

@@ -37,8 +37,9 @@ class MqttOutput {
  public:
   // Reads the credentials and certificate files (Errc::NotFound or
   // Errc::Config naming the file), then connects, waiting up to 3 s for the
-  // broker's answer; a broker that is away by then is a problem, retried
-  // in the background.
+  // broker's answer; a broker that is away by then, or a connection that
+  // failed (a TLS handshake's error named), is a problem, retried in the
+  // background.
   explicit MqttOutput(const MqttOutputSettings& settings);
   // Ends the connection without "stopped" (the broker then sends the last
   // will) unless finish() said it; never throws.
