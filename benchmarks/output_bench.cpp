@@ -23,6 +23,7 @@
 #include "lfi/sim/devices/sim_camera.h"
 
 #include "bench_util.h"
+#include "forwarding_camera.h"
 #include "mosquitto_broker.h"
 #include "quick_run_bench.h"
 
@@ -45,33 +46,13 @@ namespace {
 std::atomic<Clock::rep> lastFrame{0};  // when the camera last handed a frame over
 
 // The sim: camera, noting when each frame leaves it.
-class StampedCamera final : public Camera {
+class StampedCamera final : public testing_support::ForwardingCamera {
  public:
-  explicit StampedCamera(std::unique_ptr<Camera> inner) : inner_(std::move(inner)) {}
-  State state() const override { return inner_->state(); }
-  void open() override { inner_->open(); }
-  void close() noexcept override { inner_->close(); }
-  CameraInfo info() const override { return inner_->info(); }
-  void configure(const CameraSettings& s) override { inner_->configure(s); }
-  CameraSettings settings() const override { return inner_->settings(); }
-  void start(int buffers) override { inner_->start(buffers); }
-  void stop() override { inner_->stop(); }
-  void softwareTrigger() override { inner_->softwareTrigger(); }
+  using ForwardingCamera::ForwardingCamera;
   void grabInto(Frame& frame, std::chrono::milliseconds timeout) override {
-    inner_->grabInto(frame, timeout);
+    inner().grabInto(frame, timeout);
     lastFrame = Clock::now().time_since_epoch().count();
   }
-  StreamStatistics statistics() const override { return inner_->statistics(); }
-  std::string getFeature(const std::string& n) override { return inner_->getFeature(n); }
-  void setFeature(const std::string& n, const std::string& v) override { inner_->setFeature(n, v); }
-  std::int64_t getIntegerFeature(const std::string& n) override { return inner_->getIntegerFeature(n); }
-  void setIntegerFeature(const std::string& n, std::int64_t v) override { inner_->setIntegerFeature(n, v); }
-  double getFloatFeature(const std::string& n) override { return inner_->getFloatFeature(n); }
-  void setFloatFeature(const std::string& n, double v) override { inner_->setFloatFeature(n, v); }
-  void executeCommand(const std::string& n) override { inner_->executeCommand(n); }
-
- private:
-  std::unique_ptr<Camera> inner_;
 };
 
 }  // namespace

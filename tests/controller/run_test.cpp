@@ -5,6 +5,7 @@
 // back-off's pauses are recorded, not slept.
 
 #include "lfi/controller/run.h"
+#include "forwarding_camera.h"
 #include "lfi/drivers/camera_registry.h"
 #include "lfi/sim/devices/sim_camera.h"
 #include "lfi_test_support.h"
@@ -31,37 +32,17 @@ struct Flakiness {
 Flakiness flaky;
 
 // The sim: camera of the same scene, failing as `flaky` says (a camera pulled off the network and plugged back).
-class FlakyCamera final : public Camera {
+class FlakyCamera final : public testing_support::ForwardingCamera {
  public:
-  explicit FlakyCamera(std::unique_ptr<Camera> inner) : inner_(std::move(inner)) {}
-  State state() const override { return inner_->state(); }
-  void open() override { inner_->open(); }
-  void close() noexcept override { inner_->close(); }
-  CameraInfo info() const override { return inner_->info(); }
-  void configure(const CameraSettings& s) override { inner_->configure(s); }
-  CameraSettings settings() const override { return inner_->settings(); }
-  void start(int buffers) override { inner_->start(buffers); }
-  void stop() override { inner_->stop(); }
-  void softwareTrigger() override { inner_->softwareTrigger(); }
+  using ForwardingCamera::ForwardingCamera;
   void grabInto(Frame& frame, std::chrono::milliseconds timeout) override {
     if (flaky.grabsLeft.load() == 0) {
-      inner_->close();
+      inner().close();
       fail(Errc::Device, "test-flaky camera: gone from the network");
     }
     if (flaky.grabsLeft.load() > 0) --flaky.grabsLeft;
-    inner_->grabInto(frame, timeout);
+    inner().grabInto(frame, timeout);
   }
-  StreamStatistics statistics() const override { return inner_->statistics(); }
-  std::string getFeature(const std::string& n) override { return inner_->getFeature(n); }
-  void setFeature(const std::string& n, const std::string& v) override { inner_->setFeature(n, v); }
-  std::int64_t getIntegerFeature(const std::string& n) override { return inner_->getIntegerFeature(n); }
-  void setIntegerFeature(const std::string& n, std::int64_t v) override { inner_->setIntegerFeature(n, v); }
-  double getFloatFeature(const std::string& n) override { return inner_->getFloatFeature(n); }
-  void setFloatFeature(const std::string& n, double v) override { inner_->setFloatFeature(n, v); }
-  void executeCommand(const std::string& n) override { inner_->executeCommand(n); }
-
- private:
-  std::unique_ptr<Camera> inner_;
 };
 
 void registerFlakyCamera() {
