@@ -180,6 +180,13 @@ TEST_F(RunOutputTest, BadCredentialsAreNamedAndTheRunsRecordsAreKept) {
       listener.waitFor([&](const auto& m) { return recordParts(m, prefix()).size() == 1; }, std::chrono::seconds(10)));
 }
 
+TEST_F(RunOutputTest, AMissingCredentialsFileStopsTheRunBeforeItMakesItsFolder) {
+  const BenchFile b = bench("mqtt://127.0.0.1:1", "credentials_file = \"/no/such/credentials\"\n");
+  EXPECT_TRUE(throwsError([&] { runParts(b, b, *package_, options(1)); }, Errc::NotFound,
+                          {"credentials_file", "/no/such/credentials"}));
+  EXPECT_FALSE(fs::exists(options(1).folder));
+}
+
 TEST_F(RunOutputTest, AnUnreachableBrokerIsNamedAndTheRunsRecordsAreKept) {
   const std::string nowhere = "mqtt://127.0.0.1:" + std::to_string(testing_support::freeLoopbackPort());
   const BenchFile b = bench(nowhere, "drain_s = 0\nqueue_limit = 2\n");

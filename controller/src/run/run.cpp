@@ -90,14 +90,13 @@ class Run {
       : bench_(bench), devices_(devices), package_(package), options_(options) {}
 
   RunResult operator()() {
+    // (the output's files are checked before the devices open; a run that fails to start leaves its will)
+    if (bench_.mqtt) mqtt_ = std::make_unique<MqttOutput>(*bench_.mqtt);
     Station station = open();
     requireOutputFolder(options_.folder / "images", "run", "its records and images");
     RecordLog log(options_.folder / "records.jsonl");
     log_ = &log;
-    if (bench_.mqtt) {
-      mqtt_ = std::make_unique<MqttOutput>(*bench_.mqtt);
-      mqtt_->publishState(RunState::Running);
-    }
+    if (mqtt_) mqtt_->publishState(RunState::Running);
     page_ = options_.folder / "summary.html";
     start_ = lastPage_ = Clock::now();
     while (!done()) {
