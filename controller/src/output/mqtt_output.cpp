@@ -242,9 +242,14 @@ MqttOutput::MqttOutput(const MqttOutputSettings& settings) : impl_(std::make_uni
   mosquitto_log_callback_set(m.client, &Impl::onLog);
 
   const int rc = mosquitto_connect_async(m.client, settings.host.c_str(), settings.port, settings.keepalive_s);
-  if (rc != MOSQ_ERR_SUCCESS)
-    m.failure("connect", fmt::format("cannot connect: {}; retrying, records wait in the queue",
-                                     rc == MOSQ_ERR_ERRNO ? std::strerror(errno) : mosquitto_strerror(rc)));
+  if (rc != MOSQ_ERR_SUCCESS) {
+    // (a TLS handshake that fails at once has logged OpenSSL's reason on this thread already)
+    const std::string reason = rc == MOSQ_ERR_ERRNO ? std::strerror(errno) : mosquitto_strerror(rc);
+    std::unique_lock lock(m.mutex);
+    const std::string detail = m.clientError.empty() ? "" : " (" + m.clientError + ")";
+    lock.unlock();
+    m.failure("connect", fmt::format("cannot connect: {}{}; retrying, records wait in the queue", reason, detail));
+  }
   check(mosquitto_loop_start(m.client), "the network thread");
   std::unique_lock lock(m.mutex);
   m.changed.wait_for(lock, std::chrono::seconds(3), [&] {
