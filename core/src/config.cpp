@@ -26,6 +26,26 @@ ConfigTable ConfigTable::parseFile(const std::filesystem::path& path) {
   }
 }
 
+ConfigTable ConfigTable::parseFile(const std::filesystem::path& path, const std::vector<Override>& overrides) {
+  ConfigTable parsed = parseFile(path);
+  auto root = std::make_shared<toml::table>(*parsed.root_);
+  for (const Override& o : overrides) {
+    toml::node* n = root->at_path(o.key).node();
+    if (!n || !n->is_number()) fail(Errc::Config, "{}: has no number '{}' to set", path.string(), o.key);
+    if (!std::isfinite(o.value)) fail(Errc::Config, "{}: '{}' cannot be set to {}", path.string(), o.key, o.value);
+    const toml::source_region where = n->source();
+    if (n->is_integer()) {
+      if (o.value != std::floor(o.value) || std::abs(o.value) > 9.0e15)
+        fail(Errc::Config, "{}:{}: the whole number '{}' cannot be set to {}", path.string(), where.begin.line, o.key,
+             o.value);
+      n->as_integer()->get() = static_cast<std::int64_t>(o.value);  // (in place: the node keeps its line)
+    } else {
+      n->as_floating_point()->get() = o.value;
+    }
+  }
+  return ConfigTable(root, root.get(), path.string(), "");
+}
+
 std::string ConfigTable::where(const std::string& key) const {
   const std::string full = path_.empty() ? key : path_ + "." + key;
   const toml::node* n = table_->get(key);
@@ -112,6 +132,28 @@ std::vector<double> ConfigTable::numbers(const std::string& key, size_t minCount
       fail(Errc::Config, "{} must be an array of {} numbers", where(key), count);
     if (*v < min || *v > max)
       fail(Errc::Config, "{}: {} (element {}) is outside [{}, {}]", where(key), *v, out.size(), min, max);
+    out.push_back(*v);
+  }
+  return out;
+}
+
+std::vector<std::string> ConfigTable::strings(const std::string& key, std::optional<std::vector<std::string>> fallback,
+                                              const std::vector<std::string>& allowed) {
+  const toml::node* n = node(key);
+  if (!n) {
+    if (!fallback) fail(Errc::Config, "{} is missing", where(key));
+    return *fallback;
+  }
+  const toml::array* a = n->as_array();
+  if (!a || a->empty()) fail(Errc::Config, "{} must be a non-empty array of strings", where(key));
+  std::vector<std::string> out;
+  for (const toml::node& e : *a) {
+    const std::optional<std::string> v = e.value<std::string>();
+    if (!v) fail(Errc::Config, "{} must be a non-empty array of strings", where(key));
+    if (!allowed.empty() && std::find(allowed.begin(), allowed.end(), *v) == allowed.end())
+      fail(Errc::Config, "{}: '{}' is not one of {}", where(key), *v, fmt::join(allowed, ", "));
+    if (std::find(out.begin(), out.end(), *v) != out.end())
+      fail(Errc::Config, "{}: '{}' is there twice", where(key), *v);
     out.push_back(*v);
   }
   return out;

@@ -22,6 +22,19 @@ class ConfigTable {
   // Parses a file; throws Errc::NotFound or Errc::Config (with line and column).
   static ConfigTable parseFile(const std::filesystem::path& path);
 
+  // A number of the file replaced: "table.key" (dotted for nested tables)
+  // and its value. The key must be a number in the file: an integer's value
+  // must be whole.
+  struct Override {
+    std::string key;
+    double value;
+  };
+  // Parses a file with `overrides` applied before anything reads it, so
+  // that every check sees the values; the errors name the file and the
+  // overridden key's line. An override whose key the file has not, or has
+  // as no number, throws Errc::Config naming it.
+  static ConfigTable parseFile(const std::filesystem::path& path, const std::vector<Override>& overrides);
+
   double number(const std::string& key, std::optional<double> fallback = std::nullopt, double min = -1e300,
                 double max = 1e300);
   int integer(const std::string& key, std::optional<int> fallback = std::nullopt, int min = -(1 << 30),
@@ -38,6 +51,9 @@ class ConfigTable {
   // The same for an array of minCount .. maxCount numbers.
   std::vector<double> numbers(const std::string& key, size_t minCount, size_t maxCount,
                               std::optional<std::vector<double>> fallback, double min, double max);
+  // A non-empty array of strings, each one of `allowed` (when given) and none twice.
+  std::vector<std::string> strings(const std::string& key, std::optional<std::vector<std::string>> fallback,
+                                   const std::vector<std::string>& allowed = {});
   bool has(const std::string& key) const;
   ConfigTable table(const std::string& key);
   // An array of tables ([[key]] in TOML); empty when the key is absent.
