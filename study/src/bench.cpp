@@ -84,7 +84,11 @@ void checkGeometry(const Bench& b, const ConfigTable& cameraTable, const ConfigT
 }  // namespace
 
 Bench Bench::load(const std::filesystem::path& path) {
-  ConfigTable root = ConfigTable::parseFile(path);
+  return load(path, {});
+}
+
+Bench Bench::load(const std::filesystem::path& path, const std::vector<ConfigTable::Override>& overrides) {
+  ConfigTable root = overrides.empty() ? ConfigTable::parseFile(path) : ConfigTable::parseFile(path, overrides);
   root.requireKnownKeys({"format", "version", "lens", "camera", "parallel", "area", "schlieren", "inverse_schlieren",
                          "display", "defects"});
   root.string("format", std::nullopt, {"lfi-bench"});

@@ -28,11 +28,9 @@ namespace {
 
 const std::vector<std::string> kSetups = {"parallel", "area", "schlieren", "inverse_schlieren", "display"};
 
-struct QualitySettings {
-  int binning;          // extra binning of the bench camera (fewer, larger pixels)
-  int samplesPerPixel;  // camera images
-  int captureSamples;   // light field capture, per sensor pixel
-};
+}  // namespace
+
+namespace detail {
 
 QualitySettings settingsFor(Quality q) {
   switch (q) {
@@ -46,7 +44,6 @@ QualitySettings settingsFor(Quality q) {
   return {2, 32, 256};
 }
 
-// The bench's camera binned a further `binning` times (fewer, larger pixels).
 sim::TelecentricCamera binnedCamera(const Bench& bench, int binning) {
   sim::TelecentricCamera c = bench.telecentricCamera();
   c.width = std::max(8, c.width / binning);
@@ -55,29 +52,30 @@ sim::TelecentricCamera binnedCamera(const Bench& bench, int binning) {
   return c;
 }
 
-// The camera of one setup: conventional schlieren's has the knife edge in its stop.
 sim::TelecentricCamera setupCamera(const Bench& bench, sim::TelecentricCamera camera, const std::string& setup) {
   if (setup == "schlieren") camera.knifeEdge = bench.schlieren.knifeEdge;
   return camera;
 }
 
-// The light of one setup; the light field setups show `shown` (the bench's drive).
 Illumination setupLight(const Bench& bench, const std::string& setup, std::shared_ptr<const LightField> shown) {
   Illumination light{setup, std::move(shown), bench.inverseSchlieren.lookup, 0, nullptr};
   if (setup == "display") light.panel = displayPanel(bench, bench.display.optics, *light.lightField);
   return light;
 }
 
-nlohmann::ordered_json uniformityJson(const Uniformity& u) {
-  return {{"lit_share", u.litShare}, {"cv", u.cv}};
-}
-
-// Every defect's CNR in one evaluation, keyed "scene/defect".
 nlohmann::ordered_json cnrByDefect(const Evaluation& e) {
   nlohmann::ordered_json out = nlohmann::ordered_json::object();
   for (const auto& [scene, result] : e.scenes.items())
     for (const auto& [defect, cell] : result["defects"].items()) out[scene + "/" + defect] = cell["cnr"];
   return out;
+}
+
+}  // namespace detail
+
+namespace {
+
+nlohmann::ordered_json uniformityJson(const Uniformity& u) {
+  return {{"lit_share", u.litShare}, {"cv", u.cv}};
 }
 
 nlohmann::ordered_json driveJson(const Bench& bench) {

@@ -172,6 +172,23 @@ nlohmann::ordered_json blindFindings(const cv::Mat& frame, const DefectFinder& f
                                      const std::vector<cv::Mat>& masks, const std::vector<Vec2>& centres,
                                      const cv::Mat& changed, double objectPixel_mm);
 
+// ---- What the study's runs share (study.cpp) --------------------------------
+
+struct QualitySettings {
+  int binning;          // extra binning of the bench camera (fewer, larger pixels)
+  int samplesPerPixel;  // camera images
+  int captureSamples;   // light field capture, per sensor pixel
+};
+QualitySettings settingsFor(Quality q);
+// The bench's camera binned a further `binning` times (fewer, larger pixels).
+sim::TelecentricCamera binnedCamera(const Bench& bench, int binning);
+// The camera of one setup: conventional schlieren's has the knife edge in its stop.
+sim::TelecentricCamera setupCamera(const Bench& bench, sim::TelecentricCamera camera, const std::string& setup);
+// The light of one setup; the light field setups show `shown` (the bench's drive).
+Illumination setupLight(const Bench& bench, const std::string& setup, std::shared_ptr<const LightField> shown);
+// Every defect's CNR in one evaluation, keyed "scene/defect".
+nlohmann::ordered_json cnrByDefect(const Evaluation& e);
+
 // ---- The display-quality sweep (sweep.cpp) --------------------------------
 
 struct SweepVariant {

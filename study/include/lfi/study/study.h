@@ -6,6 +6,7 @@
 // and through the bench's display), each image compared with the intact lens
 // in the same setup by one declared criterion (docs/study.md).
 
+#include "lfi/core/config.h"
 #include "lfi/core/light_field.h"
 #include "lfi/drivers/display.h"
 #include "lfi/sim/devices/camera_sensor_model.h"
@@ -69,6 +70,9 @@ struct Bench {
   // in range that together make a bench that cannot exist (a part inside the
   // lens, a defect outside it).
   static Bench load(const std::filesystem::path& path);
+  // The same with numbers of the file replaced ("table.key" = value: a
+  // sweep's point, sweep_file.h), checked as the file's own.
+  static Bench load(const std::filesystem::path& path, const std::vector<ConfigTable::Override>& overrides);
   // The lens's lowest and highest z (world frame, mm): at the origin, and
   // with `misaligned` over both of its positions (also moved by
   // -misalignment_mm along z, the misaligned scene's).
