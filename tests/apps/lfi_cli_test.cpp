@@ -178,3 +178,48 @@ TEST_F(LfiCli, BadSceneFilesAreNamedWithTheLineOrKey) {
 }
 
 }  // namespace
+
+namespace {
+
+// A sweep of two points over Δ on the reference bench at 32 x 32 camera pixels (quick quality), ideal emitter only.
+void writeSmallSweep(const fs::path& dir) {
+  std::string bench = readText(fs::path(LFI_SOURCE_DIR) / "data" / "benches" / "reference.toml");
+  lfi::testing_support::replaceOnce(bench, "width = 512", "width = 128");
+  lfi::testing_support::replaceOnce(bench, "height = 512", "height = 128");
+  lfi::testing_support::replaceOnce(bench, "pixel_pitch_mm = 0.0138", "pixel_pitch_mm = 0.0552");
+  std::ofstream(dir / "bench.toml") << bench;
+  std::ofstream(dir / "sweep.toml") << "format = \"lfi-sweep\"\nversion = 1\nbench = \"bench.toml\"\n"
+                                       "setups = [\"inverse_schlieren\"]\n[[axis]]\n"
+                                       "key = \"inverse_schlieren.distance_mm\"\nvalues = [25, 30]\n";
+}
+
+TEST_F(LfiCli, ASweepsShardsMergeIntoTheWholeSweep) {
+  writeSmallSweep(dir_);
+  const std::string sweep = quoted(dir_ / "sweep.toml");
+  const Result whole = lfi("-q study --sweep " + sweep + " --out " + quoted(dir_ / "whole"));
+  ASSERT_EQ(whole.status, 0) << whole.output;
+  for (const char* shard : {"1/2", "2/2"}) {
+    const Result part = lfi("-q study --sweep " + sweep + " --shard " + shard + " --out " +
+                            quoted(dir_ / ("shard-" + std::string(1, shard[0]))));
+    ASSERT_EQ(part.status, 0) << part.output;
+  }
+  const Result merged = lfi("-q study merge " + quoted(dir_ / "merged") + " " + quoted(dir_ / "shard-1") + " " +
+                            quoted(dir_ / "shard-2"));
+  ASSERT_EQ(merged.status, 0) << merged.output;
+  EXPECT_EQ(readText(dir_ / "merged" / "study.json"), readText(dir_ / "whole" / "study.json"));
+  // The refusals name what is wrong.
+  for (const auto& [arguments, message] :
+       {std::pair<std::string, std::string>{"study --sweep " + sweep + " --out x --seed 4",
+                                            "--seed is the sweep file's"},
+        {"study --shard 1/2 --out x", "--shard splits a sweep file's grid"},
+        {"study --sweep " + sweep + " --shard 3/2 --out x", "shard '3/2'"},
+        {"study --sweep " + sweep, "--out is required"},
+        {"study merge " + quoted(dir_ / "again") + " " + quoted(dir_ / "shard-1"),
+         "shard 2/2 of the sweep is missing"}}) {
+    const Result run = lfi(arguments);
+    EXPECT_NE(run.status, 0) << arguments;
+    EXPECT_NE(run.output.find(message), std::string::npos) << arguments << ": " << run.output;
+  }
+}
+
+}  // namespace
