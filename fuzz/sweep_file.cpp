@@ -10,8 +10,7 @@
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   static const bool bench = [] {
     std::filesystem::copy_file(std::filesystem::path(LFI_SOURCE_DIR) / "data" / "benches" / "reference.toml",
-                               lfi::fuzz::folder() / "bench.toml",
-                               std::filesystem::copy_options::overwrite_existing);
+                               lfi::fuzz::folder() / "bench.toml", std::filesystem::copy_options::overwrite_existing);
     return true;
   }();
   (void)bench;

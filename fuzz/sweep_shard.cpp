@@ -12,7 +12,6 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   const fs::path shard = lfi::fuzz::folder() / "shard";
   fs::create_directories(shard / "images" / "point-000000");
   lfi::fuzz::writeInput("shard/shard.json", data, size);
-  lfi::fuzz::expectCleanRefusal(
-      [&] { lfi::study::mergeSweepShards(lfi::fuzz::folder() / "merged", {shard}, true); });
+  lfi::fuzz::expectCleanRefusal([&] { lfi::study::mergeSweepShards(lfi::fuzz::folder() / "merged", {shard}, true); });
   return 0;
 }
