@@ -38,6 +38,8 @@ PACKAGES=(
   libmosquitto-dev mosquitto
   # the certificates of the MQTT tests' TLS broker
   openssl
+  # sweeps on a cluster (scripts/slurm/) and the single-node cluster of their test
+  slurm-wlm munge
 )
 
 if [[ ! -r /etc/os-release ]] || ! grep -qE '^ID=debian' /etc/os-release \
