@@ -102,7 +102,16 @@ values = [8, 12, 16, 20]
   ASSERT_FALSE(fs::exists(shard2 / "shard.json")) << "task 2 finished before it could be killed";
   const auto requeue = runCommand(cluster.environment() + "scontrol requeue " + array + "_2 2>&1");
   ASSERT_EQ(requeue.status, 0) << requeue.output;
-  runCommand(cluster.environment() + "scontrol update JobId=" + array + "_2 StartTime=now 2>&1");
+  // (once Slurm has ended the first run and holds the task pending: an update before that is refused)
+  ASSERT_TRUE(waitFor(
+      [&] {
+        return runCommand(cluster.environment() + "squeue -h -o %T -j " + array + "_2 2>&1").output.find("PENDING") !=
+               std::string::npos;
+      },
+      60))
+      << "task 2 is not pending again after its requeue";
+  const auto release = runCommand(cluster.environment() + "scontrol update JobId=" + array + "_2 StartTime=now 2>&1");
+  ASSERT_EQ(release.status, 0) << release.output;
 
   ASSERT_TRUE(waitFor([&] { return fs::exists(out / "sweep" / "study.json"); }, 180))
       << "no merged sweep within 180 s: " << runCommand(cluster.environment() + "squeue 2>&1").output
@@ -110,8 +119,8 @@ values = [8, 12, 16, 20]
   EXPECT_NE(runCommand(cluster.environment() + "scontrol show job " + array + "_2 2>&1").output.find("Restarts=1"),
             std::string::npos)
       << "task 2 was not requeued";
-  EXPECT_TRUE(withoutProvenance(out / "sweep" / "study.json") == withoutProvenance(folder.path() / "whole" /
-                                                                                    "study.json"))
+  EXPECT_TRUE(withoutProvenance(out / "sweep" / "study.json") ==
+              withoutProvenance(folder.path() / "whole" / "study.json"))
       << "the merged study.json differs from the unsharded run's";
   EXPECT_TRUE(images(out / "sweep") == images(folder.path() / "whole")) << "the images differ";
 }
