@@ -49,8 +49,8 @@ class SlurmCluster {
     ::chmod((folder_ / "munge").c_str(), 0700);
     ::chmod((folder_ / "munge" / "munge.key").c_str(), 0400);
     const std::string munge = (folder_ / "munge").string();
-    run("/usr/sbin/munged -f --socket=" + munge + "/socket --key-file=" + munge + "/munge.key --log-file=" +
-        munge + "/munged.log --pid-file=" + munge + "/munged.pid --seed-file=" + munge + "/seed");
+    run("/usr/sbin/munged -f --socket=" + munge + "/socket --key-file=" + munge + "/munge.key --log-file=" + munge +
+        "/munged.log --pid-file=" + munge + "/munged.pid --seed-file=" + munge + "/seed");
 
     char host[256] = {};
     ::gethostname(host, sizeof host - 1);
