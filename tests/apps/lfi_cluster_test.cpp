@@ -7,6 +7,7 @@
 #include "lfi_process.h"
 #include "lfi_test_support.h"
 #include "slurm_cluster.h"
+#include "sweep_outputs.h"
 #include "test_folder.h"
 #include "text_edit.h"
 
@@ -15,7 +16,6 @@
 
 #include <chrono>
 #include <filesystem>
-#include <map>
 #include <sstream>
 #include <thread>
 
@@ -24,23 +24,6 @@ namespace {
 namespace fs = std::filesystem;
 using lfi::testing_support::runCommand;
 using lfi::testing_support::shellQuoted;
-
-std::string fileText(const fs::path& file) {
-  return lfi::testing_support::readText(file);
-}
-
-std::map<std::string, std::string> images(const fs::path& folder) {
-  std::map<std::string, std::string> out;
-  for (const auto& f : fs::recursive_directory_iterator(folder / "images"))
-    if (f.is_regular_file()) out[f.path().lexically_relative(folder).string()] = fileText(f.path());
-  return out;
-}
-
-nlohmann::ordered_json withoutProvenance(const fs::path& studyJson) {
-  nlohmann::ordered_json j = nlohmann::ordered_json::parse(fileText(studyJson));
-  j.erase("provenance");
-  return j;
-}
 
 // Waits up to `seconds` for `done`, checking every 10 ms.
 template <typename Done>
@@ -57,11 +40,7 @@ TEST(LfiCluster, AJobArrayOfFourShardsAndItsMergeGiveTheUnshardedSweepWithATaskR
   if (!lfi::testing_support::SlurmCluster::available()) LFI_SKIP_WITHOUT_TOOL("no Slurm (Debian: slurm-wlm, munge)");
   lfi::testing_support::TestFolder folder("lfi-cluster");
   // The reference bench at 32 x 32 camera pixels (quick quality), 2 x 4 points of the ideal emitter.
-  std::string bench = lfi::testing_support::readText(fs::path(LFI_SOURCE_DIR) / "data" / "benches" / "reference.toml");
-  lfi::testing_support::replaceOnce(bench, "width = 512", "width = 128");
-  lfi::testing_support::replaceOnce(bench, "height = 512", "height = 128");
-  lfi::testing_support::replaceOnce(bench, "pixel_pitch_mm = 0.0138", "pixel_pitch_mm = 0.0552");
-  folder.write("bench.toml", bench);
+  folder.write("bench.toml", lfi::testing_support::smallStudyBench());
   const fs::path sweep = folder.write("sweep.toml", R"(format = "lfi-sweep"
 version = 1
 bench = "bench.toml"
@@ -115,14 +94,16 @@ values = [8, 12, 16, 20]
 
   ASSERT_TRUE(waitFor([&] { return fs::exists(out / "sweep" / "study.json"); }, 180))
       << "no merged sweep within 180 s: " << runCommand(cluster.environment() + "squeue 2>&1").output
-      << fileText(out / "logs" / "merge.log");
+      << lfi::testing_support::readText(out / "logs" / "merge.log");
   EXPECT_NE(runCommand(cluster.environment() + "scontrol show job " + array + "_2 2>&1").output.find("Restarts=1"),
             std::string::npos)
       << "task 2 was not requeued";
-  EXPECT_TRUE(withoutProvenance(out / "sweep" / "study.json") ==
-              withoutProvenance(folder.path() / "whole" / "study.json"))
+  EXPECT_TRUE(lfi::testing_support::resultsWithoutProvenance(out / "sweep" / "study.json") ==
+              lfi::testing_support::resultsWithoutProvenance(folder.path() / "whole" / "study.json"))
       << "the merged study.json differs from the unsharded run's";
-  EXPECT_TRUE(images(out / "sweep") == images(folder.path() / "whole")) << "the images differ";
+  EXPECT_TRUE(lfi::testing_support::sweepImages(out / "sweep") ==
+              lfi::testing_support::sweepImages(folder.path() / "whole"))
+      << "the images differ";
 }
 
 TEST(LfiCluster, TheScriptNamesWhatItCannotSubmit) {

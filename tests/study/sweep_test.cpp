@@ -9,6 +9,7 @@
 #include "lfi/study/sweep_file.h"
 
 #include "lfi_test_support.h"
+#include "sweep_outputs.h"
 #include "test_folder.h"
 #include "text_edit.h"
 
@@ -17,8 +18,6 @@
 
 #include <filesystem>
 #include <fstream>
-#include <map>
-#include <sstream>
 
 namespace lfi::study {
 namespace {
@@ -26,16 +25,6 @@ namespace {
 namespace fs = std::filesystem;
 using testing_support::TestFolder;
 using testing_support::throwsError;
-
-// The reference bench with a small camera (32 x 32 pixels at the quick quality's binning), so that a point
-// renders in a fraction of a second.
-std::string smallBench() {
-  std::string text = testing_support::readText(fs::path(LFI_SOURCE_DIR) / "data" / "benches" / "reference.toml");
-  testing_support::replaceOnce(text, "width = 512", "width = 128");
-  testing_support::replaceOnce(text, "height = 512", "height = 128");
-  testing_support::replaceOnce(text, "pixel_pitch_mm = 0.0138", "pixel_pitch_mm = 0.0552");
-  return text;
-}
 
 // A sweep of 2 x 3 points over Δ and the display's pitch, inverse schlieren only.
 std::string smallSweep(std::uint64_t seed = 3) {
@@ -57,30 +46,9 @@ steps = 3
                      seed);
 }
 
-std::string fileText(const fs::path& file) {
-  std::ifstream in(file, std::ios::binary);
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
-// Every file under `folder/images` by its path there, with its bytes.
-std::map<std::string, std::string> images(const fs::path& folder) {
-  std::map<std::string, std::string> out;
-  for (const auto& f : fs::recursive_directory_iterator(folder / "images"))
-    if (f.is_regular_file()) out[f.path().lexically_relative(folder).string()] = fileText(f.path());
-  return out;
-}
-
-nlohmann::ordered_json withoutProvenance(const fs::path& studyJson) {
-  nlohmann::ordered_json j = nlohmann::ordered_json::parse(fileText(studyJson));
-  j.erase("provenance");
-  return j;
-}
-
 TEST(SweepFile, TheGridIsEveryCombinationTheFirstAxisSlowest) {
   TestFolder folder("lfi-sweep-file");
-  folder.write("bench.toml", smallBench());
+  folder.write("bench.toml", testing_support::smallStudyBench());
   const SweepFile s = readSweepFile(folder.write("sweep.toml", smallSweep()));
   ASSERT_EQ(s.pointCount(), 6u);
   EXPECT_EQ(s.axes[1].values, (std::vector<double>{8, 12, 16}));
@@ -105,13 +73,13 @@ TEST(SweepFile, TheGridIsEveryCombinationTheFirstAxisSlowest) {
   // The identity follows what the results depend on: the seed, an axis, the bench's bytes.
   const std::string identity = s.identity;
   EXPECT_NE(readSweepFile(folder.write("sweep.toml", smallSweep(4))).identity, identity);
-  folder.write("bench.toml", smallBench() + "\n# a comment\n");
+  folder.write("bench.toml", testing_support::smallStudyBench() + "\n# a comment\n");
   EXPECT_NE(readSweepFile(folder.write("sweep.toml", smallSweep())).identity, identity);
 }
 
 TEST(SweepFile, ABadFileIsNamedByItsKeyAndABadPointByItsValues) {
   TestFolder folder("lfi-sweep-bad");
-  folder.write("bench.toml", smallBench());
+  folder.write("bench.toml", testing_support::smallStudyBench());
   const auto refused = [&](const std::string& from, const std::string& to, Errc code,
                            std::initializer_list<std::string> fragments) {
     std::string text = smallSweep();
@@ -145,7 +113,7 @@ class SweepShards : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
     folder_ = new TestFolder("lfi-sweep-shards");
-    folder_->write("bench.toml", smallBench());
+    folder_->write("bench.toml", testing_support::smallStudyBench());
     sweep_ = new SweepFile(readSweepFile(folder_->write("sweep.toml", smallSweep())));
     SweepOptions whole;
     runSweep(*sweep_, folder_->path() / "whole", whole);
@@ -176,18 +144,19 @@ SweepFile* SweepShards::sweep_ = nullptr;
 
 TEST_F(SweepShards, MergedShardsAreTheWholeRunWhateverTheirNumber) {
   const fs::path whole = folder_->path() / "whole";
-  const auto wholeJson = withoutProvenance(whole / "study.json");
+  const auto wholeJson = testing_support::resultsWithoutProvenance(whole / "study.json");
   ASSERT_EQ(wholeJson["points"].size(), 6u);
-  const auto wholeImages = images(whole);
+  const auto wholeImages = testing_support::sweepImages(whole);
   ASSERT_EQ(wholeImages.size(), 6u * 7 * 3);  // each point's seven scenes: EXR, PNG and difference
   for (int n : {1, 3, 7}) {
     SCOPED_TRACE(fmt::format("{} shards", n));
     const fs::path merged = folder_->path() / fmt::format("merged-{}", n);
     mergeSweepShards(merged, shards(n, "s"), false);
-    EXPECT_TRUE(withoutProvenance(merged / "study.json") == wholeJson) << "study.json differs from the whole run's";
-    EXPECT_TRUE(images(merged) == wholeImages) << "the images differ from the whole run's";
+    EXPECT_TRUE(testing_support::resultsWithoutProvenance(merged / "study.json") == wholeJson)
+        << "study.json differs from the whole run's";
+    EXPECT_TRUE(testing_support::sweepImages(merged) == wholeImages) << "the images differ from the whole run's";
     // (even the provenance here: the same sweep file)
-    EXPECT_TRUE(fileText(merged / "study.json") == fileText(whole / "study.json"));
+    EXPECT_TRUE(testing_support::readText(merged / "study.json") == testing_support::readText(whole / "study.json"));
   }
   // The answers are the points' own verdicts.
   for (const auto& [defect, points] : wholeJson["answers"]["detected_at"]["inverse_schlieren"].items())
@@ -209,14 +178,14 @@ TEST_F(SweepShards, ShardsThatDoNotMakeOneSweepAreNamedAndNothingIsMerged) {
                       {"shard 2/3 is given twice", three[1].string()}));
   // Another sweep's shard (another seed).
   TestFolder other("lfi-sweep-other");
-  other.write("bench.toml", smallBench());
+  other.write("bench.toml", testing_support::smallStudyBench());
   SweepOptions o;
   o.shard = SweepShard{2, 3};
   runSweep(readSweepFile(other.write("sweep.toml", smallSweep(9))), other.path() / "s2", o);
   EXPECT_TRUE(refused({three[0], other.path() / "s2", three[2]}, Errc::InvalidFile,
                       {"different sweeps", three[0].string(), (other.path() / "s2").string()}));
   // A shard of another lfi version.
-  std::string record = fileText(three[1] / "shard.json");
+  std::string record = testing_support::readText(three[1] / "shard.json");
   testing_support::replaceOnce(record, fmt::format("\"lfi_version\": \"{}\"", lfiVersion()),
                                "\"lfi_version\": \"0.0.1\"");
   const fs::path old = folder_->path() / "old";
