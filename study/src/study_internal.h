@@ -174,6 +174,9 @@ nlohmann::ordered_json blindFindings(const cv::Mat& frame, const DefectFinder& f
 
 // ---- What the study's runs share (study.cpp) --------------------------------
 
+// A file's bytes; Errc::NotFound naming it when it cannot be read (sweep_file.cpp).
+std::string fileBytes(const std::filesystem::path& file);
+
 struct QualitySettings {
   int binning;          // extra binning of the bench camera (fewer, larger pixels)
   int samplesPerPixel;  // camera images

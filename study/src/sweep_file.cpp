@@ -3,6 +3,8 @@
 
 #include "lfi/core/error.h"
 
+#include "study_internal.h"
+
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 
@@ -19,14 +21,6 @@ namespace {
 
 constexpr std::size_t kMostPoints = 100'000;  // (each point's bench is checked when the file is read)
 const std::vector<std::string> kSweepSetups = {"inverse_schlieren", "display"};
-
-std::string fileBytes(const fs::path& file) {
-  std::ifstream in(file, std::ios::binary);
-  if (!in) fail(Errc::NotFound, "cannot read '{}'", file.string());
-  std::ostringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
 
 std::uint64_t fnv1a(const std::string& bytes, std::uint64_t hash = 1469598103934665603ULL) {
   for (const unsigned char c : bytes) hash = (hash ^ c) * 1099511628211ULL;
@@ -58,6 +52,18 @@ SweepAxis readAxis(ConfigTable t, std::size_t n) {
 }
 
 }  // namespace
+
+namespace detail {
+
+std::string fileBytes(const fs::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  if (!in) fail(Errc::NotFound, "cannot read '{}'", file.string());
+  std::ostringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+}  // namespace detail
 
 std::size_t SweepFile::pointCount() const {
   std::size_t count = 1;
@@ -121,7 +127,7 @@ SweepFile readSweepFile(const fs::path& file) {
   std::string identity =
       fmt::format("lfi-sweep 1\nquality {}\nseed {}\nsetups {}\n", quality, s.seed, fmt::join(s.setups, " "));
   for (const SweepAxis& a : s.axes) identity += fmt::format("axis {} {:.17g}\n", a.key, fmt::join(a.values, " "));
-  s.identity = fmt::format("{:016x}", fnv1a(fileBytes(s.bench), fnv1a(identity)));
+  s.identity = fmt::format("{:016x}", fnv1a(detail::fileBytes(s.bench), fnv1a(identity)));
   return s;
 }
 

@@ -12,10 +12,8 @@
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 
-#include <fstream>
 #include <map>
 #include <set>
-#include <sstream>
 
 namespace lfi::study {
 
@@ -84,13 +82,6 @@ std::string sweepReport(const nlohmann::ordered_json& results) {
          "(docs/study.md).</p>\n</body></html>\n";
 }
 
-std::string readText(const fs::path& file) {
-  std::ifstream in(file, std::ios::binary);
-  std::ostringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
-
 struct ShardFolder {
   fs::path folder;
   nlohmann::ordered_json record;
@@ -104,7 +95,7 @@ ShardFolder readShardFolder(const fs::path& folder) {
          folder.string());
   ShardFolder s{folder, {}, {}};
   try {
-    s.record = nlohmann::ordered_json::parse(readText(file));
+    s.record = nlohmann::ordered_json::parse(fileBytes(file));
     if (s.record.at("format") != "lfi-sweep-shard" || s.record.at("version") != 1)
       fail(Errc::InvalidFile, "merge: '{}' is not an lfi-sweep-shard file of version 1", file.string());
     s.shard = {s.record.at("shard").at("index").get<int>(), s.record.at("shard").at("count").get<int>()};
@@ -262,7 +253,7 @@ nlohmann::ordered_json mergeSweepShards(const fs::path& out, const std::vector<f
       requireOutputFolder(out / "images" / point, "merge", "the points' images");
       for (const auto& file : fs::directory_iterator(s->folder / "images" / point))
         if (file.is_regular_file())
-          writeFileAtomically(out / "images" / point / file.path().filename(), mode, readText(file.path()));
+          writeFileAtomically(out / "images" / point / file.path().filename(), mode, fileBytes(file.path()));
     }
   writeSweepResults(out, mode, results);
   return results;
